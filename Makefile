@@ -1,0 +1,33 @@
+# Quickstart: `make demo` and `make test` each set up .venv from nothing and run.
+PYTHON ?= python3
+VENV := .venv
+BIN := $(VENV)/bin
+STAMP := $(VENV)/.installed
+
+.PHONY: demo test lint setup clean sounds schema
+
+$(STAMP): pyproject.toml
+	$(PYTHON) -m venv $(VENV)
+	$(BIN)/pip install -q --upgrade pip
+	$(BIN)/pip install -q -e '.[all,dev]'
+	touch $(STAMP)
+
+setup: $(STAMP)
+
+demo: $(STAMP)
+	$(BIN)/scenario run scenarios/factory_physics.yaml --all-variants --out traces/demo
+
+test: $(STAMP)
+	$(BIN)/python -m pytest -q
+
+lint: $(STAMP)
+	$(BIN)/ruff check runner backends reports tests bench
+
+sounds: $(STAMP)
+	$(BIN)/python scenarios/sounds/make_sounds.py
+
+schema: $(STAMP)
+	$(BIN)/scenario schema > runner/schema/scenario.schema.json
+
+clean:
+	rm -rf $(VENV) traces .pytest_cache

@@ -1,0 +1,81 @@
+"""Small quaternion helpers in (w, x, y, z) order, shared by the runner and the backends."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+
+import numpy as np
+
+IDENTITY: tuple[float, float, float, float] = (1.0, 0.0, 0.0, 0.0)
+
+
+def quat_mul(a: Sequence[float], b: Sequence[float]) -> tuple[float, float, float, float]:
+    aw, ax, ay, az = a
+    bw, bx, by, bz = b
+    return (
+        aw * bw - ax * bx - ay * by - az * bz,
+        aw * bx + ax * bw + ay * bz - az * by,
+        aw * by - ax * bz + ay * bw + az * bx,
+        aw * bz + ax * by - ay * bx + az * bw,
+    )
+
+
+def quat_conj(q: Sequence[float]) -> tuple[float, float, float, float]:
+    return (q[0], -q[1], -q[2], -q[3])
+
+
+def quat_normalize(q: Sequence[float]) -> tuple[float, float, float, float]:
+    n = math.sqrt(sum(c * c for c in q))
+    if n == 0.0 or not math.isfinite(n):
+        raise ValueError(f"cannot normalise quaternion {tuple(q)}")
+    return (q[0] / n, q[1] / n, q[2] / n, q[3] / n)
+
+
+def quat_from_axis_angle(axis: Sequence[float], angle: float) -> tuple[float, float, float, float]:
+    n = math.sqrt(sum(c * c for c in axis))
+    if n == 0.0:
+        return IDENTITY
+    s = math.sin(angle / 2.0) / n
+    return (math.cos(angle / 2.0), axis[0] * s, axis[1] * s, axis[2] * s)
+
+
+def quat_rotate(q: Sequence[float], v: Sequence[float]) -> tuple[float, float, float]:
+    w, x, y, z = q
+    # v' = v + 2w (u x v) + 2 u x (u x v), u = (x, y, z)
+    cx = y * v[2] - z * v[1]
+    cy = z * v[0] - x * v[2]
+    cz = x * v[1] - y * v[0]
+    return (
+        v[0] + 2.0 * (w * cx + y * cz - z * cy),
+        v[1] + 2.0 * (w * cy + z * cx - x * cz),
+        v[2] + 2.0 * (w * cz + x * cy - y * cx),
+    )
+
+
+def rotation_vector(q_from: Sequence[float], q_to: Sequence[float]) -> tuple[float, float, float]:
+    """The world-frame rotation vector (axis * angle) that turns ``q_from`` into ``q_to`` (shortest)."""
+    d = quat_mul(q_to, quat_conj(q_from))
+    if d[0] < 0.0:
+        d = (-d[0], -d[1], -d[2], -d[3])
+    s = math.sqrt(d[1] * d[1] + d[2] * d[2] + d[3] * d[3])
+    if s < 1e-15:
+        return (0.0, 0.0, 0.0)
+    angle = 2.0 * math.atan2(s, d[0])
+    return (d[1] / s * angle, d[2] / s * angle, d[3] / s * angle)
+
+
+def integrate_quat(q: Sequence[float], ang_vel: Sequence[float], dt: float) -> tuple[float, float, float, float]:
+    """Rotate ``q`` by the world-frame angular velocity over ``dt`` (exact for constant velocity)."""
+    w = math.sqrt(sum(c * c for c in ang_vel))
+    if w == 0.0:
+        return (q[0], q[1], q[2], q[3])
+    return quat_normalize(quat_mul(quat_from_axis_angle(ang_vel, w * dt), q))
+
+
+def quats_xyzw_to_wxyz(q: np.ndarray) -> np.ndarray:
+    return q[..., [3, 0, 1, 2]]
+
+
+def quats_wxyz_to_xyzw(q: np.ndarray) -> np.ndarray:
+    return q[..., [1, 2, 3, 0]]

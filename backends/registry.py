@@ -1,0 +1,123 @@
+"""The backend registry: names -> adapter classes, imported lazily, with install hints.
+
+``list_backends()`` never imports an engine; ``get_backend(name)`` imports the adapter on first use and
+turns a missing engine into :class:`BackendNotInstalled` with the pip command that fixes it.
+"""
+
+from __future__ import annotations
+
+import difflib
+import importlib
+import importlib.util
+from dataclasses import dataclass
+from importlib.metadata import PackageNotFoundError, version
+from types import MappingProxyType
+
+from .base import Backend
+from .errors import BackendNotInstalled, UnknownBackend, UnsupportedFeature
+from .types import CompiledWorld
+
+
+@dataclass(frozen=True)
+class BackendEntry:
+    name: str
+    target: str  # "module:Class"
+    module: str  # the engine's import name, checked without importing it
+    distribution: str  # the engine's distribution, for its version
+    extra: str  # the extra of physics-scenarios that installs it
+    description: str
+    hidden: bool = False  # test-only backends are not listed by `scenario backends`
+
+    @property
+    def hint(self) -> str:
+        return f"pip install 'physics-scenarios[{self.extra}]'" if self.extra else "it ships with the runner"
+
+
+# Kept sorted by name.
+_KNOWN: dict[str, BackendEntry] = {
+    "dart": BackendEntry("dart", "backends.dart:DartBackend", "dartpy", "dartpy", "dart",
+                         "DART (dartpy), ODE collision detector by default"),
+    "fake": BackendEntry("fake", "backends.fake:FakeBackend", "numpy", "numpy", "",
+                         "pure-Python point masses, for tests of the runner's logic", hidden=True),
+    "mujoco": BackendEntry("mujoco", "backends.mujoco:MujocoBackend", "mujoco", "mujoco", "mujoco",
+                           "MuJoCo, built through MjSpec"),
+    "ode": BackendEntry("ode", "backends.ode:OdeBackend", "panda3d", "panda3d", "ode",
+                        "the Open Dynamics Engine through panda3d.ode: the reference"),
+    "pybullet": BackendEntry("pybullet", "backends.pybullet:PyBulletBackend", "pybullet", "pybullet", "",
+                             "PyBullet in DIRECT mode (the default backend)"),
+}
+if list(_KNOWN) != sorted(_KNOWN):  # pragma: no cover - a guard for whoever edits the table
+    raise RuntimeError("backends.registry._KNOWN must stay sorted")
+
+KNOWN_BACKENDS = MappingProxyType(_KNOWN)
+DEFAULT_BACKEND = "pybullet"
+
+
+def entry(name: str) -> BackendEntry:
+    try:
+        return _KNOWN[name]
+    except KeyError:
+        close = difflib.get_close_matches(name, [n for n, e in _KNOWN.items() if not e.hidden], n=1)
+        hint = f" Did you mean `{close[0]}`?" if close else ""
+        listed = ", ".join(n for n, e in _KNOWN.items() if not e.hidden)
+        raise UnknownBackend(f"Unknown backend `{name}`.{hint} Known backends: {listed}.") from None
+
+
+def is_installed(name: str) -> bool:
+    return importlib.util.find_spec(entry(name).module) is not None
+
+
+def engine_version(name: str) -> str:
+    try:
+        return version(entry(name).distribution)
+    except PackageNotFoundError:
+        return "not installed"
+
+
+def list_backends(include_hidden: bool = False) -> list[BackendEntry]:
+    return [e for e in _KNOWN.values() if include_hidden or not e.hidden]
+
+
+def installed_backends() -> list[str]:
+    return [e.name for e in list_backends() if is_installed(e.name)]
+
+
+def get_backend(name: str) -> type[Backend]:
+    """The adapter class for ``name``, imported now."""
+    item = entry(name)
+    if not is_installed(name):
+        raise BackendNotInstalled(
+            f"Backend `{name}` needs the `{item.module}` package, which is not installed. "
+            f"Install it with: {item.hint}"
+        )
+    module_name, _, class_name = item.target.partition(":")
+    try:
+        module = importlib.import_module(module_name)
+    except ImportError as exc:
+        raise BackendNotInstalled(
+            f"Backend `{name}` could not import its engine ({exc}). Install it with: {item.hint}"
+        ) from exc
+    cls: type[Backend] = getattr(module, class_name)
+    return cls
+
+
+def check_capabilities(cls: type[Backend], world: CompiledWorld) -> None:
+    """Refuse a world that needs what the backend cannot do, before anything is built."""
+    missing = sorted(c.value for c in world.required_capabilities() - cls.capabilities)
+    if missing:
+        raise UnsupportedFeature(
+            f"Scenario `{world.name}` needs {', '.join(missing)}, which backend `{cls.name}` does not "
+            f"support. Supported: {', '.join(sorted(c.value for c in cls.capabilities))}."
+        )
+    unknown = sorted(set(world.options_for(cls.name)) - set(cls.option_keys))
+    if unknown:
+        raise UnsupportedFeature(
+            f"Unknown option(s) {', '.join(unknown)} in backend_options.{cls.name}. "
+            f"Accepted: {', '.join(sorted(cls.option_keys)) or 'none'}."
+        )
+
+
+def create_backend(name: str, world: CompiledWorld) -> Backend:
+    cls = get_backend(name)
+    check_capabilities(cls, world)
+    return cls(world)

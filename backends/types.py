@@ -1,0 +1,211 @@
+"""Engine-neutral types shared by the runner and every backend.
+
+A :class:`CompiledWorld` is what a backend is built from: every name resolved, every mass and inertia
+computed, every pose in the world frame with quaternions in (w, x, y, z) order, every joint frame and
+every contact surface per body pair known. Backends never see YAML.
+
+Conventions (ODE's, see docs/semantics.md):
+
+* SI units; angles in radians; the world is Z-up and right-handed.
+* Box sizes are **full** edge lengths. Capsules and cylinders lie along the body's local z axis;
+  ``length`` is the length of the cylindrical part (a capsule's total length is ``length + 2*radius``).
+* A plane's normal is the body's local +z; it passes through the body's position. Planes are static.
+* Masses and inertias follow ODE's dMassSetBox/Sphere/Capsule/Cylinder: principal moments about the
+  centre of mass, in the body frame. Static bodies carry mass 0.
+* Slider position: displacement of ``body`` relative to ``other`` along ``axis`` since the start
+  (metres). Hinge angle: rotation of ``body`` relative to ``other`` about ``axis`` since the start
+  (radians, right-handed). A motor drives that coordinate's rate towards ``vel`` with force (or torque)
+  bounded by ``fmax``; ``fmax == 0`` means the motor is off (ODE's dParamVel / dParamFMax).
+"""
+
+from __future__ import annotations
+
+import enum
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+Vec3 = tuple[float, float, float]
+Quat = tuple[float, float, float, float]  # (w, x, y, z)
+Rgba = tuple[float, float, float, float]
+
+
+class Motion(str, enum.Enum):
+    STATIC = "static"  # never moves (ODE: a geom without a body)
+    KINEMATIC = "kinematic"  # moved by the runner, with velocity, unaffected by forces
+    DYNAMIC = "dynamic"  # simulated
+
+
+class ShapeKind(str, enum.Enum):
+    BOX = "box"
+    SPHERE = "sphere"
+    CAPSULE = "capsule"
+    CYLINDER = "cylinder"
+    PLANE = "plane"
+
+
+class JointKind(str, enum.Enum):
+    SLIDER = "slider"
+    HINGE = "hinge"
+    BALL = "ball"
+    FIXED = "fixed"
+    UNIVERSAL = "universal"
+
+
+class Capability(str, enum.Enum):
+    """What a backend can do. The runner checks a world's needs against these before a run starts."""
+
+    SHAPE_BOX = "shape:box"
+    SHAPE_SPHERE = "shape:sphere"
+    SHAPE_CAPSULE = "shape:capsule"
+    SHAPE_CYLINDER = "shape:cylinder"
+    SHAPE_PLANE = "shape:plane"
+    JOINT_SLIDER = "joint:slider"
+    JOINT_HINGE = "joint:hinge"
+    JOINT_BALL = "joint:ball"
+    JOINT_FIXED = "joint:fixed"
+    JOINT_UNIVERSAL = "joint:universal"
+    JOINT_BETWEEN_BODIES = "joint:between-bodies"  # joints whose `other` is a body, not the environment
+    JOINT_LIMITS = "joint:limits"
+    JOINT_MOTOR = "joint:motor"
+    KINEMATIC = "motion:kinematic"
+    SUBSTEPS = "world:substeps"
+
+
+@dataclass(frozen=True)
+class Shape:
+    kind: ShapeKind
+    size: Vec3 = (0.0, 0.0, 0.0)  # box: full edge lengths
+    radius: float = 0.0  # sphere, capsule, cylinder
+    length: float = 0.0  # capsule, cylinder: cylindrical part along local z
+
+
+@dataclass(frozen=True)
+class Surface:
+    """ODE contact surface: restitution ``bounce`` above approach speed ``bounce_vel``; Coulomb ``mu``."""
+
+    bounce: float = 0.0
+    bounce_vel: float = 0.0
+    mu: float = math.inf
+
+
+@dataclass(frozen=True)
+class Motor:
+    vel: float
+    fmax: float
+
+
+@dataclass(frozen=True)
+class BodySpec:
+    name: str
+    motion: Motion
+    shape: Shape
+    mass: float
+    inertia: Vec3  # principal moments about the COM, body frame
+    pos: Vec3
+    quat: Quat
+    lin_vel: Vec3 = (0.0, 0.0, 0.0)
+    ang_vel: Vec3 = (0.0, 0.0, 0.0)  # world frame, rad/s
+    color: Rgba = (0.7, 0.7, 0.7, 1.0)
+
+
+@dataclass(frozen=True)
+class JointSpec:
+    name: str
+    kind: JointKind
+    body: str
+    other: str | None  # None: the environment (the static world)
+    axis: Vec3 = (1.0, 0.0, 0.0)  # world frame, unit (slider, hinge; universal: first axis)
+    axis2: Vec3 | None = None  # universal: second axis, world frame, unit
+    anchor: Vec3 = (0.0, 0.0, 0.0)  # world frame (hinge, ball, universal)
+    lo: float | None = None  # stops: metres (slider) or radians (hinge)
+    hi: float | None = None
+    motor: Motor | None = None  # initial motor; the runner may change it with set_motor
+
+
+@dataclass(frozen=True)
+class PairSurface:
+    a: str
+    b: str
+    surface: Surface
+
+
+@dataclass(frozen=True)
+class CompiledWorld:
+    name: str
+    gravity: Vec3
+    dt: float  # one scenario step
+    substeps: int  # engine steps per scenario step (each dt / substeps long)
+    duration: float
+    bodies: tuple[BodySpec, ...]
+    joints: tuple[JointSpec, ...] = ()
+    default_surface: Surface = Surface()
+    pair_surfaces: tuple[PairSurface, ...] = ()
+    backend_options: Mapping[str, Mapping[str, Any]] = field(default_factory=dict)
+
+    def body_index(self, name: str) -> int:
+        for i, body in enumerate(self.bodies):
+            if body.name == name:
+                return i
+        raise KeyError(name)
+
+    def surface(self, a: str, b: str) -> Surface:
+        """The contact surface for bodies ``a`` and ``b`` (a pair override, else the default)."""
+        for pair in self.pair_surfaces:
+            if {pair.a, pair.b} == {a, b}:
+                return pair.surface
+        return self.default_surface
+
+    def options_for(self, backend: str) -> Mapping[str, Any]:
+        return self.backend_options.get(backend, {})
+
+    def required_capabilities(self) -> frozenset[Capability]:
+        need: set[Capability] = set()
+        for body in self.bodies:
+            need.add(Capability(f"shape:{body.shape.kind.value}"))
+            if body.motion is Motion.KINEMATIC:
+                need.add(Capability.KINEMATIC)
+        for joint in self.joints:
+            need.add(Capability(f"joint:{joint.kind.value}"))
+            if joint.other is not None:
+                need.add(Capability.JOINT_BETWEEN_BODIES)
+            if joint.lo is not None or joint.hi is not None:
+                need.add(Capability.JOINT_LIMITS)
+            if joint.motor is not None:
+                need.add(Capability.JOINT_MOTOR)
+        if self.substeps > 1:
+            need.add(Capability.SUBSTEPS)
+        return frozenset(need)
+
+
+@dataclass
+class BodyStates:
+    """States of every body in ``CompiledWorld.bodies`` order, world frame."""
+
+    pos: np.ndarray  # (N, 3)
+    quat: np.ndarray  # (N, 4), w x y z
+    lin_vel: np.ndarray  # (N, 3)
+    ang_vel: np.ndarray  # (N, 3)
+
+
+@dataclass
+class JointStates:
+    """States of every joint in ``CompiledWorld.joints`` order (NaN where a value does not exist)."""
+
+    position: np.ndarray  # (M,) slider m / hinge rad; NaN for ball and fixed
+    velocity: np.ndarray  # (M,)
+    motor_force: np.ndarray  # (M,) force or torque the motor applied in the last step; 0 if none
+
+
+@dataclass(frozen=True)
+class Contact:
+    """Touching bodies after the last step (indices into ``CompiledWorld.bodies``, ``a < b``)."""
+
+    a: int
+    b: int
+    points: int  # number of contact points with distance <= 0
+    depth: float  # largest penetration depth, >= 0
+    normal_force: float  # summed normal force in N; NaN if the engine cannot say
