@@ -1,0 +1,93 @@
+"""A pure-Python test backend: exact ODE-style free motion, no contacts. For tests of the runner's logic.
+
+Dynamic bodies move by semi-implicit Euler (v += (g + F/m) dt; x += v dt) with orientation integrated from
+the angular velocity (no gyroscopic term); sliders to the environment carry a velocity motor bounded by
+fmax (and stops); kinematic bodies follow the runner. There are no contacts, so no collisions.
+"""
+
+from __future__ import annotations
+
+from typing import ClassVar
+
+import numpy as np
+
+from .base import Backend
+from .geometry import integrate_quat
+from .types import BodyStates, Capability, CompiledWorld, Contact, JointKind, JointStates, Motion, Quat, Vec3
+
+
+class FakeBackend(Backend):
+    name = "fake"
+    engine_distribution = "numpy"
+    capabilities: ClassVar[frozenset[Capability]] = frozenset({
+        Capability.SHAPE_BOX, Capability.SHAPE_SPHERE, Capability.SHAPE_CAPSULE, Capability.SHAPE_CYLINDER,
+        Capability.SHAPE_PLANE, Capability.KINEMATIC, Capability.JOINT_SLIDER, Capability.JOINT_MOTOR,
+        Capability.JOINT_LIMITS, Capability.SUBSTEPS})
+
+    def __init__(self, world: CompiledWorld) -> None:
+        super().__init__(world)
+        n = len(world.bodies)
+        self.pos = np.array([b.pos for b in world.bodies], float).reshape(n, 3)
+        self.quat = np.array([b.quat for b in world.bodies], float).reshape(n, 4)
+        self.vel = np.array([b.lin_vel for b in world.bodies], float).reshape(n, 3)
+        self.ang = np.array([b.ang_vel for b in world.bodies], float).reshape(n, 3)
+        self.mass = np.array([b.mass for b in world.bodies], float)
+        self.inertia = np.array([b.inertia for b in world.bodies], float).reshape(n, 3)
+        self.moves = np.array([b.motion is Motion.DYNAMIC for b in world.bodies])
+        self.force = np.zeros((n, 6))
+        index = {b.name: i for i, b in enumerate(world.bodies)}
+        self.sliders = [(index[j.body], np.asarray(j.axis), j) for j in world.joints if j.kind is JointKind.SLIDER]
+        self.start = {i: self.pos[i].copy() for i, _, _ in self.sliders}
+        self.motor = {j.name: (j.motor.vel, j.motor.fmax) if j.motor else (0.0, 0.0) for _, _, j in self.sliders}
+        self.applied = np.zeros(len(world.joints))
+
+    def step(self) -> None:
+        h = self.world.dt / self.world.substeps
+        g = np.asarray(self.world.gravity)
+        for _ in range(self.world.substeps):
+            for i in np.flatnonzero(self.moves):
+                self.vel[i] += (g + self.force[i, :3] / self.mass[i]) * h
+                self.ang[i] += self.force[i, 3:] / self.inertia[i].mean() * h
+            for k, (i, axis, joint) in enumerate(self.sliders):
+                vel, fmax = self.motor[joint.name]
+                along = float(self.vel[i] @ axis)
+                # the joint removes all motion off its axis; the motor changes the rate within fmax*h/m
+                self.vel[i] = along * axis
+                self.ang[i] = 0.0
+                dv = np.clip(vel - along, -fmax * h / self.mass[i], fmax * h / self.mass[i]) if fmax > 0 else 0.0
+                self.vel[i] += dv * axis
+                self.applied[k] = dv * self.mass[i] / h
+            for i in np.flatnonzero(self.moves):
+                self.pos[i] += self.vel[i] * h
+                self.quat[i] = integrate_quat(self.quat[i], self.ang[i], h)
+            for i in np.flatnonzero(~self.moves):
+                self.pos[i] += self.vel[i] * h
+                self.quat[i] = integrate_quat(self.quat[i], self.ang[i], h)
+        self.force[:] = 0.0
+
+    def body_states(self) -> BodyStates:
+        return BodyStates(self.pos.copy(), self.quat.copy(), self.vel.copy(), self.ang.copy())
+
+    def joint_states(self) -> JointStates:
+        m = len(self.world.joints)
+        position, velocity = np.full(m, np.nan), np.full(m, np.nan)
+        for k, (i, axis, _) in enumerate(self.sliders):
+            position[k] = float((self.pos[i] - self.start[i]) @ axis)
+            velocity[k] = float(self.vel[i] @ axis)
+        return JointStates(position, velocity, self.applied.copy())
+
+    def contacts(self) -> list[Contact]:
+        return []
+
+    def set_kinematic(self, body: int, pos: Vec3, quat: Quat, lin_vel: Vec3, ang_vel: Vec3) -> None:
+        self.pos[body], self.quat[body], self.vel[body], self.ang[body] = pos, quat, lin_vel, ang_vel
+
+    def set_motor(self, joint: int, vel: float, fmax: float) -> None:
+        self.motor[self.world.joints[joint].name] = (vel, fmax)
+
+    def apply_force(self, body: int, force: Vec3, torque: Vec3) -> None:
+        self.force[body, :3] += force
+        self.force[body, 3:] += torque
+
+    def reset_body(self, body: int, pos: Vec3, quat: Quat, lin_vel: Vec3, ang_vel: Vec3) -> None:
+        self.pos[body], self.quat[body], self.vel[body], self.ang[body] = pos, quat, lin_vel, ang_vel

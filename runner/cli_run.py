@@ -1,0 +1,109 @@
+"""`scenario run`: run every case of every file, print verdict tables and a summary."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+from pathlib import Path
+from typing import Any
+
+from rich.console import Console
+from rich.progress import BarColumn, Progress, TextColumn, TimeRemainingColumn
+from rich.table import Table
+
+from backends.errors import BackendNotInstalled, UnknownBackend
+from backends.registry import entry, is_installed
+
+from .errors import ExitCode, ScenarioValidationError
+from .run import run_loaded
+from .scenario.load import LoadedScenario, load_all, parse_overrides
+from .session import RunResult
+
+
+def _verdict_table(result: RunResult, failures_only: bool) -> Table:
+    title = f"{result.scenario} · {result.variant} · {result.backend}"
+    table = Table(title=title, title_justify="left", show_lines=False)
+    for col in ("assertion", "result", "measured", "expected", "time"):
+        table.add_column(col, overflow="fold")
+    for v in result.verdicts:
+        if failures_only and v.passed:
+            continue
+        mark = "[green]pass[/]" if v.passed else "[bold red]FAIL[/]"
+        when = "" if v.time is None or math.isinf(v.time) else f"{v.time:.3f}"
+        measured = v.measured + (f" ({v.message})" if v.message and not v.passed else "")
+        table.add_row(v.name, mark, measured, v.expected, when)
+    return table
+
+
+def _result_json(r: RunResult) -> dict[str, Any]:
+    return {"scenario": r.scenario, "variant": r.variant, "backend": r.backend, "status": r.status,
+            "end_time": r.end_time, "steps": r.steps, "trace": r.trace, "failure": r.failure,
+            "failure_detail": r.extra or None, "verdicts": [v.as_dict() for v in r.verdicts],
+            "events": [{"time": t, "name": n, "source": s} for t, n, s in r.events]}
+
+
+def command_run(args: argparse.Namespace, out: Console, err: Console) -> int:
+    entry(args.backend)  # an unknown name is bad input (exit 2) before anything runs
+    if not is_installed(args.backend):
+        raise BackendNotInstalled(f"Backend `{args.backend}` is not installed. Install it with: "
+                                  f"{entry(args.backend).hint}")
+    overrides = parse_overrides(args.set)
+    cases: list[LoadedScenario] = []
+    problems = []
+    for path in args.files:
+        try:
+            cases.extend(load_all(path, args.variant, args.all_variants, overrides))
+        except ScenarioValidationError as exc:
+            problems.extend(exc.issues)
+    if problems:
+        raise ScenarioValidationError(problems)
+    out_dir: Path | None = None if args.no_trace else args.out
+    results: list[RunResult] = []
+    show_progress = err.is_terminal and not (args.quiet or args.json)
+    for case in cases:
+        if show_progress:
+            with Progress(TextColumn("{task.description}"), BarColumn(), TextColumn("{task.percentage:>3.0f}%"),
+                          TimeRemainingColumn(), console=err, transient=True) as progress:
+                task = progress.add_task(f"{case.model.scenario} · {case.variant}", total=None)
+                result = run_loaded(case, args.backend, out_dir,
+                                    lambda k, n: progress.update(task, completed=k, total=n))
+        else:
+            result = run_loaded(case, args.backend, out_dir)
+        results.append(result)
+        if not args.json:
+            _print_result(out, result, args.quiet)
+    if args.json:
+        out.print_json(json.dumps({"results": [_result_json(r) for r in results]}, allow_nan=False, default=str))
+    else:
+        _print_summary(out, results)
+    if any(r.status == "engine-failure" for r in results):
+        return ExitCode.ENGINE_FAILURE
+    return ExitCode.OK if all(r.passed for r in results) else ExitCode.ASSERTION_FAILED
+
+
+def _print_result(out: Console, result: RunResult, quiet: bool) -> None:
+    if result.failure:
+        out.print(f"[bold red]engine failure[/] in {result.scenario} · {result.variant} · {result.backend}: "
+                  f"{result.failure}")
+        detail = result.extra.get("last_good")
+        if detail:
+            out.print(f"  last good state of `{result.extra.get('body')}`: {json.dumps(detail)}")
+    if result.verdicts and (not quiet or not result.passed):
+        out.print(_verdict_table(result, failures_only=quiet))
+    if result.trace and not quiet:
+        out.print(f"  trace: {result.trace}")
+
+
+def _print_summary(out: Console, results: list[RunResult]) -> None:
+    passed = sum(r.passed for r in results)
+    checks = sum(len(r.verdicts) for r in results)
+    failed_checks = sum(not v.passed for r in results for v in r.verdicts)
+    colour = "green" if passed == len(results) else "red"
+    out.print(f"[bold {colour}]{passed}/{len(results)} runs passed[/] ({checks - failed_checks}/{checks} assertions)")
+    for r in results:
+        if not r.passed:
+            out.print(f"  [red]{r.status}[/]: {r.scenario} · {r.variant} · {r.backend}")
+
+
+__all__ = ["command_run", "UnknownBackend"]

@@ -1,0 +1,36 @@
+"""Sound files: WAV only, read with the standard library (length, format, samples)."""
+
+from __future__ import annotations
+
+import wave
+from dataclasses import dataclass
+from pathlib import Path
+
+MAX_SOUND_SECONDS = 600.0
+
+
+@dataclass(frozen=True)
+class SoundInfo:
+    path: Path
+    length: float  # seconds
+    sample_rate: int
+    channels: int
+    sample_width: int  # bytes
+
+
+class SoundFileError(ValueError):
+    """Not a readable WAV file (the message says why)."""
+
+
+def read_info(path: Path) -> SoundInfo:
+    try:
+        with wave.open(str(path), "rb") as w:
+            frames, rate = w.getnframes(), w.getframerate()
+            info = SoundInfo(path, frames / rate if rate else 0.0, rate, w.getnchannels(), w.getsampwidth())
+    except FileNotFoundError:
+        raise SoundFileError("file not found") from None
+    except (wave.Error, EOFError, OSError) as exc:
+        raise SoundFileError(f"not a WAV file ({exc})") from None
+    if info.length > MAX_SOUND_SECONDS:
+        raise SoundFileError(f"longer than {MAX_SOUND_SECONDS:.0f} s ({info.length:.1f} s)")
+    return info
