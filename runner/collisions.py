@@ -82,7 +82,7 @@ def sphere_hits(center: np.ndarray, radius: float, into: SolidDef, pose: Pose) -
         projected = center - dist * normal
         if _point_in_polygon(projected, pts, normal):
             return True
-        return _dist_to_polygon_edges(projected, pts) <= np.sqrt(max(radius * radius - dist * dist, 0.0))
+        return bool(_dist_to_polygon_edges(projected, pts) <= np.sqrt(max(radius * radius - dist * dist, 0.0)))
     # box: closest point of the oriented box to the sphere's centre
     box_center = pose.pos + pose.scale * (pose.rot @ into.center)
     local = pose.rot.T @ (center - box_center)

@@ -12,6 +12,7 @@ to ``<path>``. /tf, /bodies and /joints are formatted through templates prepared
 from __future__ import annotations
 
 import contextlib
+import json
 import math
 import os
 from collections.abc import Mapping, Sequence
@@ -68,21 +69,17 @@ class SolidVisual:
     vertices: tuple[Vec3, ...] = ()  # polygon: body frame, already scaled; order gives the normal
 
 
-def _contacts_json(contacts: Sequence[Contact], names: Sequence[str]) -> str:
-    def fin(x: float) -> float | None:
-        return float(x) if math.isfinite(x) else None
+_PAIR = '{"a":%s,"b":%s,"points":%d,"depth":%s,"normal_force":%s}'
 
-    pairs = [
-        {
-            "a": names[c.a],
-            "b": names[c.b],
-            "points": c.points,
-            "depth": fin(c.depth),
-            "normal_force": fin(c.normal_force),
-        }
-        for c in contacts
-    ]
-    return fx.dumps({"count": len(pairs), "pairs": pairs})
+
+def _contacts_json(contacts: Sequence[Contact], quoted: Sequence[str]) -> str:
+    """The /contacts message; ``quoted`` = body names already JSON-encoded. NaN and inf -> null."""
+    if math.isfinite(sum(c.depth + c.normal_force for c in contacts)):
+        pairs = [_PAIR % (quoted[c.a], quoted[c.b], c.points, c.depth, c.normal_force) for c in contacts]
+    else:
+        num = fx.json_number
+        pairs = [_PAIR % (quoted[c.a], quoted[c.b], c.points, num(c.depth), num(c.normal_force)) for c in contacts]
+    return f'{{"count":{len(pairs)},"pairs":[{",".join(pairs)}]}}'
 
 
 class _Sink:
@@ -139,13 +136,14 @@ class TraceWriter:
         self._force = force
         self._names = [b.name for b in meta.bodies]
         self._joint_names = [j.name for j in meta.joints]
+        self._quoted = [json.dumps(n) for n in self._names]
         if len(set(self._names)) != len(self._names) or len(set(self._joint_names)) != len(self._joint_names):
             raise ValueError("body and joint names must be unique")
         clash = set(meta.extra) & set(tf.SCENARIO_KEYS)
         if clash:
             raise ValueError(f"TraceMeta.extra must not redefine {sorted(clash)}")
-        self._flush_interval = flush_interval
-        self._next_flush = flush_interval
+        self._flush_ns = max(1, round(flush_interval * 1e9))
+        self._next_flush_ns = self._flush_ns
         self._last_ns = 0
         self._steps = 0
         self._final: Path | None = None
@@ -289,15 +287,15 @@ class TraceWriter:
             jrows = np.empty((len(self._joint_names), 3))
             jrows[:, 0], jrows[:, 1], jrows[:, 2] = joints.position, joints.velocity, joints.motor_force
             self._write(tf.TOPIC_JOINTS, ns, self._joints_tpl.render(jrows.ravel()))
-        self._write(tf.TOPIC_CONTACTS, ns, _contacts_json(contacts, self._names))
+        self._write(tf.TOPIC_CONTACTS, ns, _contacts_json(contacts, self._quoted))
         if state_vars:
             if tf.TOPIC_STATE not in self._channels:
                 self._register(tf.TOPIC_STATE, fx.state_schema(state_vars))
             self._write(tf.TOPIC_STATE, ns, fx.dumps(state_vars))
         self._steps += 1
-        if t >= self._next_flush:
+        if ns >= self._next_flush_ns:
             self._writer.flush()
-            self._next_flush = (math.floor(t / self._flush_interval) + 1) * self._flush_interval
+            self._next_flush_ns = (ns // self._flush_ns + 1) * self._flush_ns
 
     def event(self, t: float, name: str, source: str, detail: Mapping[str, Any] | None = None) -> None:
         ns = self._ns(t)
