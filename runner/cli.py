@@ -74,9 +74,15 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+def _console(stderr: bool) -> Console:
+    """A console that wraps to the terminal, or to a wide page in logs and pipes (CI)."""
+    probe = Console(stderr=stderr)
+    return Console(stderr=stderr, highlight=False, soft_wrap=True, width=None if probe.is_terminal else 160)
+
+
 def main(argv: Sequence[str] | None = None) -> int:
-    out = Console(highlight=False, soft_wrap=True)
-    err = Console(stderr=True, highlight=False, soft_wrap=True)
+    out = _console(stderr=False)
+    err = _console(stderr=True)
     args = build_parser().parse_args(argv)
     previous = signal.signal(signal.SIGTERM, _on_sigterm)
     try:
