@@ -74,6 +74,4 @@ def map_engine_errors(backend: str, doing: str) -> Iterator[None]:
     except (KeyboardInterrupt, SystemExit, MemoryError):
         raise
     except Exception as exc:  # noqa: BLE001 - the boundary: every engine error is translated
-        raise EngineFailure(
-            f"{backend}: {doing} failed: {type(exc).__name__}: {exc}", backend=backend
-        ) from exc
+        raise EngineFailure(f"{backend}: {doing} failed: {type(exc).__name__}: {exc}", backend=backend) from exc

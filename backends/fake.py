@@ -19,10 +19,20 @@ from .types import BodyStates, Capability, CompiledWorld, Contact, JointKind, Jo
 class FakeBackend(Backend):
     name = "fake"
     engine_distribution = "numpy"
-    capabilities: ClassVar[frozenset[Capability]] = frozenset({
-        Capability.SHAPE_BOX, Capability.SHAPE_SPHERE, Capability.SHAPE_CAPSULE, Capability.SHAPE_CYLINDER,
-        Capability.SHAPE_PLANE, Capability.KINEMATIC, Capability.JOINT_SLIDER, Capability.JOINT_MOTOR,
-        Capability.JOINT_LIMITS, Capability.SUBSTEPS})
+    capabilities: ClassVar[frozenset[Capability]] = frozenset(
+        {
+            Capability.SHAPE_BOX,
+            Capability.SHAPE_SPHERE,
+            Capability.SHAPE_CAPSULE,
+            Capability.SHAPE_CYLINDER,
+            Capability.SHAPE_PLANE,
+            Capability.KINEMATIC,
+            Capability.JOINT_SLIDER,
+            Capability.JOINT_MOTOR,
+            Capability.JOINT_LIMITS,
+            Capability.SUBSTEPS,
+        }
+    )
 
     def __init__(self, world: CompiledWorld) -> None:
         super().__init__(world)

@@ -35,16 +35,42 @@ class BackendEntry:
 
 # Kept sorted by name.
 _KNOWN: dict[str, BackendEntry] = {
-    "dart": BackendEntry("dart", "backends.dart:DartBackend", "dartpy", "dartpy", "dart",
-                         "DART (dartpy), ODE collision detector by default"),
-    "fake": BackendEntry("fake", "backends.fake:FakeBackend", "numpy", "numpy", "",
-                         "pure-Python point masses, for tests of the runner's logic", hidden=True),
-    "mujoco": BackendEntry("mujoco", "backends.mujoco:MujocoBackend", "mujoco", "mujoco", "mujoco",
-                           "MuJoCo, built through MjSpec"),
-    "ode": BackendEntry("ode", "backends.ode:OdeBackend", "panda3d", "panda3d", "ode",
-                        "the Open Dynamics Engine through panda3d.ode: the reference"),
-    "pybullet": BackendEntry("pybullet", "backends.pybullet:PyBulletBackend", "pybullet", "pybullet", "",
-                             "PyBullet in DIRECT mode (the default backend)"),
+    "dart": BackendEntry(
+        "dart",
+        "backends.dart:DartBackend",
+        "dartpy",
+        "dartpy",
+        "dart",
+        "DART (dartpy), ODE collision detector by default",
+    ),
+    "fake": BackendEntry(
+        "fake",
+        "backends.fake:FakeBackend",
+        "numpy",
+        "numpy",
+        "",
+        "pure-Python point masses, for tests of the runner's logic",
+        hidden=True,
+    ),
+    "mujoco": BackendEntry(
+        "mujoco", "backends.mujoco:MujocoBackend", "mujoco", "mujoco", "mujoco", "MuJoCo, built through MjSpec"
+    ),
+    "ode": BackendEntry(
+        "ode",
+        "backends.ode:OdeBackend",
+        "panda3d",
+        "panda3d",
+        "ode",
+        "the Open Dynamics Engine through panda3d.ode: the reference",
+    ),
+    "pybullet": BackendEntry(
+        "pybullet",
+        "backends.pybullet:PyBulletBackend",
+        "pybullet",
+        "pybullet",
+        "",
+        "PyBullet in DIRECT mode (the default backend)",
+    ),
 }
 if list(_KNOWN) != sorted(_KNOWN):  # pragma: no cover - a guard for whoever edits the table
     raise RuntimeError("backends.registry._KNOWN must stay sorted")
@@ -87,8 +113,7 @@ def get_backend(name: str) -> type[Backend]:
     item = entry(name)
     if not is_installed(name):
         raise BackendNotInstalled(
-            f"Backend `{name}` needs the `{item.module}` package, which is not installed. "
-            f"Install it with: {item.hint}"
+            f"Backend `{name}` needs the `{item.module}` package, which is not installed. Install it with: {item.hint}"
         )
     module_name, _, class_name = item.target.partition(":")
     try:

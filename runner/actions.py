@@ -53,8 +53,9 @@ def run_actions(session: Session, actions: Any, at: float, depth: int = 0) -> No
         elif isinstance(action, B.ResetAction):
             _reset(session, action.reset)
         elif isinstance(action, B.LogAction):
-            message, level = (action.log, "info") if isinstance(action.log, str) else (action.log.message,
-                                                                                        action.log.level)
+            message, level = (
+                (action.log, "info") if isinstance(action.log, str) else (action.log.message, action.log.level)
+            )
             session.log(at, level, message, "handler")
         elif isinstance(action, B.SendAction):
             if depth >= MAX_SEND_DEPTH:
@@ -78,8 +79,11 @@ def _reset(session: Session, spec: str | B.ResetCommand) -> None:
     else:
         quat = body.quat
     if body.motion.value == "kinematic":
-        hpr = cmd.hpr if cmd.hpr is not None else (quat_to_hpr(quat) if cmd.quat is not None
-                                                   else session.program.start_hpr[body.name])
+        hpr = (
+            cmd.hpr
+            if cmd.hpr is not None
+            else (quat_to_hpr(quat) if cmd.quat is not None else session.program.start_hpr[body.name])
+        )
         session.kinematics.teleport(session.backend, body.name, pos, hpr)
     elif body.motion.value == "dynamic":
         session.backend.reset_body(index, pos, quat, cmd.vel, cmd.angvel)

@@ -24,8 +24,15 @@ class Verdict:
     message: str = ""
 
     def as_dict(self) -> dict[str, Any]:
-        return {"name": self.name, "kind": self.kind, "passed": self.passed, "measured": self.measured,
-                "expected": self.expected, "time": self.time, "message": self.message}
+        return {
+            "name": self.name,
+            "kind": self.kind,
+            "passed": self.passed,
+            "measured": self.measured,
+            "expected": self.expected,
+            "time": self.time,
+            "message": self.message,
+        }
 
 
 def fmt(value: Any) -> str:
@@ -94,7 +101,10 @@ class AssertionTracker:
             if c.done is not None:
                 continue
             s = c.spec
-            if isinstance(s, A.ValueAssertion | A.CheckAssertion | A.ContactAssertion) and getattr(s, "at", None) is not None:
+            if (
+                isinstance(s, A.ValueAssertion | A.CheckAssertion | A.ContactAssertion)
+                and getattr(s, "at", None) is not None
+            ):
                 if self._at_time(s.at, t, final):
                     c.done = self._sample(s, t, r, contact)
                 continue
@@ -107,8 +117,11 @@ class AssertionTracker:
                     value = contact(*s.contact)
                     mode = s.when
                 else:
-                    mode = "always" if isinstance(s, A.AlwaysAssertion) else (
-                        "never" if isinstance(s, A.NeverAssertion) else "eventually")
+                    mode = (
+                        "always"
+                        if isinstance(s, A.AlwaysAssertion)
+                        else ("never" if isinstance(s, A.NeverAssertion) else "eventually")
+                    )
                     value = bool(self.expr[getattr(s, mode)].evaluate(r))
                 if mode == "always" and not value:
                     c.done = Verdict(s.name, c.kind, False, "false", "always true", t, f"false at t={t:.4f}")
@@ -149,12 +162,21 @@ class AssertionTracker:
     def _extremum(self, c: _Check, r: Resolver) -> Verdict:
         s = c.spec
         ok, expected = self._near(c.best if c.best is not None else math.nan, s.near, s.tol, r)
-        return Verdict(s.name, c.kind, ok, fmt(c.best), expected, c.best_time,
-                       f"{'max' if isinstance(s, A.MaxAssertion) else 'min'} at t={c.best_time:.4f}"
-                       if c.best_time is not None else "")
+        return Verdict(
+            s.name,
+            c.kind,
+            ok,
+            fmt(c.best),
+            expected,
+            c.best_time,
+            f"{'max' if isinstance(s, A.MaxAssertion) else 'min'} at t={c.best_time:.4f}"
+            if c.best_time is not None
+            else "",
+        )
 
-    def finish(self, t_end: float, events: Sequence[tuple[float, str]], sounds: Sequence[tuple[float, str]],
-               r: Resolver) -> list[Verdict]:
+    def finish(
+        self, t_end: float, events: Sequence[tuple[float, str]], sounds: Sequence[tuple[float, str]], r: Resolver
+    ) -> list[Verdict]:
         out = []
         for c in self.checks:
             s = c.spec
@@ -165,20 +187,51 @@ class AssertionTracker:
             elif isinstance(s, A.SoundAssertion):
                 out.append(self._sound(s, sounds, r))
             elif isinstance(s, A.MaxAssertion | A.MinAssertion):
-                out.append(self._extremum(c, r) if c.best is not None else
-                           Verdict(s.name, c.kind, False, "no sample", "a sample in the window", None,
-                                   "the run ended before the window"))
+                out.append(
+                    self._extremum(c, r)
+                    if c.best is not None
+                    else Verdict(
+                        s.name,
+                        c.kind,
+                        False,
+                        "no sample",
+                        "a sample in the window",
+                        None,
+                        "the run ended before the window",
+                    )
+                )
             elif isinstance(s, A.AlwaysAssertion | A.NeverAssertion) or (
-                    isinstance(s, A.ContactAssertion) and s.when in ("always", "never")):
+                isinstance(s, A.ContactAssertion) and s.when in ("always", "never")
+            ):
                 ok = c.seen
-                out.append(Verdict(s.name, c.kind, ok, "held" if ok else "no sample", "held over the window", t_end,
-                                   "" if ok else "the run ended before the window"))
+                out.append(
+                    Verdict(
+                        s.name,
+                        c.kind,
+                        ok,
+                        "held" if ok else "no sample",
+                        "held over the window",
+                        t_end,
+                        "" if ok else "the run ended before the window",
+                    )
+                )
             elif isinstance(s, A.EventuallyAssertion) or isinstance(s, A.ContactAssertion) and s.when == "eventually":
-                out.append(Verdict(s.name, c.kind, False, "never true", "eventually true", None, "never true in the window"))
+                out.append(
+                    Verdict(s.name, c.kind, False, "never true", "eventually true", None, "never true in the window")
+                )
             else:
                 at = getattr(s, "at", None)
-                out.append(Verdict(s.name, c.kind, False, "not reached", f"a sample at t={at}", None,
-                                   f"the run ended at t={t_end:.4f} before t={at}"))
+                out.append(
+                    Verdict(
+                        s.name,
+                        c.kind,
+                        False,
+                        "not reached",
+                        f"a sample at t={at}",
+                        None,
+                        f"the run ended at t={t_end:.4f} before t={at}",
+                    )
+                )
         return out
 
     def _event(self, s: A.EventAssertion, events: Sequence[tuple[float, str]], r: Resolver) -> Verdict:
@@ -205,7 +258,9 @@ class AssertionTracker:
                 problems.append(f"{'it' if first is None else other} never happened")
             elif (first >= other_times[0]) if field_name == "before" else (first <= other_times[0]):
                 problems.append(f"first at {fmt(first)}, {other} first at {fmt(other_times[0])}")
-        return Verdict(s.name, "event", not problems, ", ".join(measured), ", ".join(expected), first, "; ".join(problems))
+        return Verdict(
+            s.name, "event", not problems, ", ".join(measured), ", ".join(expected), first, "; ".join(problems)
+        )
 
     def _sound(self, s: A.SoundAssertion, sounds: Sequence[tuple[float, str]], r: Resolver) -> Verdict:
         times = [t for t, name in sounds if name == s.sound]
@@ -220,5 +275,12 @@ class AssertionTracker:
             expected.append(f"count {lo}" if lo == hi else f"count in [{lo}, {hi}]")
             if len(times) < lo or (hi is not None and len(times) > hi):
                 problems.append(f"played {len(times)} times")
-        return Verdict(s.name, "sound", not problems, f"started at {fmt(times)}", ", ".join(expected),
-                       times[0] if times else None, "; ".join(problems))
+        return Verdict(
+            s.name,
+            "sound",
+            not problems,
+            f"started at {fmt(times)}",
+            ", ".join(expected),
+            times[0] if times else None,
+            "; ".join(problems),
+        )

@@ -19,6 +19,7 @@ from typing import Any
 from rich.console import Console
 
 from backends.registry import DEFAULT_BACKEND
+from reports.trace_reader import TraceReadError
 
 from .errors import (
     BackendNotInstalled,
@@ -46,8 +47,10 @@ def _on_sigterm(signum: int, frame: FrameType | None) -> None:
 def build_parser() -> argparse.ArgumentParser:
     from .version import tool_version
 
-    parser = argparse.ArgumentParser(prog="scenario", description="Declarative physics scenarios, checked on "
-                                     "several physics engines with ODE semantics.")
+    parser = argparse.ArgumentParser(
+        prog="scenario",
+        description="Declarative physics scenarios, checked on several physics engines with ODE semantics.",
+    )
     parser.add_argument("--version", action="version", version=f"physics-scenarios {tool_version()}")
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
     run = sub.add_parser("run", help="run scenarios and print verdicts")
@@ -58,8 +61,13 @@ def build_parser() -> argparse.ArgumentParser:
     group.add_argument("--all-variants", action="store_true", help="run every variant")
     run.add_argument("--out", type=Path, default=DEFAULT_OUT, help="folder for the traces (default: traces/)")
     run.add_argument("--no-trace", action="store_true", help="do not write traces")
-    run.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
-                     help="override a value, e.g. world.dt=0.01 or params.count=50 (repeatable)")
+    run.add_argument(
+        "--set",
+        action="append",
+        default=[],
+        metavar="KEY=VALUE",
+        help="override a value, e.g. world.dt=0.01 or params.count=50 (repeatable)",
+    )
     run.add_argument("--force", action="store_true", default=True, help=argparse.SUPPRESS)
     out = run.add_mutually_exclusive_group()
     out.add_argument("--quiet", "-q", action="store_true", help="print only failures and the summary")
@@ -109,6 +117,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     except KeyboardInterrupt:
         err.print("interrupted (Ctrl-C); traces written so far are finished and marked interrupted")
         return ExitCode.INTERRUPTED
+    except TraceReadError as exc:
+        err.print(f"[bold red]error:[/] cannot read the trace: {exc}", markup=True)
+        return ExitCode.BAD_INPUT
     except BrokenPipeError:
         return ExitCode.OK
     finally:
@@ -165,9 +176,13 @@ def _backends(out: Console) -> int:
         table.add_column(col)
     for entry in list_backends():
         installed = is_installed(entry.name)
-        table.add_row(entry.name + (" (default)" if entry.name == DEFAULT_BACKEND else ""),
-                      engine_version(entry.name), "yes" if installed else "no", entry.description,
-                      "" if installed else entry.hint)
+        table.add_row(
+            entry.name + (" (default)" if entry.name == DEFAULT_BACKEND else ""),
+            engine_version(entry.name),
+            "yes" if installed else "no",
+            entry.description,
+            "" if installed else entry.hint,
+        )
     out.print(table)
     return ExitCode.OK
 

@@ -37,17 +37,27 @@ def _verdict_table(result: RunResult, failures_only: bool) -> Table:
 
 
 def _result_json(r: RunResult) -> dict[str, Any]:
-    return {"scenario": r.scenario, "variant": r.variant, "backend": r.backend, "status": r.status,
-            "end_time": r.end_time, "steps": r.steps, "trace": r.trace, "failure": r.failure,
-            "failure_detail": r.extra or None, "verdicts": [v.as_dict() for v in r.verdicts],
-            "events": [{"time": t, "name": n, "source": s} for t, n, s in r.events]}
+    return {
+        "scenario": r.scenario,
+        "variant": r.variant,
+        "backend": r.backend,
+        "status": r.status,
+        "end_time": r.end_time,
+        "steps": r.steps,
+        "trace": r.trace,
+        "failure": r.failure,
+        "failure_detail": r.extra or None,
+        "verdicts": [v.as_dict() for v in r.verdicts],
+        "events": [{"time": t, "name": n, "source": s} for t, n, s in r.events],
+    }
 
 
 def command_run(args: argparse.Namespace, out: Console, err: Console) -> int:
     entry(args.backend)  # an unknown name is bad input (exit 2) before anything runs
     if not is_installed(args.backend):
-        raise BackendNotInstalled(f"Backend `{args.backend}` is not installed. Install it with: "
-                                  f"{entry(args.backend).hint}")
+        raise BackendNotInstalled(
+            f"Backend `{args.backend}` is not installed. Install it with: {entry(args.backend).hint}"
+        )
     overrides = parse_overrides(args.set)
     cases: list[LoadedScenario] = []
     problems = []
@@ -63,11 +73,18 @@ def command_run(args: argparse.Namespace, out: Console, err: Console) -> int:
     show_progress = err.is_terminal and not (args.quiet or args.json)
     for case in cases:
         if show_progress:
-            with Progress(TextColumn("{task.description}"), BarColumn(), TextColumn("{task.percentage:>3.0f}%"),
-                          TimeRemainingColumn(), console=err, transient=True) as progress:
+            with Progress(
+                TextColumn("{task.description}"),
+                BarColumn(),
+                TextColumn("{task.percentage:>3.0f}%"),
+                TimeRemainingColumn(),
+                console=err,
+                transient=True,
+            ) as progress:
                 task = progress.add_task(f"{case.model.scenario} · {case.variant}", total=None)
-                result = run_loaded(case, args.backend, out_dir,
-                                    lambda k, n: progress.update(task, completed=k, total=n))
+                result = run_loaded(
+                    case, args.backend, out_dir, lambda k, n, task=task: progress.update(task, completed=k, total=n)
+                )
         else:
             result = run_loaded(case, args.backend, out_dir)
         results.append(result)
@@ -84,8 +101,9 @@ def command_run(args: argparse.Namespace, out: Console, err: Console) -> int:
 
 def _print_result(out: Console, result: RunResult, quiet: bool) -> None:
     if result.failure:
-        out.print(f"[bold red]engine failure[/] in {result.scenario} · {result.variant} · {result.backend}: "
-                  f"{result.failure}")
+        out.print(
+            f"[bold red]engine failure[/] in {result.scenario} · {result.variant} · {result.backend}: {result.failure}"
+        )
         detail = result.extra.get("last_good")
         if detail:
             out.print(f"  last good state of `{result.extra.get('body')}`: {json.dumps(detail)}")

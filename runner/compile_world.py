@@ -30,8 +30,14 @@ from .scenario.names import BodyInstance, expand_bodies, groups
 
 #: Kinematic bodies get a mass only because some engines need one; it never affects their motion.
 KINEMATIC_DENSITY = 1000.0
-PALETTE = [(0.85, 0.55, 0.25, 1.0), (0.35, 0.55, 0.85, 1.0), (0.45, 0.75, 0.40, 1.0), (0.80, 0.35, 0.45, 1.0),
-           (0.65, 0.50, 0.80, 1.0), (0.90, 0.80, 0.35, 1.0)]
+PALETTE = [
+    (0.85, 0.55, 0.25, 1.0),
+    (0.35, 0.55, 0.85, 1.0),
+    (0.45, 0.75, 0.40, 1.0),
+    (0.80, 0.35, 0.45, 1.0),
+    (0.65, 0.50, 0.80, 1.0),
+    (0.90, 0.80, 0.35, 1.0),
+]
 STATIC_COLOR = (0.55, 0.55, 0.55, 1.0)
 
 
@@ -112,12 +118,25 @@ def compile_body(inst: BodyInstance, number: int) -> BodySpec:
     else:
         mass = (body.density or KINEMATIC_DENSITY) * volume(shape)
     inertia = mass_properties(shape, mass) if mass > 0 else (0.0, 0.0, 0.0)
-    color = tuple(body.color) if body.color is not None else (
-        STATIC_COLOR if motion is Motion.STATIC else PALETTE[number % len(PALETTE)])
+    color = (
+        tuple(body.color)
+        if body.color is not None
+        else (STATIC_COLOR if motion is Motion.STATIC else PALETTE[number % len(PALETTE)])
+    )
     if len(color) == 3:
         color = (*color, 1.0)
-    return BodySpec(name=inst.name, motion=motion, shape=shape, mass=mass, inertia=inertia, pos=_position(inst),
-                    quat=orientation(body), lin_vel=body.vel, ang_vel=body.angvel, color=color)  # type: ignore[arg-type]
+    return BodySpec(
+        name=inst.name,
+        motion=motion,
+        shape=shape,
+        mass=mass,
+        inertia=inertia,
+        pos=_position(inst),
+        quat=orientation(body),
+        lin_vel=body.vel,
+        ang_vel=body.angvel,
+        color=color,
+    )  # type: ignore[arg-type]
 
 
 def _unit(v: Sequence[float]) -> tuple[float, float, float]:
@@ -133,11 +152,20 @@ def compile_world(model: Scenario, name: str) -> CompiledWorld:
     for jname, joint in model.joints.items():
         other = None if joint.bodies[1] == "environment" else joint.bodies[1]
         lo, hi = joint.limits if joint.limits is not None else (None, None)
-        joints.append(JointSpec(
-            name=jname, kind=JointKind(joint.type), body=joint.bodies[0], other=other, axis=_unit(joint.axis),
-            axis2=_unit(joint.axis2) if joint.axis2 is not None else None,
-            anchor=joint.anchor if joint.anchor is not None else positions[joint.bodies[0]], lo=lo, hi=hi,
-            motor=Motor(joint.motor.vel, joint.motor.fmax) if joint.motor is not None else None))
+        joints.append(
+            JointSpec(
+                name=jname,
+                kind=JointKind(joint.type),
+                body=joint.bodies[0],
+                other=other,
+                axis=_unit(joint.axis),
+                axis2=_unit(joint.axis2) if joint.axis2 is not None else None,
+                anchor=joint.anchor if joint.anchor is not None else positions[joint.bodies[0]],
+                lo=lo,
+                hi=hi,
+                motor=Motor(joint.motor.vel, joint.motor.fmax) if joint.motor is not None else None,
+            )
+        )
     members = groups(model)
     pairs: list[PairSurface] = []
     for override in model.surfaces:
@@ -147,7 +175,14 @@ def compile_world(model: Scenario, name: str) -> CompiledWorld:
         pairs.extend(PairSurface(a, b, surface) for a in side_a for b in side_b if a != b)
     d = model.surface
     return CompiledWorld(
-        name=name, gravity=model.world.gravity, dt=model.world.dt, substeps=model.world.substeps,
-        duration=model.world.duration, bodies=bodies, joints=tuple(joints),
-        default_surface=Surface(d.bounce, d.bounce_vel, d.mu), pair_surfaces=tuple(pairs),
-        backend_options={k: dict(v) for k, v in model.backend_options.items()})
+        name=name,
+        gravity=model.world.gravity,
+        dt=model.world.dt,
+        substeps=model.world.substeps,
+        duration=model.world.duration,
+        bodies=bodies,
+        joints=tuple(joints),
+        default_surface=Surface(d.bounce, d.bounce_vel, d.mu),
+        pair_surfaces=tuple(pairs),
+        backend_options={k: dict(v) for k, v in model.backend_options.items()},
+    )

@@ -39,6 +39,7 @@ def _aggregate(f: Callable[..., Any]) -> Callable[..., Any]:
         if not args:
             raise ExpressionError(f"{f.__name__}() of nothing")
         return f(args)
+
     return wrapped
 
 
@@ -49,22 +50,54 @@ def _safe_pow(a: float, b: float) -> float:
 
 
 PURE_FUNCTIONS: dict[str, Callable[..., Any]] = {
-    "abs": abs, "sqrt": math.sqrt, "sin": math.sin, "cos": math.cos, "tan": math.tan, "asin": math.asin,
-    "acos": math.acos, "atan": math.atan, "atan2": math.atan2, "exp": math.exp, "log": math.log,
-    "hypot": math.hypot, "radians": math.radians, "degrees": math.degrees, "floor": math.floor,
-    "ceil": math.ceil, "round": round, "sign": lambda x: (x > 0) - (x < 0),
-    "min": _aggregate(min), "max": _aggregate(max), "sum": _aggregate(sum),
-    "mean": _aggregate(lambda v: sum(v) / len(v)), "all": _aggregate(all), "any": _aggregate(any),
-    "len": lambda v: len(v), "clamp": lambda x, lo, hi: max(lo, min(hi, x)),
+    "abs": abs,
+    "sqrt": math.sqrt,
+    "sin": math.sin,
+    "cos": math.cos,
+    "tan": math.tan,
+    "asin": math.asin,
+    "acos": math.acos,
+    "atan": math.atan,
+    "atan2": math.atan2,
+    "exp": math.exp,
+    "log": math.log,
+    "hypot": math.hypot,
+    "radians": math.radians,
+    "degrees": math.degrees,
+    "floor": math.floor,
+    "ceil": math.ceil,
+    "round": round,
+    "sign": lambda x: (x > 0) - (x < 0),
+    "min": _aggregate(min),
+    "max": _aggregate(max),
+    "sum": _aggregate(sum),
+    "mean": _aggregate(lambda v: sum(v) / len(v)),
+    "all": _aggregate(all),
+    "any": _aggregate(any),
+    "len": lambda v: len(v),
+    "clamp": lambda x, lo, hi: max(lo, min(hi, x)),
 }
 #: Functions the runner resolves (they need the run's state): contact(a, b), playing('ival'), count('event').
 RUNNER_FUNCTIONS = frozenset({"contact", "playing", "count"})
 CONSTANTS = {"pi": math.pi, "e": math.e, "inf": math.inf, "true": True, "false": False, "True": True, "False": False}
 
-_BIN = {ast.Add: operator.add, ast.Sub: operator.sub, ast.Mult: operator.mul, ast.Div: operator.truediv,
-        ast.FloorDiv: operator.floordiv, ast.Mod: operator.mod, ast.Pow: _safe_pow}
-_CMP = {ast.Eq: operator.eq, ast.NotEq: operator.ne, ast.Lt: operator.lt, ast.LtE: operator.le,
-        ast.Gt: operator.gt, ast.GtE: operator.ge}
+_BIN = {
+    ast.Add: operator.add,
+    ast.Sub: operator.sub,
+    ast.Mult: operator.mul,
+    ast.Div: operator.truediv,
+    ast.FloorDiv: operator.floordiv,
+    ast.Mod: operator.mod,
+    ast.Pow: _safe_pow,
+}
+_CMP = {
+    ast.Eq: operator.eq,
+    ast.NotEq: operator.ne,
+    ast.Lt: operator.lt,
+    ast.LtE: operator.le,
+    ast.Gt: operator.gt,
+    ast.GtE: operator.ge,
+}
 
 Evaluator = Callable[[Resolver], Any]
 
@@ -160,6 +193,7 @@ class _Compiler:
                         return False
                     left = right
                 return True
+
             return compare
         if isinstance(node, ast.IfExp):
             test, body, orelse = self.compile(node.test), self.compile(node.body), self.compile(node.orelse)

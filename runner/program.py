@@ -56,9 +56,17 @@ class Program:
 def _interval_spec(step: B.Step, model: Any, sounds: dict[str, SoundInfo], seen: tuple[str, ...] = ()) -> Any:
     if step.lerp is not None:
         lerp = step.lerp
-        return LerpSpec(body=lerp.body, duration=lerp.duration, blend=lerp.blend, pos=lerp.pos, hpr=lerp.hpr,
-                        scale=lerp.scale, start_pos=lerp.start_pos, start_hpr=lerp.start_hpr,
-                        start_scale=lerp.start_scale)
+        return LerpSpec(
+            body=lerp.body,
+            duration=lerp.duration,
+            blend=lerp.blend,
+            pos=lerp.pos,
+            hpr=lerp.hpr,
+            scale=lerp.scale,
+            start_pos=lerp.start_pos,
+            start_hpr=lerp.start_hpr,
+            start_scale=lerp.start_scale,
+        )
     if step.wait is not None:
         return WaitSpec(duration=step.wait)
     if step.func is not None:
@@ -67,8 +75,9 @@ def _interval_spec(step: B.Step, model: Any, sounds: dict[str, SoundInfo], seen:
         spec = step.sound if isinstance(step.sound, B.SoundStep) else B.SoundStep(sound=step.sound)
         length = sounds[spec.sound].length
         duration = spec.duration if spec.duration is not None else max(length - spec.start_time, 0.0)
-        return SoundSpec(sound=spec.sound, duration=duration, volume=spec.volume, loop=spec.loop,
-                         start_time=spec.start_time)
+        return SoundSpec(
+            sound=spec.sound, duration=duration, volume=spec.volume, loop=spec.loop, start_time=spec.start_time
+        )
     if step.interval is not None:
         if step.interval in seen:
             raise ValueError(f"interval `{step.interval}` contains itself")
@@ -97,7 +106,19 @@ def _expressions(model: Any) -> dict[str, Expression]:
         if isinstance(action, B.CalcAction):
             texts.update(action.calc.values())
     for a in model.assertions:
-        for field in ("value", "check", "always", "never", "eventually", "max_of", "min_of", "near", "min", "max", "tol"):
+        for field in (
+            "value",
+            "check",
+            "always",
+            "never",
+            "eventually",
+            "max_of",
+            "min_of",
+            "near",
+            "min",
+            "max",
+            "tol",
+        ):
             value = getattr(a, field, None)
             for text in value.values() if isinstance(value, dict) else [value]:
                 if isinstance(text, str):
@@ -112,19 +133,25 @@ def build_program(loaded: LoadedScenario) -> Program:
     world = compile_world(model, model.scenario)
     base = Path(loaded.path).parent
     sounds = {name: read_info((base / rel).resolve()) for name, rel in model.sounds.items()}
-    intervals = {ival: (d.name or ival, _interval_spec(d, model, sounds, (ival,))) for ival, d in model.intervals.items()}
+    intervals = {
+        ival: (d.name or ival, _interval_spec(d, model, sounds, (ival,))) for ival, d in model.intervals.items()
+    }
     steps = max(1, int(math.floor(world.duration / world.dt + 0.5)))
     inputs: list[TimedInput] = []
     for item in model.inputs:
-        times = [item.at] if item.repeat is None else [item.at + k * item.repeat.every for k in range(item.repeat.count)]
+        times = (
+            [item.at] if item.repeat is None else [item.at + k * item.repeat.every for k in range(item.repeat.count)]
+        )
         for t in times:
             step = max(0, math.ceil(t / world.dt - STEP_EPS))
             if step < steps:
                 inputs.append(TimedInput(step, t, item.event))
     inputs.sort(key=lambda x: (x.step, x.time))
     index = {b.name: i for i, b in enumerate(world.bodies)}
-    nodes = [NodeDef(name, index[n.body], tuple(_solid(s) for s in n.all_solids()))
-             for name, n in model.collisions.nodes.items()]
+    nodes = [
+        NodeDef(name, index[n.body], tuple(_solid(s) for s in n.all_solids()))
+        for name, n in model.collisions.nodes.items()
+    ]
     start_hpr: dict[str, tuple[float, float, float]] = {}
     start_scale: dict[str, float] = {}
     for inst, spec in zip(expand_bodies(model), world.bodies, strict=True):
@@ -132,7 +159,18 @@ def build_program(loaded: LoadedScenario) -> Program:
         start_hpr[inst.name] = body.hpr if body.hpr is not None else quat_to_hpr(spec.quat)
         start_scale[inst.name] = body.scale
     return Program(
-        loaded=loaded, world=world, steps=steps, intervals=intervals, handlers=dict(model.on), inputs=inputs,
-        nodes=nodes, colliders=list(model.collisions.from_),
-        contact_colliders=[index[b] for b in model.collisions.contacts_from], expressions=_expressions(model),
-        sounds=sounds, groups=groups(model), start_hpr=start_hpr, start_scale=start_scale)
+        loaded=loaded,
+        world=world,
+        steps=steps,
+        intervals=intervals,
+        handlers=dict(model.on),
+        inputs=inputs,
+        nodes=nodes,
+        colliders=list(model.collisions.from_),
+        contact_colliders=[index[b] for b in model.collisions.contacts_from],
+        expressions=_expressions(model),
+        sounds=sounds,
+        groups=groups(model),
+        start_hpr=start_hpr,
+        start_scale=start_scale,
+    )

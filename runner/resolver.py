@@ -28,8 +28,15 @@ class Snapshot:
 class StateResolver:
     """Implements :class:`runner.expressions.Resolver` for a run. Getters are built once per name."""
 
-    def __init__(self, world: CompiledWorld, groups: dict[str, list[str]], state: dict[str, Any],
-                 params: dict[str, Any], snapshot: Snapshot, functions: dict[str, Callable[[Sequence[Any]], Any]]):
+    def __init__(
+        self,
+        world: CompiledWorld,
+        groups: dict[str, list[str]],
+        state: dict[str, Any],
+        params: dict[str, Any],
+        snapshot: Snapshot,
+        functions: dict[str, Callable[[Sequence[Any]], Any]],
+    ):
         self.world = world
         self.body_index = {b.name: i for i, b in enumerate(world.bodies)}
         self.joint_index = {j.name: i for i, j in enumerate(world.joints)}
@@ -40,8 +47,14 @@ class StateResolver:
         self.functions = functions
         self._getters: dict[str, Callable[[], Any]] = {}
         gx, gy, gz = world.gravity
-        self._constants = {"dt": world.dt, "duration": world.duration, "g": math.sqrt(gx * gx + gy * gy + gz * gz),
-                           "gravity.x": gx, "gravity.y": gy, "gravity.z": gz}
+        self._constants = {
+            "dt": world.dt,
+            "duration": world.duration,
+            "g": math.sqrt(gx * gx + gy * gy + gz * gz),
+            "gravity.x": gx,
+            "gravity.y": gy,
+            "gravity.z": gz,
+        }
 
     def value(self, name: str) -> Any:
         getter = self._getters.get(name)

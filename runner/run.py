@@ -29,17 +29,29 @@ def _solids(program) -> list:  # noqa: ANN001 - runner-internal
         body = program.world.bodies[node.body].name
         scale = program.start_scale[body]
         for s in node.solids:
-            out.append(SolidVisual(
-                node=node.name, body=body, kind=s.kind, center=tuple(float(c) * scale for c in s.center),
-                radius=s.radius * scale,
-                size=tuple(float(c) * 2 * scale for c in s.half) if s.half is not None else (0.0, 0.0, 0.0),
-                vertices=tuple(tuple(float(c) * scale for c in v) for v in s.vertices) if s.vertices is not None
-                else ()))
+            out.append(
+                SolidVisual(
+                    node=node.name,
+                    body=body,
+                    kind=s.kind,
+                    center=tuple(float(c) * scale for c in s.center),
+                    radius=s.radius * scale,
+                    size=tuple(float(c) * 2 * scale for c in s.half) if s.half is not None else (0.0, 0.0, 0.0),
+                    vertices=tuple(tuple(float(c) * scale for c in v) for v in s.vertices)
+                    if s.vertices is not None
+                    else (),
+                )
+            )
     return out
 
 
-def run_loaded(loaded: LoadedScenario, backend_name: str, out_dir: Path | None,
-               progress: Callable[[int, int], None] | None = None, force: bool = True) -> RunResult:
+def run_loaded(
+    loaded: LoadedScenario,
+    backend_name: str,
+    out_dir: Path | None,
+    progress: Callable[[int, int], None] | None = None,
+    force: bool = True,
+) -> RunResult:
     """Build, run and record one case. Engine failures come back as a result with status engine-failure;
     an interruption (KeyboardInterrupt) finishes the trace as interrupted and propagates."""
     program = build_program(loaded)
@@ -54,13 +66,23 @@ def run_loaded(loaded: LoadedScenario, backend_name: str, out_dir: Path | None,
         out_dir.mkdir(parents=True, exist_ok=True)
         world = program.world
         meta = TraceMeta(
-            scenario=loaded.model.scenario, variant=loaded.variant, backend=backend_name,
-            backend_version=cls.engine_version(), engine_settings=backend.settings(), dt=world.dt,
-            substeps=world.substeps, duration=world.duration, tool_version=tool_version(),
-            scenario_sha256=loaded.sha256, scenario_path=loaded.path.name,
-            schema_version=loaded.model.schema_version, bodies=world.bodies, joints=world.joints,
+            scenario=loaded.model.scenario,
+            variant=loaded.variant,
+            backend=backend_name,
+            backend_version=cls.engine_version(),
+            engine_settings=backend.settings(),
+            dt=world.dt,
+            substeps=world.substeps,
+            duration=world.duration,
+            tool_version=tool_version(),
+            scenario_sha256=loaded.sha256,
+            scenario_path=loaded.path.name,
+            schema_version=loaded.model.schema_version,
+            bodies=world.bodies,
+            joints=world.joints,
             state_names=list(loaded.model.state),
-            extra={"overrides": json.dumps([[k, v] for k, v in loaded.overrides], default=str)})
+            extra={"overrides": json.dumps([[k, v] for k, v in loaded.overrides], default=str)},
+        )
         with TraceWriter(trace_path(out_dir, loaded, backend_name), meta, force=force) as trace:
             _attach_sources(trace, loaded, program)
             trace.scene(0.0, _solids(program))
@@ -74,16 +96,31 @@ def _run(program, loaded: LoadedScenario, backend, trace, progress) -> RunResult
     try:
         result = session.run()
     except EngineFailure as exc:
-        result = RunResult(program.name, loaded.variant, backend.name, "engine-failure", [], session.snapshot.time,
-                           0, session.events, session.sound_starts, 0.0, failure=str(exc),
-                           extra={"body": exc.body, "time": exc.time, "last_good": exc.last_good})
+        result = RunResult(
+            program.name,
+            loaded.variant,
+            backend.name,
+            "engine-failure",
+            [],
+            session.snapshot.time,
+            0,
+            session.events,
+            session.sound_starts,
+            0.0,
+            failure=str(exc),
+            extra={"body": exc.body, "time": exc.time, "last_good": exc.last_good},
+        )
     if trace is not None:
         trace.verdicts(result.end_time, [v.as_dict() for v in result.verdicts])
         if result.failure:
             trace.log(result.end_time, "error", result.failure, "engine")
-        summary = {"passed": sum(v.passed for v in result.verdicts),
-                   "failed": sum(not v.passed for v in result.verdicts), "end_time": result.end_time,
-                   "failure": result.failure, **({"failure_detail": result.extra} if result.failure else {})}
+        summary = {
+            "passed": sum(v.passed for v in result.verdicts),
+            "failed": sum(not v.passed for v in result.verdicts),
+            "end_time": result.end_time,
+            "failure": result.failure,
+            **({"failure_detail": result.extra} if result.failure else {}),
+        }
         result.trace = str(trace.finish(result.status, summary))
     return result
 

@@ -29,7 +29,6 @@ from backends.errors import EngineFailure
 from .actions import run_actions
 from .assertions import AssertionTracker, Verdict
 from .collisions import EventHandler, Pose, SolidTraverser
-from .hpr import hpr_to_quat
 from .intervals import IntervalManager
 from .kinematics import KinematicTable
 from .program import Program
@@ -60,8 +59,13 @@ class RunResult:
 
 
 class Session:
-    def __init__(self, program: Program, backend: Backend, trace: Any | None = None,
-                 progress: Callable[[int, int], None] | None = None) -> None:
+    def __init__(
+        self,
+        program: Program,
+        backend: Backend,
+        trace: Any | None = None,
+        progress: Callable[[int, int], None] | None = None,
+    ) -> None:
         self.program = program
         self.world = program.world
         self.backend = backend
@@ -85,10 +89,18 @@ class Session:
         self.queue: deque[tuple[str, str]] = deque()
         self.ended = False
         self.end_reason = ""
-        self.resolver = StateResolver(self.world, program.groups, self.state, dict(model.params), self.snapshot, {
-            "contact": lambda a: self.in_contact(str(a[0]), str(a[1])),
-            "playing": lambda a: self.intervals.is_playing(str(a[0])),
-            "count": lambda a: self.event_counts.get(str(a[0]), 0)})
+        self.resolver = StateResolver(
+            self.world,
+            program.groups,
+            self.state,
+            dict(model.params),
+            self.snapshot,
+            {
+                "contact": lambda a: self.in_contact(str(a[0]), str(a[1])),
+                "playing": lambda a: self.intervals.is_playing(str(a[0])),
+                "count": lambda a: self.event_counts.get(str(a[0]), 0),
+            },
+        )
         self.tracker = AssertionTracker(model.assertions, program.expressions, backend.name, self.dt)
         self.traverser = SolidTraverser(program.nodes, program.colliders)
         c = model.collisions
@@ -172,21 +184,38 @@ class Session:
     # --- the loop --------------------------------------------------------------------------------
     def _read(self, t: float) -> None:
         states = self.backend.body_states()
-        bad = ~(np.isfinite(states.pos).all(axis=1) & np.isfinite(states.quat).all(axis=1)
-                & np.isfinite(states.lin_vel).all(axis=1) & np.isfinite(states.ang_vel).all(axis=1))
+        bad = ~(
+            np.isfinite(states.pos).all(axis=1)
+            & np.isfinite(states.quat).all(axis=1)
+            & np.isfinite(states.lin_vel).all(axis=1)
+            & np.isfinite(states.ang_vel).all(axis=1)
+        )
         fast = (np.linalg.norm(np.nan_to_num(states.lin_vel, nan=np.inf), axis=1) > MAX_SPEED) | (
-            np.linalg.norm(np.nan_to_num(states.ang_vel, nan=np.inf), axis=1) > MAX_SPEED)
+            np.linalg.norm(np.nan_to_num(states.ang_vel, nan=np.inf), axis=1) > MAX_SPEED
+        )
         broken = np.flatnonzero(bad | fast)
         if broken.size:
             i = int(broken[0])
             name = self.world.bodies[i].name
             last = self.snapshot.bodies
-            last_good = None if last is None else {
-                "time": self.snapshot.time, "pos": last.pos[i].tolist(), "vel": last.lin_vel[i].tolist(),
-                "angvel": last.ang_vel[i].tolist()}
+            last_good = (
+                None
+                if last is None
+                else {
+                    "time": self.snapshot.time,
+                    "pos": last.pos[i].tolist(),
+                    "vel": last.lin_vel[i].tolist(),
+                    "angvel": last.ang_vel[i].tolist(),
+                }
+            )
             what = "a non-finite state" if bad[i] else f"a speed above {MAX_SPEED:g}"
-            raise EngineFailure(f"body `{name}` reached {what} at t={t:.4f} s on {self.backend.name}",
-                                backend=self.backend.name, body=name, time=t, last_good=last_good)
+            raise EngineFailure(
+                f"body `{name}` reached {what} at t={t:.4f} s on {self.backend.name}",
+                backend=self.backend.name,
+                body=name,
+                time=t,
+                last_good=last_good,
+            )
         self.snapshot.time = t
         self.snapshot.bodies = states
         self.snapshot.joints = self.backend.joint_states()
@@ -198,8 +227,10 @@ class Session:
         from .collisions import quat_matrix
 
         s = self.snapshot.bodies
-        return [Pose(s.pos[i], quat_matrix(s.quat[i]), self.kinematics.by_name[b.name].scale)
-                for i, b in enumerate(self.world.bodies)]
+        return [
+            Pose(s.pos[i], quat_matrix(s.quat[i]), self.kinematics.by_name[b.name].scale)
+            for i, b in enumerate(self.world.bodies)
+        ]
 
     def _detect(self, t: float) -> None:
         hits = self.traverser.traverse(self._poses()) if self.traverser.colliders else []
@@ -219,7 +250,8 @@ class Session:
                     self.trace.sound(end, name, "stop")
         if self.trace is not None:
             if self.kinematics.scale_changed:
-                self.trace.scene(t, scales={n: k.scale for n, k in self.kinematics.by_name.items()})
+                start = self.program.start_scale
+                self.trace.scene(t, scales={n: k.scale / start[n] for n, k in self.kinematics.by_name.items()})
                 self.kinematics.scale_changed.clear()
             self.trace.step(t, self.snapshot.bodies, self.snapshot.joints, self.contacts, self.state)
         self.tracker.on_step(t, self.resolver, self.in_contact)
@@ -263,5 +295,15 @@ class Session:
         self.tracker.on_step(t, self.resolver, self.in_contact, final=True)
         verdicts = self.tracker.finish(t, [(e[0], e[1]) for e in self.events], self.sound_starts, self.resolver)
         status = "passed" if all(v.passed for v in verdicts) else "failed"
-        return RunResult(self.program.name, self.program.loaded.variant, self.backend.name, status, verdicts, t,
-                         k, self.events, self.sound_starts, wallclock.perf_counter() - start)
+        return RunResult(
+            self.program.name,
+            self.program.loaded.variant,
+            self.backend.name,
+            status,
+            verdicts,
+            t,
+            k,
+            self.events,
+            self.sound_starts,
+            wallclock.perf_counter() - start,
+        )

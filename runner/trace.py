@@ -139,15 +139,15 @@ class TraceWriter:
         self._quoted = [json.dumps(n) for n in self._names]
         if len(set(self._names)) != len(self._names) or len(set(self._joint_names)) != len(self._joint_names):
             raise ValueError("body and joint names must be unique")
-        clash = set(meta.extra) & set(tf.SCENARIO_KEYS)
-        if clash:
-            raise ValueError(f"TraceMeta.extra must not redefine {sorted(clash)}")
+        if set(meta.extra) & set(tf.SCENARIO_KEYS):
+            raise ValueError(f"TraceMeta.extra must not redefine {sorted(set(meta.extra) & set(tf.SCENARIO_KEYS))}")
         self._flush_ns = max(1, round(flush_interval * 1e9))
         self._next_flush_ns = self._flush_ns
         self._last_ns = 0
         self._steps = 0
         self._final: Path | None = None
         self._closed = False
+        self._tf_tpl, self._bodies_tpl, self._joints_tpl = fx.step_templates(self._names, self._joint_names)
         self._sink = self._open()
         try:
             self._writer = Writer(self._sink, chunk_size=chunk_size, compression=CompressionType.LZ4)
@@ -155,10 +155,11 @@ class TraceWriter:
             self._channels: dict[str, int] = {}
             self._register_all()
             self._writer.add_metadata(tf.METADATA_SCENARIO, self._scenario_record())
-        except (OSError, McapError) as exc:
+        except BaseException as exc:
             self._abandon()
-            raise TraceError(f"cannot write trace {self.partial_path}: {exc}") from exc
-        self._tf_tpl, self._bodies_tpl, self._joints_tpl = fx.step_templates(self._names, self._joint_names)
+            if isinstance(exc, OSError | McapError):
+                raise TraceError(f"cannot write trace {self.partial_path}: {exc}") from exc
+            raise
 
     # ---- opening ---------------------------------------------------------------------------------
 

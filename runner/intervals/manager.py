@@ -25,7 +25,7 @@ ones at once; never for a SoundInterval, a Func, or a Lerp skipped in one frame)
 from __future__ import annotations
 
 import bisect
-from collections.abc import Iterator, Mapping
+from collections.abc import Callable, Iterator, Mapping
 from contextlib import contextmanager
 
 from .base import Node, State
@@ -85,7 +85,7 @@ class IntervalManager:
             return WaitLeaf(spec.duration)
         raise TypeError(f"Invalid interval spec. Expected one of the runner.intervals specs. Received: {spec!r}")
 
-    def _done_callback(self, play: Play):  # noqa: ANN202 - a closure
+    def _done_callback(self, play: Play) -> Callable[[float], None]:
         if play.is_python:
             return lambda at: self._host.interval_event(play.id, "done", at)
         return lambda at: self._done.append((play.id, at))

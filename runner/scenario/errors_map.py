@@ -48,8 +48,11 @@ def issues_from(error: ValidationError, positions: Positions, data: Any, root: t
             key = str(path[-1]) if path else ""
             allowed = keys_at(root, data, path[:-1])
             close = difflib.get_close_matches(key, allowed, n=1, cutoff=0.6)
-            hint = f"; did you mean `{close[0]}`?" if close else (f"; expected one of: {', '.join(sorted(allowed))}"
-                                                                   if allowed else "")
+            hint = (
+                f"; did you mean `{close[0]}`?"
+                if close
+                else (f"; expected one of: {', '.join(sorted(allowed))}" if allowed else "")
+            )
             message = f"unknown key `{key}`{hint}"
             issue = positions.issue(path, message, at_key=True)
         elif kind in ("union_tag_not_found", "union_tag_invalid"):
@@ -57,8 +60,10 @@ def issues_from(error: ValidationError, positions: Positions, data: Any, root: t
             keys = list(value) if isinstance(value, dict) else []
             guess = next(iter(difflib.get_close_matches(keys[0], list(tags), n=1)), None) if keys else None
             what = "an action" if tags is ACTION_TAGS else "an assertion"
-            message = (f"expected {what} with one of the keys {', '.join(tags)}; found "
-                       f"{'keys ' + ', '.join(map(str, keys)) if keys else _found(value)}")
+            message = (
+                f"expected {what} with one of the keys {', '.join(tags)}; found "
+                f"{'keys ' + ', '.join(map(str, keys)) if keys else _found(value)}"
+            )
             if guess:
                 message += f"; did you mean `{guess}`?"
             issue = positions.issue(path, message)
@@ -67,7 +72,7 @@ def issues_from(error: ValidationError, positions: Positions, data: Any, root: t
             issue = Issue(issue.file, issue.line, issue.column, _join(path), issue.message)
         else:
             msg = err["msg"]
-            msg = msg[len("Value error, "):] if msg.startswith("Value error, ") else msg
+            msg = msg[len("Value error, ") :] if msg.startswith("Value error, ") else msg
             if "found" not in msg:
                 msg = f"{msg[0].lower()}{msg[1:]}; found {_found(value)}"
             issue = positions.issue(path, msg)

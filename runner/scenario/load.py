@@ -48,11 +48,22 @@ def read_source(path: FsPath) -> tuple[str, Any, Positions]:
     try:
         text = raw.decode("utf-8")
     except UnicodeDecodeError as exc:
-        raise ScenarioValidationError([Issue(str(path), 0, 0, "", f"expected UTF-8 text, found a byte 0x{raw[exc.start]:02x} "
-                                             f"at offset {exc.start}")]) from None
+        raise ScenarioValidationError(
+            [
+                Issue(
+                    str(path),
+                    0,
+                    0,
+                    "",
+                    f"expected UTF-8 text, found a byte 0x{raw[exc.start]:02x} at offset {exc.start}",
+                )
+            ]
+        ) from None
     data, positions = load_yaml(text, str(path))
     if not isinstance(data, dict):
-        raise ScenarioValidationError([positions.issue((), f"expected a mapping at the top, found {type(data).__name__}")])
+        raise ScenarioValidationError(
+            [positions.issue((), f"expected a mapping at the top, found {type(data).__name__}")]
+        )
     return text, data, positions
 
 
@@ -62,8 +73,9 @@ def parse_overrides(items: list[str]) -> tuple[tuple[str, Any], ...]:
     for item in items:
         key, sep, value = item.partition("=")
         if not sep or not key.strip():
-            raise ScenarioValidationError([Issue("<command line>", 0, 0, "--set",
-                                                 f"expected key=value, found {item!r}")])
+            raise ScenarioValidationError(
+                [Issue("<command line>", 0, 0, "--set", f"expected key=value, found {item!r}")]
+            )
         try:
             parsed = yaml.safe_load(value) if value.strip() else ""
         except yaml.YAMLError:
@@ -81,8 +93,17 @@ def _set_path(data: dict[str, Any], dotted: str, value: Any, file: str, origin: 
         elif isinstance(node, list) and isinstance(part, int) and part < len(node):
             node = node[part]
         else:
-            raise ScenarioValidationError([Issue(file, 0, 0, dotted, f"cannot set `{dotted}`: "
-                                                 f"`{format_path(tuple(parts[:i + 1]))}` is not a mapping")])
+            raise ScenarioValidationError(
+                [
+                    Issue(
+                        file,
+                        0,
+                        0,
+                        dotted,
+                        f"cannot set `{dotted}`: `{format_path(tuple(parts[: i + 1]))}` is not a mapping",
+                    )
+                ]
+            )
     last = parts[-1]
     if isinstance(node, dict):
         node[last] = value
@@ -103,8 +124,11 @@ def _substitute(value: Any, params: dict[str, Any], path: Path, positions: Posit
         names = _PARAM_ANYWHERE.findall(value)
         missing = [n for n in names if n not in params]
         if missing:
-            issues.append(positions.issue(path, f"unknown parameter `{missing[0]}`; "
-                                                f"declared: {', '.join(sorted(params)) or 'none'}"))
+            issues.append(
+                positions.issue(
+                    path, f"unknown parameter `{missing[0]}`; declared: {', '.join(sorted(params)) or 'none'}"
+                )
+            )
             return value
         if whole:
             return params[whole.group(1)]
@@ -118,7 +142,9 @@ def variant_names(path: FsPath) -> list[str]:
     return list(variants) if isinstance(variants, dict) and variants else [BASE_CASE]
 
 
-def load_scenario(path: FsPath, variant: str | None = None, overrides: tuple[tuple[str, Any], ...] = ()) -> LoadedScenario:
+def load_scenario(
+    path: FsPath, variant: str | None = None, overrides: tuple[tuple[str, Any], ...] = ()
+) -> LoadedScenario:
     """Load ``path`` as the given variant (``None``: the base case)."""
     text, data, positions = read_source(path)
     data = copy.deepcopy(data)
@@ -131,8 +157,9 @@ def load_scenario(path: FsPath, variant: str | None = None, overrides: tuple[tup
     if chosen is not None:
         if chosen not in variants:
             names = ", ".join(variants) or "none"
-            raise ScenarioValidationError([positions.issue(("variants",), f"unknown variant `{chosen}`; this file "
-                                                                          f"has: {names}", at_key=True)])
+            raise ScenarioValidationError(
+                [positions.issue(("variants",), f"unknown variant `{chosen}`; this file has: {names}", at_key=True)]
+            )
         _apply_variant(data, variants[chosen], ("variants", chosen), positions, file)
     params = data.get("params") if isinstance(data.get("params"), dict) else {}
     issues: list[Issue] = []
@@ -144,9 +171,15 @@ def load_scenario(path: FsPath, variant: str | None = None, overrides: tuple[tup
     except ValidationError as exc:
         raise ScenarioValidationError(issues_from(exc, positions, data, Scenario)) from None
     check_references(model, positions, path.parent)
-    return LoadedScenario(model=model, variant=chosen or BASE_CASE, path=path, text=text,
-                          sha256=hashlib.sha256(text.encode()).hexdigest(), positions=positions,
-                          overrides=overrides)
+    return LoadedScenario(
+        model=model,
+        variant=chosen or BASE_CASE,
+        path=path,
+        text=text,
+        sha256=hashlib.sha256(text.encode()).hexdigest(),
+        positions=positions,
+        overrides=overrides,
+    )
 
 
 def _apply_variant(data: dict[str, Any], variant: Any, vpath: Path, positions: Positions, file: str) -> None:
@@ -167,8 +200,9 @@ def _apply_variant(data: dict[str, Any], variant: Any, vpath: Path, positions: P
             positions.remap(vpath + ("assertions", i), ("assertions", offset + i))
 
 
-def load_all(path: FsPath, variant: str | None, all_variants: bool,
-             overrides: tuple[tuple[str, Any], ...] = ()) -> list[LoadedScenario]:
+def load_all(
+    path: FsPath, variant: str | None, all_variants: bool, overrides: tuple[tuple[str, Any], ...] = ()
+) -> list[LoadedScenario]:
     """The cases to run: one variant, every variant, or the base case."""
     if all_variants:
         return [load_scenario(path, name, overrides) for name in variant_names(path)]

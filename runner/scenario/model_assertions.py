@@ -141,9 +141,16 @@ class ContactAssertion(AssertionBase):
 
 
 ASSERTION_TAGS: dict[str, type[Strict]] = {
-    "value": ValueAssertion, "check": CheckAssertion, "always": AlwaysAssertion, "never": NeverAssertion,
-    "eventually": EventuallyAssertion, "max": MaxAssertion, "min": MinAssertion, "event": EventAssertion,
-    "sound": SoundAssertion, "contact": ContactAssertion,
+    "value": ValueAssertion,
+    "check": CheckAssertion,
+    "always": AlwaysAssertion,
+    "never": NeverAssertion,
+    "eventually": EventuallyAssertion,
+    "max": MaxAssertion,
+    "min": MinAssertion,
+    "event": EventAssertion,
+    "sound": SoundAssertion,
+    "contact": ContactAssertion,
 }
 
 

@@ -10,11 +10,23 @@ from pydantic import BaseModel, ConfigDict, Field, field_validator
 SCHEMA_VERSION = 1
 
 Vec3 = tuple[float, float, float]
-Name = Annotated[str, Field(pattern=r"^[A-Za-z_][A-Za-z0-9_]*$", max_length=64,
-                            description="An identifier: letters, digits and underscores, not starting with a digit.")]
-EventName = Annotated[str, Field(pattern=r"^[^\s]+$", min_length=1, max_length=128,
-                                 description="An event name, Panda3D style: `space`, `mouse1`, `shift-space`, "
-                                             "`box-into-door`...")]
+Name = Annotated[
+    str,
+    Field(
+        pattern=r"^[A-Za-z_][A-Za-z0-9_]*$",
+        max_length=64,
+        description="An identifier: letters, digits and underscores, not starting with a digit.",
+    ),
+]
+EventName = Annotated[
+    str,
+    Field(
+        pattern=r"^[^\s]+$",
+        min_length=1,
+        max_length=128,
+        description="An event name, Panda3D style: `space`, `mouse1`, `shift-space`, `box-into-door`...",
+    ),
+]
 Expr = Annotated[str, Field(min_length=1, max_length=2000, description="An expression (docs/language.md#expressions).")]
 PositiveFloat = Annotated[float, Field(gt=0, allow_inf_nan=False)]
 FiniteFloat = Annotated[float, Field(allow_inf_nan=False)]
@@ -37,10 +49,12 @@ class Surface(Strict):
     """An ODE contact surface."""
 
     bounce: Annotated[float, Field(ge=0, le=1, allow_inf_nan=False)] = Field(
-        0.0, description="Restitution (ODE bounce), 0..1.")
+        0.0, description="Restitution (ODE bounce), 0..1."
+    )
     bounce_vel: NonNegFloat = Field(0.0, description="Minimum approach speed for a bounce, m/s (ODE bounce_vel).")
     mu: Annotated[float, Field(ge=0)] = Field(
-        math.inf, description="Coulomb friction coefficient; `inf` for no slip (ODE dInfinity).")
+        math.inf, description="Coulomb friction coefficient; `inf` for no slip (ODE dInfinity)."
+    )
 
     @field_validator("mu")
     @classmethod

@@ -67,10 +67,12 @@ class CollisionNode(Strict):
 
 class Collisions(Strict):
     nodes: dict[Name, CollisionNode] = Field(default_factory=dict)
-    from_: list[Name] = Field(default_factory=list, alias="from",
-                              description="Collision nodes that are colliders (Panda3D addCollider).")
-    contacts_from: list[Name] = Field(default_factory=list,
-                                      description="Bodies whose physics contacts also raise in/again/out events.")
+    from_: list[Name] = Field(
+        default_factory=list, alias="from", description="Collision nodes that are colliders (Panda3D addCollider)."
+    )
+    contacts_from: list[Name] = Field(
+        default_factory=list, description="Bodies whose physics contacts also raise in/again/out events."
+    )
     in_: list[str] = Field(["%fn-into-%in"], alias="in", description="In patterns (%fn, %in, %fs, %is, %ig).")
     again: list[str] = Field(default_factory=list, description="Again patterns.")
     out: list[str] = Field(default_factory=list, description="Out patterns.")
@@ -178,10 +180,23 @@ class IfAction(Strict):
 
 
 ACTION_TAGS: dict[str, type[Strict]] = {
-    "start": StartAction, "pause": PauseAction, "resume": ResumeAction, "finish": FinishAction,
-    "loop": LoopAction, "set": SetAction, "calc": CalcAction, "play_sound": PlaySoundAction,
-    "stop_sound": StopSoundAction, "motor": MotorAction, "force": ForceAction, "impulse": ImpulseAction,
-    "reset": ResetAction, "log": LogAction, "send": SendAction, "end": EndAction, "if": IfAction,
+    "start": StartAction,
+    "pause": PauseAction,
+    "resume": ResumeAction,
+    "finish": FinishAction,
+    "loop": LoopAction,
+    "set": SetAction,
+    "calc": CalcAction,
+    "play_sound": PlaySoundAction,
+    "stop_sound": StopSoundAction,
+    "motor": MotorAction,
+    "force": ForceAction,
+    "impulse": ImpulseAction,
+    "reset": ResetAction,
+    "log": LogAction,
+    "send": SendAction,
+    "end": EndAction,
+    "if": IfAction,
 }
 
 
@@ -240,19 +255,28 @@ class Step(Strict):
 
     @model_validator(mode="after")
     def _one(self) -> Step:
-        kinds = [k for k in ("lerp", "sequence", "parallel", "wait", "sound", "func", "interval")
-                 if getattr(self, k) is not None]
+        kinds = [
+            k
+            for k in ("lerp", "sequence", "parallel", "wait", "sound", "func", "interval")
+            if getattr(self, k) is not None
+        ]
         if len(kinds) != 1:
-            raise ValueError("expected exactly one of lerp, sequence, parallel, wait, sound, func, interval; "
-                             f"found {', '.join(kinds) or 'none'}")
+            raise ValueError(
+                "expected exactly one of lerp, sequence, parallel, wait, sound, func, interval; "
+                f"found {', '.join(kinds) or 'none'}"
+            )
         if self.duration is not None and kinds[0] not in ("sequence", "parallel"):
             raise ValueError(f"`duration` belongs to sequence or parallel, not {kinds[0]}")
         return self
 
 
 class IntervalDef(Step):
-    name: str | None = Field(None, max_length=128, description="The Panda3D name. Starting an interval whose "
-                             "name is playing finishes the old one first (same-name takeover). Default: the id.")
+    name: str | None = Field(
+        None,
+        max_length=128,
+        description="The Panda3D name. Starting an interval whose "
+        "name is playing finishes the old one first (same-name takeover). Default: the id.",
+    )
 
 
 # --- timed inputs ---------------------------------------------------------------------------------

@@ -31,7 +31,8 @@ class BodyArray(Strict):
     """Copies of a body named `<name>_0` ... `<name>_<n-1>`; the plain name refers to the whole group."""
 
     count: Annotated[int, Field(ge=1, le=10_000)] | tuple[int, int, int] = Field(
-        description="How many copies: n (a column along z) or [nx, ny, nz].")
+        description="How many copies: n (a column along z) or [nx, ny, nz]."
+    )
     spacing: Vec3 = Field((0.0, 0.0, 1.0), description="Offset between neighbours along x, y, z (metres).")
     layer_shift: Vec3 = Field((0.0, 0.0, 0.0), description="Extra offset added per layer (z index).")
 
@@ -53,8 +54,10 @@ class Body(Strict):
     cylinder: Cylinder | None = None
     plane: Plane | None = None
     motion: Literal["dynamic", "kinematic", "static"] = Field(
-        "dynamic", description="dynamic: simulated; kinematic: moved by intervals and actions, carries what "
-                               "rests on it; static: never moves.")
+        "dynamic",
+        description="dynamic: simulated; kinematic: moved by intervals and actions, carries what "
+        "rests on it; static: never moves.",
+    )
     mass: PositiveFloat | None = Field(None, description="kg; inertia from the shape (ODE dMassSet*Total).")
     density: PositiveFloat | None = Field(None, description="kg/m^3; mass = density x volume (ODE dMassSet*).")
     pos: Vec3 = (0.0, 0.0, 0.0)
@@ -93,8 +96,9 @@ class Body(Strict):
 
 class Motor(Strict):
     vel: FiniteFloat = Field(0.0, description="Target rate: m/s (slider) or rad/s (hinge) (ODE dParamVel).")
-    fmax: NonNegFloat = Field(description="Largest force (N) or torque (N m) the motor may use; 0 = off "
-                                          "(ODE dParamFMax).")
+    fmax: NonNegFloat = Field(
+        description="Largest force (N) or torque (N m) the motor may use; 0 = off (ODE dParamFMax)."
+    )
 
 
 class Joint(Strict):
@@ -104,7 +108,8 @@ class Joint(Strict):
     axis2: Vec3 | None = Field(None, description="Second axis of a universal joint.")
     anchor: Vec3 | None = Field(None, description="World-frame anchor; default: the first body's position.")
     limits: tuple[FiniteFloat, FiniteFloat] | None = Field(
-        None, description="[lo, hi] stops: metres (slider) or radians (hinge).")
+        None, description="[lo, hi] stops: metres (slider) or radians (hinge)."
+    )
     motor: Motor | None = None
 
     _v = field_validator("axis", "axis2", "anchor", mode="before")(finite_vec)

@@ -9,13 +9,32 @@ from .model import Scenario
 from .model_physics import Body
 
 BODY_FIELDS = {
-    "pos": ("x", "y", "z"), "vel": ("x", "y", "z"), "angvel": ("x", "y", "z"), "quat": ("w", "x", "y", "z"),
+    "pos": ("x", "y", "z"),
+    "vel": ("x", "y", "z"),
+    "angvel": ("x", "y", "z"),
+    "quat": ("w", "x", "y", "z"),
 }
 BODY_SCALARS = ("speed",)
 JOINT_FIELDS = ("position", "velocity", "force")
 GLOBALS = ("time", "dt", "duration", "g", "gravity.x", "gravity.y", "gravity.z")
-RESERVED = frozenset({"time", "dt", "duration", "g", "gravity", "state", "param", "environment", "world",
-                      "true", "false", "pi", "e", "inf"})
+RESERVED = frozenset(
+    {
+        "time",
+        "dt",
+        "duration",
+        "g",
+        "gravity",
+        "state",
+        "param",
+        "environment",
+        "world",
+        "true",
+        "false",
+        "pi",
+        "e",
+        "inf",
+    }
+)
 
 
 @dataclass(frozen=True)

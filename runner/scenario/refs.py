@@ -124,14 +124,18 @@ def check_references(model: Scenario, positions: Positions, base_dir: FsPath) ->
             if solid.polygon is not None:
                 problem = polygon_problem(solid.polygon)
                 if problem:
-                    where = ("collisions", "nodes", node_name) + (("solids", k) if k < len(node.solids) else ("polygon",))
+                    where = ("collisions", "nodes", node_name) + (
+                        ("solids", k) if k < len(node.solids) else ("polygon",)
+                    )
                     bad(where, problem)
     for i, ref in enumerate(model.collisions.from_):
         if ref not in nodes:
             bad(("collisions", "from", i), _unknown("collision node", ref, nodes))
         elif any(s.sphere is None for s in nodes[ref].all_solids()):
-            bad(("collisions", "from", i), f"collider `{ref}` must hold only spheres (Panda3D from-solids "
-                                           "supported here: sphere)")
+            bad(
+                ("collisions", "from", i),
+                f"collider `{ref}` must hold only spheres (Panda3D from-solids supported here: sphere)",
+            )
     for i, ref in enumerate(model.collisions.contacts_from):
         if ref not in body_names:
             bad(("collisions", "contacts_from", i), _unknown("body", ref, body_names))
@@ -142,8 +146,10 @@ def check_references(model: Scenario, positions: Positions, base_dir: FsPath) ->
                 if ref not in body_names:
                     bad(path + ("lerp", "body"), _unknown("body", ref, body_names))
                 elif model.bodies.get(ref) is not None and model.bodies[ref].motion != "kinematic":
-                    bad(path + ("lerp", "body"), f"intervals move kinematic bodies; `{ref}` is "
-                                                 f"{model.bodies[ref].motion}")
+                    bad(
+                        path + ("lerp", "body"),
+                        f"intervals move kinematic bodies; `{ref}` is {model.bodies[ref].motion}",
+                    )
             if step.sound is not None:
                 ref = step.sound if isinstance(step.sound, str) else step.sound.sound
                 if ref not in model.sounds:
@@ -160,8 +166,13 @@ def check_references(model: Scenario, positions: Positions, base_dir: FsPath) ->
         raise ScenarioValidationError(issues)
 
 
-_INTERVAL_ACTIONS: dict[type, str] = {B.StartAction: "start", B.PauseAction: "pause", B.ResumeAction: "resume",
-                                      B.FinishAction: "finish", B.LoopAction: "loop"}
+_INTERVAL_ACTIONS: dict[type, str] = {
+    B.StartAction: "start",
+    B.PauseAction: "pause",
+    B.ResumeAction: "resume",
+    B.FinishAction: "finish",
+    B.LoopAction: "loop",
+}
 
 
 def _check_actions(model: Scenario, bad: Any, body_names: set[str], sounds: dict[str, float]) -> None:
@@ -184,8 +195,10 @@ def _check_actions(model: Scenario, bad: Any, body_names: set[str], sounds: dict
             if joint is None:
                 bad(path + ("motor", "joint"), _unknown("joint", action.motor.joint, model.joints))
             elif joint.type not in ("slider", "hinge"):
-                bad(path + ("motor", "joint"), f"joint `{action.motor.joint}` is a {joint.type}; motors drive "
-                                               "sliders and hinges")
+                bad(
+                    path + ("motor", "joint"),
+                    f"joint `{action.motor.joint}` is a {joint.type}; motors drive sliders and hinges",
+                )
         if isinstance(action, B.ForceAction | B.ImpulseAction):
             cmd = action.force if isinstance(action, B.ForceAction) else action.impulse
             field = "force" if isinstance(action, B.ForceAction) else "impulse"
@@ -205,7 +218,19 @@ def _expressions(model: Scenario) -> Iterator[tuple[str, Path]]:
             for var, text in action.calc.items():
                 yield text, path + ("calc", var)
     for i, a in enumerate(model.assertions):
-        for field in ("value", "check", "always", "never", "eventually", "max_of", "min_of", "near", "min", "max", "tol"):
+        for field in (
+            "value",
+            "check",
+            "always",
+            "never",
+            "eventually",
+            "max_of",
+            "min_of",
+            "near",
+            "min",
+            "max",
+            "tol",
+        ):
             value = getattr(a, field, None)
             alias = {"max_of": "max", "min_of": "min"}.get(field, field)
             if isinstance(value, dict):

@@ -7,8 +7,8 @@ safe types are built (no object tags); duplicate keys, non-string keys and alias
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
 import re
+from dataclasses import dataclass, field
 from typing import Any
 
 import yaml
@@ -50,7 +50,7 @@ class Positions:
         for table in (self.values, self.keys):
             for p, pos in list(table.items()):
                 if p[: len(src)] == src:
-                    table[dst + p[len(src):]] = pos
+                    table[dst + p[len(src) :]] = pos
 
 
 def format_path(path: Path) -> str:
@@ -77,8 +77,9 @@ class _Builder:
     def build(self, node: yaml.Node, path: Path) -> Any:
         self.count += 1
         if self.count > MAX_NODES:
-            raise self.fail(node, path, f"the document expands to more than {MAX_NODES} values "
-                            "(an alias bomb?); refused")
+            raise self.fail(
+                node, path, f"the document expands to more than {MAX_NODES} values (an alias bomb?); refused"
+            )
         if len(path) > MAX_DEPTH:
             raise self.fail(node, path, f"nesting deeper than {MAX_DEPTH} levels; refused")
         self.positions.values.setdefault(path, (node.start_mark.line + 1, node.start_mark.column + 1))
@@ -119,7 +120,8 @@ _Loader.yaml_implicit_resolvers = {
     for first, resolvers in yaml.SafeLoader.yaml_implicit_resolvers.items()
 }
 _Loader.add_implicit_resolver(
-    "tag:yaml.org,2002:bool", re.compile(r"^(?:true|True|TRUE|false|False|FALSE)$"), list("tTfF"))
+    "tag:yaml.org,2002:bool", re.compile(r"^(?:true|True|TRUE|false|False|FALSE)$"), list("tTfF")
+)
 
 
 def load_yaml(text: str, file: str) -> tuple[Any, Positions]:

@@ -50,7 +50,9 @@ def close(seconds: float = 0.6) -> list[float]:
     for i in range(n):
         t = i / RATE
         slam = 0.6 * noise[i] * math.exp(-t * 25)
-        ring = math.sin(2 * math.pi * 180 * t) * math.exp(-t * 6) + 0.4 * math.sin(2 * math.pi * 410 * t) * math.exp(-t * 9)
+        ring = math.sin(2 * math.pi * 180 * t) * math.exp(-t * 6) + 0.4 * math.sin(2 * math.pi * 410 * t) * math.exp(
+            -t * 9
+        )
         out.append(slam + 0.5 * ring)
     return out
 

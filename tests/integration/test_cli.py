@@ -21,7 +21,9 @@ def scenario(*args: str, cwd: Path = ROOT) -> subprocess.CompletedProcess[str]:
 def test_validate_misspelt_key_names_file_line_column_and_suggests(tmp_path: Path) -> None:
     text = (ROOT / "scenarios" / "factory_physics.yaml").read_text()
     bad = tmp_path / "bad.yaml"
-    bad.write_text(text.replace("  box: {box: [0.3, 0.3, 0.3], density: 500", "  box: {box: [0.3, 0.3, 0.3], densty: 500"))
+    bad.write_text(
+        text.replace("  box: {box: [0.3, 0.3, 0.3], density: 500", "  box: {box: [0.3, 0.3, 0.3], densty: 500")
+    )
     line = next(i for i, row in enumerate(bad.read_text().splitlines(), 1) if "densty" in row)
     col = bad.read_text().splitlines()[line - 1].index("densty") + 1
     done = scenario("validate", str(bad))
@@ -48,8 +50,9 @@ def test_committed_schema_is_in_sync() -> None:
 
 
 def test_run_json_exit_zero_and_traces(tmp_path: Path) -> None:
-    done = scenario("run", str(ROOT / "scenarios" / "factory_intervals.yaml"), "--all-variants", "--json",
-                    "--out", str(tmp_path))
+    done = scenario(
+        "run", str(ROOT / "scenarios" / "factory_intervals.yaml"), "--all-variants", "--json", "--out", str(tmp_path)
+    )
     assert done.returncode == 0, done.stderr
     results = json.loads(done.stdout)["results"]
     assert [r["variant"] for r in results] == ["door-closed", "door-opened-first", "space-twice", "open-then-close"]
@@ -58,8 +61,16 @@ def test_run_json_exit_zero_and_traces(tmp_path: Path) -> None:
 
 
 def test_failing_assertion_exits_one_with_the_verdict_table(tmp_path: Path) -> None:
-    done = scenario("run", str(ROOT / "scenarios" / "factory_intervals.yaml"), "--variant", "door-closed",
-                    "--set", "world.duration=1.0", "--out", str(tmp_path))
+    done = scenario(
+        "run",
+        str(ROOT / "scenarios" / "factory_intervals.yaml"),
+        "--variant",
+        "door-closed",
+        "--set",
+        "world.duration=1.0",
+        "--out",
+        str(tmp_path),
+    )
     assert done.returncode == 1
     assert "FAIL" in done.stdout and "collision-fires-once" in done.stdout
 

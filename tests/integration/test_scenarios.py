@@ -19,8 +19,9 @@ CASES = [(p, v) for p in SCENARIOS for v in variant_names(p)]
 @pytest.mark.parametrize("path,variant", CASES, ids=[f"{p.stem}:{v}" for p, v in CASES])
 def test_scenario_passes(path: Path, variant: str, backend: str, tmp_path: Path) -> None:
     result = run_loaded(load_scenario(path, variant), backend, tmp_path)
-    failed = [f"{v.name}: measured {v.measured}, expected {v.expected} {v.message}" for v in result.verdicts
-              if not v.passed]
+    failed = [
+        f"{v.name}: measured {v.measured}, expected {v.expected} {v.message}" for v in result.verdicts if not v.passed
+    ]
     assert result.status == "passed", f"{result.failure or ''}\n" + "\n".join(failed)
     assert result.verdicts, "a scenario case without assertions checks nothing"
     trace = read_trace(Path(result.trace))
@@ -39,7 +40,7 @@ def test_closed_door_box_stops_at_the_touch_height(tmp_path: Path, backend: str)
     touch = 1.5 * 0.3  # sphere radius after the box's scale, above the door's plane z = 0
     speed = 1.0 / 1.0 * 0.04  # the drop moves 1 m/s: 0.04 m per step
     assert touch - 2 * speed <= z[-1] <= touch
-    assert np.all(z[np.searchsorted(trace.times, 2.16):] == z[-1])  # it stopped and stayed
+    assert np.all(z[np.searchsorted(trace.times, 2.16) :] == z[-1])  # it stopped and stayed
     hits = [e for e in trace.events if e.name == "box-into-door"]
     assert len(hits) == 1 and hits[0].t == pytest.approx(2.16)
     assert [s.t for s in trace.sounds if s.name == "thud" and s.action == "start"] == [pytest.approx(2.16)]

@@ -48,7 +48,9 @@ def test_in_again_out_sequence_and_order() -> None:
     handler = EventHandler(["%fn-into-%in"], ["%fn-again-%in"], ["%fn-out-%in"])
     assert [e.name for e in handler.update([("box", "door", False)])] == ["box-into-door"]
     assert [e.name for e in handler.update([("box", "door", False), ("box", "wall", False)])] == [
-        "box-again-door", "box-into-wall"]
+        "box-again-door",
+        "box-into-wall",
+    ]
     assert [e.name for e in handler.update([("box", "wall", False)])] == ["box-out-door", "box-again-wall"]
     assert [e.name for e in handler.update([])] == ["box-out-wall"]
     assert handler.update([]) == []

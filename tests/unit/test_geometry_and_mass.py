@@ -16,11 +16,14 @@ def close(a, b, tol=1e-12):  # noqa: ANN001, ANN201
     return all(abs(x - y) <= tol for x, y in zip(a, b, strict=True))
 
 
-@pytest.mark.parametrize("hpr,vector,expected", [
-    ((90, 0, 0), (0, 1, 0), (-1, 0, 0)),  # heading +90: forward turns left
-    ((0, 90, 0), (0, 1, 0), (0, 0, 1)),  # pitch +90: nose up
-    ((0, 0, 90), (1, 0, 0), (0, 0, -1)),  # roll +90: right side down
-])
+@pytest.mark.parametrize(
+    "hpr,vector,expected",
+    [
+        ((90, 0, 0), (0, 1, 0), (-1, 0, 0)),  # heading +90: forward turns left
+        ((0, 90, 0), (0, 1, 0), (0, 0, 1)),  # pitch +90: nose up
+        ((0, 0, 90), (1, 0, 0), (0, 0, -1)),  # roll +90: right side down
+    ],
+)
 def test_hpr_axes_as_panda3d(hpr, vector, expected) -> None:  # noqa: ANN001
     assert close(quat_rotate(hpr_to_quat(hpr), vector), expected)
 

@@ -1,0 +1,318 @@
+"""The DART (dartpy) backend: the contract of backends/base.py on top of the world of ``_build``.
+
+DART resets joint commands and external forces in every ``World.step()``, so each engine step re-issues
+the motor targets (SERVO actuators, force-limited to +-fmax), the kinematic velocities (VELOCITY
+actuators on FreeJoints) and the one-step forces of the scenario step. Poses of free bodies are read in
+two calls per skeleton (FreeJoint positions are [rotation vector, translation], velocities
+[angular, linear], both in the world frame) and converted with numpy: DART's per-body reads cost several
+times the other engines' (notes §9).
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any, ClassVar
+
+import dartpy as dart
+import numpy as np
+
+from ..base import Backend
+from ..errors import EngineFailure, UnsupportedFeature, map_engine_errors
+from ..geometry import integrate_quat
+from ..types import BodyStates, Capability, CompiledWorld, Contact, JointKind, JointStates, Motion, Quat, Vec3
+from . import _surfaces
+from ._build import DETECTORS, BodyHandle, JointHandle, build, place_free
+
+_NAME = "dart"
+
+
+class DartBackend(Backend):
+    name: ClassVar[str] = _NAME
+    engine_distribution: ClassVar[str] = "dartpy"
+    capabilities: ClassVar[frozenset[Capability]] = frozenset(
+        {
+            Capability.SHAPE_BOX,
+            Capability.SHAPE_SPHERE,
+            Capability.SHAPE_CAPSULE,
+            Capability.SHAPE_CYLINDER,
+            Capability.SHAPE_PLANE,
+            Capability.JOINT_SLIDER,
+            Capability.JOINT_HINGE,
+            Capability.JOINT_BALL,
+            Capability.JOINT_FIXED,
+            Capability.JOINT_BETWEEN_BODIES,
+            Capability.JOINT_LIMITS,
+            Capability.JOINT_MOTOR,
+            Capability.KINEMATIC,
+            Capability.SUBSTEPS,
+        }
+    )
+    option_keys: ClassVar[dict[str, str]] = {
+        "collision_detector": "ode | fcl | bullet | dart: DART's collision detector (default ode: ODE-like "
+        "contact sets, 4 points for a box on a plane)",
+        "max_engine_dt": "longest DART step in seconds (default: dt / substeps); shorter engine steps make "
+        "deep landings penetrate less, since DART corrects penetration at 1 mm/s at most",
+    }
+
+    def __init__(self, world: CompiledWorld) -> None:
+        super().__init__(world)
+        options = world.options_for(_NAME)
+        self._detector = str(options.get("collision_detector", "ode"))
+        if self._detector not in DETECTORS:
+            raise UnsupportedFeature(
+                f"Invalid `backend_options.dart.collision_detector`. Expected one of "
+                f"{', '.join(sorted(DETECTORS))}. Received: collision_detector={self._detector!r}."
+            )
+        self._engine_steps = world.substeps * _split(world.dt / world.substeps, options.get("max_engine_dt"))
+        try:
+            coefficients, self._surface_conflict = _surfaces.solve(world), ""
+        except UnsupportedFeature as exc:  # no fixed values exist: solve for the touching pairs each step
+            coefficients, self._surface_conflict = _surfaces.solve(world, []), str(exc)
+        with map_engine_errors(_NAME, "building the world"):
+            built = build(world, self._detector, coefficients, self._engine_steps)
+        self._dart: Any = built.world
+        self._bodies: list[BodyHandle] = built.bodies
+        self._joints: list[JointHandle] = built.joints
+        self._coefficients = built.coefficients
+        self._free = [i for i, h in enumerate(self._bodies) if h.free]
+        self._free_skeletons = [self._bodies[i].skeleton for i in self._free]
+        self._static = [i for i, b in enumerate(world.bodies) if b.motion is Motion.STATIC]
+        self._static_set = set(self._static)
+        self._object_body: dict[Any, int] = {}
+        self._linked = [i for i in range(len(world.bodies)) if i not in set(self._free) | set(self._static)]
+        self._static_pos = np.array([world.bodies[i].pos for i in self._static], dtype=float).reshape(-1, 3)
+        self._static_quat = np.array([world.bodies[i].quat for i in self._static], dtype=float).reshape(-1, 4)
+        self._prev_quat = np.array([b.quat for b in world.bodies], dtype=float).reshape(-1, 4)
+        self._kinematic: dict[int, list[Any]] = {
+            i: [b.pos, b.quat, b.lin_vel, b.ang_vel] for i, b in enumerate(world.bodies) if b.motion is Motion.KINEMATIC
+        }
+        self._forces: dict[int, tuple[np.ndarray, np.ndarray]] = {}
+        self._motor_force = np.zeros(len(self._joints))
+        self._steps = 0
+        self._closed = False
+        self._relevant = set(_surfaces.touching_pairs(world))
+        self._touching: list[tuple[int, int]] | None = None
+        for j, handle in enumerate(self._joints):
+            if handle.spec.motor is not None:
+                self.set_motor(j, handle.spec.motor.vel, handle.spec.motor.fmax)
+
+    def settings(self) -> dict[str, Any]:
+        names = [b.name for b in self.world.bodies]
+        return {
+            "collision_detector": self._detector,
+            "engine_dt": self.world.dt / self._engine_steps,
+            "engine_steps_per_step": self._engine_steps,
+            "constraint_solver": "BoxedLcpConstraintSolver (Dantzig, PGS fallback)",
+            "deactivation": False,
+            "mu_inf_as": _surfaces.finite_mu(self.world),
+            "surfaces": "per step, for the touching pairs" if self._surface_conflict else "fixed per shape",
+            "friction_per_body": dict(zip(names, self._coefficients.friction, strict=True)),
+            "restitution_per_body": dict(zip(names, self._coefficients.restitution, strict=True)),
+        }
+
+    # --- inputs ---------------------------------------------------------------------------------------
+
+    def set_motor(self, joint: int, vel: float, fmax: float) -> None:
+        handle = self._joints[joint]
+        if handle.spec.kind not in (JointKind.SLIDER, JointKind.HINGE):
+            raise UnsupportedFeature(f"Joint `{handle.spec.name}` is a {handle.spec.kind.value}: it has no motor.")
+        handle.vel, handle.fmax = float(vel), max(0.0, float(fmax))
+        with map_engine_errors(_NAME, f"setting the motor of `{handle.spec.name}`"):
+            if handle.fmax > 0.0:
+                handle.joint.setActuatorType(dart.dynamics.ActuatorType.SERVO)
+                handle.joint.setForceLowerLimit(0, -handle.fmax)
+                handle.joint.setForceUpperLimit(0, handle.fmax)
+            else:
+                handle.joint.setActuatorType(dart.dynamics.ActuatorType.PASSIVE)
+        if handle.fmax == 0.0:
+            self._motor_force[joint] = 0.0
+
+    def apply_force(self, body: int, force: Vec3, torque: Vec3) -> None:
+        if self.world.bodies[body].motion is not Motion.DYNAMIC:
+            return  # static and kinematic bodies are unaffected by forces
+        f, t = self._forces.get(body, (np.zeros(3), np.zeros(3)))
+        self._forces[body] = (f + np.asarray(force, float), t + np.asarray(torque, float))
+
+    def set_kinematic(self, body: int, pos: Vec3, quat: Quat, lin_vel: Vec3, ang_vel: Vec3) -> None:
+        if body not in self._kinematic:
+            raise ValueError(f"body `{self.world.bodies[body].name}` is not kinematic")
+        self._kinematic[body] = [tuple(pos), tuple(quat), tuple(lin_vel), tuple(ang_vel)]
+        with map_engine_errors(_NAME, "placing a kinematic body"):
+            place_free(self._bodies[body].root, pos, quat, lin_vel, ang_vel)
+        self._prev_quat[body] = quat
+
+    def reset_body(self, body: int, pos: Vec3, quat: Quat, lin_vel: Vec3, ang_vel: Vec3) -> None:
+        handle = self._bodies[body]
+        if handle.spec.motion is not Motion.DYNAMIC or not handle.free:
+            raise UnsupportedFeature(
+                f"Backend `dart` can reset only free dynamic bodies; `{handle.spec.name}` is "
+                f"{handle.spec.motion.value}{'' if handle.free else ' and jointed'}."
+            )
+        with map_engine_errors(_NAME, f"resetting `{handle.spec.name}`"):
+            place_free(handle.root, pos, quat, lin_vel, ang_vel)
+        self._prev_quat[body] = quat
+
+    # --- stepping -------------------------------------------------------------------------------------
+
+    def step(self) -> None:
+        servos = [(j, h) for j, h in enumerate(self._joints) if h.fmax > 0.0]
+        impulse = np.zeros(len(servos))
+        with map_engine_errors(_NAME, f"step {self._steps + 1}"):
+            for _ in range(self._engine_steps):
+                # World.step() clears commands and external forces: re-issue them for every engine step.
+                for _, h in servos:
+                    h.joint.setCommand(0, h.sign * h.vel)
+                for i, (_, _, lin, ang) in self._kinematic.items():
+                    self._bodies[i].root.setCommands(np.concatenate([ang, lin]))
+                for i, (force, torque) in self._forces.items():
+                    self._bodies[i].node.addExtForce(force)
+                    self._bodies[i].node.addExtTorque(torque)
+                if self._surface_conflict:
+                    self._match_touching_pairs()
+                self._dart.step()
+                for n, (_, h) in enumerate(servos):
+                    impulse[n] += h.joint.getConstraintImpulse(0)
+            for n, (j, h) in enumerate(servos):
+                self._motor_force[j] = h.sign * impulse[n] / self.world.dt  # mean force over the step
+            self._forces.clear()
+            dt = self.world.dt
+            for i, state in self._kinematic.items():
+                pos, quat, lin, ang = state
+                state[0] = tuple(p + v * dt for p, v in zip(pos, lin, strict=True))
+                state[1] = integrate_quat(quat, ang, dt)
+                place_free(self._bodies[i].root, state[0], state[1], lin, ang)
+        self._steps += 1
+
+    # --- outputs --------------------------------------------------------------------------------------
+
+    def body_states(self) -> BodyStates:
+        n = len(self._bodies)
+        pos, quat = np.empty((n, 3)), np.empty((n, 4))
+        lin, ang = np.zeros((n, 3)), np.zeros((n, 3))
+        with map_engine_errors(_NAME, "reading body states"):
+            if self._free:
+                q = np.array([s.getPositions() for s in self._free_skeletons])
+                v = np.array([s.getVelocities() for s in self._free_skeletons])
+                pos[self._free], quat[self._free] = q[:, 3:], rotvec_to_quat(q[:, :3])
+                ang[self._free], lin[self._free] = v[:, :3], v[:, 3:]
+            for i in self._linked:
+                node = self._bodies[i].node
+                transform = node.getWorldTransform()
+                pos[i], quat[i] = transform.translation(), transform.quaternion().wxyz()
+                lin[i], ang[i] = node.getLinearVelocity(), node.getAngularVelocity()
+        pos[self._static], quat[self._static] = self._static_pos, self._static_quat
+        # q and -q are one rotation: keep the sign continuous, as ODE's integrated quaternion is.
+        flip = np.einsum("ij,ij->i", quat, self._prev_quat) < 0.0
+        quat[flip] *= -1.0
+        self._prev_quat = quat.copy()
+        bad = ~np.isfinite(np.hstack([pos, quat, lin, ang])).all(axis=1)
+        if bad.any():
+            body = self.world.bodies[int(np.argmax(bad))].name
+            raise EngineFailure(
+                f"dart: body `{body}` has a non-finite state after step {self._steps}",
+                backend=_NAME,
+                body=body,
+                time=self._steps * self.world.dt,
+            )
+        return BodyStates(pos, quat, lin, ang)
+
+    def joint_states(self) -> JointStates:
+        m = len(self._joints)
+        position, velocity = np.full(m, math.nan), np.full(m, math.nan)
+        with map_engine_errors(_NAME, "reading joint states"):
+            for j, h in enumerate(self._joints):
+                if h.spec.kind in (JointKind.SLIDER, JointKind.HINGE):
+                    position[j] = h.sign * h.joint.getPosition(0)
+                    velocity[j] = h.sign * h.joint.getVelocity(0)
+        return JointStates(position, velocity, self._motor_force.copy())
+
+    def contacts(self) -> list[Contact]:
+        pairs: list[tuple[int, int]] = []
+        depth: list[float] = []
+        force: list[Any] = []
+        normal: list[Any] = []
+        with map_engine_errors(_NAME, "reading contacts"):
+            for c in self._dart.getLastCollisionResult().getContacts():
+                pair = self._pair(c)
+                if pair is not None:
+                    pairs.append(pair)
+                    depth.append(c.penetrationDepth)
+                    force.append(c.force)
+                    normal.append(c.normal)
+        if not pairs:
+            return []
+        normal_force = np.abs(np.einsum("ij,ij->i", np.array(force), np.array(normal)))
+        found: dict[tuple[int, int], list[float]] = {}
+        for pair, d, f in zip(pairs, depth, normal_force.tolist(), strict=True):
+            entry = found.setdefault(pair, [0, 0.0, 0.0])
+            entry[0] += 1
+            entry[1] = max(entry[1], d)
+            entry[2] += f
+        return [Contact(a, b, int(e[0]), e[1], e[2]) for (a, b), e in sorted(found.items())]
+
+    def _pair(self, contact: Any) -> tuple[int, int] | None:
+        """The (a < b) body indices of a DART contact; None between two static bodies (never reported)."""
+        a, b = self._body_of(contact.collisionObject1), self._body_of(contact.collisionObject2)
+        if a in self._static_set and b in self._static_set:
+            return None
+        return (a, b) if a < b else (b, a)
+
+    def _body_of(self, collision_object: Any) -> int:
+        """The body index of a collision object (its shape node is named by the index).
+
+        Reading the name costs about 7 us; the wrapper objects are cached instead, which keeps them alive
+        so that dartpy hands back the same wrapper for the same object on later calls.
+        """
+        try:
+            return self._object_body[collision_object]
+        except KeyError:
+            index = int(collision_object.getShapeFrame().getName())
+            self._object_body[collision_object] = index
+            return index
+
+    def _match_touching_pairs(self) -> None:
+        """Give the pairs about to touch their surfaces (worlds whose pairs have no fixed solution).
+
+        DART's step detects collisions at the current poses; detecting them here first tells which pairs
+        its contact constraints will combine, so per-shape values are solved for those pairs only.
+        """
+        solver = self._dart.getConstraintSolver()
+        result = dart.collision.CollisionResult()
+        solver.getCollisionGroup().collide(solver.getCollisionOption(), result)
+        touching = sorted({p for p in map(self._pair, result.getContacts()) if p in self._relevant})
+        if touching == self._touching:
+            return
+        try:
+            coefficients = _surfaces.solve(self.world, touching)
+        except UnsupportedFeature as exc:
+            raise UnsupportedFeature(f"{exc} (at t = {self._steps * self.world.dt:.3f} s)") from None
+        for handle, f, r in zip(self._bodies, coefficients.friction, coefficients.restitution, strict=True):
+            handle.aspect.setFrictionCoeff(f)
+            handle.aspect.setRestitutionCoeff(r)
+        self._touching = touching
+
+    def close(self) -> None:
+        if not self._closed:
+            self._closed = True
+            self._dart.removeAllSkeletons()
+
+
+def _split(step: float, longest: Any) -> int:
+    """How many DART steps make one ``step`` no longer than ``backend_options.dart.max_engine_dt``."""
+    if longest is None:
+        return 1
+    if isinstance(longest, bool) or not isinstance(longest, (int, float)) or not 0.0 < longest < math.inf:
+        raise UnsupportedFeature(
+            f"Invalid `backend_options.dart.max_engine_dt`. Expected a positive number of seconds. "
+            f"Received: max_engine_dt={longest!r}."
+        )
+    return max(1, math.ceil(step / longest - 1e-9))
+
+
+def rotvec_to_quat(rv: np.ndarray) -> np.ndarray:
+    """(N, 3) rotation vectors -> (N, 4) unit quaternions (w, x, y, z)."""
+    angle = np.linalg.norm(rv, axis=1)
+    small = angle < 1e-8
+    safe = np.where(small, 1.0, angle)
+    scale = np.where(small, 0.5 - angle * angle / 48.0, np.sin(0.5 * angle) / safe)
+    return np.hstack([np.cos(0.5 * angle)[:, None], rv * scale[:, None]])

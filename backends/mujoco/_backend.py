@@ -1,0 +1,297 @@
+"""The MuJoCo adapter: inputs, stepping and fresh reads on the model that ``_model.build`` compiles."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from typing import Any, ClassVar
+
+import mujoco
+import numpy as np
+
+from ..base import Backend
+from ..errors import EngineFailure, UnsupportedFeature, map_engine_errors
+from ..geometry import integrate_quat, quat_conj, quat_rotate
+from ..types import (
+    BodyStates,
+    Capability,
+    CompiledWorld,
+    Contact,
+    JointKind,
+    JointStates,
+    Motion,
+    Quat,
+    Vec3,
+)
+from ._model import IMPEDANCE, KINEMATIC_MASS_RATIO, MU_MAX, Options, build
+
+_BAD_STATE = (mujoco.mjtWarning.mjWARN_BADQPOS, mujoco.mjtWarning.mjWARN_BADQVEL, mujoco.mjtWarning.mjWARN_BADQACC)
+
+
+class MujocoBackend(Backend):
+    """MuJoCo through MjSpec, stepped with ODE semantics (docs/backends/mujoco.md)."""
+
+    name: ClassVar[str] = "mujoco"
+    engine_distribution: ClassVar[str] = "mujoco"
+    capabilities: ClassVar[frozenset[Capability]] = frozenset(
+        {
+            Capability.SHAPE_BOX,
+            Capability.SHAPE_SPHERE,
+            Capability.SHAPE_CAPSULE,
+            Capability.SHAPE_CYLINDER,
+            Capability.SHAPE_PLANE,
+            Capability.JOINT_SLIDER,
+            Capability.JOINT_HINGE,
+            Capability.JOINT_BALL,
+            Capability.JOINT_FIXED,
+            Capability.JOINT_BETWEEN_BODIES,
+            Capability.JOINT_LIMITS,
+            Capability.JOINT_MOTOR,
+            Capability.KINEMATIC,
+            Capability.SUBSTEPS,
+        }
+    )
+    option_keys: ClassVar[Mapping[str, str]] = {
+        "erp": "ODE-style error reduction per engine step of contacts and joint stops (default 0.2)",
+        "bounce_erp": "error reduction of contacts that bounce; adds up to this to the rebound (default 0.05)",
+        "engine_substeps": "MuJoCo steps per world substep (default 1)",
+    }
+
+    def __init__(self, world: CompiledWorld) -> None:
+        super().__init__(world)
+        self._opts = Options.parse(world.options_for(self.name))
+        self._nsteps = world.substeps * self._opts.engine_substeps
+        self._h = world.dt / self._nsteps
+        with map_engine_errors(self.name, "building the model"):
+            self._layout = build(world, self._opts, self._h)
+            self._m = self._layout.model
+            self._d = mujoco.MjData(self._m)
+        m, lay = self._m, self._layout
+        ids = lay.body_id
+        self._root = m.body_rootid[ids]
+        self._free = {  # world index -> (qpos address, dof address) of free bodies (dynamic or kinematic)
+            i: (int(m.jnt_qposadr[m.body_jntadr[b]]), int(m.jnt_dofadr[m.body_jntadr[b]]))
+            for i, b in enumerate(ids)
+            if m.body_jntnum[b] == 1 and m.jnt_type[m.body_jntadr[b]] == mujoco.mjtJoint.mjJNT_FREE
+        }
+        self._sign = np.ones(len(world.joints))  # world joint coordinate = sign * MuJoCo's
+        for edge in lay.edges.values():
+            if edge.joint is not None:
+                self._sign[edge.joint] = edge.sign
+        self._kinematic: dict[int, tuple[Vec3, Quat, Vec3, Vec3]] = {}
+        self._xfrc = np.zeros((m.nbody, 6))
+        self._forced = False
+        motors = np.flatnonzero(lay.motor_id >= 0)
+        self._motor_of = np.full(len(world.joints), -1)  # world joint -> slot = tendon id (one per motor)
+        self._motor_of[motors] = lay.motor_id[motors]
+        self._helper_dof = lay.helper_dof[motors][np.argsort(lay.motor_id[motors])]
+        self._target = np.zeros(motors.size)  # per slot, in the MuJoCo joint's coordinate
+        self._motor_sum = np.zeros(motors.size)
+        self._contacts: list[Contact] = []
+        self._steps = 0
+        self._stale = True
+        for i, body in enumerate(world.bodies):
+            if body.motion is Motion.KINEMATIC:
+                self._kinematic[i] = (body.pos, body.quat, body.lin_vel, body.ang_vel)
+            elif body.motion is Motion.DYNAMIC:
+                self._set_velocity(i, body.lin_vel, body.ang_vel)
+        for j, joint in enumerate(world.joints):
+            if self._motor_of[j] >= 0:
+                motor = joint.motor
+                self.set_motor(j, motor.vel if motor else 0.0, motor.fmax if motor else 0.0)
+        self._place_kinematic(0.0)
+
+    # --- inputs ---------------------------------------------------------------------------------
+
+    def set_kinematic(self, body: int, pos: Vec3, quat: Quat, lin_vel: Vec3, ang_vel: Vec3) -> None:
+        if body not in self._kinematic:
+            raise UnsupportedFeature(f"mujoco: body `{self.world.bodies[body].name}` is not kinematic")
+        self._kinematic[body] = (tuple(pos), tuple(quat), tuple(lin_vel), tuple(ang_vel))  # type: ignore[assignment]
+        self._place_kinematic(0.0)
+
+    def set_motor(self, joint: int, vel: float, fmax: float) -> None:
+        slot = int(self._motor_of[joint])
+        if slot < 0:
+            spec = self.world.joints[joint]
+            raise UnsupportedFeature(f"mujoco: joint `{spec.name}` ({spec.kind.value}) has no motor")
+        self._m.tendon_frictionloss[slot] = fmax  # 0: no row, the motor is off
+        self._target[slot] = self._sign[joint] * vel
+
+    def apply_force(self, body: int, force: Vec3, torque: Vec3) -> None:
+        if self.world.bodies[body].motion is not Motion.DYNAMIC:
+            return  # static and kinematic bodies are unaffected by forces
+        row = self._xfrc[self._layout.body_id[body]]
+        row[:3] += force
+        row[3:] += torque
+        self._forced = True
+
+    def reset_body(self, body: int, pos: Vec3, quat: Quat, lin_vel: Vec3, ang_vel: Vec3) -> None:
+        if body not in self._free or self.world.bodies[body].motion is not Motion.DYNAMIC:
+            name = self.world.bodies[body].name
+            raise UnsupportedFeature(f"mujoco: reset_body needs a free dynamic body; `{name}` is jointed")
+        qadr, _ = self._free[body]
+        self._d.qpos[qadr : qadr + 3] = pos
+        self._d.qpos[qadr + 3 : qadr + 7] = quat
+        self._set_velocity(body, lin_vel, ang_vel)
+        self._stale = True
+
+    # --- stepping -------------------------------------------------------------------------------
+
+    def step(self) -> None:
+        m, d = self._m, self._d
+        with map_engine_errors(self.name, "mj_step"):
+            if self._forced:
+                d.xfrc_applied[:] = self._xfrc  # held for every substep of this step, then cleared
+            self._motor_sum[:] = 0.0
+            touching = []
+            for k in range(self._nsteps):
+                if k:
+                    self._place_kinematic(k * self._h)
+                d.qvel[self._helper_dof] = self._target
+                mujoco.mj_step(m, d)
+                rows = np.flatnonzero(d.efc_type == mujoco.mjtConstraint.mjCNSTR_FRICTION_TENDON)
+                np.add.at(self._motor_sum, d.efc_id[rows], d.efc_force[rows])
+                touching.append(self._touching())
+            if self._forced:
+                d.xfrc_applied[:] = 0.0
+                self._xfrc[:] = 0.0
+                self._forced = False
+            self._steps += 1
+            for i, (pos, quat, lin, ang) in self._kinematic.items():  # now exactly where the velocity says
+                dt = self.world.dt
+                end = (pos[0] + lin[0] * dt, pos[1] + lin[1] * dt, pos[2] + lin[2] * dt)
+                self._kinematic[i] = (end, integrate_quat(quat, ang, dt), lin, ang)
+            self._place_kinematic(0.0)
+        self._check()
+        self._contacts = self._merge(touching)
+        self._stale = True
+
+    def _place_kinematic(self, t: float) -> None:
+        """Impose every kinematic body's pose at time ``t`` into the step, and its velocity."""
+        for i, (pos, quat, lin, ang) in self._kinematic.items():
+            qadr, _ = self._free[i]
+            q = integrate_quat(quat, ang, t)
+            self._d.qpos[qadr : qadr + 3] = (pos[0] + lin[0] * t, pos[1] + lin[1] * t, pos[2] + lin[2] * t)
+            self._d.qpos[qadr + 3 : qadr + 7] = q
+            self._set_velocity(i, lin, ang, q)
+        self._stale = True
+
+    def _set_velocity(self, body: int, lin: Vec3, ang: Vec3, quat: Quat | None = None) -> None:
+        """Free joints take the linear velocity in the world frame, the angular one in the body frame."""
+        if body not in self._free:
+            return  # a jointed body starts at rest relative to its parent
+        qadr, dadr = self._free[body]
+        q = quat if quat is not None else tuple(self._d.qpos[qadr + 3 : qadr + 7])
+        self._d.qvel[dadr : dadr + 3] = lin
+        self._d.qvel[dadr + 3 : dadr + 6] = quat_rotate(quat_conj(q), ang)
+
+    def _check(self) -> None:
+        d = self._d
+        bad = any(d.warning[w].number for w in _BAD_STATE)
+        if not bad and np.isfinite(d.qpos).all() and np.isfinite(d.qvel).all():
+            return
+        dofs = np.flatnonzero(~np.isfinite(d.qvel))
+        body = None
+        if dofs.size:
+            mj_body = self._m.dof_bodyid[dofs[0]]
+            body = self.world.bodies[int(np.flatnonzero(self._layout.body_id == mj_body)[0])].name
+        time = self._steps * self.world.dt
+        raise EngineFailure(
+            f"mujoco: the simulation became invalid (NaN, inf or a huge acceleration) by t={time:g} s",
+            backend=self.name,
+            body=body,
+            time=time,
+        )
+
+    # --- contacts -------------------------------------------------------------------------------
+
+    def _touching(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """Per body pair touching in the last engine step: (pair code, points, depth, normal force)."""
+        d, n = self._d, self._d.ncon
+        if n == 0:
+            empty = np.zeros(0)
+            return empty.astype(np.int64), empty.astype(np.int64), empty, empty
+        c = d.contact
+        keep = c.dist[:n] <= 0.0
+        owners = self._layout.geom_body[c.geom[:n][keep]]
+        a, b = owners.min(axis=1), owners.max(axis=1)
+        code = a * len(self.world.bodies) + b
+        rows = c.efc_address[:n][keep]
+        force = np.zeros(rows.size)  # a contact at distance 0 is "in the gap": touching, with no row
+        active = rows >= 0
+        force[active] = d.efc_force[rows[active]]  # elliptic cone: a contact's first row is its normal
+        pairs, inverse, points = np.unique(code, return_inverse=True, return_counts=True)
+        depth = np.zeros(pairs.size)
+        np.maximum.at(depth, inverse, -c.dist[:n][keep])
+        return pairs, points, depth, np.bincount(inverse, weights=force, minlength=pairs.size)
+
+    def _merge(self, touching: list[tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]]) -> list[Contact]:
+        """Pairs touching in any engine step of the scenario step; force averaged over the step."""
+        code = np.concatenate([t[0] for t in touching])
+        if code.size == 0:
+            return []
+        pairs, inverse = np.unique(code, return_inverse=True)
+        points = np.zeros(pairs.size, dtype=np.int64)
+        depth = np.zeros(pairs.size)
+        np.maximum.at(points, inverse, np.concatenate([t[1] for t in touching]))
+        np.maximum.at(depth, inverse, np.concatenate([t[2] for t in touching]))
+        force = np.bincount(inverse, weights=np.concatenate([t[3] for t in touching]), minlength=pairs.size)
+        n = len(self.world.bodies)
+        return [
+            Contact(int(p // n), int(p % n), int(k), float(x), float(f / self._nsteps))
+            for p, k, x, f in zip(pairs, points, depth, force, strict=True)
+        ]
+
+    def contacts(self) -> list[Contact]:
+        return list(self._contacts)
+
+    # --- reads ----------------------------------------------------------------------------------
+
+    def _refresh(self) -> None:
+        """Recompute poses and velocities from qpos/qvel (mj_step leaves xpos/xquat one step behind)."""
+        if self._stale:
+            with map_engine_errors(self.name, "reading states"):
+                mujoco.mj_kinematics(self._m, self._d)
+                mujoco.mj_comPos(self._m, self._d)
+                mujoco.mj_comVel(self._m, self._d)
+            self._stale = False
+
+    def body_states(self) -> BodyStates:
+        self._refresh()
+        d, ids = self._d, self._layout.body_id
+        pos = d.xpos[ids].copy()
+        ang = d.cvel[ids, :3].copy()
+        lin = d.cvel[ids, 3:] + np.cross(ang, pos - d.subtree_com[self._root])  # cvel is about the root's COM
+        return BodyStates(pos=pos, quat=d.xquat[ids].copy(), lin_vel=lin, ang_vel=ang)
+
+    def joint_states(self) -> JointStates:
+        n = len(self.world.joints)
+        position, velocity, force = np.full(n, np.nan), np.full(n, np.nan), np.zeros(n)
+        m, d, lay = self._m, self._d, self._layout
+        for j, joint in enumerate(self.world.joints):
+            if joint.kind not in (JointKind.SLIDER, JointKind.HINGE):
+                continue
+            jid, sign = lay.joint_id[j], self._sign[j]
+            position[j] = sign * d.qpos[m.jnt_qposadr[jid]]
+            velocity[j] = sign * d.qvel[m.jnt_dofadr[jid]]
+            if self._motor_of[j] >= 0:
+                force[j] = sign * self._motor_sum[self._motor_of[j]] / self._nsteps
+        return JointStates(position=position, velocity=velocity, motor_force=force)
+
+    def settings(self) -> dict[str, Any]:
+        o = self._opts
+        return {
+            "engine": f"mujoco {mujoco.__version__}",
+            "timestep": self._h,
+            "engine_steps_per_step": self._nsteps,
+            "integrator": "implicitfast",
+            "cone": "elliptic",
+            "solver": "Newton",
+            "iterations": int(self._m.opt.iterations),
+            "tolerance": float(self._m.opt.tolerance),
+            "motors": "tendon frictionloss rows (bounded velocity constraints), impedance 0.9999",
+            "contact_solref": f"(-erp/h^2, -(1+bounce)/h), erp {o.erp}, bounce_erp {o.bounce_erp}",
+            "impedance": IMPEDANCE,
+            "mu_max": MU_MAX,
+            "kinematic_mass_ratio": KINEMATIC_MASS_RATIO,
+            "bounce_vel": "ignored (MuJoCo's contact is linear in the approach speed)",
+        }

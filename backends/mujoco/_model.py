@@ -1,0 +1,355 @@
+"""Building the MuJoCo model of a CompiledWorld with ``mujoco.MjSpec`` (no XML).
+
+Bodies become one kinematic tree: a body joined to the environment (or to a static body) is a child of
+the world body with a slide/hinge/ball joint (a fixed joint: no joint, welded); a body joined to another
+body is that body's child; every other dynamic body, and every kinematic body, is a free root. A joint is
+attached to whichever end the tree reaches second, so its MuJoCo coordinate may be the negative of the
+world's (``Edge.sign``). Closed loops are not representable and are refused.
+
+Every pair of bodies that can touch gets an explicit contact pair (geoms collide through nothing else),
+so each pair has its own surface and its own friction reference. The normal row follows ODE's
+velocity-level contact rather than MuJoCo's spring-damper default: with a constant impedance ``d`` a
+row reaches ``a = -B*v - K*r + (1-d)*a0`` (``solref = (-K, -B)``), so ``B = (1+e)/h`` turns the approach
+speed ``v`` into ``-e*v`` in one engine step ``h`` (ODE's bounce) and ``K = erp/h**2`` removes ``erp`` of
+the penetration per step (ODE's ERP). Friction rows (``solreffriction``) use a gentler rate: MuJoCo's
+convex cone turns a stiff friction reference on a sliding contact into a separating normal push (the
+body hops). docs/backends/mujoco.md gives the measured consequences.
+"""
+
+from __future__ import annotations
+
+import math
+from collections import deque
+from collections.abc import Mapping
+from dataclasses import dataclass
+from typing import Any
+
+import mujoco
+import numpy as np
+
+from ..errors import UnsupportedFeature
+from ..geometry import quat_conj, quat_mul, quat_rotate
+from ..types import BodySpec, CompiledWorld, JointKind, Motion, ShapeKind, Surface
+
+#: Constant constraint impedance (solimp dmin = dmax): how nearly a contact or stop reaches its
+#: reference acceleration. The rest, (1 - d) of the unconstrained acceleration, leaks through.
+IMPEDANCE = 0.99
+#: Impedance of the motor rows: the rate error left after a step that reaches the target is 1e-4 of it.
+MOTOR_IMPEDANCE = 0.9999
+#: Friction coefficients are capped here (``inf`` included): with the elliptic cone this already
+#: means no slip, and larger values only worsen the solver's conditioning.
+MU_MAX = 1000.0
+#: Rate (1/s) at which friction rows remove a sticking contact's tangential speed, at most 1/(4h).
+FRICTION_RATE = 50.0
+#: A kinematic body is a free body this much heavier than the heaviest dynamic body (at least 1 kg),
+#: with gravity compensated and its pose and velocity imposed before every engine step.
+KINEMATIC_MASS_RATIO = 1e6
+
+_GEOM = {
+    ShapeKind.BOX: mujoco.mjtGeom.mjGEOM_BOX,
+    ShapeKind.SPHERE: mujoco.mjtGeom.mjGEOM_SPHERE,
+    ShapeKind.CAPSULE: mujoco.mjtGeom.mjGEOM_CAPSULE,
+    ShapeKind.CYLINDER: mujoco.mjtGeom.mjGEOM_CYLINDER,
+    ShapeKind.PLANE: mujoco.mjtGeom.mjGEOM_PLANE,
+}
+_JOINT = {
+    JointKind.SLIDER: mujoco.mjtJoint.mjJNT_SLIDE,
+    JointKind.HINGE: mujoco.mjtJoint.mjJNT_HINGE,
+    JointKind.BALL: mujoco.mjtJoint.mjJNT_BALL,
+}
+_SOLIMP = [IMPEDANCE, IMPEDANCE, 0.001, 0.5, 2.0]
+
+
+@dataclass(frozen=True)
+class Options:
+    """The scenario's ``backend_options.mujoco`` block, validated."""
+
+    erp: float = 0.2  # ODE's default ERP, for contacts that do not bounce and for joint stops
+    bounce_erp: float = 0.05  # ERP of contacts that bounce (it adds to the rebound, see the docs)
+    engine_substeps: int = 1  # MuJoCo steps per world substep
+
+    @classmethod
+    def parse(cls, raw: Mapping[str, Any]) -> Options:
+        values = {**cls().__dict__, **raw}
+        for key, value in values.items():
+            ok = isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
+            if key == "engine_substeps":
+                ok = ok and float(value).is_integer() and value >= 1
+            elif key in ("erp", "bounce_erp"):
+                ok = ok and 0.0 < value <= 1.0
+            else:
+                ok = ok and value > 0.0
+            if not ok:
+                raise UnsupportedFeature(
+                    f"Invalid `backend_options.mujoco.{key}`. Expected a positive number"
+                    f"{' (an integer)' if key == 'engine_substeps' else ''}"
+                    f"{' in (0, 1]' if 'erp' in key else ''}. Received: {key}={value!r}."
+                )
+        values["engine_substeps"] = int(values["engine_substeps"])
+        return cls(**values)
+
+
+@dataclass(frozen=True)
+class Edge:
+    """How a body hangs in the MuJoCo tree."""
+
+    parent: str | None  # None: the world body
+    joint: int | None  # index into world.joints; None: a free root, or a static body
+    sign: float  # +1: the MuJoCo joint coordinate is the world joint's, -1: its negative
+
+
+@dataclass
+class Layout:
+    """The compiled model and the index maps between it and the CompiledWorld."""
+
+    model: mujoco.MjModel
+    edges: dict[str, Edge]
+    body_id: np.ndarray  # world body index -> MuJoCo body id
+    geom_body: np.ndarray  # MuJoCo geom id -> world body index
+    joint_id: np.ndarray  # world joint index -> MuJoCo joint id, -1 for a fixed joint
+    motor_id: np.ndarray  # world joint index -> MuJoCo tendon id of its motor, -1 when it has none
+    helper_dof: np.ndarray  # world joint index -> dof of its motor's helper slide, -1 when none
+
+
+def plan_tree(world: CompiledWorld) -> dict[str, Edge]:
+    """Every body's place in the tree, parents before children (static bodies first)."""
+    motion = {b.name: b.motion for b in world.bodies}
+
+    def node(name: str | None) -> str | None:  # static bodies are the environment
+        return None if name is None or motion[name] is Motion.STATIC else name
+
+    links: dict[str | None, list[int]] = {None: [], **{b.name: [] for b in world.bodies}}
+    for i, joint in enumerate(world.joints):
+        if joint.kind not in _JOINT and joint.kind is not JointKind.FIXED:
+            raise UnsupportedFeature(f"mujoco: joint `{joint.name}` is {joint.kind.value}, not supported")
+        a, b = node(joint.body), node(joint.other)
+        if a == b:
+            raise UnsupportedFeature(f"mujoco: joint `{joint.name}` joins nothing that can move")
+        links[a].append(i)
+        links[b].append(i)
+    edges = {b.name: Edge(None, None, 1.0) for b in world.bodies if b.motion is Motion.STATIC}
+    roots = [b.name for b in world.bodies if b.motion is Motion.KINEMATIC]
+    roots += [b.name for b in world.bodies if b.motion is Motion.DYNAMIC]
+    for root in [None, *roots]:
+        if root is not None:
+            if root in edges:
+                continue
+            edges[root] = Edge(None, None, 1.0)
+        queue: deque[str | None] = deque([root])
+        while queue:
+            parent = queue.popleft()
+            for i in links[parent]:
+                joint = world.joints[i]
+                if parent is not None and edges[parent].joint == i:
+                    continue  # the joint that hangs `parent` itself
+                a, b = node(joint.body), node(joint.other)
+                child = b if a == parent else a
+                if child is None or child in edges:
+                    raise UnsupportedFeature(f"mujoco: joint `{joint.name}` closes a kinematic loop")
+                if motion[child] is Motion.KINEMATIC:
+                    raise UnsupportedFeature(
+                        f"mujoco: kinematic body `{child}` cannot hang from joint `{joint.name}`"
+                    )
+                edges[child] = Edge(parent, i, 1.0 if child == a else -1.0)
+                queue.append(child)
+    return edges
+
+
+def _rigid_groups(world: CompiledWorld, edges: dict[str, Edge]) -> dict[str, str]:
+    """Body -> the first body up its chain of fixed joints ("" when the chain ends at the world)."""
+    group: dict[str, str] = {}
+    for name, edge in edges.items():  # parents come first
+        fixed = edge.joint is not None and world.joints[edge.joint].kind is JointKind.FIXED
+        if fixed:
+            group[name] = group[edge.parent] if edge.parent is not None else ""
+        else:
+            static = world.bodies[world.body_index(name)].motion is Motion.STATIC
+            group[name] = "" if static else name
+    return group
+
+
+def contact_solref(surface: Surface, h: float, opts: Options) -> tuple[list[float], list[float]]:
+    """(normal, friction) solref for a surface at engine step ``h`` (see the module docstring)."""
+    e = surface.bounce
+    erp = opts.erp if e == 0.0 else opts.bounce_erp
+    return [-erp / h**2, -(1.0 + e) / h], [-1.0, -min(FRICTION_RATE, 0.25 / h)]
+
+
+def _mu(surface: Surface) -> float:
+    return min(surface.mu, MU_MAX)
+
+
+def build(world: CompiledWorld, opts: Options, h: float) -> Layout:
+    """Compile ``world`` with engine step ``h``."""
+    edges = plan_tree(world)
+    spec = mujoco.MjSpec()
+    spec.compiler.degree = False  # hinge ranges in radians
+    spec.option.timestep = h
+    spec.option.gravity = list(world.gravity)
+    spec.option.integrator = mujoco.mjtIntegrator.mjINT_IMPLICITFAST
+    spec.option.cone = mujoco.mjtCone.mjCONE_ELLIPTIC
+    spec.option.tolerance = 1e-10  # motors settle to 1e-6 of their target rate (default 1e-8: 2e-4)
+    spec.option.disableflags |= mujoco.mjtDisableBit.mjDSBL_AUTORESET  # a blow-up must surface
+    specs = {b.name: b for b in world.bodies}
+    heavy = KINEMATIC_MASS_RATIO * max([1.0] + [b.mass for b in world.bodies if b.motion is Motion.DYNAMIC])
+    mj_bodies: dict[str, Any] = {}
+    for name, edge in edges.items():
+        body = specs[name]
+        parent = specs[edge.parent] if edge.parent is not None else None
+        mj = (mj_bodies[edge.parent] if edge.parent is not None else spec.worldbody).add_body(
+            name=f"body:{name}", **_relative_pose(body, parent)
+        )
+        mj_bodies[name] = mj
+        if body.motion is not Motion.STATIC:
+            mass, inertia = (heavy, [heavy] * 3) if body.motion is Motion.KINEMATIC else (body.mass, body.inertia)
+            mj.mass, mj.inertia, mj.explicitinertial = mass, list(inertia), True
+            mj.ipos, mj.iquat = [0.0, 0.0, 0.0], [1.0, 0.0, 0.0, 0.0]  # COM at the body origin
+            mj.gravcomp = 1.0 if body.motion is Motion.KINEMATIC else 0.0
+        if body.motion is not Motion.STATIC and edge.joint is None:
+            mj.add_freejoint()
+        elif edge.joint is not None:
+            _add_joint(mj, body, world, edge, h, opts)
+        _add_geom(mj, body)
+    _add_motors(spec, world, heavy, h)
+    _add_pairs(spec, world, edges, h, opts)
+    model = spec.compile()
+    _rescale_solver(model, [b.name for b in world.bodies if b.motion is Motion.DYNAMIC])
+    return Layout(
+        model=model,
+        edges=edges,
+        body_id=np.array([model.body(f"body:{b.name}").id for b in world.bodies], dtype=np.int64),
+        geom_body=np.array(
+            [world.body_index(model.body(model.geom_bodyid[g]).name[5:]) for g in range(model.ngeom)],
+            dtype=np.int64,
+        ),
+        joint_id=np.array(
+            [model.joint(f"joint:{j.name}").id if j.kind in _JOINT else -1 for j in world.joints], dtype=np.int64
+        ),
+        motor_id=np.array(
+            [model.tendon(f"motor:{j.name}").id if _motorised(j.kind) else -1 for j in world.joints],
+            dtype=np.int64,
+        ),
+        helper_dof=np.array(
+            [model.jnt_dofadr[model.joint(f"helper:{j.name}").id] if _motorised(j.kind) else -1 for j in world.joints],
+            dtype=np.int64,
+        ),
+    )
+
+
+def _rescale_solver(model: mujoco.MjModel, dynamic: list[str]) -> None:
+    """Base the solver's tolerance on the dynamic bodies' inertia, not on the heavy driven bodies.
+
+    MuJoCo scales its convergence test by ``stat.meaninertia``, the mean diagonal of the mass matrix;
+    the kinematic bodies and motor helpers would inflate it a millionfold and stop the solver early.
+    """
+    data = mujoco.MjData(model)
+    mujoco.mj_forward(model, data)
+    ids = [model.body(f"body:{name}").id for name in dynamic]
+    dofs = np.flatnonzero(np.isin(model.dof_bodyid, ids))
+    if dofs.size:
+        full = np.zeros((model.nv, model.nv))
+        mujoco.mj_fullM(model, data, full)
+        model.stat.meaninertia = float(np.mean(np.diag(full)[dofs]))
+
+
+def _motorised(kind: JointKind) -> bool:
+    return kind in (JointKind.SLIDER, JointKind.HINGE)
+
+
+def _relative_pose(body: BodySpec, parent: BodySpec | None) -> dict[str, list[float]]:
+    if parent is None:
+        return {"pos": list(body.pos), "quat": list(body.quat)}
+    inv = quat_conj(parent.quat)
+    delta = [body.pos[k] - parent.pos[k] for k in range(3)]
+    return {"pos": list(quat_rotate(inv, delta)), "quat": list(quat_mul(inv, body.quat))}
+
+
+def _add_joint(mj: Any, body: BodySpec, world: CompiledWorld, edge: Edge, h: float, opts: Options) -> None:
+    joint = world.joints[edge.joint]  # type: ignore[index]
+    if joint.kind is JointKind.FIXED:
+        return  # no joint: welded to the parent
+    inv = quat_conj(body.quat)
+    anchor = [joint.anchor[k] - body.pos[k] for k in range(3)]
+    mj_joint = mj.add_joint(
+        name=f"joint:{joint.name}",
+        type=_JOINT[joint.kind],
+        axis=list(quat_rotate(inv, joint.axis)),
+        pos=list(quat_rotate(inv, anchor)),
+    )
+    if joint.lo is None and joint.hi is None:
+        return
+    if joint.kind is JointKind.BALL:
+        raise UnsupportedFeature(f"mujoco: stops on ball joint `{joint.name}` are not supported")
+    lo = -math.inf if joint.lo is None else joint.lo
+    hi = math.inf if joint.hi is None else joint.hi
+    mj_joint.range = sorted([edge.sign * lo, edge.sign * hi])
+    mj_joint.limited = mujoco.mjtLimited.mjLIMITED_TRUE
+    mj_joint.solref_limit = [-opts.erp / h**2, -1.0 / h]  # ODE's stop: no bounce, ERP correction
+    mj_joint.solimp_limit = _SOLIMP
+
+
+def _add_geom(mj: Any, body: BodySpec) -> None:
+    shape = body.shape
+    if shape.kind is ShapeKind.PLANE and body.motion is not Motion.STATIC:
+        raise UnsupportedFeature(f"mujoco: plane `{body.name}` must be static")
+    size = {
+        ShapeKind.BOX: [s / 2.0 for s in shape.size],
+        ShapeKind.SPHERE: [shape.radius, 0.0, 0.0],
+        ShapeKind.CAPSULE: [shape.radius, shape.length / 2.0, 0.0],
+        ShapeKind.CYLINDER: [shape.radius, shape.length / 2.0, 0.0],
+        ShapeKind.PLANE: [0.0, 0.0, 1.0],  # infinite
+    }[shape.kind]
+    geom = mj.add_geom(name=f"geom:{body.name}", type=_GEOM[shape.kind], size=size, rgba=list(body.color))
+    geom.contype = geom.conaffinity = 0  # every contact comes from an explicit pair
+
+
+def _add_motors(spec: Any, world: CompiledWorld, heavy: float, h: float) -> None:
+    """ODE's velocity motor as a bounded velocity constraint: a tendon's frictionloss row.
+
+    The tendon measures the joint's rate minus the rate of a heavy helper slide whose velocity the
+    backend sets to the target, so the frictionloss row drives the joint to the target with a force
+    bounded by fmax (the tendon's frictionloss), in one step when fmax allows, as ODE's LCP does. A
+    velocity actuator with a large gain chatters by one step of acceleration around the target instead:
+    MuJoCo drops a clamped actuator's implicit damping, so the step that crosses the target overshoots.
+    """
+    for joint in world.joints:
+        if not _motorised(joint.kind):
+            continue
+        helper = spec.worldbody.add_body(name=f"motor:{joint.name}", mass=heavy, inertia=[heavy] * 3)
+        helper.explicitinertial, helper.gravcomp = True, 1.0
+        helper.ipos, helper.iquat = [0.0, 0.0, 0.0], [1.0, 0.0, 0.0, 0.0]
+        helper.add_joint(name=f"helper:{joint.name}", type=mujoco.mjtJoint.mjJNT_SLIDE, axis=[1.0, 0.0, 0.0])
+        tendon = spec.add_tendon(name=f"motor:{joint.name}")
+        tendon.wrap_joint(f"joint:{joint.name}", 1.0)
+        tendon.wrap_joint(f"helper:{joint.name}", -1.0)
+        tendon.solref_friction = [-1.0, -1.0 / h]  # the rate error is removed in one step
+        tendon.solimp_friction = [MOTOR_IMPEDANCE, MOTOR_IMPEDANCE, 0.001, 0.5, 2.0]
+        tendon.frictionloss = 0.0  # fmax; the backend sets it (0: off)
+
+
+def _add_pairs(spec: Any, world: CompiledWorld, edges: dict[str, Edge], h: float, opts: Options) -> None:
+    """One contact pair per pair of bodies that can touch, with that pair's surface.
+
+    Bodies touch unless both are welded to the world or driven (static, kinematic), or they are joined
+    (ODE programs skip connected bodies), or a fixed joint makes them one rigid group.
+    """
+    group = _rigid_groups(world, edges)
+    dynamic = {b.name for b in world.bodies if b.motion is Motion.DYNAMIC}
+    joined = {frozenset((j.body, j.other)) for j in world.joints if j.other is not None}
+    names = [b.name for b in world.bodies]
+    for i, a in enumerate(names):
+        for b in names[i + 1 :]:
+            if group[a] == group[b] or not {group[a], group[b]} & dynamic or frozenset((a, b)) in joined:
+                continue
+            surface = world.surface(a, b)
+            solref, solreffriction = contact_solref(surface, h, opts)
+            mu = _mu(surface)
+            spec.add_pair(
+                geomname1=f"geom:{a}",
+                geomname2=f"geom:{b}",
+                condim=3 if mu > 0.0 else 1,
+                friction=[mu, mu, 0.005, 0.0001, 0.0001],
+                solref=solref,
+                solreffriction=solreffriction,
+                solimp=_SOLIMP,
+            )

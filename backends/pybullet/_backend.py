@@ -1,0 +1,378 @@
+"""The PyBullet adapter: ODE semantics on PyBullet in DIRECT mode (docs/backends/pybullet.md).
+
+One client per instance (several may coexist; every call passes ``physicsClientId``). Each scenario
+step is ``world.substeps`` calls of ``stepSimulation()`` with ``fixedTimeStep = dt / substeps`` and
+``numSubSteps = 0``; damping is 0 everywhere; one-step forces are re-applied before every substep of
+the next step (PyBullet clears them after each); kinematic bodies are mass-0 bases placed with their
+velocity and re-placed exactly after each substep.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from typing import Any, ClassVar
+
+import numpy as np
+import pybullet as p
+
+from ..base import Backend
+from ..errors import EngineFailure, UnsupportedFeature, map_engine_errors
+from ..geometry import integrate_quat
+from ..types import BodyStates, Capability, CompiledWorld, Contact, JointKind, JointStates, Motion, Quat, Vec3
+from ._build import PLANE_HALF_SIZE, Layout, build, xyzw
+from ._surfaces import FRICTION_CLAMP, SurfaceFit, fit_surfaces
+
+_NAME = "pybullet"
+#: PyBullet clamps joint rates to 100 by default; ODE has no such limit.
+_MAX_JOINT_VELOCITY = 1e6
+#: Bullet keeps contact points up to this distance apart (default 0.02 m). Restitution is lost when a
+#: point exists more than about one step before impact [checked: a sphere dropped 0.5 m at dt 0.001
+#: rebounds to 0.0000 of its height at 0.02, 0.27 at 0.001]. ODE makes contacts only when touching.
+#: NB: Bullet keeps this in a process-wide global, so every instance sets the same value.
+CONTACT_BREAKING_THRESHOLD = 0.001
+
+
+def _options(world: CompiledWorld) -> tuple[int, bool]:
+    opts = world.options_for(_NAME)
+    iterations = opts.get("solver_iterations", 50)
+    if isinstance(iterations, bool) or not isinstance(iterations, int) or iterations < 1:
+        raise UnsupportedFeature(
+            "Invalid `backend_options.pybullet.solver_iterations`. Expected a positive integer. "
+            f"Received: solver_iterations={iterations!r}"
+        )
+    overlapping = opts.get("deterministic_overlapping_pairs", True)
+    if not isinstance(overlapping, bool):
+        raise UnsupportedFeature(
+            "Invalid `backend_options.pybullet.deterministic_overlapping_pairs`. Expected true or false. "
+            f"Received: deterministic_overlapping_pairs={overlapping!r}"
+        )
+    return iterations, overlapping
+
+
+class PyBulletBackend(Backend):
+    """PyBullet multibodies with ODE's stepping, forces, motors, stops and surfaces."""
+
+    name: ClassVar[str] = _NAME
+    engine_distribution: ClassVar[str] = "pybullet"
+    capabilities: ClassVar[frozenset[Capability]] = frozenset(
+        {
+            Capability.SHAPE_BOX,
+            Capability.SHAPE_SPHERE,
+            Capability.SHAPE_CAPSULE,
+            Capability.SHAPE_CYLINDER,
+            Capability.SHAPE_PLANE,
+            Capability.JOINT_SLIDER,
+            Capability.JOINT_HINGE,
+            Capability.JOINT_BALL,
+            Capability.JOINT_FIXED,
+            Capability.JOINT_BETWEEN_BODIES,
+            Capability.JOINT_LIMITS,
+            Capability.JOINT_MOTOR,
+            Capability.KINEMATIC,
+            Capability.SUBSTEPS,
+        }
+    )
+    option_keys: ClassVar[Mapping[str, str]] = {
+        "solver_iterations": "numSolverIterations of the constraint solver (default 50)",
+        "deterministic_overlapping_pairs": "sort broadphase pairs for run-to-run determinism (default true)",
+    }
+
+    def __init__(self, world: CompiledWorld) -> None:
+        super().__init__(world)
+        self._c = -1
+        self._iterations, self._overlapping = _options(world)
+        with map_engine_errors(_NAME, "building the world"):
+            self._c = int(p.connect(p.DIRECT))
+            try:
+                self._build()
+            except BaseException:
+                self.close()
+                raise
+
+    # --- construction ---------------------------------------------------------------------------
+
+    def _build(self) -> None:
+        world, c = self.world, self._c
+        self._h = world.dt / world.substeps
+        p.setGravity(*world.gravity, physicsClientId=c)
+        p.setTimeStep(self._h, physicsClientId=c)
+        self._layout: Layout = build(p, c, world)
+        self._fit: SurfaceFit = fit_surfaces(world, self._layout.excluded)
+        p.setPhysicsEngineParameter(
+            fixedTimeStep=self._h,
+            numSubSteps=0,
+            numSolverIterations=self._iterations,
+            restitutionVelocityThreshold=self._fit.restitution_threshold,
+            contactBreakingThreshold=CONTACT_BREAKING_THRESHOLD,
+            deterministicOverlappingPairs=int(self._overlapping),
+            physicsClientId=c,
+        )
+        layout = self._layout
+        # PyBullet pitfall [checked]: a changeDynamics call on a link that also sets linearDamping,
+        # angularDamping or activationState applies its other parameters to the base instead (and
+        # drops joint limits). These three are per multibody anyway: set them alone, on the base.
+        for uid in sorted(set(layout.uid)):
+            for key, value in (
+                ("linearDamping", 0.0),
+                ("angularDamping", 0.0),
+                ("activationState", p.ACTIVATION_STATE_DISABLE_SLEEPING),
+            ):
+                p.changeDynamics(uid, -1, physicsClientId=c, **{key: value})
+        for i, spec in enumerate(world.bodies):
+            uid, link = layout.uid[i], layout.link[i]
+            extra: dict[str, Any] = {}
+            if spec.motion is Motion.DYNAMIC:
+                extra["localInertiaDiagonal"] = list(spec.inertia)
+            p.changeDynamics(
+                uid,
+                link,
+                restitution=self._fit.restitution[i],
+                lateralFriction=self._fit.friction[i],
+                physicsClientId=c,
+                **extra,
+            )
+            if link >= 0:  # also alone: combined with others it misroutes them like the damping
+                p.changeDynamics(uid, link, maxJointVelocity=_MAX_JOINT_VELOCITY, physicsClientId=c)
+            if link < 0:
+                p.resetBaseVelocity(uid, list(spec.lin_vel), list(spec.ang_vel), physicsClientId=c)
+        for k, joint in enumerate(world.joints):
+            handle = layout.joints[k]
+            if joint.kind is JointKind.BALL:  # PyBullet holds spherical links with a default motor
+                p.setJointMotorControlMultiDof(
+                    handle.uid, handle.link, p.POSITION_CONTROL, targetPosition=[0.0, 0.0, 0.0, 1.0],
+                    force=[0.0, 0.0, 0.0], physicsClientId=c,
+                )
+            if handle.dofs != 1:
+                continue
+            motor = joint.motor
+            self.set_motor(k, motor.vel if motor else 0.0, motor.fmax if motor else 0.0)
+            if joint.lo is not None or joint.hi is not None:  # in its own call: never with damping
+                lo = joint.lo if joint.lo is not None else -math.inf
+                hi = joint.hi if joint.hi is not None else math.inf
+                lo, hi = (lo, hi) if handle.sign > 0 else (-hi, -lo)
+                p.changeDynamics(
+                    handle.uid, handle.link, jointLowerLimit=max(lo, -1e30), jointUpperLimit=min(hi, 1e30),
+                    physicsClientId=c,
+                )
+        self._bases = [(i, layout.uid[i]) for i in range(len(world.bodies)) if layout.link[i] < 0]
+        trees = {uid for uid, _, _ in layout.link_groups}
+        self._jointed = {i for i, uid in enumerate(layout.uid) if uid in trees}
+        self._kinematic: dict[int, tuple[Vec3, Quat, Vec3, Vec3]] = {
+            i: (b.pos, b.quat, b.lin_vel, b.ang_vel) for i, b in enumerate(world.bodies) if b.motion is Motion.KINEMATIC
+        }
+        self._forces: dict[int, np.ndarray] = {}
+        self._motor_joints = [k for k, h in enumerate(layout.joints) if h.dofs == 1]
+        self._motor_sum = np.zeros(len(world.joints))
+        self._lut = np.full((max(layout.uid) + 1, max(layout.link) + 2), -1, dtype=np.int64)
+        for i in range(len(world.bodies)):
+            self._lut[layout.uid[i], layout.link[i] + 1] = i
+        self._cache: np.ndarray | None = None
+        self._steps = 0
+
+    # --- stepping -------------------------------------------------------------------------------
+
+    def step(self) -> None:
+        with map_engine_errors(_NAME, f"step {self._steps + 1}"):
+            c, n = self._c, self.world.substeps
+            self._motor_sum[:] = 0.0
+            for s in range(1, n + 1):
+                if self._forces:
+                    self._apply_forces()
+                p.stepSimulation(physicsClientId=c)
+                if self._kinematic:
+                    self._place_kinematic(s / n)
+                if n > 1 and self._motor_joints:
+                    self._motor_sum += self._motor_torques()
+            self._forces.clear()
+            for i, (pos, quat, lin, ang) in self._kinematic.items():
+                self._kinematic[i] = (self._advance(pos, lin, 1.0), integrate_quat(quat, ang, self.world.dt), lin, ang)
+            self._steps += 1
+            self._cache = None
+
+    def _advance(self, pos: Vec3, lin: Vec3, fraction: float) -> Vec3:
+        t = self.world.dt * fraction
+        return (pos[0] + lin[0] * t, pos[1] + lin[1] * t, pos[2] + lin[2] * t)
+
+    def _place_kinematic(self, fraction: float) -> None:
+        """PyBullet does not move mass-0 bases: put each kinematic body where its velocity says."""
+        c, dt = self._c, self.world.dt
+        for i, (pos, quat, lin, ang) in self._kinematic.items():
+            uid = self._layout.uid[i]
+            q = integrate_quat(quat, ang, dt * fraction)
+            p.resetBasePositionAndOrientation(uid, self._advance(pos, lin, fraction), xyzw(q), physicsClientId=c)
+            p.resetBaseVelocity(uid, lin, ang, physicsClientId=c)
+
+    def _apply_forces(self) -> None:
+        """At the centre of mass, world frame, for this substep (PyBullet clears them after each)."""
+        c, layout = self._c, self._layout
+        for i, ft in self._forces.items():
+            uid, link = layout.uid[i], layout.link[i]
+            if link < 0:
+                com = p.getBasePositionAndOrientation(uid, physicsClientId=c)[0]
+            else:
+                com = p.getLinkState(uid, link, computeForwardKinematics=1, physicsClientId=c)[0]
+            p.applyExternalForce(uid, link, ft[:3].tolist(), com, p.WORLD_FRAME, physicsClientId=c)
+            p.applyExternalTorque(uid, link, ft[3:].tolist(), p.WORLD_FRAME, physicsClientId=c)
+
+    def _motor_torques(self) -> np.ndarray:
+        out = np.zeros(len(self.world.joints))
+        for k in self._motor_joints:
+            h = self._layout.joints[k]
+            out[k] = h.sign * p.getJointState(h.uid, h.link, physicsClientId=self._c)[3]
+        return out
+
+    # --- reading --------------------------------------------------------------------------------
+
+    def _read(self) -> np.ndarray:
+        if self._cache is not None:
+            return self._cache
+        c = self._c
+        rows: list[tuple[float, ...]] = [()] * len(self.world.bodies)
+        for i, uid in self._bases:
+            pos, orn = p.getBasePositionAndOrientation(uid, physicsClientId=c)
+            lin, ang = p.getBaseVelocity(uid, physicsClientId=c)
+            rows[i] = pos + orn + lin + ang
+        for uid, links, bodies in self._layout.link_groups:
+            states = p.getLinkStates(
+                uid, links, computeLinkVelocity=1, computeForwardKinematics=1, physicsClientId=c
+            )
+            for i, ls in zip(bodies, states, strict=True):
+                rows[i] = ls[0] + ls[1] + ls[6] + ls[7]
+        arr = np.array(rows, dtype=np.float64).reshape(len(rows), 13)
+        if not np.isfinite(arr).all():
+            bad = self.world.bodies[int(np.flatnonzero(~np.isfinite(arr).all(axis=1))[0])].name
+            raise EngineFailure(
+                f"pybullet: body `{bad}` has a non-finite state after step {self._steps}",
+                backend=_NAME,
+                body=bad,
+                time=self._steps * self.world.dt,
+            )
+        self._cache = arr
+        return arr
+
+    def body_states(self) -> BodyStates:
+        with map_engine_errors(_NAME, "reading body states"):
+            arr = self._read()
+            return BodyStates(
+                pos=arr[:, 0:3].copy(),
+                quat=arr[:, [6, 3, 4, 5]],  # x, y, z, w -> w, x, y, z
+                lin_vel=arr[:, 7:10].copy(),
+                ang_vel=arr[:, 10:13].copy(),
+            )
+
+    def joint_states(self) -> JointStates:
+        with map_engine_errors(_NAME, "reading joint states"):
+            m = len(self.world.joints)
+            pos, vel, force = np.full(m, np.nan), np.full(m, np.nan), np.zeros(m)
+            for k in self._motor_joints:
+                h = self._layout.joints[k]
+                q, qd, _, torque = p.getJointState(h.uid, h.link, physicsClientId=self._c)
+                pos[k], vel[k], force[k] = h.sign * q, h.sign * qd, h.sign * torque
+            if self.world.substeps > 1 and self._steps:
+                force = self._motor_sum / self.world.substeps  # the mean over the step's substeps
+            return JointStates(position=pos, velocity=vel, motor_force=force)
+
+    def contacts(self) -> list[Contact]:
+        with map_engine_errors(_NAME, "reading contacts"):
+            points = p.getContactPoints(physicsClientId=self._c)
+            if not points:
+                return []
+            cols = list(zip(*points, strict=True))
+            dist = np.asarray(cols[8], dtype=np.float64)
+            keep = dist <= 0.0  # PyBullet also reports near points (distance > 0): not touching
+            if not keep.any():
+                return []
+            lut = self._lut
+            ia = lut[np.asarray(cols[1])[keep], np.asarray(cols[3])[keep] + 1]
+            ib = lut[np.asarray(cols[2])[keep], np.asarray(cols[4])[keep] + 1]
+            a, b = np.minimum(ia, ib), np.maximum(ia, ib)
+            key = a * len(self.world.bodies) + b
+            pairs, inverse, counts = np.unique(key, return_inverse=True, return_counts=True)
+            depth = np.zeros(len(pairs))
+            np.maximum.at(depth, inverse, -dist[keep])
+            normal = np.bincount(inverse, weights=np.asarray(cols[9], dtype=np.float64)[keep], minlength=len(pairs))
+            n = len(self.world.bodies)
+            return [
+                Contact(int(k // n), int(k % n), int(cnt), float(d), float(f))
+                for k, cnt, d, f in zip(pairs.tolist(), counts.tolist(), depth.tolist(), normal.tolist(), strict=True)
+            ]
+
+    # --- inputs ---------------------------------------------------------------------------------
+
+    def set_kinematic(self, body: int, pos: Vec3, quat: Quat, lin_vel: Vec3, ang_vel: Vec3) -> None:
+        with map_engine_errors(_NAME, f"placing kinematic body {body}"):
+            if body not in self._kinematic:
+                raise UnsupportedFeature(f"Body `{self.world.bodies[body].name}` is not kinematic.")
+            self._kinematic[body] = (tuple(pos), tuple(quat), tuple(lin_vel), tuple(ang_vel))  # type: ignore[assignment]
+            uid = self._layout.uid[body]
+            p.resetBasePositionAndOrientation(uid, list(pos), xyzw(quat), physicsClientId=self._c)
+            p.resetBaseVelocity(uid, list(lin_vel), list(ang_vel), physicsClientId=self._c)
+            self._cache = None
+
+    def set_motor(self, joint: int, vel: float, fmax: float) -> None:
+        with map_engine_errors(_NAME, f"setting the motor of joint {joint}"):
+            h = self._layout.joints[joint]
+            if h.dofs != 1:
+                raise UnsupportedFeature(f"Joint `{self.world.joints[joint].name}` has no motor on PyBullet.")
+            if not fmax >= 0.0:
+                raise ValueError(f"fmax must be >= 0, got {fmax}")
+            p.setJointMotorControl2(
+                h.uid, h.link, p.VELOCITY_CONTROL, targetVelocity=h.sign * vel, force=fmax, physicsClientId=self._c
+            )
+
+    def apply_force(self, body: int, force: Vec3, torque: Vec3) -> None:
+        if self.world.bodies[body].motion is not Motion.DYNAMIC:
+            return  # ODE: forces on static or kinematic bodies have no effect
+        acc = self._forces.setdefault(body, np.zeros(6))
+        acc[:3] += force
+        acc[3:] += torque
+
+    def reset_body(self, body: int, pos: Vec3, quat: Quat, lin_vel: Vec3, ang_vel: Vec3) -> None:
+        with map_engine_errors(_NAME, f"resetting body {body}"):
+            spec = self.world.bodies[body]
+            if spec.motion is not Motion.DYNAMIC or body in self._jointed:
+                raise UnsupportedFeature(
+                    f"Backend `pybullet` can only reset a dynamic body without joints; `{spec.name}` is not one."
+                )
+            uid = self._layout.uid[body]
+            p.resetBasePositionAndOrientation(uid, list(pos), xyzw(quat), physicsClientId=self._c)
+            p.resetBaseVelocity(uid, list(lin_vel), list(ang_vel), physicsClientId=self._c)
+            self._cache = None
+
+    # --- metadata and teardown --------------------------------------------------------------------
+
+    def settings(self) -> dict[str, Any]:
+        with map_engine_errors(_NAME, "reading settings"):
+            engine = dict(p.getPhysicsEngineParameters(physicsClientId=self._c)) if self._c >= 0 else {}
+        out: dict[str, Any] = {
+            "mode": "DIRECT",
+            "fixed_time_step": self._h,
+            "substeps": self.world.substeps,
+            "num_sub_steps": 0,
+            "solver_iterations": self._iterations,
+            "deterministic_overlapping_pairs": self._overlapping,
+            "restitution_velocity_threshold": self._fit.restitution_threshold,
+            "contact_breaking_threshold": CONTACT_BREAKING_THRESHOLD,
+            "plane": f"static box, half size {PLANE_HALF_SIZE:g} m, top face on the plane",
+            "damping": 0.0,
+            "sleeping": "disabled",
+            "friction_clamp": FRICTION_CLAMP,
+            "surface_mapping": self._fit.method,
+            "engine_parameters": engine,
+        }
+        if self._fit.threshold_note:
+            out["restitution_velocity_threshold_note"] = self._fit.threshold_note
+        if self._fit.method != "sqrt":
+            names = [b.name for b in self.world.bodies]
+            out["restitution_per_body"] = dict(zip(names, self._fit.restitution, strict=True))
+            out["lateral_friction_per_body"] = dict(zip(names, self._fit.friction, strict=True))
+        return out
+
+    def close(self) -> None:
+        if self._c < 0:
+            return
+        c, self._c = self._c, -1
+        with map_engine_errors(_NAME, "disconnecting"):
+            if p.isConnected(physicsClientId=c):
+                p.disconnect(physicsClientId=c)

@@ -1,0 +1,148 @@
+"""The summary that ``scenario inspect TRACE`` prints: what ran, how it ended, what the trace holds."""
+
+from __future__ import annotations
+
+import io
+import json
+from pathlib import Path
+from typing import Any
+
+from rich.console import Console, Group
+from rich.table import Table
+from rich.text import Text
+
+from reports import trace_format as tf
+from reports.trace_reader import Trace, read_trace
+
+__all__ = ["render_inspect", "summary", "summary_text"]
+
+_STATUS_STYLE = {
+    tf.STATUS_PASSED: "bold green",
+    tf.STATUS_FAILED: "bold red",
+    tf.STATUS_ERROR: "bold red",
+    tf.STATUS_ENGINE_FAILURE: "bold red",
+    tf.STATUS_INTERRUPTED: "bold yellow",
+    tf.STATUS_INCOMPLETE: "bold yellow",
+}
+
+
+def _short(value: Any, limit: int = 60) -> str:
+    text = value if isinstance(value, str) else json.dumps(value, separators=(",", ":"))
+    return text if len(text) <= limit else text[: limit - 1] + "…"
+
+
+def _size(n: int) -> str:
+    if n < 1024:
+        return f"{n} B"
+    return f"{n / 1024:.1f} KiB" if n < 1024 * 1024 else f"{n / 1024 / 1024:.1f} MiB"
+
+
+def _overview(trace: Trace) -> Table:
+    sc, res = trace.scenario, trace.result
+    table = Table(show_header=False, box=None, pad_edge=False)
+    table.add_column(style="bold")
+    table.add_column()
+    backend = sc.get(tf.KEY_BACKEND, "?")
+    if sc.get(tf.KEY_BACKEND_VERSION):
+        backend += f" {sc[tf.KEY_BACKEND_VERSION]}"
+    status = Text(trace.status, style=_STATUS_STYLE.get(trace.status, "bold"))
+    error = trace.summary.get("error") if res else None
+    if error:
+        status.append(f"  ({_short(error, 80)})", style="")
+    steps = len(trace.times)
+    span = f"{trace.times[0]:g} s to {trace.times[-1]:g} s" if steps else "no steps recorded"
+    tool = f"physics-scenarios {sc.get(tf.KEY_TOOL_VERSION, '?')}, trace format {sc.get(tf.KEY_TRACE_FORMAT, '?')}"
+    source = f"{sc.get(tf.KEY_SCENARIO_PATH, '?')} (sha256 {sc.get(tf.KEY_SCENARIO_SHA256, '?')[:12]})"
+    rows: list[tuple[str, str | Text]] = [
+        ("scenario", sc.get(tf.KEY_NAME, "?")),
+        ("variant", sc.get(tf.KEY_VARIANT, "?")),
+        ("backend", backend),
+        ("status", status),
+        ("steps", f"{steps} ({span})"),
+        ("dt", f"{sc.get(tf.KEY_DT, '?')} s, {sc.get(tf.KEY_SUBSTEPS, '?')} substep(s)"),
+        ("duration", f"{trace.duration:g} s simulated (scenario: {sc.get(tf.KEY_DURATION, '?')} s)"),
+        ("scenario file", source),
+        ("tool", tool),
+    ]
+    if not trace.complete:
+        how = f"read up to its last complete chunk; stopped at: {trace.stop_reason}" if trace.recovered else "no footer"
+        rows.append(("file", Text(f"unfinished ({how})", style="yellow")))
+    for key, value in rows:
+        table.add_row(key, value)
+    return table
+
+
+def _channels(trace: Trace) -> Table:
+    table = Table(title="Channels", title_justify="left")
+    table.add_column("topic")
+    table.add_column("schema")
+    table.add_column("messages", justify="right")
+    for info in trace.channels.values():
+        table.add_row(info.topic, info.schema, str(info.count))
+    return table
+
+
+def _events(trace: Trace, limit: int) -> Table:
+    table = Table(title=f"Events ({len(trace.events)})", title_justify="left")
+    table.add_column("t (s)", justify="right")
+    table.add_column("event", no_wrap=True)
+    table.add_column("source", overflow="fold")
+    for e in trace.events[:limit]:
+        table.add_row(f"{e.t:.4f}", e.name, e.source)
+    if len(trace.events) > limit:
+        table.add_row("…", f"{len(trace.events) - limit} more", "")
+    return table
+
+
+def _verdicts(trace: Trace) -> Table:
+    table = Table(title=f"Verdicts ({len(trace.verdicts)})", title_justify="left")
+    table.add_column("t (s)", justify="right")
+    table.add_column("assertion", no_wrap=True)
+    table.add_column("result", no_wrap=True)
+    table.add_column("measured", overflow="fold")
+    table.add_column("expected", overflow="fold")
+    for v in trace.verdicts:
+        passed = v.passed
+        result = Text("pass", "green") if passed else Text("FAIL", "bold red") if passed is False else Text("?")
+        measured = _short(v.data[tf.VERDICT_MEASURED]) if tf.VERDICT_MEASURED in v.data else ""
+        expected = _short(v.data[tf.VERDICT_EXPECTED]) if tf.VERDICT_EXPECTED in v.data else ""
+        table.add_row(f"{v.t:.4f}", v.name, result, measured, expected)
+    return table
+
+
+def _attachments(trace: Trace) -> Table:
+    table = Table(title="Attachments", title_justify="left")
+    table.add_column("name")
+    table.add_column("media type")
+    table.add_column("size", justify="right")
+    for a in trace.attachments:
+        table.add_row(a.name, a.media_type, _size(a.size))
+    return table
+
+
+def summary(trace: Trace, max_events: int = 50) -> Group:
+    """A rich renderable summarising ``trace``."""
+    parts: list[Any] = [Text(str(trace.path), style="bold underline"), _overview(trace), _channels(trace)]
+    if trace.events:
+        parts.append(_events(trace, max_events))
+    if trace.verdicts:
+        parts.append(_verdicts(trace))
+    if trace.attachments:
+        parts.append(_attachments(trace))
+    return Group(*parts)
+
+
+def summary_text(trace: Trace, width: int = 100, max_events: int = 50) -> str:
+    """The same summary as plain text (no colour), for logs, tests and ``--json``-less pipes."""
+    buffer = io.StringIO()
+    console = Console(file=buffer, width=width, color_system=None, force_terminal=False, highlight=False)
+    console.print(summary(trace, max_events))
+    return buffer.getvalue()
+
+
+def render_inspect(path: str | Path, recover: bool = False, max_events: int = 50) -> Group:
+    """Read ``path`` (``recover=True`` for an unfinished one) and summarise it.
+
+    Raises :class:`reports.trace_reader.TraceReadError` when the file cannot be read.
+    """
+    return summary(read_trace(path, recover=recover), max_events)
