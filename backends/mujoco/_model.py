@@ -33,13 +33,13 @@ from ..types import BodySpec, CompiledWorld, JointKind, Motion, ShapeKind, Surfa
 
 #: Constant constraint impedance (solimp dmin = dmax): how nearly a contact or stop reaches its
 #: reference acceleration. The rest, (1 - d) of the unconstrained acceleration, leaks through.
-IMPEDANCE = 0.99
+IMPEDANCE = 0.999
 #: Impedance of the motor rows: the rate error left after a step that reaches the target is 1e-4 of it.
 MOTOR_IMPEDANCE = 0.9999
 #: Friction coefficients are capped here (``inf`` included): with the elliptic cone this already
 #: means no slip, and larger values only worsen the solver's conditioning.
 MU_MAX = 1000.0
-#: Rate (1/s) at which friction rows remove a sticking contact's tangential speed, at most 1/(4h).
+#: Rate (1/s) at which friction rows remove a sticking contact's tangential speed, at most 0.5/h.
 FRICTION_RATE = 50.0
 #: A kinematic body is a free body this much heavier than the heaviest dynamic body (at least 1 kg),
 #: with gravity compensated and its pose and velocity imposed before every engine step.
@@ -172,7 +172,7 @@ def contact_solref(surface: Surface, h: float, opts: Options) -> tuple[list[floa
     """(normal, friction) solref for a surface at engine step ``h`` (see the module docstring)."""
     e = surface.bounce
     erp = opts.erp if e == 0.0 else opts.bounce_erp
-    return [-erp / h**2, -(1.0 + e) / h], [-1.0, -min(FRICTION_RATE, 0.25 / h)]
+    return [-erp / h**2, -(1.0 + e) / h], [-1.0, -min(FRICTION_RATE, 0.5 / h)]
 
 
 def _mu(surface: Surface) -> float:

@@ -12,14 +12,17 @@ Sources: ``direct/src/interval/cIntervalManager.cxx``, ``IntervalManager.py``, `
   has a task **pauses** the task's interval instead (no jump). Same-name C++ and Python intervals do
   not interact.
 * :meth:`IntervalManager.step` is one frame: first the Python tasks (sort 0, in the order they were
-  started; one started during this phase still runs in it), then every C++ interval in name order (the
-  later-sorting name wins a shared property), then the meta intervals' queued Python events (those of
+  started: one started before ``step``, e.g. by a key handler, or during this phase runs in it, as
+  measured on Panda3D; one started later in the frame waits for the next step), then every C++
+  interval in name order (the later-sorting name wins a shared property; one started by a Func of a
+  Sequence waits for the next step, at t = dt), then the meta intervals' queued Python events (those of
   intervals just finished first, then by manager slot), then the done events.
 
 Each operation notifies ``host.interval_event(id, what, at)`` with what = started, paused, resumed,
 finished, looped, taken_over (another object with the same name finished, paused or unregistered it)
-or done (where Panda3D throws the interval's done event: C++ ones at the end of the next step, Python
-ones at once; never for a SoundInterval, a Func, or a Lerp skipped in one frame).
+or done (where Panda3D throws the interval's done event: C++ ones at the end of the step that ended
+them, or of the next step after a start/finish; Python ones at once; never for a SoundInterval, a
+Func, or a Lerp that began and ended in one frame).
 """
 
 from __future__ import annotations
