@@ -76,7 +76,12 @@ def _interval_spec(step: B.Step, model: Any, sounds: dict[str, SoundInfo], seen:
         length = sounds[spec.sound].length
         duration = spec.duration if spec.duration is not None else max(length - spec.start_time, 0.0)
         return SoundSpec(
-            sound=spec.sound, duration=duration, volume=spec.volume, loop=spec.loop, start_time=spec.start_time
+            sound=spec.sound,
+            duration=duration,
+            volume=spec.volume,
+            loop=spec.loop,
+            start_time=spec.start_time,
+            length=length,
         )
     if step.interval is not None:
         if step.interval in seen:
