@@ -155,6 +155,9 @@ class PyBulletBackend(Backend):
                     handle.uid, handle.link, jointLowerLimit=max(lo, -1e30), jointUpperLimit=min(hi, 1e30),
                     physicsClientId=c,
                 )
+            rate = self._initial_rate(joint.kind, joint.axis, joint.body, joint.other)
+            if rate:  # a link's initial velocity is its joint rate (ball and fixed children inherit)
+                p.resetJointState(handle.uid, handle.link, 0.0, handle.sign * rate, physicsClientId=c)
         self._bases = [(i, layout.uid[i]) for i in range(len(world.bodies)) if layout.link[i] < 0]
         trees = {uid for uid, _, _ in layout.link_groups}
         self._jointed = {i for i, uid in enumerate(layout.uid) if uid in trees}
@@ -171,6 +174,14 @@ class PyBulletBackend(Backend):
         self._cache: np.ndarray | None = None
         self._contacts: list[Contact] | None = None
         self._steps = 0
+
+    def _initial_rate(self, kind: JointKind, axis: Vec3, body: str, other: str | None) -> float:
+        """The joint rate implied by the bodies' initial velocities (body relative to other, along axis)."""
+        specs = {b.name: b for b in self.world.bodies}
+        field = "lin_vel" if kind is JointKind.SLIDER else "ang_vel"
+        mine = getattr(specs[body], field)
+        theirs = getattr(specs[other], field) if other is not None else (0.0, 0.0, 0.0)
+        return sum(axis[i] * (mine[i] - theirs[i]) for i in range(3))
 
     # --- stepping -------------------------------------------------------------------------------
 

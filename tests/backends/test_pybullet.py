@@ -263,3 +263,51 @@ def test_close_is_idempotent_and_final() -> None:
     sim.close()
     with pytest.raises(EngineFailure, match="pybullet: step 1 failed"):
         sim.step()
+
+
+def test_initial_velocity_of_a_link_becomes_its_joint_rate() -> None:
+    door = w.box("door", w.LAB_DOOR, (1.0, 0.0, 1.0), lin_vel=(0.2, 0.0, 0.0))
+    joint = JointSpec("slider", JointKind.SLIDER, "door", None, axis=(1.0, 0.0, 0.0))
+    with create_backend("pybullet", w.world("moving-door", [door], joints=(joint,), dt=0.04)) as sim:
+        assert sim.joint_states().velocity[0] == pytest.approx(0.2, abs=1e-12)
+        sim.step()
+        assert sim.body_states().pos[0, 0] == pytest.approx(1.0 + 0.2 * 0.04, abs=1e-12)
+
+
+def test_one_sided_stop() -> None:
+    """Only `hi` given: the hinge stops there and is free the other way."""
+    hinge = w.offset_hinge(hi=0.2)
+    with create_backend("pybullet", hinge) as sim:
+        for _ in range(100):
+            sim.step()
+        assert sim.joint_states().position[0] == pytest.approx(0.2, abs=2e-3)
+    up = w.world("up", list(hinge.bodies), joints=hinge.joints, gravity=(0.0, 0.0, 9.81))  # swings to -pi/2
+    with create_backend("pybullet", up) as sim:
+        for _ in range(30):
+            sim.step()
+        assert sim.joint_states().position[0] < -0.5
+
+
+def test_kinematic_with_substeps() -> None:
+    """Placed at every substep: exact after the step and still carrying (0.296 m without substeps)."""
+    base = w.kinematic_platform()
+    world = CompiledWorld(**{**base.__dict__, "substeps": 4})
+    with create_backend("pybullet", world) as sim:
+        for k in range(100):
+            sim.set_kinematic(0, (0.3 * k * world.dt, 0.0, 0.5), w.IDENTITY, (0.3, 0.0, 0.0), ZERO)
+            sim.step()
+        s = sim.body_states()
+    assert s.pos[0] == pytest.approx((0.3, 0.0, 0.5), abs=1e-12)
+    assert s.pos[1, 0] == pytest.approx(0.3, rel=0.02)
+
+
+def test_non_neighbours_in_a_tree_collide() -> None:
+    """Self-collision is on for links that are not directly joined (ODE collides them too)."""
+    a = w.box("a", (0.2, 0.2, 0.2), (0.0, 0.0, 1.0))
+    b = w.box("b", (0.2, 0.2, 0.2), (0.25, 0.0, 1.0))
+    c = w.box("c", (0.2, 0.2, 0.2), (0.1, 0.0, 1.15))  # overlaps a (and b), joined only to b
+    joints = (JointSpec("ab", JointKind.FIXED, "b", "a"), JointSpec("bc", JointKind.FIXED, "c", "b"))
+    with create_backend("pybullet", w.world("tree", [a, b, c], joints=joints, gravity=ZERO)) as sim:
+        sim.step()
+        pairs = [(k.a, k.b) for k in sim.contacts()]
+    assert pairs == [(0, 2)]

@@ -12,13 +12,37 @@ from rich.console import Console
 from rich.progress import BarColumn, Progress, TextColumn, TimeRemainingColumn
 from rich.table import Table
 
-from backends.errors import BackendNotInstalled, UnknownBackend
-from backends.registry import entry, is_installed
+from backends.errors import BackendNotInstalled
+from backends.registry import DEFAULT_BACKEND, entry, is_installed
 
-from .errors import ExitCode, ScenarioValidationError
-from .run import run_loaded
-from .scenario.load import LoadedScenario, load_all, parse_overrides
-from .session import RunResult
+from ..errors import ExitCode, ScenarioValidationError
+from ..run import run_loaded
+from ..scenario.load import LoadedScenario, load_all, parse_overrides
+from ..session import RunResult
+
+NAME = "run"
+HELP = "run scenarios and print verdicts"
+DEFAULT_OUT = Path("traces")
+
+
+def configure(run: argparse.ArgumentParser) -> None:
+    run.add_argument("files", nargs="+", type=Path, metavar="FILE")
+    run.add_argument("--backend", "-b", default=DEFAULT_BACKEND, help=f"engine to use (default {DEFAULT_BACKEND})")
+    group = run.add_mutually_exclusive_group()
+    group.add_argument("--variant", help="run this variant (default: the file's first variant)")
+    group.add_argument("--all-variants", action="store_true", help="run every variant")
+    run.add_argument("--out", type=Path, default=DEFAULT_OUT, help="folder for the traces (default: traces/)")
+    run.add_argument("--no-trace", action="store_true", help="do not write traces")
+    run.add_argument(
+        "--set",
+        action="append",
+        default=[],
+        metavar="KEY=VALUE",
+        help="override a value, e.g. world.dt=0.01 or params.count=50 (repeatable)",
+    )
+    out = run.add_mutually_exclusive_group()
+    out.add_argument("--quiet", "-q", action="store_true", help="print only failures and the summary")
+    out.add_argument("--json", action="store_true", help="print the results as JSON")
 
 
 def _verdict_table(result: RunResult, failures_only: bool) -> Table:
@@ -52,7 +76,7 @@ def _result_json(r: RunResult) -> dict[str, Any]:
     }
 
 
-def command_run(args: argparse.Namespace, out: Console, err: Console) -> int:
+def execute(args: argparse.Namespace, out: Console, err: Console) -> int:
     entry(args.backend)  # an unknown name is bad input (exit 2) before anything runs
     if not is_installed(args.backend):
         raise BackendNotInstalled(
@@ -122,6 +146,3 @@ def _print_summary(out: Console, results: list[RunResult]) -> None:
     for r in results:
         if not r.passed:
             out.print(f"  [red]{r.status}[/]: {r.scenario} · {r.variant} · {r.backend}")
-
-
-__all__ = ["command_run", "UnknownBackend"]
