@@ -35,6 +35,8 @@ class BackendEntry:
 
 # Kept sorted by name.
 _KNOWN: dict[str, BackendEntry] = {
+    "crash": BackendEntry("crash", "backends.crash:CrashBackend", "numpy", "numpy", "",
+                          "test-only: kills its own process mid-run (SIGKILL/SIGSEGV) to test isolation", hidden=True),
     "dart": BackendEntry(
         "dart",
         "backends.dart:DartBackend",

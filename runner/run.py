@@ -122,7 +122,30 @@ def _run(program, loaded: LoadedScenario, backend, trace, progress) -> RunResult
             **({"failure_detail": result.extra} if result.failure else {}),
         }
         result.trace = str(trace.finish(result.status, summary))
+        write_cost(Path(result.trace), result)
     return result
+
+
+def cost_path(trace: Path) -> Path:
+    """Where a run's wall-clock cost is kept: beside the trace, never inside it (traces hold simulated time
+    only, so that the same run gives the same bytes)."""
+    return trace.with_name(trace.name.removesuffix(".mcap") + ".cost.json")
+
+
+def write_cost(trace: Path, result: RunResult) -> None:
+    simulated = result.end_time
+    data = {
+        "trace": trace.name,
+        "wall_seconds": round(result.wall_seconds, 6),
+        "steps": result.steps,
+        "simulated_seconds": simulated,
+        "steps_per_second": round(result.steps / result.wall_seconds, 3) if result.wall_seconds > 0 else None,
+        "real_time_factor": round(simulated / result.wall_seconds, 4) if result.wall_seconds > 0 else None,
+    }
+    target = cost_path(trace)
+    tmp = target.with_name(target.name + ".partial")
+    tmp.write_text(json.dumps(data, indent=2) + "\n")
+    tmp.replace(target)
 
 
 def _attach_sources(trace, loaded: LoadedScenario, program) -> None:  # noqa: ANN001

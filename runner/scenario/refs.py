@@ -19,6 +19,9 @@ from .names import RESERVED, check_name, expand_bodies, groups, readable_names
 from .patterns import possible_events
 from .yaml_source import Path, Positions
 
+MAX_BODIES = 10_000
+MAX_STEPS = 10_000_000
+
 
 def _unknown(kind: str, name: str, known: Iterable[str]) -> str:
     known = sorted(known)
@@ -80,6 +83,11 @@ def check_references(model: Scenario, positions: Positions, base_dir: FsPath) ->
 
     instances = expand_bodies(model)
     body_names = {b.name for b in instances}
+    if len(instances) > MAX_BODIES:
+        bad(("bodies",), f"expected at most {MAX_BODIES} bodies (arrays expanded), found {len(instances)}")
+    steps = model.world.duration / model.world.dt
+    if steps > MAX_STEPS:
+        bad(("world", "duration"), f"expected at most {MAX_STEPS} steps (duration / dt), found {steps:.0f}")
     group_names = set(groups(model))
     for name in [*model.bodies, *model.joints]:
         if name in RESERVED:

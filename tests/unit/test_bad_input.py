@@ -165,3 +165,15 @@ def test_several_problems_reported_together(tmp_path: Path) -> None:
     with pytest.raises(ScenarioValidationError) as info:
         load_scenario(path, None)
     assert len(info.value.issues) == 2
+
+
+def test_limits_on_bodies_and_steps(tmp_path: Path) -> None:
+    path = tmp_path / "big.yaml"
+    path.write_text(BASE.replace("duration: 1", "duration: 1.0e6")
+                    + "  crate: {box: [1, 1, 1], density: 1, array: {count: [100, 60, 1]}}\n"
+                    + "  brick: {box: [1, 1, 1], density: 1, array: {count: [100, 60, 1]}}\n")
+    with pytest.raises(ScenarioValidationError) as info:
+        load_scenario(path, None)
+    text = str(info.value)
+    assert "expected at most 10000 bodies (arrays expanded), found 12001" in text
+    assert f"{path}:3:" in text and "expected at most 10000000 steps (duration / dt), found 25000000" in text
