@@ -20,7 +20,7 @@ from ..base import Backend
 from ..errors import EngineFailure, UnsupportedFeature, map_engine_errors
 from ..geometry import integrate_quat
 from ..types import BodyStates, Capability, CompiledWorld, Contact, JointKind, JointStates, Motion, Quat, Vec3
-from ._build import PLANE_HALF_SIZE, Layout, build, xyzw
+from ._build import PLANE_HALF_SIZE, Layout, build, initial_rate, read_options, xyzw
 from ._surfaces import FRICTION_CLAMP, SurfaceFit, fit_surfaces
 
 _NAME = "pybullet"
@@ -31,23 +31,8 @@ _MAX_JOINT_VELOCITY = 1e6
 #: rebounds to 0.0000 of its height at 0.02, 0.27 at 0.001]. ODE makes contacts only when touching.
 #: NB: Bullet keeps this in a process-wide global, so every instance sets the same value.
 CONTACT_BREAKING_THRESHOLD = 0.001
-
-
-def _options(world: CompiledWorld) -> tuple[int, bool]:
-    opts = world.options_for(_NAME)
-    iterations = opts.get("solver_iterations", 50)
-    if isinstance(iterations, bool) or not isinstance(iterations, int) or iterations < 1:
-        raise UnsupportedFeature(
-            "Invalid `backend_options.pybullet.solver_iterations`. Expected a positive integer. "
-            f"Received: solver_iterations={iterations!r}"
-        )
-    overlapping = opts.get("deterministic_overlapping_pairs", True)
-    if not isinstance(overlapping, bool):
-        raise UnsupportedFeature(
-            "Invalid `backend_options.pybullet.deterministic_overlapping_pairs`. Expected true or false. "
-            f"Received: deterministic_overlapping_pairs={overlapping!r}"
-        )
-    return iterations, overlapping
+#: restitutionVelocityThreshold = bounce_vel + this * |g| * h (see PyBulletBackend._build).
+_GRAVITY_MARGIN = 1.5
 
 
 class PyBulletBackend(Backend):
@@ -81,7 +66,7 @@ class PyBulletBackend(Backend):
     def __init__(self, world: CompiledWorld) -> None:
         super().__init__(world)
         self._c = -1
-        self._iterations, self._overlapping = _options(world)
+        self._iterations, self._overlapping = read_options(world)
         with map_engine_errors(_NAME, "building the world"):
             self._c = int(p.connect(p.DIRECT))
             try:
@@ -99,11 +84,17 @@ class PyBulletBackend(Backend):
         p.setTimeStep(self._h, physicsClientId=c)
         self._layout: Layout = build(p, c, world)
         self._fit: SurfaceFit = fit_surfaces(world, self._layout.excluded)
+        # ODE bounces when the approach speed *before* the step exceeds bounce_vel; Bullet compares the
+        # speed after this substep's gravity, so a resting body approaches at about g*h and bounces every
+        # step [checked: the lab's box on the door, dt 0.04, bounce 0.2, threshold 0: vz -0.32..+0.33
+        # forever; threshold exactly g*h: a limit cycle that rocks the box]. Add 1.5 g*h (1.1 already
+        # rests still; 1.5 leaves a margin).
+        self._threshold = self._fit.restitution_threshold + _GRAVITY_MARGIN * math.hypot(*world.gravity) * self._h
         p.setPhysicsEngineParameter(
             fixedTimeStep=self._h,
             numSubSteps=0,
             numSolverIterations=self._iterations,
-            restitutionVelocityThreshold=self._fit.restitution_threshold,
+            restitutionVelocityThreshold=self._threshold,
             contactBreakingThreshold=CONTACT_BREAKING_THRESHOLD,
             deterministicOverlappingPairs=int(self._overlapping),
             physicsClientId=c,
@@ -155,7 +146,7 @@ class PyBulletBackend(Backend):
                     handle.uid, handle.link, jointLowerLimit=max(lo, -1e30), jointUpperLimit=min(hi, 1e30),
                     physicsClientId=c,
                 )
-            rate = self._initial_rate(joint.kind, joint.axis, joint.body, joint.other)
+            rate = initial_rate(world, joint)
             if rate:  # a link's initial velocity is its joint rate (ball and fixed children inherit)
                 p.resetJointState(handle.uid, handle.link, 0.0, handle.sign * rate, physicsClientId=c)
         self._bases = [(i, layout.uid[i]) for i in range(len(world.bodies)) if layout.link[i] < 0]
@@ -174,14 +165,6 @@ class PyBulletBackend(Backend):
         self._cache: np.ndarray | None = None
         self._contacts: list[Contact] | None = None
         self._steps = 0
-
-    def _initial_rate(self, kind: JointKind, axis: Vec3, body: str, other: str | None) -> float:
-        """The joint rate implied by the bodies' initial velocities (body relative to other, along axis)."""
-        specs = {b.name: b for b in self.world.bodies}
-        field = "lin_vel" if kind is JointKind.SLIDER else "ang_vel"
-        mine = getattr(specs[body], field)
-        theirs = getattr(specs[other], field) if other is not None else (0.0, 0.0, 0.0)
-        return sum(axis[i] * (mine[i] - theirs[i]) for i in range(3))
 
     # --- stepping -------------------------------------------------------------------------------
 
@@ -368,7 +351,8 @@ class PyBulletBackend(Backend):
             "num_sub_steps": 0,
             "solver_iterations": self._iterations,
             "deterministic_overlapping_pairs": self._overlapping,
-            "restitution_velocity_threshold": self._fit.restitution_threshold,
+            "restitution_velocity_threshold": self._threshold,
+            "bounce_vel": self._fit.restitution_threshold,
             "contact_breaking_threshold": CONTACT_BREAKING_THRESHOLD,
             "plane": f"static box, half size {PLANE_HALF_SIZE:g} m, top face on the plane",
             "damping": 0.0,
@@ -389,6 +373,7 @@ class PyBulletBackend(Backend):
         if self._c < 0:
             return
         c, self._c = self._c, -1
+        self._cache, self._contacts = None, None
         with map_engine_errors(_NAME, "disconnecting"):
             if p.isConnected(physicsClientId=c):
                 p.disconnect(physicsClientId=c)

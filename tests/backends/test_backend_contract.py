@@ -453,6 +453,22 @@ def test_restitution(backend_name: str) -> None:
     assert ratio == pytest.approx(bounce**2, abs=tol("restitution", backend_name)), f"apex ratio {ratio:.4f}"
 
 
+def test_bouncy_surface_rests(backend_name: str) -> None:
+    """A box resting on a bouncy surface (bounce 0.2, bounce_vel 0) at the lab's dt 0.04 stays still:
+    ODE bounces on the approach speed before the step, which is 0 at rest, not on one step of gravity."""
+    cube = w.box("box", w.LAB_BOX, (0.0, 0.0, 0.15), density=500.0)
+    world = w.world("bouncy-rest", [w.ground(), cube], dt=0.04, surface=Surface(bounce=0.2, mu=5000.0))
+    peak = 0.0
+    with make_backend(backend_name, world) as sim:
+        for k in range(75):
+            sim.step()
+            if k >= 25:
+                peak = max(peak, float(np.abs(sim.body_states().lin_vel[1]).max()))
+        s = sim.body_states()
+    assert peak < tol("rest_jitter", backend_name)
+    assert s.pos[1, 2] == pytest.approx(0.15, abs=tol("resting_height", backend_name))
+
+
 # 12. friction ----------------------------------------------------------------------------------------
 
 

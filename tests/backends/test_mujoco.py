@@ -1,0 +1,256 @@
+"""MuJoCo-specific checks: the pitfalls of notes/ode-on-backends.md and the mapping's measured behaviour.
+
+The shared suite (test_backend_contract.py) checks ODE's semantics on every backend; these tests pin what
+only the MuJoCo adapter does (motor rows, xfrc_applied, stale xpos, contact solref, the joint tree) with
+the figures docs/backends/mujoco.md reports.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from backends.errors import EngineFailure, UnsupportedFeature
+from backends.geometry import integrate_quat, quat_from_axis_angle
+from backends.types import BodySpec, CompiledWorld, JointKind, JointSpec, Motor, Surface
+
+from . import worlds as w
+from .worlds import ZERO, G, make_backend
+
+pytest.importorskip("mujoco", reason="engine not installed: pip install 'physics-scenarios[mujoco]'")
+
+
+def _with_options(world: CompiledWorld, **options: object) -> CompiledWorld:
+    return CompiledWorld(
+        world.name, world.gravity, world.dt, world.substeps, world.duration, world.bodies, world.joints,
+        world.default_surface, world.pair_surfaces, {"mujoco": options},
+    )  # fmt: skip
+
+
+# --- motors: bounded velocity constraints -----------------------------------------------------------
+
+
+def test_door_accelerates_at_fmax_over_m() -> None:
+    """The lab's door: a = fmax/m = 0.25 m/s^2 within 1 % at every step until 0.3 m/s (issue 3)."""
+    world = w.lab_door()
+    with make_backend("mujoco", world) as sim:
+        v_prev = 0.0
+        for k in range(1, 30):
+            sim.step()
+            js = sim.joint_states()
+            assert (js.velocity[0] - v_prev) / world.dt == pytest.approx(100.0 / 400.0, rel=0.01), f"step {k}"
+            assert js.motor_force[0] == pytest.approx(100.0, rel=0.01), f"step {k}"
+            v_prev = js.velocity[0]
+
+
+def test_motor_settles_on_a_target_reached_between_steps() -> None:
+    """0.305 m/s is reached 0.005 into step 31: ODE needs 50 N there, then holds; no chatter.
+
+    A velocity actuator with a large gain instead alternates 0.300 / 0.310 m/s forever (measured): MuJoCo
+    drops a clamped actuator's implicit damping, so the crossing step overshoots by fmax*dt/m.
+    """
+    with make_backend("mujoco", w.lab_door(motor=Motor(0.305, 100.0))) as sim:
+        forces, rates = [], []
+        for _ in range(45):
+            sim.step()
+            js = sim.joint_states()
+            forces.append(float(js.motor_force[0]))
+            rates.append(float(js.velocity[0]))
+    assert forces[30] == pytest.approx(50.0, abs=0.01)  # 400 kg * 0.005 m/s / 0.04 s
+    assert np.abs(np.array(rates[30:]) - 0.305).max() < 1e-6
+    assert np.abs(forces[32:]).max() < 0.01
+
+
+def test_motor_off_leaves_the_joint_free() -> None:
+    """fmax 0 is off: no force and no hidden damping; a 40 N push gives exactly 40*dt/m, kept."""
+    with make_backend("mujoco", w.lab_door(motor=Motor(0.3, 0.0))) as sim:
+        sim.apply_force(0, (40.0, 0.0, 0.0), ZERO)
+        for _ in range(5):
+            sim.step()
+            js = sim.joint_states()
+            assert js.velocity[0] == pytest.approx(40.0 * 0.04 / 400.0, abs=1e-12)
+            assert js.motor_force[0] == 0.0
+        sim.set_motor(0, -0.3, 100.0)  # on again: brakes at fmax/m
+        sim.step()
+        assert sim.joint_states().velocity[0] == pytest.approx(0.004 - 0.01, abs=1e-9)
+
+
+def test_flipped_joint_keeps_the_world_sign() -> None:
+    """A hinge declared as `a` relative to `b`, where the tree hangs `b` under `a`, reports a's rate.
+
+    `a` is held by a slider to the environment (so the tree reaches it first); the motor turns `a`
+    relative to `b` at +1 rad/s, so `b` itself must turn at -1 rad/s about +z.
+    """
+    a = w.box("a", (0.2, 0.2, 0.2), (0.0, 0.0, 1.0))
+    b = w.box("b", (0.4, 0.1, 0.1), (0.0, 0.0, 1.2))
+    slider = JointSpec("slide", JointKind.SLIDER, "a", None, axis=(1.0, 0.0, 0.0), motor=Motor(0.0, 1e6))
+    hinge = JointSpec(
+        "turn", JointKind.HINGE, "a", "b", axis=(0.0, 0.0, 1.0), anchor=(0.0, 0.0, 1.2), motor=Motor(1.0, 1e3)
+    )
+    world = w.world("flip", [a, b], joints=(slider, hinge), gravity=ZERO, dt=0.01)
+    with make_backend("mujoco", world) as sim:
+        for _ in range(20):
+            sim.step()
+        js, bs = sim.joint_states(), sim.body_states()
+    eps = 1e-4  # motor rows leave up to 1e-4 of the rate error (impedance 0.9999); measured 9e-6
+    assert js.velocity[1] == pytest.approx(1.0, abs=eps)
+    assert js.position[1] == pytest.approx(0.2, abs=eps)
+    assert bs.ang_vel[1] == pytest.approx((0.0, 0.0, -1.0), abs=eps)
+    assert bs.quat[1] == pytest.approx(quat_from_axis_angle((0.0, 0.0, 1.0), -0.2), abs=eps)
+
+
+def test_initial_velocity_of_a_jointed_body_moves_its_joint() -> None:
+    door = w.lab_door(motor=None)
+    spec = door.bodies[0]
+    moving = BodySpec(spec.name, spec.motion, spec.shape, spec.mass, spec.inertia, spec.pos, spec.quat, (0.2, 0.5, 0.0))
+    world = w.world("door", [moving], joints=door.joints, dt=0.04)
+    with make_backend("mujoco", world) as sim:
+        assert sim.joint_states().velocity[0] == pytest.approx(0.2)  # the slider's share of (0.2, 0.5, 0)
+        for _ in range(10):
+            sim.step()
+        assert sim.body_states().pos[0] == pytest.approx((1.0 + 0.2 * 0.4, 0.0, 1.0), abs=1e-9)
+
+
+# --- one-step forces, fresh states -------------------------------------------------------------------
+
+
+@pytest.mark.parametrize(("substeps", "engine_substeps"), [(1, 1), (10, 1), (1, 4)])
+def test_one_step_kick_and_xfrc_applied_cleared(substeps: int, engine_substeps: int) -> None:
+    """ODE's addForce: 2.5706 then 2.1782 m/s, with xfrc_applied zero again after the step (it persists)."""
+    world = _with_options(w.lab_kick(substeps), engine_substeps=engine_substeps)
+    with make_backend("mujoco", world) as sim:
+        sim.apply_force(0, (0.0, 0.0, 1000.0), ZERO)
+        sim.step()
+        assert not sim._d.xfrc_applied.any()  # type: ignore[attr-defined]
+        v1 = sim.body_states().lin_vel[0, 2]
+        sim.step()
+        v2 = sim.body_states().lin_vel[0, 2]
+    assert v1 == pytest.approx(2.5706, abs=1e-4)
+    assert v2 == pytest.approx(2.1782, abs=1e-4)
+
+
+def test_states_are_read_fresh_not_from_stale_xpos() -> None:
+    """After mj_step MuJoCo's xpos still holds the start of the step; the adapter recomputes it."""
+    z0, dt = 2.0, 0.04
+    with make_backend("mujoco", w.free_fall(z0, dt)) as sim:
+        sim.step()
+        stale = float(sim._d.xpos[sim._layout.body_id[0], 2])  # type: ignore[attr-defined]
+        fresh = float(sim.body_states().pos[0, 2])
+    assert stale == z0  # the pitfall is real in this MuJoCo
+    assert fresh == pytest.approx(z0 - G * dt * dt, abs=1e-12)
+
+
+def test_angular_velocity_is_world_frame() -> None:
+    """Free joints keep angular velocity in the body frame; states and inputs are in the world frame."""
+    q0 = quat_from_axis_angle((1.0, 0.0, 0.0), math.pi / 2)  # body y along world -z: a principal axis
+    cube = w.box("cube", (0.2, 0.3, 0.4), (0.0, 0.0, 1.0), quat=q0, ang_vel=(0.0, 0.0, 2.0))
+    world = w.world("spin", [cube], gravity=ZERO, dt=0.01)
+    with make_backend("mujoco", world) as sim:
+        for _ in range(50):
+            sim.step()
+        s = sim.body_states()
+    assert s.ang_vel[0] == pytest.approx((0.0, 0.0, 2.0), abs=1e-9)
+    expected = integrate_quat(q0, (0.0, 0.0, 2.0), 0.5)
+    q = s.quat[0] if np.dot(s.quat[0], expected) > 0 else -s.quat[0]
+    assert q == pytest.approx(expected, abs=1e-6)
+
+
+# --- kinematic bodies -------------------------------------------------------------------------------
+
+
+def test_kinematic_platform_carries_the_box() -> None:
+    """0.3 m/s for 1 s: carried 0.294 m (ODE's slip while friction catches up: 0.2954), pose exact."""
+    world = w.kinematic_platform()
+    with make_backend("mujoco", world) as sim:
+        for k in range(100):
+            sim.set_kinematic(0, (0.3 * k * 0.01, 0.0, 0.5), w.IDENTITY, (0.3, 0.0, 0.0), ZERO)
+            sim.step()
+        s = sim.body_states()
+    assert s.pos[0] == pytest.approx((0.3, 0.0, 0.5), abs=1e-12)
+    assert s.pos[1, 0] == pytest.approx(0.3, rel=0.05)
+    assert s.pos[1, 0] == pytest.approx(0.294, abs=0.002)
+    assert s.pos[1, 2] == pytest.approx(0.65, abs=1e-3)  # still on the platform
+
+
+# --- contacts and surfaces --------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("mu", [5000.0, math.inf])
+@pytest.mark.parametrize("dt", [0.04, 0.01])
+def test_large_mu_does_not_sink(mu: float, dt: float) -> None:
+    """The notes' pyramidal cone let a box with mu >= 10 fall through the floor (-4.76 m after 1 s)."""
+    cube = w.box("box", w.LAB_BOX, (0.0, 0.0, 0.15), density=500.0)
+    world = w.world("rest", [w.ground(), cube], dt=dt, surface=Surface(bounce=0.2, mu=mu))
+    with make_backend("mujoco", world) as sim:
+        for _ in range(round(2.0 / dt)):
+            sim.step()
+        s = sim.body_states()
+    assert s.pos[1, 2] == pytest.approx(0.15, abs=2e-3)  # measured 0.1483 at dt 0.04, 0.1500 at dt 0.01
+    # still rising out of the landing's depth at bounce_erp 0.05 per step: 1.7 mm/s at dt 0.04
+    assert np.linalg.norm(s.lin_vel[1]) < 5e-3
+
+
+def _restitution(bounce: float, drop: float, dt: float) -> float:
+    """sqrt(apex ratio) of a 0.1 m sphere dropped from ``drop`` metres: the effective e."""
+    apex, rising = -math.inf, False
+    with make_backend("mujoco", w.bouncing_sphere(bounce, drop, dt=dt)) as sim:
+        for _ in range(round(3.0 / dt)):
+            sim.step()
+            s = sim.body_states()
+            rising = rising or s.lin_vel[1, 2] > 0.0
+            if rising:
+                apex = max(apex, float(s.pos[1, 2]))
+                if s.lin_vel[1, 2] < 0.0:
+                    break
+    return math.sqrt(max(apex - 0.1, 0.0) / drop)
+
+
+@pytest.mark.parametrize("bounce", [0.2, 0.5, 0.8])
+def test_restitution_against_target(bounce: float) -> None:
+    """solref (-erp/h^2, -(1+e)/h) bounces at e plus the ERP push-out of the first contact's depth.
+
+    That depth is at most v*h (3.1 mm here), pushed out at bounce_erp 0.05 per step: at most +0.05 on e.
+    Measured at 0.5 m: 0.205, 0.506, 0.806.
+    """
+    e = _restitution(bounce, 0.5, 0.001)
+    assert bounce - 0.005 <= e <= bounce + 0.05
+
+
+def test_no_bounce_without_restitution() -> None:
+    """bounce 0: only ODE's ERP push-out (erp 0.2 of at most 3.1 mm per step) lifts it: measured 0.007."""
+    assert _restitution(0.0, 0.5, 0.001) < 0.05
+
+
+def test_contact_shorter_than_a_step_is_reported() -> None:
+    """With engine substeps a bounce can start and end inside one scenario step; contacts() keeps it."""
+    world = _with_options(w.bouncing_sphere(0.8, 0.5, dt=0.04), engine_substeps=40)
+    seen = []  # (pairs reported, contacts in the step's last engine step)
+    with make_backend("mujoco", world) as sim:
+        for _ in range(25):
+            sim.step()
+            seen.append(([(c.a, c.b) for c in sim.contacts()], sim._d.ncon))  # type: ignore[attr-defined]
+    assert ([(0, 1)], 0) in seen
+
+
+# --- what the adapter refuses -----------------------------------------------------------------------
+
+
+def test_refusals() -> None:
+    door = w.lab_door()
+    with pytest.raises(UnsupportedFeature, match="engine_substeps"):
+        make_backend("mujoco", _with_options(door, engine_substeps=0))
+    with pytest.raises(UnsupportedFeature, match="kinematic loop"):
+        loop = JointSpec("again", JointKind.BALL, "door", None, anchor=(1.0, 0.0, 1.0))
+        make_backend("mujoco", w.world("loop", list(door.bodies), joints=(*door.joints, loop)))
+    with make_backend("mujoco", door) as sim, pytest.raises(UnsupportedFeature, match="jointed"):
+        sim.reset_body(0, (0.0, 0.0, 0.0), w.IDENTITY, ZERO, ZERO)
+
+
+def test_blow_up_is_an_engine_failure_naming_the_body() -> None:
+    with make_backend("mujoco", w.free_fall()) as sim:
+        sim.apply_force(0, (1e308, 0.0, 0.0), ZERO)
+        with pytest.raises(EngineFailure) as info:
+            sim.step()
+    assert info.value.body == "box" and info.value.time == pytest.approx(0.01)
