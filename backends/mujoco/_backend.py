@@ -22,8 +22,23 @@ from ..types import (
     Quat,
     Vec3,
 )
-from ._model import IMPEDANCE, KINEMATIC_MASS_RATIO, MU_MAX, Options, build
+from ._model import FRICTION_RATE, IMPEDANCE, KINEMATIC_MASS_RATIO, MU_MAX, Options, build
 
+
+def _no_log_file() -> None:
+    """MuJoCo appends its warnings to MUJOCO_LOG.TXT in the working directory (a process-wide setting).
+
+    The adapter turns the warnings that matter into EngineFailure; the console copy stays.
+    """
+    if hasattr(mujoco, "MjLogConfig"):  # MuJoCo 4
+        config = mujoco.MjLogConfig.get()
+        config.logto_file = False
+        config.set()
+
+
+_no_log_file()
+_Pairs = tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]  # pair code a*N+b, points, depth, force
+_NO_PAIRS: _Pairs = (np.zeros(0, np.int64), np.zeros(0, np.int64), np.zeros(0), np.zeros(0))
 _BAD_STATE = (mujoco.mjtWarning.mjWARN_BADQPOS, mujoco.mjtWarning.mjWARN_BADQVEL, mujoco.mjtWarning.mjWARN_BADQACC)
 
 
@@ -86,7 +101,7 @@ class MujocoBackend(Backend):
         self._helper_dof = lay.helper_dof[motors][np.argsort(lay.motor_id[motors])]
         self._target = np.zeros(motors.size)  # per slot, in the MuJoCo joint's coordinate
         self._motor_sum = np.zeros(motors.size)
-        self._contacts: list[Contact] = []
+        self._pairs = _NO_PAIRS
         self._steps = 0
         self._stale = True
         for i, body in enumerate(world.bodies):
@@ -94,6 +109,7 @@ class MujocoBackend(Backend):
                 self._kinematic[i] = (body.pos, body.quat, body.lin_vel, body.ang_vel)
             elif body.motion is Motion.DYNAMIC:
                 self._set_velocity(i, body.lin_vel, body.ang_vel)
+        self._initial_joint_rates()
         for j, joint in enumerate(world.joints):
             if self._motor_of[j] >= 0:
                 motor = joint.motor
@@ -148,8 +164,7 @@ class MujocoBackend(Backend):
                     self._place_kinematic(k * self._h)
                 d.qvel[self._helper_dof] = self._target
                 mujoco.mj_step(m, d)
-                rows = np.flatnonzero(d.efc_type == mujoco.mjtConstraint.mjCNSTR_FRICTION_TENDON)
-                np.add.at(self._motor_sum, d.efc_id[rows], d.efc_force[rows])
+                self._motor_sum -= d.qfrc_constraint[self._helper_dof]  # the helper feels -(motor force)
                 touching.append(self._touching())
             if self._forced:
                 d.xfrc_applied[:] = 0.0
@@ -162,7 +177,7 @@ class MujocoBackend(Backend):
                 self._kinematic[i] = (end, integrate_quat(quat, ang, dt), lin, ang)
             self._place_kinematic(0.0)
         self._check()
-        self._contacts = self._merge(touching)
+        self._pairs = self._merge(touching)
         self._stale = True
 
     def _place_kinematic(self, t: float) -> None:
@@ -178,22 +193,41 @@ class MujocoBackend(Backend):
     def _set_velocity(self, body: int, lin: Vec3, ang: Vec3, quat: Quat | None = None) -> None:
         """Free joints take the linear velocity in the world frame, the angular one in the body frame."""
         if body not in self._free:
-            return  # a jointed body starts at rest relative to its parent
+            return  # jointed bodies: see _initial_joint_rates
         qadr, dadr = self._free[body]
         q = quat if quat is not None else tuple(self._d.qpos[qadr + 3 : qadr + 7])
         self._d.qvel[dadr : dadr + 3] = lin
         self._d.qvel[dadr + 3 : dadr + 6] = quat_rotate(quat_conj(q), ang)
+
+    def _initial_joint_rates(self) -> None:
+        """A jointed body's initial velocity relative to its parent's, projected on its joint."""
+        m, world = self._m, self.world
+        for name, edge in self._layout.edges.items():
+            if edge.joint is None or self._layout.joint_id[edge.joint] < 0:
+                continue
+            child = world.bodies[world.body_index(name)]
+            parent = world.bodies[world.body_index(edge.parent)] if edge.parent is not None else None
+            lin = np.subtract(child.lin_vel, parent.lin_vel if parent else (0.0, 0.0, 0.0))
+            ang = np.subtract(child.ang_vel, parent.ang_vel if parent else (0.0, 0.0, 0.0))
+            joint = world.joints[edge.joint]
+            dof = m.jnt_dofadr[self._layout.joint_id[edge.joint]]
+            if joint.kind is JointKind.SLIDER:
+                self._d.qvel[dof] = float(np.dot(lin, joint.axis))
+            elif joint.kind is JointKind.HINGE:
+                self._d.qvel[dof] = float(np.dot(ang, joint.axis))
+            else:  # ball: the rate in the child's frame
+                self._d.qvel[dof : dof + 3] = quat_rotate(quat_conj(child.quat), ang)
 
     def _check(self) -> None:
         d = self._d
         bad = any(d.warning[w].number for w in _BAD_STATE)
         if not bad and np.isfinite(d.qpos).all() and np.isfinite(d.qvel).all():
             return
-        dofs = np.flatnonzero(~np.isfinite(d.qvel))
-        body = None
-        if dofs.size:
-            mj_body = self._m.dof_bodyid[dofs[0]]
-            body = self.world.bodies[int(np.flatnonzero(self._layout.body_id == mj_body)[0])].name
+        dofs = set(np.flatnonzero(~np.isfinite(d.qvel)))
+        dofs |= {d.warning[w].lastinfo for w in _BAD_STATE[1:] if d.warning[w].number}  # lastinfo: the dof
+        bad_bodies = {self._m.dof_bodyid[i] for i in dofs if 0 <= i < self._m.nv}
+        named = [b.name for b, mj in zip(self.world.bodies, self._layout.body_id, strict=True) if mj in bad_bodies]
+        body = named[0] if named else None
         time = self._steps * self.world.dt
         raise EngineFailure(
             f"mujoco: the simulation became invalid (NaN, inf or a huge acceleration) by t={time:g} s",
@@ -204,45 +238,35 @@ class MujocoBackend(Backend):
 
     # --- contacts -------------------------------------------------------------------------------
 
-    def _touching(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-        """Per body pair touching in the last engine step: (pair code, points, depth, normal force)."""
+    def _touching(self) -> _Pairs:
+        """Body pairs touching (distance <= 0) in the last engine step."""
         d, n = self._d, self._d.ncon
         if n == 0:
-            empty = np.zeros(0)
-            return empty.astype(np.int64), empty.astype(np.int64), empty, empty
+            return _NO_PAIRS
         c = d.contact
         keep = c.dist[:n] <= 0.0
         owners = self._layout.geom_body[c.geom[:n][keep]]
-        a, b = owners.min(axis=1), owners.max(axis=1)
-        code = a * len(self.world.bodies) + b
+        code = owners.min(axis=1) * len(self.world.bodies) + owners.max(axis=1)
         rows = c.efc_address[:n][keep]
         force = np.zeros(rows.size)  # a contact at distance 0 is "in the gap": touching, with no row
         active = rows >= 0
         force[active] = d.efc_force[rows[active]]  # elliptic cone: a contact's first row is its normal
-        pairs, inverse, points = np.unique(code, return_inverse=True, return_counts=True)
-        depth = np.zeros(pairs.size)
-        np.maximum.at(depth, inverse, -c.dist[:n][keep])
-        return pairs, points, depth, np.bincount(inverse, weights=force, minlength=pairs.size)
+        return _by_pair(code, -c.dist[:n][keep], force)
 
-    def _merge(self, touching: list[tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]]) -> list[Contact]:
-        """Pairs touching in any engine step of the scenario step; force averaged over the step."""
-        code = np.concatenate([t[0] for t in touching])
-        if code.size == 0:
-            return []
-        pairs, inverse = np.unique(code, return_inverse=True)
-        points = np.zeros(pairs.size, dtype=np.int64)
-        depth = np.zeros(pairs.size)
-        np.maximum.at(points, inverse, np.concatenate([t[1] for t in touching]))
-        np.maximum.at(depth, inverse, np.concatenate([t[2] for t in touching]))
-        force = np.bincount(inverse, weights=np.concatenate([t[3] for t in touching]), minlength=pairs.size)
-        n = len(self.world.bodies)
-        return [
-            Contact(int(p // n), int(p % n), int(k), float(x), float(f / self._nsteps))
-            for p, k, x, f in zip(pairs, points, depth, force, strict=True)
-        ]
+    def _merge(self, touching: list[_Pairs]) -> _Pairs:
+        """Pairs touching in any engine step of the scenario step: most points, deepest, summed force."""
+        if len(touching) == 1:
+            return touching[0]
+        code, points, depth, force = (np.concatenate(parts) for parts in zip(*touching, strict=True))
+        return _by_pair(code, depth, force, points)
 
     def contacts(self) -> list[Contact]:
-        return list(self._contacts)
+        code, points, depth, force = self._pairs
+        n = len(self.world.bodies)
+        return [
+            Contact(int(p // n), int(p % n), int(k), float(x), float(f / self._nsteps))  # force: step mean
+            for p, k, x, f in zip(code, points, depth, force, strict=True)
+        ]
 
     # --- reads ----------------------------------------------------------------------------------
 
@@ -290,8 +314,21 @@ class MujocoBackend(Backend):
             "tolerance": float(self._m.opt.tolerance),
             "motors": "tendon frictionloss rows (bounded velocity constraints), impedance 0.9999",
             "contact_solref": f"(-erp/h^2, -(1+bounce)/h), erp {o.erp}, bounce_erp {o.bounce_erp}",
+            "friction_solref": f"(-1, -min({FRICTION_RATE:g}, 0.5/h))",
             "impedance": IMPEDANCE,
             "mu_max": MU_MAX,
             "kinematic_mass_ratio": KINEMATIC_MASS_RATIO,
             "bounce_vel": "ignored (MuJoCo's contact is linear in the approach speed)",
         }
+
+
+def _by_pair(code: np.ndarray, depth: np.ndarray, force: np.ndarray, points: np.ndarray | None = None) -> _Pairs:
+    """Group rows by pair code: points (rows counted, or the largest given), deepest, summed force."""
+    if code.size == 0:
+        return _NO_PAIRS
+    order = np.lexsort((depth, code))  # by pair, deepest last
+    code, depth, force = code[order], depth[order], force[order]
+    last = np.flatnonzero(np.append(code[1:] != code[:-1], True))
+    first = np.concatenate(([0], last[:-1] + 1))
+    count = last - first + 1 if points is None else np.maximum.reduceat(points[order], first)
+    return code[last], count, depth[last], np.add.reduceat(force, first)

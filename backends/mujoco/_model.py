@@ -74,16 +74,12 @@ class Options:
         for key, value in values.items():
             ok = isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
             if key == "engine_substeps":
-                ok = ok and float(value).is_integer() and value >= 1
-            elif key in ("erp", "bounce_erp"):
-                ok = ok and 0.0 < value <= 1.0
+                ok, expected = ok and float(value).is_integer() and value >= 1, "an integer >= 1"
             else:
-                ok = ok and value > 0.0
+                ok, expected = ok and 0.0 < value <= 1.0, "a number in (0, 1]"
             if not ok:
                 raise UnsupportedFeature(
-                    f"Invalid `backend_options.mujoco.{key}`. Expected a positive number"
-                    f"{' (an integer)' if key == 'engine_substeps' else ''}"
-                    f"{' in (0, 1]' if 'erp' in key else ''}. Received: {key}={value!r}."
+                    f"Invalid `backend_options.mujoco.{key}`. Expected {expected}. Received: {key}={value!r}."
                 )
         values["engine_substeps"] = int(values["engine_substeps"])
         return cls(**values)
@@ -247,9 +243,8 @@ def _rescale_solver(model: mujoco.MjModel, dynamic: list[str]) -> None:
     ids = [model.body(f"body:{name}").id for name in dynamic]
     dofs = np.flatnonzero(np.isin(model.dof_bodyid, ids))
     if dofs.size:
-        full = np.zeros((model.nv, model.nv))
-        mujoco.mj_fullM(model, data, full)
-        model.stat.meaninertia = float(np.mean(np.diag(full)[dofs]))
+        diagonal = data.M[model.M_rowadr + model.M_rownnz - 1]  # CSR rows end on the diagonal
+        model.stat.meaninertia = float(np.mean(diagonal[dofs]))
 
 
 def _motorised(kind: JointKind) -> bool:
