@@ -20,8 +20,12 @@ Semantics every backend must honour (ODE's):
   ``pos + lin_vel*dt`` with ``quat`` rotated by ``ang_vel*dt``, and bodies resting on it were
   carried by friction. A kinematic body not set again keeps its last velocity for the next step
   (the runner always sets it, to zero when it stops).
-* ``reset_body`` teleports a dynamic body and sets its velocities (the lab's reset on ``mouse1``).
-* ``contacts()`` lists body pairs touching (distance <= 0) as seen by the last ``step()``.
+* ``reset_body`` teleports a dynamic body and sets its velocities (the lab's reset on ``mouse1``). Bodies held by
+  joints are not reset (the runner refuses such a scenario before it runs).
+* ``contacts()`` lists body pairs touching (distance <= 0) during the last ``step()`` (in any of its substeps);
+  ``normal_force`` is the step's mean. Pairs of static and kinematic bodies never collide with each other.
+* ``JointStates.motor_force`` is the mean over the step's substeps.
+* A quaternion and its negation are the same orientation; callers must not rely on the sign.
 * States are read fresh after the step (never a stale cache), positions in metres, quaternions
   (w, x, y, z), velocities in the world frame.
 * Engine exceptions leave the adapter as :class:`~backends.errors.EngineFailure`.

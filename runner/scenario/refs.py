@@ -216,6 +216,8 @@ def _check_actions(model: Scenario, bad: Any, body_names: set[str], sounds: dict
             ref = action.reset if isinstance(action.reset, str) else action.reset.body
             if ref not in body_names:
                 bad(path + ("reset",), _unknown("body", ref, body_names))
+            elif any(ref in j.bodies for j in model.joints.values()):
+                bad(path + ("reset",), f"body `{ref}` is held by a joint; only free bodies can be reset")
 
 
 def _expressions(model: Scenario) -> Iterator[tuple[str, Path]]:
