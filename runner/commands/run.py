@@ -12,10 +12,10 @@ from rich.console import Console
 from rich.progress import BarColumn, Progress, TextColumn, TimeRemainingColumn
 from rich.table import Table
 
-from backends.errors import BackendNotInstalled
+from backends.errors import BackendError, BackendNotInstalled, EngineFailure
 from backends.registry import DEFAULT_BACKEND, entry, is_installed
 
-from ..errors import ExitCode, ScenarioValidationError
+from ..errors import ExitCode, ScenarioError, ScenarioValidationError
 from ..run import run_loaded
 from ..scenario.load import LoadedScenario, load_all, parse_overrides
 from ..session import RunResult
@@ -43,9 +43,13 @@ def configure(run: argparse.ArgumentParser) -> None:
     out = run.add_mutually_exclusive_group()
     out.add_argument("--quiet", "-q", action="store_true", help="print only failures and the summary")
     out.add_argument("--json", action="store_true", help="print the results as JSON")
+    run.add_argument(
+        "--junit", type=Path, metavar="FILE", help="also write a JUnit XML report (one testcase per case) to FILE"
+    )
 
 
-def _verdict_table(result: RunResult, failures_only: bool) -> Table:
+def verdict_table(result: RunResult, failures_only: bool = False) -> Table:
+    """The verdict table of one run (also used by `check`, JUnit reports and the pytest plugin)."""
     title = f"{result.scenario} · {result.variant} · {result.backend}"
     table = Table(title=title, title_justify="left", show_lines=False)
     for col in ("assertion", "result", "measured", "expected", "time"):
@@ -77,13 +81,48 @@ def _result_json(r: RunResult) -> dict[str, Any]:
 
 
 def execute(args: argparse.Namespace, out: Console, err: Console) -> int:
+    results: list[RunResult] = []
+    cases: list[LoadedScenario] = []
+    try:
+        code = _execute(args, out, err, cases, results)
+    except (ScenarioError, BackendError) as exc:
+        if args.junit:
+            _write_junit(args, cases, results, exc)
+        raise
+    if args.junit:
+        _write_junit(args, cases, results, None)
+    return code
+
+
+def _write_junit(
+    args: argparse.Namespace, cases: list[LoadedScenario], results: list[RunResult], exc: Exception | None
+) -> None:
+    """The report of what ran; what stopped the command (bad input, a missing engine) is an error case."""
+    from ..junit import from_error, from_result, write_junit
+
+    junit = [from_result(r, c) for r, c in zip(results, cases, strict=False)]
+    if isinstance(exc, ScenarioValidationError):
+        by_file: dict[str, list[str]] = {}
+        for issue in exc.issues:
+            by_file.setdefault(issue.file, []).append(str(issue))
+        junit += [from_error(f, args.backend, "\n".join(lines)) for f, lines in by_file.items()]
+    elif exc is not None:
+        kind = "engine-failure" if isinstance(exc, (BackendNotInstalled, EngineFailure)) else "bad-input"
+        case = cases[len(results)] if len(results) < len(cases) else None
+        where = case.path if case is not None else (args.files[0] if args.files else "scenario")
+        junit.append(from_error(where, args.backend, str(exc), kind, case.variant if case is not None else "load"))
+    write_junit(args.junit, junit)
+
+
+def _execute(
+    args: argparse.Namespace, out: Console, err: Console, cases: list[LoadedScenario], results: list[RunResult]
+) -> int:
     entry(args.backend)  # an unknown name is bad input (exit 2) before anything runs
     if not is_installed(args.backend):
         raise BackendNotInstalled(
             f"Backend `{args.backend}` is not installed. Install it with: {entry(args.backend).hint}"
         )
     overrides = parse_overrides(args.set)
-    cases: list[LoadedScenario] = []
     problems = []
     for path in args.files:
         try:
@@ -93,7 +132,6 @@ def execute(args: argparse.Namespace, out: Console, err: Console) -> int:
     if problems:
         raise ScenarioValidationError(problems)
     out_dir: Path | None = None if args.no_trace else args.out
-    results: list[RunResult] = []
     show_progress = err.is_terminal and not (args.quiet or args.json)
     for case in cases:
         if show_progress:
@@ -132,7 +170,7 @@ def _print_result(out: Console, result: RunResult, quiet: bool) -> None:
         if detail:
             out.print(f"  last good state of `{result.extra.get('body')}`: {json.dumps(detail)}")
     if result.verdicts and (not quiet or not result.passed):
-        out.print(_verdict_table(result, failures_only=quiet))
+        out.print(verdict_table(result, failures_only=quiet))
     if result.trace and not quiet:
         out.print(f"  trace: {result.trace}")
 
