@@ -4,7 +4,7 @@ VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 
-.PHONY: demo test lint setup clean sounds schema
+.PHONY: demo test lint setup clean sounds schema conformance baselines
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -28,6 +28,12 @@ sounds: $(STAMP)
 
 schema: $(STAMP)
 	$(BIN)/scenario schema > runner/schema/scenario.schema.json
+
+conformance: $(STAMP)
+	$(BIN)/scenario conformance --out traces/conformance --markdown docs/conformance.md
+
+baselines: $(STAMP)
+	$(BIN)/scenario baseline scenarios/*.yaml --backend pybullet,mujoco,dart,ode --dir baselines
 
 clean:
 	rm -rf $(VENV) traces .pytest_cache

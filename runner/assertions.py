@@ -22,6 +22,10 @@ class Verdict:
     expected: str
     time: float | None = None  # when it was decided (first failure, first success, or the sample time)
     message: str = ""
+    #: the numbers behind a numeric verdict, unformatted (None where the check is not numeric)
+    value: float | None = None
+    target: float | None = None
+    tolerance: float | None = None
 
     def as_dict(self) -> dict[str, Any]:
         return {
@@ -32,7 +36,14 @@ class Verdict:
             "expected": self.expected,
             "time": self.time,
             "message": self.message,
+            "value": _finite(self.value),
+            "target": _finite(self.target),
+            "tolerance": _finite(self.tolerance),
         }
+
+
+def _finite(x: float | None) -> float | None:
+    return x if x is not None and math.isfinite(x) else None
 
 
 def fmt(value: Any) -> str:
@@ -88,7 +99,7 @@ class AssertionTracker:
         target = self._number(near, r)
         t = self._number(tolerance(tol, self.backend), r)
         ok = math.isfinite(measured) and abs(measured - target) <= t + 1e-12 * max(1.0, abs(target))
-        return ok, f"{fmt(target)} ± {fmt(t)}"
+        return ok, f"{fmt(target)} ± {fmt(t)}", target, t
 
     def _at_time(self, at: Any, t: float, final: bool) -> bool:
         if at == "end":
@@ -151,17 +162,17 @@ class AssertionTracker:
         measured = self.expr[s.value].evaluate(r)
         value = float(measured) if not isinstance(measured, list) else math.nan
         if s.near is not None:
-            ok, expected = self._near(value, s.near, s.tol, r)
-        else:
-            lo = self._number(s.min, r) if s.min is not None else -math.inf
-            hi = self._number(s.max, r) if s.max is not None else math.inf
-            ok = lo <= value <= hi
-            expected = f"in [{fmt(lo)}, {fmt(hi)}]"
-        return Verdict(s.name, kind, ok, fmt(value), expected, t)
+            ok, expected, target, tol = self._near(value, s.near, s.tol, r)
+            return Verdict(s.name, kind, ok, fmt(value), expected, t, value=value, target=target, tolerance=tol)
+        lo = self._number(s.min, r) if s.min is not None else -math.inf
+        hi = self._number(s.max, r) if s.max is not None else math.inf
+        ok = lo <= value <= hi
+        return Verdict(s.name, kind, ok, fmt(value), f"in [{fmt(lo)}, {fmt(hi)}]", t, value=value)
 
     def _extremum(self, c: _Check, r: Resolver) -> Verdict:
         s = c.spec
-        ok, expected = self._near(c.best if c.best is not None else math.nan, s.near, s.tol, r)
+        best = c.best if c.best is not None else math.nan
+        ok, expected, target, tol = self._near(best, s.near, s.tol, r)
         return Verdict(
             s.name,
             c.kind,
@@ -172,6 +183,9 @@ class AssertionTracker:
             f"{'max' if isinstance(s, A.MaxAssertion) else 'min'} at t={c.best_time:.4f}"
             if c.best_time is not None
             else "",
+            value=best,
+            target=target,
+            tolerance=tol,
         )
 
     def finish(
@@ -238,6 +252,9 @@ class AssertionTracker:
         times = [t for t, name in events if name == s.event]
         first = times[0] if times else None
         problems, measured, expected = [], [f"count {len(times)}", f"first {fmt(first)}"], []
+        numbers: tuple[float | None, float | None, float | None] = (None, None, None)
+        if isinstance(s.count, int):
+            numbers = (float(len(times)), float(s.count), 0.0)
         if s.count is not None:
             lo, hi = (s.count, s.count) if isinstance(s.count, int) else (s.count.min, s.count.max)
             expected.append(f"count {lo}" if lo == hi else f"count in [{lo}, {hi if hi is not None else '∞'}]")
@@ -247,6 +264,7 @@ class AssertionTracker:
             t = self._number(tolerance(s.tol, self.backend), r)
             target = _time(s.first)
             expected.append(f"first {fmt(target)} ± {fmt(t)}")
+            numbers = (first, target, t)
             if first is None or abs(first - target) > t + TIME_EPS:
                 problems.append("first time off" if first is not None else "never happened")
         for field_name, other in (("before", s.before), ("after", s.after)):
@@ -258,15 +276,30 @@ class AssertionTracker:
                 problems.append(f"{'it' if first is None else other} never happened")
             elif (first >= other_times[0]) if field_name == "before" else (first <= other_times[0]):
                 problems.append(f"first at {fmt(first)}, {other} first at {fmt(other_times[0])}")
+        value, target, tol = numbers
         return Verdict(
-            s.name, "event", not problems, ", ".join(measured), ", ".join(expected), first, "; ".join(problems)
+            s.name,
+            "event",
+            not problems,
+            ", ".join(measured),
+            ", ".join(expected),
+            first,
+            "; ".join(problems),
+            value=value,
+            target=target,
+            tolerance=tol,
         )
 
     def _sound(self, s: A.SoundAssertion, sounds: Sequence[tuple[float, str]], r: Resolver) -> Verdict:
         times = [t for t, name in sounds if name == s.sound]
         problems, expected = [], []
+        numbers: tuple[float | None, float | None, float | None] = (None, None, None)
+        if isinstance(s.count, int):
+            numbers = (float(len(times)), float(s.count), 0.0)
         if s.played_at is not None:
             tol = self._number(tolerance(s.tol, self.backend), r)
+            nearest = min(times, key=lambda t: abs(t - s.played_at)) if times else None
+            numbers = (nearest, float(s.played_at), tol)
             expected.append(f"played at {fmt(s.played_at)} ± {fmt(tol)}")
             if not any(abs(t - s.played_at) <= tol + TIME_EPS for t in times):
                 problems.append("not played at that time")
@@ -283,4 +316,7 @@ class AssertionTracker:
             ", ".join(expected),
             times[0] if times else None,
             "; ".join(problems),
+            value=numbers[0],
+            target=numbers[1],
+            tolerance=numbers[2],
         )

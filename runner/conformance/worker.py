@@ -7,7 +7,7 @@ process per backend. ``JOB`` is a JSON file ``{"backend": name, "cases": [{"id",
 case a crash or a hang interrupted. Nothing is written to stdout: engines print there.
 
 A case's result keeps, for every assertion, the raw numbers behind its verdict (measured value, target,
-tolerance), which the matrix needs to the last digit; verdicts only carry them formatted.
+tolerance: ``Verdict.value/target/tolerance``), which the matrix needs to the last digit.
 """
 
 from __future__ import annotations
@@ -23,11 +23,8 @@ from typing import Any
 from backends.errors import BackendNotInstalled, EngineFailure, UnsupportedFeature
 from backends.registry import check_capabilities, get_backend
 
-from ..assertions import AssertionTracker, Verdict, tolerance
 from ..errors import ScenarioValidationError
-from ..expressions import Resolver
 from ..program import build_program
-from ..scenario import model_assertions as A
 from ..scenario.load import load_scenario
 from ..session import RunResult, Session
 
@@ -39,83 +36,21 @@ def _num(value: Any) -> float | None:
     return float(value) if math.isfinite(value) else None
 
 
-class RecordingTracker(AssertionTracker):
-    """The runner's assertion tracker, also keeping (measured, target, tolerance) of numeric checks.
-
-    It hooks the tracker's ``_sample`` and ``_extremum``; verdicts that carried these numbers themselves
-    would make this subclass unnecessary.
-    """
-
-    def __init__(self, specs: Sequence[Any], expressions: Any, backend: str, dt: float) -> None:
-        super().__init__(specs, expressions, backend, dt)
-        self._index = {id(c.spec): i for i, c in enumerate(self.checks)}
-        self.raw: dict[int, tuple[float | None, float | None, float | None]] = {}
-
-    def number(self, value: Any, r: Resolver) -> float:
-        return self._number(value, r)
-
-    def _sample(self, s: Any, t: float, r: Resolver, contact: Any) -> Verdict:
-        verdict = super()._sample(s, t, r, contact)
-        if isinstance(s, A.ValueAssertion):
-            measured = _num(self.expr[s.value].evaluate(r))
-            if s.near is not None:
-                target = self._number(s.near, r)
-                tol = self._number(tolerance(s.tol, self.backend), r)
-                self.raw[self._index[id(s)]] = (measured, target, tol)
-            else:
-                self.raw[self._index[id(s)]] = (measured, None, None)
-        return verdict
-
-    def _extremum(self, c: Any, r: Resolver) -> Verdict:
-        verdict = super()._extremum(c, r)
-        s = c.spec
-        target = self._number(s.near, r)
-        tol = self._number(tolerance(s.tol, self.backend), r)
-        self.raw[self._index[id(s)]] = (_num(c.best), target, tol)
-        return verdict
-
-
-def _event_numbers(
-    spec: Any, result: RunResult, tracker: RecordingTracker, r: Resolver
-) -> tuple[float | None, float | None, float | None]:
-    if isinstance(spec, A.EventAssertion):
-        times = [t for t, name, _ in result.events if name == spec.event]
-        if spec.first is not None:
-            target = math.inf if spec.first == "end" else float(spec.first)
-            tol = tracker.number(tolerance(spec.tol, tracker.backend), r)
-            return (times[0] if times else None), _num(target), tol
-        if isinstance(spec.count, int):
-            return float(len(times)), float(spec.count), 0.0
-        return None, None, None
-    if isinstance(spec, A.SoundAssertion):
-        times = [t for t, name in result.sounds if name == spec.sound]
-        if spec.played_at is not None:
-            tol = tracker.number(tolerance(spec.tol, tracker.backend), r)
-            nearest = min(times, key=lambda t: abs(t - spec.played_at)) if times else None
-            return nearest, float(spec.played_at), tol
-        if isinstance(spec.count, int):
-            return float(len(times)), float(spec.count), 0.0
-    return None, None, None
-
-
-def _checks(result: RunResult, tracker: RecordingTracker, resolver: Resolver) -> list[dict[str, Any]]:
-    out = []
-    for i, (check, verdict) in enumerate(zip(tracker.checks, result.verdicts, strict=True)):
-        measured, target, tol = tracker.raw.get(i) or _event_numbers(check.spec, result, tracker, resolver)
-        out.append(
-            {
-                "name": verdict.name,
-                "passed": verdict.passed,
-                "measured": measured,
-                "target": target,
-                "tol": tol,
-                "measured_text": verdict.measured,
-                "expected_text": verdict.expected,
-                "time": _num(verdict.time),
-                "message": verdict.message,
-            }
-        )
-    return out
+def _checks(result: RunResult) -> list[dict[str, Any]]:
+    return [
+        {
+            "name": v.name,
+            "passed": v.passed,
+            "measured": _num(v.value),
+            "target": _num(v.target),
+            "tol": _num(v.tolerance),
+            "measured_text": v.measured,
+            "expected_text": v.expected,
+            "time": _num(v.time),
+            "message": v.message,
+        }
+        for v in result.verdicts
+    ]
 
 
 def _status(status: str, message: str, start: float, checks: list[dict[str, Any]] | None = None) -> dict[str, Any]:
@@ -145,11 +80,8 @@ def run_case(path: Path, variant: str | None, backend_name: str) -> dict[str, An
     except Exception as exc:  # an adapter's bug must not lose the other cases: it shows in the matrix
         return _status("error", f"{type(exc).__name__}: {exc}", start)
     try:
-        session = Session(program, backend)
-        tracker = RecordingTracker(loaded.model.assertions, program.expressions, backend.name, program.world.dt)
-        session.tracker = tracker
-        result = session.run()
-        return _status(result.status, "", start, _checks(result, tracker, session.resolver))
+        result = Session(program, backend).run()
+        return _status(result.status, "", start, _checks(result))
     except EngineFailure as exc:
         return _status("engine-failure", str(exc), start)
     except Exception as exc:  # as above
