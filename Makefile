@@ -16,6 +16,8 @@ setup: $(STAMP)
 
 demo: $(STAMP)
 	$(BIN)/scenario run scenarios/factory_physics.yaml --all-variants --out traces/demo
+	$(BIN)/scenario compare scenarios/factory_physics.yaml --all-variants --out traces/compare; \
+	status=$$?; echo "Comparison report: file://$(CURDIR)/traces/compare/report.html"; exit $$status
 
 test: $(STAMP)
 	$(BIN)/python -m pytest -q

@@ -1,0 +1,150 @@
+"""`scenario compare` and `scenario report` as a user runs them, on real engines and the crash backend.
+
+Reads the shared compare run (conftest.compare_run: factory_physics door-stays-closed on ode, pybullet
+and crash); the extra runs here take about 4 s more.
+"""
+
+from __future__ import annotations
+
+import json
+import shutil
+from pathlib import Path
+
+import pytest
+
+from reports.build import write_report
+from reports.trace_reader import read_trace
+
+from .conftest import FACTORY, CompareRun, scenario
+
+G = 9.81
+DT = 0.04
+# ODE's joints are soft: the constraint acts as a spring k = ERP / (h CFM) (ODE manual, "Soft constraint and
+# constraint force mixing"); with the ode backend's ERP 0.2 and CFM 1e-5 at h = 0.04 s, k = 5e5 N/m
+ODE_JOINT_STIFFNESS = 0.2 / (DT * 1e-5)
+DOOR_MASS, BOX_MASS = 2 * 2 * 0.1 * 1000, 0.3**3 * 500
+
+
+def test_crashing_backend_is_marked_and_the_others_are_complete(compare_run: CompareRun) -> None:
+    assert compare_run.done.returncode == 1, compare_run.done.stderr
+    assert "crashed (signal 11)" in compare_run.done.stdout
+    crash = compare_run.run("crash")
+    assert crash["status"] == "crashed" and crash["label"] == "crashed (signal 11)" and not crash["ok"]
+    assert crash["trace"] == "factory-physics__door-stays-closed__crash.mcap.partial"
+    assert crash["end_time"] == pytest.approx(1.0)  # the steps up to the last complete chunk
+    for name in ("ode", "pybullet"):
+        run = compare_run.run(name)
+        assert run["status"] == "passed" and run["ok"] and run["assertions"] == {"total": 9, "passed": 9, "failed": 0}
+        assert run["end_time"] == 6.0 and run["trace"] == f"factory-physics__door-stays-closed__{name}.mcap"
+    doc = compare_run.doc
+    assert doc["reference"] == "ode" and doc["backends"] == ["ode", "crash", "pybullet"] and not doc["passed"]
+    assert {p.name for p in compare_run.traces.iterdir()} == {
+        "factory-physics__door-stays-closed__crash.mcap.partial",
+        "factory-physics__door-stays-closed__crash.outcome.json",
+        "factory-physics__door-stays-closed__ode.mcap",
+        "factory-physics__door-stays-closed__ode.cost.json",
+        "factory-physics__door-stays-closed__pybullet.mcap",
+        "factory-physics__door-stays-closed__pybullet.cost.json",
+    }
+    md = (compare_run.out / "report.md").read_text()
+    assert "| door-stays-closed | ✅ passed 9/9 | ❌ crashed (signal 11) 0/0" in md
+
+
+def test_report_from_the_traces_reproduces_report_json_exactly(compare_run: CompareRun, tmp_path: Path) -> None:
+    again = scenario("report", str(compare_run.traces), "--out", str(tmp_path / "dir"))
+    assert again.returncode == 1, again.stderr
+    original = (compare_run.out / "report.json").read_bytes()
+    assert (tmp_path / "dir" / "report.json").read_bytes() == original
+    assert (tmp_path / "dir" / "report.html").read_bytes() == (compare_run.out / "report.html").read_bytes()
+    # the same from a copy of the files elsewhere, traces named one by one (outcome and cost files are
+    # found beside them), through the function the command calls
+    copy = tmp_path / "copy"
+    shutil.copytree(compare_run.traces, copy)
+    traces = sorted(p for p in copy.iterdir() if ".mcap" in p.name)
+    assert len(traces) == 3
+    write_report(traces, tmp_path / "files")
+    assert (tmp_path / "files" / "report.json").read_bytes() == original
+
+
+def test_verdict_matrix_and_events_match_the_traces(compare_run: CompareRun) -> None:
+    case = compare_run.doc["cases"][0]
+    name = "factory-physics__door-stays-closed__{}.mcap"
+    traces = {b: read_trace(compare_run.traces / name.format(b)) for b in ("ode", "pybullet")}
+    for backend, trace in traces.items():
+        assert case["verdicts"]["assertions"] == [v.name for v in trace.verdicts]
+        for v in trace.verdicts:
+            cell = case["verdicts"]["cells"][v.name][backend]
+            assert cell["passed"] is v.passed and cell["measured"] == v.data["measured"]
+    assert all(case["verdicts"]["cells"][n]["crash"] is None for n in case["verdicts"]["assertions"])
+    ode_lands = [e.t for e in traces["ode"].events if e.name == "box-into-door"]
+    pb_lands = [e.t for e in traces["pybullet"].events if e.name == "box-into-door"]
+    row = next(r for r in case["events"]["comparison"]["pybullet"] if r["name"] == "box-into-door")
+    assert len(ode_lands) == len(pb_lands) == 2 and row["status"] == "match"  # landing, one bounce
+    for (ref_t, delta), a, b in zip(row["matched"], pb_lands, ode_lands, strict=True):
+        assert ref_t == pytest.approx(b) and delta == pytest.approx(a - b)
+    assert row["first_delta"] == pytest.approx(pb_lands[0] - ode_lands[0])
+    crash = next(r for r in case["events"]["comparison"]["crash"] if r["name"] == "box-into-door")
+    # the crash backend (free motion, no contacts) died at t = 1.2 s without an event
+    assert crash["status"] == "missing" and crash["missing"] == pytest.approx(ode_lands)
+
+
+def test_divergence_measures_odes_soft_slider_and_free_flight(compare_run: CompareRun) -> None:
+    case = compare_run.doc["cases"][0]
+    pb = case["divergence"]["pybullet"]
+    # PyBullet holds the door rigidly at z = 0; ODE's slider lets it sink until the spring carries the door
+    # (overdamped, time constant about c/k = (1 - ERP) h / ERP = 0.16 s), then door + box once the box rests
+    errors = dict(zip(pb["series"]["t"], pb["series"]["bodies"]["door"]["position"], strict=True))
+    assert errors[0.92] == pytest.approx(DOOR_MASS * G / ODE_JOINT_STIFFNESS, rel=0.01)
+    assert errors[6.0] == pytest.approx((DOOR_MASS + BOX_MASS) * G / ODE_JOINT_STIFFNESS, rel=0.01)
+    door = pb["bodies"]["door"]["position"]
+    assert door["max"] == max(errors.values()) and door["max_time"] == pytest.approx(1.0)  # the box's impact
+    # the crash backend integrates free flight exactly like ODE (semi-implicit Euler): until the box
+    # reaches the door (z below 0.2 m at t = 0.96 s) they agree to single precision
+    crash = case["divergence"]["crash"]
+    t = crash["series"]["t"]
+    flight = [e for ti, e in zip(t, crash["series"]["bodies"]["box"]["position"], strict=True) if ti < 0.95]
+    assert len(flight) == 24 and max(flight) < 1e-5
+    assert crash["compared_until"] == pytest.approx(1.0)
+    assert crash["bodies"]["box"]["position"]["first_over"] == pytest.approx(1.0)  # the box falls through
+
+
+def test_cost_comes_from_the_cost_files(compare_run: CompareRun) -> None:
+    for name in ("ode", "pybullet"):
+        saved = json.loads((compare_run.traces / f"factory-physics__door-stays-closed__{name}.cost.json").read_text())
+        cost = compare_run.run(name)["cost"]
+        assert cost["wall_seconds"] == saved["wall_seconds"] > 0
+        assert cost["steps"] == saved["steps"] == 150 and cost["simulated_seconds"] == 6.0
+        assert cost["steps_per_second"] == pytest.approx(150 / saved["wall_seconds"], rel=1e-6)
+        assert cost["real_time_factor"] == pytest.approx(6.0 / saved["wall_seconds"], rel=1e-4)
+    assert compare_run.run("crash")["cost"]["wall_seconds"] is None
+
+
+def test_exit_codes_follow_assertions_and_max_divergence(compare_run: CompareRun, tmp_path: Path) -> None:
+    good = [compare_run.traces / f"factory-physics__door-stays-closed__{b}.mcap" for b in ("ode", "pybullet")]
+    # PyBullet's box lands up to 6.7 cm away from ODE's (engine contact differences): 1 cm fails, 1 m passes
+    tight = scenario("report", *map(str, good), "--out", str(tmp_path / "b"), "--max-divergence", "0.01")
+    assert tight.returncode == 1, tight.stderr
+    doc = json.loads((tmp_path / "b" / "report.json").read_text())
+    pybullet = doc["cases"][0]["runs"][1]
+    assert pybullet["passed"] and pybullet["within_max_divergence"] is False and not pybullet["ok"]
+    assert doc["thresholds"]["position"] == 0.01 and not doc["passed"]
+    assert write_report(good, tmp_path / "a").passed
+    loose = write_report(good, tmp_path / "c", max_divergence=1.0)
+    assert loose.passed and loose.document["cases"][0]["runs"][1]["within_max_divergence"] is True
+
+
+def test_compare_exits_zero_when_every_backend_passes(tmp_path: Path) -> None:
+    done = scenario("compare", str(FACTORY), "--variant", "door-stays-closed", "--backends", "pybullet", "--reference",
+                    "ode", "--out", str(tmp_path), "-j", "2")  # fmt: skip
+    assert done.returncode == 0, done.stdout + done.stderr
+    doc = json.loads((tmp_path / "report.json").read_text())
+    assert doc["reference"] == "ode" and doc["backends"] == ["ode", "pybullet"] and doc["passed"]
+
+
+def test_bad_input_exits_two(tmp_path: Path) -> None:
+    unknown = scenario("compare", str(FACTORY), "--backends", "pybulet", "--out", str(tmp_path))
+    assert unknown.returncode == 2 and "Did you mean `pybullet`?" in unknown.stderr
+    not_a_trace = tmp_path / "notes.txt"
+    not_a_trace.write_text("hello")
+    refused = scenario("report", str(not_a_trace), "--out", str(tmp_path / "r"))
+    assert refused.returncode == 2 and "is not a trace" in refused.stderr and "Traceback" not in refused.stderr
