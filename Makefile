@@ -15,7 +15,7 @@ $(STAMP): pyproject.toml
 setup: $(STAMP)
 
 demo: $(STAMP)
-	$(BIN)/scenario run scenarios/factory_physics.yaml --all-variants --out traces/demo
+	$(BIN)/scenario run scenarios/factory_physics.yaml --all-variants --out traces/demo --force
 	$(BIN)/scenario compare scenarios/factory_physics.yaml --all-variants --out traces/compare; \
 	status=$$?; echo "Comparison report: file://$(CURDIR)/traces/compare/report.html"; exit $$status
 

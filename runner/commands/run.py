@@ -46,6 +46,20 @@ def configure(run: argparse.ArgumentParser) -> None:
     run.add_argument(
         "--junit", type=Path, metavar="FILE", help="also write a JUnit XML report (one testcase per case) to FILE"
     )
+    run.add_argument("--force", action="store_true", help="overwrite traces that already exist")
+    run.add_argument(
+        "--isolate",
+        action="store_true",
+        help="run the engine in a child process: a crash (even a "
+        "segfault) is reported as exit 3 with its signal, and the trace up to that point is kept",
+    )
+    run.add_argument(
+        "--timeout",
+        type=float,
+        default=None,
+        metavar="S",
+        help="with --isolate: stop a run after S seconds of wall time",
+    )
 
 
 def verdict_table(result: RunResult, failures_only: bool = False) -> Table:
@@ -132,9 +146,16 @@ def _execute(
     if problems:
         raise ScenarioValidationError(problems)
     out_dir: Path | None = None if args.no_trace else args.out
-    show_progress = err.is_terminal and not (args.quiet or args.json)
+    if out_dir is not None and not args.force:
+        _refuse_overwrite(out_dir, cases, args.backend)
+    show_progress = err.is_terminal and not (args.quiet or args.json) and not args.isolate
+    crashed: list[str] = []
     for case in cases:
-        if show_progress:
+        if args.isolate:
+            result = _run_isolated(case, args, out_dir, err, crashed)
+            if result is None:
+                continue
+        elif show_progress:
             with Progress(
                 TextColumn("{task.description}"),
                 BarColumn(),
@@ -155,8 +176,10 @@ def _execute(
     if args.json:
         out.print_json(json.dumps({"results": [_result_json(r) for r in results]}, allow_nan=False, default=str))
     else:
-        _print_summary(out, results)
-    if any(r.status == "engine-failure" for r in results):
+        _print_summary(out, results, len(crashed))
+    for line in crashed:
+        out.print(f"[bold red]{line}[/]")
+    if crashed or any(r.status == "engine-failure" for r in results):
         return ExitCode.ENGINE_FAILURE
     return ExitCode.OK if all(r.passed for r in results) else ExitCode.ASSERTION_FAILED
 
@@ -175,12 +198,45 @@ def _print_result(out: Console, result: RunResult, quiet: bool) -> None:
         out.print(f"  trace: {result.trace}")
 
 
-def _print_summary(out: Console, results: list[RunResult]) -> None:
+def _print_summary(out: Console, results: list[RunResult], crashed: int = 0) -> None:
     passed = sum(r.passed for r in results)
+    total = len(results) + crashed
     checks = sum(len(r.verdicts) for r in results)
     failed_checks = sum(not v.passed for r in results for v in r.verdicts)
-    colour = "green" if passed == len(results) else "red"
-    out.print(f"[bold {colour}]{passed}/{len(results)} runs passed[/] ({checks - failed_checks}/{checks} assertions)")
+    colour = "green" if passed == total else "red"
+    out.print(f"[bold {colour}]{passed}/{total} runs passed[/] ({checks - failed_checks}/{checks} assertions)")
     for r in results:
         if not r.passed:
             out.print(f"  [red]{r.status}[/]: {r.scenario} · {r.variant} · {r.backend}")
+
+
+def _refuse_overwrite(out_dir: Path, cases: list[LoadedScenario], backend: str) -> None:
+    """Refuse before anything runs if a trace of these cases is already there (unless --force)."""
+    from ..run import trace_path
+
+    paths = [trace_path(out_dir, c, backend) for c in cases]
+    existing = [q for p in paths for q in (p, p.with_name(p.name + ".partial")) if q.exists()]
+    if existing:
+        names = ", ".join(str(p) for p in existing[:3]) + (
+            f" and {len(existing) - 3} more" if len(existing) > 3 else ""
+        )
+        raise ScenarioError(
+            f"{names} already exist{'s' if len(existing) == 1 else ''}; pass --force to overwrite, "
+            "or choose another --out folder"
+        )
+
+
+def _run_isolated(
+    case: LoadedScenario, args: argparse.Namespace, out_dir: Path | None, err: Console, crashed: list[str]
+) -> RunResult | None:
+    """One case in a child process; a crash or time-out is recorded in ``crashed`` and gives no result."""
+    from ..isolation import run_isolated
+
+    run = run_isolated(case, args.backend, out_dir, timeout=args.timeout)
+    if run.result is not None:
+        return run.result
+    where = f" (trace kept: {run.trace})" if run.trace is not None else ""
+    crashed.append(f"{run.label}: {case.model.scenario} · {case.variant} · {args.backend}{where}")
+    if run.message:
+        err.print(run.message)
+    return None

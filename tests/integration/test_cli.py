@@ -108,3 +108,25 @@ def test_backends_lists_versions() -> None:
     assert done.returncode == 0
     for name in ("pybullet", "mujoco", "dart", "ode"):
         assert name in done.stdout
+
+
+def test_existing_trace_is_not_overwritten_without_force(tmp_path: Path) -> None:
+    path = str(ROOT / "scenarios" / "factory_intervals.yaml")
+    assert scenario("run", path, "--backend", "fake", "--out", str(tmp_path), "-q").returncode == 0
+    trace = tmp_path / "factory-intervals__door-closed__fake.mcap"
+    before = trace.read_bytes()
+    again = scenario("run", path, "--backend", "fake", "--out", str(tmp_path), "-q")
+    assert again.returncode == 2 and "already exists; pass --force to overwrite" in again.stderr
+    assert trace.read_bytes() == before
+    assert scenario("run", path, "--backend", "fake", "--out", str(tmp_path), "-q", "--force").returncode == 0
+
+
+def test_isolate_reports_a_segfault_as_exit_three_and_keeps_the_trace(tmp_path: Path) -> None:
+    done = scenario("run", str(ROOT / "scenarios" / "factory_physics.yaml"), "--variant", "door-stays-closed",
+                    "--backend", "crash", "--isolate", "--out", str(tmp_path), "-q")
+    assert done.returncode == 3
+    assert "crashed (signal 11)" in done.stdout
+    partial = tmp_path / "factory-physics__door-stays-closed__crash.mcap.partial"
+    recovered = scenario("inspect", str(partial), "--recover")
+    assert recovered.returncode == 0, recovered.stderr
+    assert "factory-physics" in recovered.stdout
