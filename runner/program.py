@@ -18,7 +18,7 @@ from .intervals import FuncSpec, LerpSpec, ParallelSpec, SequenceSpec, SoundSpec
 from .scenario import model_behaviour as B
 from .scenario.load import LoadedScenario
 from .scenario.names import expand_bodies, groups
-from .scenario.refs import all_actions
+from .scenario.refs import expressions_in
 from .sounds import SoundInfo, read_info
 
 STEP_EPS = 1e-9  # a timed input at t is due at the first step whose time is >= t - STEP_EPS
@@ -104,31 +104,7 @@ def _solid(solid: B.Solid) -> SolidDef:
 
 
 def _expressions(model: Any) -> dict[str, Expression]:
-    texts: set[str] = set()
-    for action, _ in all_actions(model):
-        if isinstance(action, B.IfAction):
-            texts.add(action.if_)
-        if isinstance(action, B.CalcAction):
-            texts.update(action.calc.values())
-    for a in model.assertions:
-        for field in (
-            "value",
-            "check",
-            "always",
-            "never",
-            "eventually",
-            "max_of",
-            "min_of",
-            "near",
-            "min",
-            "max",
-            "tol",
-        ):
-            value = getattr(a, field, None)
-            for text in value.values() if isinstance(value, dict) else [value]:
-                if isinstance(text, str):
-                    texts.add(text)
-    return {t: compile_expression(t) for t in texts}
+    return {text: compile_expression(text) for text, _ in expressions_in(model)}
 
 
 def build_program(loaded: LoadedScenario) -> Program:

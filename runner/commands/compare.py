@@ -17,8 +17,8 @@ from rich.console import Console
 from backends.errors import BackendNotInstalled
 from backends.registry import entry, installed_backends, is_installed
 
-from ..errors import ExitCode, ScenarioValidationError, UsageError
-from ..scenario.load import LoadedScenario, load_all, parse_overrides
+from ..errors import ExitCode, UsageError
+from ..scenario.load import LoadedScenario, load_files, parse_overrides
 
 NAME = "compare"
 HELP = "run scenarios on several backends (each in its own process) and write a comparison report"
@@ -99,14 +99,7 @@ def execute(args: argparse.Namespace, out: Console, err: Console) -> int:
     backends = _backends(args)
     overrides = parse_overrides(args.set)
     cases: list[LoadedScenario] = []
-    problems = []
-    for path in args.files:
-        try:
-            cases.extend(load_all(path, args.variant, args.all_variants, overrides))
-        except ScenarioValidationError as exc:
-            problems.extend(exc.issues)
-    if problems:
-        raise ScenarioValidationError(problems)
+    cases.extend(load_files(args.files, args.variant, args.all_variants, overrides))
     work = [(case, b) for case in cases for b in backends]
     out.print(f"comparing {len(cases)} case(s) on {', '.join(backends)}: {len(work)} runs, {args.jobs} at a time")
     lock = threading.Lock()

@@ -17,7 +17,7 @@ from backends.registry import DEFAULT_BACKEND, entry, is_installed
 
 from ..errors import ExitCode, ScenarioError, ScenarioValidationError
 from ..run import run_loaded
-from ..scenario.load import LoadedScenario, load_all, parse_overrides
+from ..scenario.load import LoadedScenario, load_files, parse_overrides
 from ..session import RunResult
 
 NAME = "run"
@@ -137,14 +137,7 @@ def _execute(
             f"Backend `{args.backend}` is not installed. Install it with: {entry(args.backend).hint}"
         )
     overrides = parse_overrides(args.set)
-    problems = []
-    for path in args.files:
-        try:
-            cases.extend(load_all(path, args.variant, args.all_variants, overrides))
-        except ScenarioValidationError as exc:
-            problems.extend(exc.issues)
-    if problems:
-        raise ScenarioValidationError(problems)
+    cases.extend(load_files(args.files, args.variant, args.all_variants, overrides))
     out_dir: Path | None = None if args.no_trace else args.out
     if out_dir is not None and not args.force:
         _refuse_overwrite(out_dir, cases, args.backend)

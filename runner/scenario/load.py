@@ -210,3 +210,19 @@ def load_all(
         names = variant_names(path)
         return [load_scenario(path, names[0] if names != [BASE_CASE] else None, overrides)]
     return [load_scenario(path, variant, overrides)]
+
+
+def load_files(
+    files: list[FsPath], variant: str | None, all_variants: bool, overrides: tuple[tuple[str, Any], ...] = ()
+) -> list[LoadedScenario]:
+    """The cases of several files; every file's problems are collected and raised together."""
+    cases: list[LoadedScenario] = []
+    issues: list[Issue] = []
+    for path in files:
+        try:
+            cases.extend(load_all(path, variant, all_variants, overrides))
+        except ScenarioValidationError as exc:
+            issues.extend(exc.issues)
+    if issues:
+        raise ScenarioValidationError(issues)
+    return cases

@@ -220,7 +220,8 @@ def _check_actions(model: Scenario, bad: Any, body_names: set[str], sounds: dict
                 bad(path + ("reset",), f"body `{ref}` is held by a joint; only free bodies can be reset")
 
 
-def _expressions(model: Scenario) -> Iterator[tuple[str, Path]]:
+def expressions_in(model: Scenario) -> Iterator[tuple[str, Path]]:
+    """Every expression text in the scenario, with where it is."""
     for action, path in all_actions(model):
         if isinstance(action, B.IfAction):
             yield action.if_, path + ("if",)
@@ -251,7 +252,7 @@ def _expressions(model: Scenario) -> Iterator[tuple[str, Path]]:
 
 def _check_expressions(model: Scenario, bad: Any, owners: set[str]) -> None:
     valid = set(readable_names(model))
-    for text, path in _expressions(model):
+    for text, path in expressions_in(model):
         try:
             expr = compile_expression(text)
         except ExpressionError as exc:
