@@ -4,12 +4,12 @@ VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 
-.PHONY: demo test lint setup clean sounds schema conformance baselines
+.PHONY: demo test lint setup clean sounds schema conformance baselines bench bench-quick
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/pip install -q --upgrade pip
-	$(BIN)/pip install -q -e '.[all,dev]'
+	$(BIN)/pip install -q -e '.[all,dev,ray]'
 	touch $(STAMP)
 
 setup: $(STAMP)
@@ -36,6 +36,12 @@ conformance: $(STAMP)
 
 baselines: $(STAMP)
 	$(BIN)/scenario baseline scenarios/*.yaml --backend pybullet,mujoco,dart,ode --dir baselines
+
+bench: $(STAMP)
+	$(BIN)/python -m bench
+
+bench-quick: $(STAMP)
+	$(BIN)/python -m bench --quick --out traces/bench-quick.md
 
 clean:
 	rm -rf $(VENV) traces .pytest_cache

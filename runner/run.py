@@ -6,6 +6,7 @@ import json
 import re
 from collections.abc import Callable
 from pathlib import Path
+from typing import Any
 
 from backends.errors import EngineFailure
 from backends.registry import check_capabilities, get_backend
@@ -51,16 +52,21 @@ def run_loaded(
     out_dir: Path | None,
     progress: Callable[[int, int], None] | None = None,
     force: bool = True,
+    record_every: int = 1,
+    trace_process: bool = False,
 ) -> RunResult:
     """Build, run and record one case. Engine failures come back as a result with status engine-failure;
-    an interruption (KeyboardInterrupt) finishes the trace as interrupted and propagates."""
+    an interruption (KeyboardInterrupt) finishes the trace as interrupted and propagates.
+
+    ``record_every``: the trace gets every k-th step and the last (assertions still check every step);
+    ``trace_process``: the trace is formatted and written by a second process (runner.trace_process)."""
     program = build_program(loaded)
     cls = get_backend(backend_name)
     check_capabilities(cls, program.world)
     backend = cls(program.world)
     try:
         if out_dir is None:
-            return _run(program, loaded, backend, None, progress)
+            return _run(program, loaded, backend, None, progress, record_every)
         from .trace import TraceMeta, TraceWriter
 
         out_dir.mkdir(parents=True, exist_ok=True)
@@ -81,18 +87,26 @@ def run_loaded(
             bodies=world.bodies,
             joints=world.joints,
             state_names=list(loaded.model.state),
-            extra={"overrides": json.dumps([[k, v] for k, v in loaded.overrides], default=str)},
+            extra={
+                "overrides": json.dumps([[k, v] for k, v in loaded.overrides], default=str),
+                **({"record_every": str(record_every)} if record_every > 1 else {}),
+            },
         )
-        with TraceWriter(trace_path(out_dir, loaded, backend_name), meta, force=force) as trace:
+        writer: Any = TraceWriter
+        if trace_process:
+            from .trace_process import BackgroundTraceWriter
+
+            writer = BackgroundTraceWriter
+        with writer(trace_path(out_dir, loaded, backend_name), meta, force=force) as trace:
             _attach_sources(trace, loaded, program)
             trace.scene(0.0, _solids(program))
-            return _run(program, loaded, backend, trace, progress)
+            return _run(program, loaded, backend, trace, progress, record_every)
     finally:
         backend.close()
 
 
-def _run(program, loaded: LoadedScenario, backend, trace, progress) -> RunResult:  # noqa: ANN001
-    session = Session(program, backend, trace, progress)
+def _run(program, loaded: LoadedScenario, backend, trace, progress, record_every: int = 1) -> RunResult:  # noqa: ANN001
+    session = Session(program, backend, trace, progress, record_every)
     try:
         result = session.run()
     except EngineFailure as exc:

@@ -28,7 +28,7 @@ from backends.errors import EngineFailure
 
 from .actions import run_actions
 from .assertions import AssertionTracker, Verdict
-from .collisions import EventHandler, Pose, SolidTraverser
+from .collisions import EventHandler, SolidTraverser, quat_matrices
 from .intervals import IntervalManager
 from .kinematics import KinematicTable
 from .program import Program
@@ -65,13 +65,17 @@ class Session:
         backend: Backend,
         trace: Any | None = None,
         progress: Callable[[int, int], None] | None = None,
+        record_every: int = 1,
     ) -> None:
         self.program = program
+        self.record_every = max(1, int(record_every))  # the trace gets every k-th step (and the last)
+        self._recorded: float | None = None  # time of the last step in the trace
         self.world = program.world
         self.backend = backend
         self.trace = trace
         self.progress = progress
         self.dt = self.world.dt
+        self.names = [b.name for b in self.world.bodies]
         self.body_index = {b.name: i for i, b in enumerate(self.world.bodies)}
         self.joint_index = {j.name: i for i, j in enumerate(self.world.joints)}
         model = program.loaded.model
@@ -81,6 +85,15 @@ class Session:
         self.intervals = IntervalManager(self, program.intervals)
         self.snapshot = Snapshot()
         self.contact_pairs: set[tuple[str, str]] = set()
+        self.contacts: list[Any] = []
+        self._contacts_at: float | None = None  # when self.contacts was read
+        # Contacts are read every step only when something uses them: contact events, contact() in an
+        # expression, a contact assertion; otherwise only for the steps the trace records.
+        self._contacts_always = (
+            bool(program.contact_colliders)
+            or any("contact" in e.calls for e in program.expressions.values())
+            or any(type(a).__name__ == "ContactAssertion" for a in model.assertions)
+        )
         self.events: list[tuple[float, str, str]] = []
         self.event_counts: dict[str, int] = {}
         self.sound_starts: list[tuple[float, str]] = []
@@ -182,7 +195,7 @@ class Session:
         self.log(at, "info", f"scenario ended: {reason}", "scenario")
 
     # --- the loop --------------------------------------------------------------------------------
-    def _read(self, t: float) -> None:
+    def _read(self, t: float, contacts: bool = True) -> None:
         states = self.backend.body_states()
         bad = ~(
             np.isfinite(states.pos).all(axis=1)
@@ -219,42 +232,54 @@ class Session:
         self.snapshot.time = t
         self.snapshot.bodies = states
         self.snapshot.joints = self.backend.joint_states()
-        names = [b.name for b in self.world.bodies]
+        if contacts or self._contacts_always:
+            self._read_contacts(t)
+
+    def _read_contacts(self, t: float) -> None:
+        names = self.names
         self.contacts = self.backend.contacts()
         self.contact_pairs = {(names[c.a], names[c.b]) for c in self.contacts}
+        self._contacts_at = t
 
-    def _poses(self) -> list[Pose]:
-        from .collisions import quat_matrix
-
+    def _solid_hits(self) -> list[tuple[str, str, bool]]:
         s = self.snapshot.bodies
-        return [
-            Pose(s.pos[i], quat_matrix(s.quat[i]), self.kinematics.by_name[b.name].scale)
-            for i, b in enumerate(self.world.bodies)
-        ]
+        scale = np.array([k.scale for k in self.kinematics.by_name.values()])  # world order
+        return self.traverser.traverse_arrays(s.pos, quat_matrices(s.quat), scale)
 
     def _detect(self, t: float) -> None:
-        hits = self.traverser.traverse(self._poses()) if self.traverser.colliders else []
-        names = [b.name for b in self.world.bodies]
-        for i in self.program.contact_colliders:
+        hits = self._solid_hits() if self.traverser.colliders else []
+        names = self.names
+        if self.program.contact_colliders:
+            touching: dict[int, list[int]] = {}  # body -> the bodies it touches, in contact order
             for c in self.contacts:
-                if c.a == i or c.b == i:
-                    hits.append((names[i], names[c.b if c.a == i else c.a], True))
+                touching.setdefault(c.a, []).append(c.b)
+                touching.setdefault(c.b, []).append(c.a)
+            for i in self.program.contact_colliders:
+                hits.extend((names[i], names[other], True) for other in touching.get(i, ()))
         for ev in self.collision_events.update(hits):
             self.queue.append((ev.name, f"collision-{ev.kind}"))
 
-    def _record(self, t: float) -> None:
+    def _record(self, t: float, k: int = 0, last: bool = False) -> None:
+        """Step ``k`` ends at ``t``: sounds that ended, the trace (every ``record_every``-th step and the
+        last), running assertions (every step)."""
         for name, end in list(self.playing_sounds.items()):
             if end <= t + 1e-9:
                 del self.playing_sounds[name]
                 if self.trace is not None:
                     self.trace.sound(end, name, "stop")
-        if self.trace is not None:
-            if self.kinematics.scale_changed:
-                start = self.program.start_scale
-                self.trace.scene(t, scales={n: k.scale / start[n] for n, k in self.kinematics.by_name.items()})
-                self.kinematics.scale_changed.clear()
-            self.trace.step(t, self.snapshot.bodies, self.snapshot.joints, self.contacts, self.state)
+        if self.trace is not None and (k % self.record_every == 0 or last):
+            self._trace_step(t)
         self.tracker.on_step(t, self.resolver, self.in_contact)
+
+    def _trace_step(self, t: float) -> None:
+        if self._contacts_at != t:
+            self._read_contacts(t)
+        if self.kinematics.scale_changed:
+            start = self.program.start_scale
+            self.trace.scene(t, scales={n: k.scale / start[n] for n, k in self.kinematics.by_name.items()})
+            self.kinematics.scale_changed.clear()
+        self.trace.step(t, self.snapshot.bodies, self.snapshot.joints, self.contacts, self.state)
+        self._recorded = t
 
     def run(self) -> RunResult:
         start = wallclock.perf_counter()
@@ -284,14 +309,17 @@ class Session:
                 self.backend.apply_force(i, tuple(f[:3]), tuple(f[3:]))
             self.forces.clear()
             self.backend.step()
-            self._read(t_next)
+            recorded = self.trace is not None and ((k + 1) % self.record_every == 0 or k == steps - 1)
+            self._read(t_next, contacts=recorded)
             self._detect(t_next)
-            self._record(t_next)
+            self._record(t_next, k + 1, last=k == steps - 1)
             t = t_next
             if self.progress is not None and (k % 50 == 0 or k == steps - 1):
                 self.progress(k + 1, steps)
         else:
             k = steps
+        if self.trace is not None and self._recorded != t:  # ended between recorded steps: keep the last state
+            self._trace_step(t)
         self.tracker.on_step(t, self.resolver, self.in_contact, final=True)
         verdicts = self.tracker.finish(t, [(e[0], e[1]) for e in self.events], self.sound_starts, self.resolver)
         status = "passed" if all(v.passed for v in verdicts) else "failed"

@@ -15,7 +15,7 @@ from rich.table import Table
 from backends.errors import BackendError, BackendNotInstalled, EngineFailure
 from backends.registry import DEFAULT_BACKEND, entry, is_installed
 
-from ..errors import ExitCode, ScenarioError, ScenarioValidationError
+from ..errors import ExitCode, ScenarioError, ScenarioValidationError, UsageError
 from ..run import run_loaded
 from ..scenario.load import LoadedScenario, load_files, parse_overrides
 from ..session import RunResult
@@ -26,7 +26,9 @@ DEFAULT_OUT = Path("traces")
 
 
 def configure(run: argparse.ArgumentParser) -> None:
-    run.add_argument("files", nargs="+", type=Path, metavar="FILE")
+    from ..executors import add_arguments
+
+    run.add_argument("files", nargs="+", type=Path, metavar="FILE", help="scenario files, or folders of *.yaml files")
     run.add_argument("--backend", "-b", default=DEFAULT_BACKEND, help=f"engine to use (default {DEFAULT_BACKEND})")
     group = run.add_mutually_exclusive_group()
     group.add_argument("--variant", help="run this variant (default: the file's first variant)")
@@ -60,6 +62,14 @@ def configure(run: argparse.ArgumentParser) -> None:
         metavar="S",
         help="with --isolate: stop a run after S seconds of wall time",
     )
+    run.add_argument(
+        "--record-every", type=int, default=1, metavar="K",
+        help="record every K-th step in the trace, and the last (default 1; assertions still check every step)",
+    )  # fmt: skip
+    run.add_argument(
+        "--trace-process", action="store_true", help="format and write traces in a second process (uses a free core)"
+    )
+    add_arguments(run)
 
 
 def verdict_table(result: RunResult, failures_only: bool = False) -> Table:
@@ -137,14 +147,25 @@ def _execute(
             f"Backend `{args.backend}` is not installed. Install it with: {entry(args.backend).hint}"
         )
     overrides = parse_overrides(args.set)
-    cases.extend(load_files(args.files, args.variant, args.all_variants, overrides))
+    if args.record_every < 1:
+        raise UsageError(
+            f"Invalid `--record-every`. Expected a positive number of steps. Received: {args.record_every}"
+        )
+    cases.extend(load_files(_expand(args.files), args.variant, args.all_variants, overrides))
     out_dir: Path | None = None if args.no_trace else args.out
     if out_dir is not None and not args.force:
         _refuse_overwrite(out_dir, cases, args.backend)
     show_progress = err.is_terminal and not (args.quiet or args.json) and not args.isolate
     crashed: list[str] = []
-    for case in cases:
-        if args.isolate:
+    parallel = args.jobs > 1 or args.executor != "local"
+    ready, error = _run_parallel(args, err, cases, out_dir, overrides, crashed) if parallel else (None, None)
+    options = {"record_every": args.record_every, "trace_process": args.trace_process}
+    for i, case in enumerate(cases if ready is None else cases[: len(ready)]):
+        if ready is not None:
+            result = ready[i]
+            if result is None:  # crashed: listed in `crashed`
+                continue
+        elif args.isolate:
             result = _run_isolated(case, args, out_dir, err, crashed)
             if result is None:
                 continue
@@ -159,13 +180,19 @@ def _execute(
             ) as progress:
                 task = progress.add_task(f"{case.model.scenario} · {case.variant}", total=None)
                 result = run_loaded(
-                    case, args.backend, out_dir, lambda k, n, task=task: progress.update(task, completed=k, total=n)
+                    case,
+                    args.backend,
+                    out_dir,
+                    lambda k, n, task=task: progress.update(task, completed=k, total=n),
+                    **options,
                 )
         else:
-            result = run_loaded(case, args.backend, out_dir)
+            result = run_loaded(case, args.backend, out_dir, **options)
         results.append(result)
         if not args.json:
             _print_result(out, result, args.quiet)
+    if error is not None:
+        error.raise_error()  # bad input or a missing engine, as a serial run would stop on it
     if args.json:
         out.print_json(json.dumps({"results": [_result_json(r) for r in results]}, allow_nan=False, default=str))
     else:
@@ -233,3 +260,66 @@ def _run_isolated(
     if run.message:
         err.print(run.message)
     return None
+
+
+def _expand(paths: list[Path]) -> list[Path]:
+    """A folder stands for its *.yaml files (not its subfolders), in name order."""
+    out: list[Path] = []
+    for path in paths:
+        out.extend(sorted(path.glob("*.yaml")) if path.is_dir() else [path])
+    return out
+
+
+def _run_parallel(
+    args: argparse.Namespace,
+    err: Console,
+    cases: list[LoadedScenario],
+    out_dir: Path | None,
+    overrides: tuple[tuple[str, Any], ...],
+    crashed: list[str],
+) -> tuple[list[RunResult | None], Any]:
+    """Every case at once, ``-j`` at a time (runner.executors; with --isolate, runner.isolation). Returns
+    the results in case order up to the first case that could not run (bad input, a missing engine),
+    with that case, whose error the caller raises; None for a crash (a line in ``crashed``)."""
+    from ..executors import Case, estimate_cost, make_executor
+
+    label = f"{args.backend}"
+    count = [0]
+
+    def tick(*_: Any) -> None:
+        count[0] += 1
+        if err.is_terminal and not (args.quiet or args.json):
+            err.print(f"  {count[0]}/{len(cases)} cases done", end="\r")
+
+    if args.isolate:
+        if args.executor != "local":
+            raise UsageError("`--isolate` runs each case in a local child process; it does not combine with Ray")
+        from ..isolation import run_many
+
+        isolated = run_many([(c, args.backend) for c in cases], out_dir, jobs=args.jobs, timeout=args.timeout,
+                            on_done=tick)  # fmt: skip
+        ready: list[RunResult | None] = []
+        for case, run in zip(cases, isolated, strict=True):
+            if run.result is None:
+                where = f" (trace kept: {run.trace})" if run.trace is not None else ""
+                crashed.append(f"{run.label}: {case.model.scenario} · {case.variant} · {label}{where}")
+            ready.append(run.result)
+        return ready, None
+    jobs = [
+        Case(str(c.path), None if c.variant == "base" else c.variant, args.backend, overrides,
+             None if out_dir is None else str(out_dir), cost=estimate_cost(c), record_every=args.record_every)
+        for c in cases
+    ]  # fmt: skip
+    executor = make_executor(args.executor, args.jobs, args.ray_address)
+    try:
+        done = executor.run(jobs, tick)
+    finally:
+        executor.close()
+    ready = []
+    for case, r in zip(cases, done, strict=True):
+        if r.status == "error":
+            return ready, r
+        if r.result is None:
+            crashed.append(f"{r.status}: {case.model.scenario} · {case.variant} · {label} ({r.failure})")
+        ready.append(r.result)
+    return ready, None

@@ -1,0 +1,115 @@
+"""``python -m bench``: run the benchmarks and write bench/results.md (see bench/README.md)."""
+
+from __future__ import annotations
+
+import argparse
+import os
+import shlex
+import sys
+import time
+from pathlib import Path
+
+from backends.registry import is_installed
+
+from . import batch, memory, overhead, scaling
+from .instrument import wrapper_cost
+from .report import Results, append_notes, render
+
+ENGINES = ("pybullet", "mujoco", "dart", "ode")
+SECTIONS = ("overhead", "scaling", "memory", "batch")
+
+
+def _ints(text: str) -> list[int]:
+    return [int(x) for x in text.split(",") if x.strip()]
+
+
+def _floats(text: str) -> list[float]:
+    return [float(x) for x in text.split(",") if x.strip()]
+
+
+def _names(text: str) -> list[str]:
+    return [x.strip() for x in text.split(",") if x.strip()]
+
+
+def parser() -> argparse.ArgumentParser:
+    p = argparse.ArgumentParser(prog="python -m bench", description=__doc__)
+    p.add_argument("--out", type=Path, default=Path(__file__).parent / "results.md")
+    p.add_argument("--sections", type=_names, default=list(SECTIONS), help=f"any of {','.join(SECTIONS)}")
+    p.add_argument("--quick", action="store_true", help="tiny sizes: checks the machinery in about two minutes")
+    p.add_argument("--backends", type=_names, default=None, help="overhead: engines (default: every installed one)")
+    p.add_argument("--reps", type=int, default=5, help="overhead: interleaved repetitions (median)")
+    p.add_argument("--duration", type=float, default=10.0, help="overhead: simulated seconds")
+    p.add_argument("--pile", type=_ints, default=[5, 5, 4], help="overhead: nx,ny,nz boxes (default 100)")
+    p.add_argument("--scaling-backends", type=_names, default=["pybullet", "mujoco"])
+    p.add_argument("--scaling-sizes", type=_ints, default=[10, 100, 1000])
+    p.add_argument("--scaling-duration", type=float, default=1.0, help="simulated seconds per scaling run")
+    p.add_argument("--memory-backends", type=_names, default=["pybullet", "mujoco"])
+    p.add_argument("--memory-durations", type=_floats, default=[10.0, 100.0])
+    p.add_argument("--memory-pile", type=_ints, default=[5, 2, 1], help="nx,ny,nz boxes for the memory runs")
+    p.add_argument("--batch-backend", default="pybullet")
+    p.add_argument("--batch-jobs", type=_ints, default=[1, 2])
+    p.add_argument("--batch-reps", type=int, default=3)
+    return p
+
+
+def _quick(a: argparse.Namespace) -> None:
+    a.reps, a.duration, a.pile = 2, 0.4, [2, 2, 2]
+    a.scaling_sizes, a.scaling_duration = [10, 40], 0.2
+    a.memory_durations, a.memory_pile = [1.0, 4.0], [2, 1, 1]
+    a.batch_reps = 1
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = parser().parse_args(argv)
+    if args.quick:
+        _quick(args)
+    started = time.perf_counter()
+
+    def log(text: str) -> None:
+        print(f"[{time.perf_counter() - started:7.1f}s] {text}", flush=True)
+
+    installed = [b for b in ENGINES if is_installed(b)]
+    backends = [b for b in (args.backends or installed) if b in installed]
+    sizes = {
+        "overhead": f"{'x'.join(map(str, args.pile))} boxes, {args.duration:g} s at dt 0.004, {args.reps} reps, "
+        f"{','.join(backends)}",
+        "scaling": f"{args.scaling_sizes} bodies, {args.scaling_duration:g} s, {','.join(args.scaling_backends)}",
+        "memory": f"{'x'.join(map(str, args.memory_pile))} boxes, {args.memory_durations} s, "
+        f"{','.join(args.memory_backends)}",
+        "batch": f"-j {args.batch_jobs}, {args.batch_reps} reps, {args.batch_backend}",
+    }
+    results = Results(command=shlex.join(["python", "-m", "bench", *(argv if argv is not None else sys.argv[1:])]),
+                      sizes={k: v for k, v in sizes.items() if k in args.sections})  # fmt: skip
+    results.load = (os.getloadavg()[0], 0.0)
+    results.wrapper_us = wrapper_cost() * 1e6
+    notes: list[str] = []
+    if "overhead" in args.sections and backends:
+        log(f"overhead: {sizes['overhead']}")
+        results.overhead = overhead.run(backends, tuple(args.pile), args.duration, args.reps, log)  # type: ignore[arg-type]
+    if "scaling" in args.sections:
+        log(f"scaling: {sizes['scaling']}")
+        results.scaling = scaling.run([b for b in args.scaling_backends if b in installed], args.scaling_sizes,
+                                      args.scaling_duration, log)  # fmt: skip
+    if "memory" in args.sections:
+        log(f"memory: {sizes['memory']}")
+        results.memory = memory.run([b for b in args.memory_backends if b in installed], args.memory_durations,
+                                    tuple(args.memory_pile), log)  # type: ignore[arg-type]  # fmt: skip
+    if "batch" in args.sections:
+        files = batch.default_files()
+        if args.quick:
+            files = files[:3]
+        log(f"batch: {sizes['batch']}, {len(files)} files")
+        results.batch = batch.run(files, args.batch_backend, args.batch_jobs, args.batch_reps, log)
+    results.load = (results.load[0], os.getloadavg()[0])
+    results.wall_seconds = time.perf_counter() - started
+    if args.quick:
+        notes.append("`--quick`: sizes too small for the targets; this run only checks the machinery")
+    text = append_notes(render(results), notes)
+    args.out.parent.mkdir(parents=True, exist_ok=True)
+    args.out.write_text(text)
+    log(f"wrote {args.out}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

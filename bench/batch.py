@@ -1,0 +1,101 @@
+"""Benchmark 5: a batch of scenario files and variants with ``-j N`` against ``-j 1``.
+
+Each measurement is a whole command in a child process (start-up included), as a user or CI pays it:
+``scenario run FILES --all-variants -j N`` when the CLI has ``-j``, otherwise ``python -m bench.batch``
+running the same cases through :class:`runner.executors.LocalExecutor`, which ``run -j`` uses.
+"""
+
+from __future__ import annotations
+
+import shutil
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+
+ROOT = Path(__file__).parent.parent
+
+
+def default_files() -> list[Path]:
+    return sorted((ROOT / "scenarios").glob("*.yaml")) + sorted((ROOT / "scenarios" / "conformance").glob("*.yaml"))
+
+
+def cli_has_jobs() -> bool:
+    scenario = shutil.which("scenario", path=str(Path(sys.executable).parent))
+    if scenario is None:
+        return False
+    done = subprocess.run([scenario, "run", "--help"], capture_output=True, text=True, check=False)
+    return "--jobs" in done.stdout
+
+
+@dataclass
+class BatchFigures:
+    backend: str
+    files: int
+    cases: int = 0
+    via: str = ""
+    seconds: dict[int, list[float]] = field(default_factory=dict)  # jobs -> per repetition
+    exit_codes: set[int] = field(default_factory=set)
+
+    def median(self, jobs: int) -> float:
+        return statistics.median(self.seconds[jobs])
+
+    def speedup(self, jobs: int) -> float:
+        return self.median(1) / self.median(jobs)
+
+
+def _command(files: Sequence[Path], backend: str, jobs: int, out: Path, cli: bool) -> list[str]:
+    if cli:
+        scenario = str(Path(sys.executable).parent / "scenario")
+        return [scenario, "run", *map(str, files), "--all-variants", "-b", backend, "-q", "--out", str(out),
+                "-j", str(jobs)]  # fmt: skip
+    return [sys.executable, "-m", "bench.batch", backend, str(jobs), str(out), *map(str, files)]
+
+
+def run(
+    files: Sequence[Path], backend: str, jobs: Sequence[int], repetitions: int, log: Callable[[str], None] = print
+) -> BatchFigures:
+    cli = cli_has_jobs()
+    fig = BatchFigures(backend, len(files), via="scenario run -j" if cli else "runner.executors.LocalExecutor")
+    fig.cases = _count_cases(files)
+    with tempfile.TemporaryDirectory(prefix="bench-batch-") as tmp:
+        for rep in range(repetitions):
+            order = list(jobs) if rep % 2 == 0 else list(reversed(jobs))
+            for j in order:
+                out = Path(tmp, f"j{j}")
+                start = time.perf_counter()
+                done = subprocess.run(_command(files, backend, j, out, cli), capture_output=True, cwd=ROOT, check=False)
+                fig.seconds.setdefault(j, []).append(time.perf_counter() - start)
+                fig.exit_codes.add(done.returncode)
+                shutil.rmtree(out, ignore_errors=True)
+            times = ", ".join(f"-j {j} {fig.seconds[j][-1]:.2f}s" for j in jobs)
+            log(f"  batch round {rep + 1}/{repetitions}: {times}")
+    return fig
+
+
+def _count_cases(files: Sequence[Path]) -> int:
+    from runner.scenario.load import variant_names
+
+    return sum(len(variant_names(f)) for f in files)
+
+
+def _child(argv: Sequence[str]) -> int:
+    """The batch without `run -j`: every variant of every file through the local executor."""
+    from runner.executors import Case, LocalExecutor, estimate_cost, status_code
+    from runner.scenario.load import load_all
+
+    backend, jobs, out = argv[0], int(argv[1]), argv[2]
+    cases = [
+        Case(f, None if c.variant == "base" else c.variant, backend, (), out, cost=estimate_cost(c))
+        for f in argv[3:]
+        for c in load_all(Path(f), None, True)
+    ]
+    return status_code(LocalExecutor(jobs).run(cases))
+
+
+if __name__ == "__main__":
+    sys.exit(_child(sys.argv[1:]))

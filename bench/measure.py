@@ -1,0 +1,132 @@
+"""One measured run: the runner (instrumented, see bench/instrument.py) or a hand-written loop."""
+
+from __future__ import annotations
+
+import gc
+import importlib
+import inspect
+import os
+import time
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from backends.registry import create_backend, get_backend
+from backends.types import CompiledWorld
+from runner.assertions import AssertionTracker
+from runner.program import build_program
+from runner.run import run_loaded
+from runner.scenario.load import LoadedScenario, load_scenario
+from runner.session import Session
+from runner.trace import TraceWriter
+
+from . import instrument as ins
+from .raw_common import RawTiming, time_loop
+
+PILE = Path(__file__).parent / "scenarios" / "pile.yaml"
+RAW_LOOPS = {
+    "dart": ("bench.raw_dart", "DartLoop"),
+    "mujoco": ("bench.raw_mujoco", "MujocoLoop"),
+    "ode": ("bench.raw_ode", "OdeLoop"),
+    "pybullet": ("bench.raw_pybullet", "PyBulletLoop"),
+}
+
+
+def pile(counts: tuple[int, int, int], duration: float, dt: float = 0.004) -> LoadedScenario:
+    nx, ny, nz = counts
+    overrides = (("params.nx", nx), ("params.ny", ny), ("params.nz", nz), ("world.duration", duration),
+                 ("world.dt", dt))  # fmt: skip
+    return load_scenario(PILE, None, overrides)
+
+
+@dataclass(frozen=True)
+class RunnerTiming:
+    seconds: float  # run_loaded, wall
+    steps: int
+    status: str
+    engine_build: float  # the adapter's constructor (and settings(), close())
+    engine_step: float  # Backend.step
+    engine_reads: float  # body_states, joint_states, contacts
+    engine_inputs: float
+    trace: float  # every TraceWriter method
+    assertions: float  # AssertionTracker.on_step
+    detect: float  # Session._detect (collision solids and contact events)
+    wrapped_calls: int
+    trace_bytes: int
+
+    @property
+    def runner_own(self) -> float:
+        """Everything but the engine and the trace: compiling, the step loop's bookkeeping, assertions."""
+        return self.seconds - self.engine_build - self.engine_step - self.engine_reads - self.engine_inputs - self.trace
+
+
+def supports_trace_process() -> bool:
+    """Whether run_loaded can write the trace in a second process (runner/trace_process.py)."""
+    return "trace_process" in inspect.signature(run_loaded).parameters
+
+
+def run_runner(loaded: LoadedScenario, backend: str, out_dir: Path | None, trace_process: bool = False) -> RunnerTiming:
+    cls = get_backend(backend)
+    targets = {
+        "engine": (cls, ins.ENGINE_STEP + ins.ENGINE_READS + ins.ENGINE_INPUTS + ins.ENGINE_SETUP),
+        "trace": (TraceWriter, ins.TRACE_METHODS),
+        "assert": (AssertionTracker, ("on_step",)),
+        "detect": (Session, ("_detect",)),
+    }
+    try:  # the writer in a second process (proposed in the performance report): its calls cost the run
+        from runner.trace_process import BackgroundTraceWriter
+
+        targets["trace-process"] = (BackgroundTraceWriter, ins.TRACE_METHODS)
+    except ImportError:
+        pass
+    gc.collect()
+    with ins.timed(targets) as split:
+        start = time.perf_counter()
+        result = run_loaded(loaded, backend, out_dir, **({"trace_process": True} if trace_process else {}))
+        seconds = time.perf_counter() - start
+    size = os.path.getsize(result.trace) if result.trace else 0
+    return RunnerTiming(
+        seconds=seconds,
+        steps=result.steps,
+        status=result.status,
+        engine_build=split.total("engine", ins.ENGINE_SETUP),
+        engine_step=split.total("engine", ins.ENGINE_STEP),
+        engine_reads=split.total("engine", ins.ENGINE_READS),
+        engine_inputs=split.total("engine", ins.ENGINE_INPUTS),
+        trace=split.total("trace") + split.total("trace-process"),
+        assertions=split.total("assert"),
+        detect=split.total("detect"),
+        wrapped_calls=sum(split.calls.values()),
+        trace_bytes=size,
+    )
+
+
+def adapter_settings(backend: str, world: CompiledWorld) -> dict[str, Any]:
+    adapter = create_backend(backend, world)
+    try:
+        return adapter.settings()
+    finally:
+        adapter.close()
+
+
+def run_raw(backend: str, world: CompiledWorld, settings: dict[str, Any], steps: int, read: bool) -> RawTiming:
+    module, name = RAW_LOOPS[backend]
+    make = getattr(importlib.import_module(module), name)
+    gc.collect()
+    return time_loop(make, world, settings, steps, read)
+
+
+def world_of(loaded: LoadedScenario) -> tuple[CompiledWorld, int]:
+    program = build_program(loaded)
+    return program.world, program.steps
+
+
+def final_from_trace(path: str) -> np.ndarray:
+    """(N, 13) final rows of a trace's /bodies (resolution 1e-9)."""
+    from reports.trace_reader import read_trace
+
+    trace = read_trace(path)
+    rows = [np.concatenate([s.pos[-1], s.quat[-1], s.vel[-1], s.angvel[-1]]) for s in trace.bodies.values()]
+    return np.array(rows)
