@@ -22,7 +22,8 @@ from ..types import (
     Quat,
     Vec3,
 )
-from ._model import FRICTION_RATE, IMPEDANCE, KINEMATIC_MASS_RATIO, MU_MAX, Options, build
+from . import _coulomb
+from ._model import IMPEDANCE, KINEMATIC_MASS_RATIO, MU_MAX, Options, build
 
 
 def _no_log_file() -> None:
@@ -163,7 +164,7 @@ class MujocoBackend(Backend):
                 if k:
                     self._place_kinematic(k * self._h)
                 d.qvel[self._helper_dof] = self._target
-                mujoco.mj_step(m, d)
+                _coulomb.step(m, d)
                 self._motor_sum -= d.qfrc_constraint[self._helper_dof]  # the helper feels -(motor force)
                 touching.append(self._touching())
             if self._forced:
@@ -314,7 +315,9 @@ class MujocoBackend(Backend):
             "tolerance": float(self._m.opt.tolerance),
             "motors": "tendon frictionloss rows (bounded velocity constraints), impedance 0.9999",
             "contact_solref": f"(-erp/h^2, -(1+bounce)/h), erp {o.erp}, bounce_erp {o.bounce_erp}",
-            "friction_solref": f"(-1, -min({FRICTION_RATE:g}, 0.5/h))",
+            "friction_solref": "(-1, -1/h)",
+            "friction": f"Coulomb for mu <= {_coulomb.MU_COULOMB:g}: sliding contacts' normal reference corrected "
+            f"for the convex cone (at most {_coulomb.MAX_SOLVES} solves per engine step, {_coulomb.TOLERANCE:g} m/s)",
             "impedance": IMPEDANCE,
             "mu_max": MU_MAX,
             "kinematic_mass_ratio": KINEMATIC_MASS_RATIO,

@@ -11,9 +11,10 @@ so each pair has its own surface and its own friction reference. The normal row 
 velocity-level contact rather than MuJoCo's spring-damper default: with a constant impedance ``d`` a
 row reaches ``a = -B*v - K*r + (1-d)*a0`` (``solref = (-K, -B)``), so ``B = (1+e)/h`` turns the approach
 speed ``v`` into ``-e*v`` in one engine step ``h`` (ODE's bounce) and ``K = erp/h**2`` removes ``erp`` of
-the penetration per step (ODE's ERP). Friction rows (``solreffriction``) use a gentler rate: MuJoCo's
-convex cone turns a stiff friction reference on a sliding contact into a separating normal push (the
-body hops). docs/backends/mujoco.md gives the measured consequences.
+the penetration per step (ODE's ERP). Friction rows (``solreffriction = (-1, -1/h)``) remove the slip in
+one step, as ODE's friction rows do; ``_coulomb.step`` keeps MuJoCo's convex cone from turning the slip a
+sliding contact cannot remove into a separating push. docs/backends/mujoco.md gives the measured
+consequences.
 """
 
 from __future__ import annotations
@@ -39,8 +40,6 @@ MOTOR_IMPEDANCE = 0.9999
 #: Friction coefficients are capped here (``inf`` included): with the elliptic cone this already
 #: means no slip, and larger values only worsen the solver's conditioning.
 MU_MAX = 1000.0
-#: Rate (1/s) at which friction rows remove a sticking contact's tangential speed, at most 0.5/h.
-FRICTION_RATE = 50.0
 #: A kinematic body is a free body this much heavier than the heaviest dynamic body (at least 1 kg),
 #: with gravity compensated and its pose and velocity imposed before every engine step.
 KINEMATIC_MASS_RATIO = 1e6
@@ -143,9 +142,7 @@ def plan_tree(world: CompiledWorld) -> dict[str, Edge]:
                 if child is None or child in edges:
                     raise UnsupportedFeature(f"mujoco: joint `{joint.name}` closes a kinematic loop")
                 if motion[child] is Motion.KINEMATIC:
-                    raise UnsupportedFeature(
-                        f"mujoco: kinematic body `{child}` cannot hang from joint `{joint.name}`"
-                    )
+                    raise UnsupportedFeature(f"mujoco: kinematic body `{child}` cannot hang from joint `{joint.name}`")
                 edges[child] = Edge(parent, i, 1.0 if child == a else -1.0)
                 queue.append(child)
     return edges
@@ -168,7 +165,7 @@ def contact_solref(surface: Surface, h: float, opts: Options) -> tuple[list[floa
     """(normal, friction) solref for a surface at engine step ``h`` (see the module docstring)."""
     e = surface.bounce
     erp = opts.erp if e == 0.0 else opts.bounce_erp
-    return [-erp / h**2, -(1.0 + e) / h], [-1.0, -min(FRICTION_RATE, 0.5 / h)]
+    return [-erp / h**2, -(1.0 + e) / h], [-1.0, -1.0 / h]  # friction: the slip removed in one step
 
 
 def _mu(surface: Surface) -> float:

@@ -13,13 +13,13 @@ import numpy as np
 import pytest
 
 from backends.errors import EngineFailure, UnsupportedFeature
-from backends.geometry import integrate_quat, quat_from_axis_angle
-from backends.types import BodySpec, CompiledWorld, JointKind, JointSpec, Motor, Surface
+from backends.geometry import integrate_quat, quat_from_axis_angle, quat_rotate
+from backends.types import BodySpec, CompiledWorld, JointKind, JointSpec, Motion, Motor, Shape, ShapeKind, Surface
 
 from . import worlds as w
 from .worlds import ZERO, G, make_backend
 
-pytest.importorskip("mujoco", reason="engine not installed: pip install 'physics-scenarios[mujoco]'")
+mujoco = pytest.importorskip("mujoco", reason="engine not installed: pip install 'physics-scenarios[mujoco]'")
 
 
 def _with_options(world: CompiledWorld, **options: object) -> CompiledWorld:
@@ -161,16 +161,29 @@ def test_angular_velocity_is_world_frame() -> None:
 
 
 def test_kinematic_platform_carries_the_box() -> None:
-    """0.3 m/s for 1 s: carried 0.294 m (ODE's slip while friction catches up: 0.2954), pose exact."""
+    """0.3 m/s for 1 s: friction brings the cube to the platform's speed within mu*N*dt/m per step, then
+    carries it exactly (no creep); the platform's pose is exact.
+
+    The cube starts exactly touching, so its first contact (distance 0) has no row: it falls 1 mm in
+    step 1 and lands in step 2 (N = 86 N), then rides: 0.2158 + 98 * 0.3 m/s for 0.01 s = 0.29616 m
+    (ODE, in contact from step 1 and rocking: 0.29594 m). Before the Coulomb correction: 0.2940 m.
+    """
     world = w.kinematic_platform()
+    mass, mu, dt = world.bodies[1].mass, world.default_surface.mu, world.dt
     with make_backend("mujoco", world) as sim:
+        v_prev, rates = 0.0, []
         for k in range(100):
             sim.set_kinematic(0, (0.3 * k * 0.01, 0.0, 0.5), w.IDENTITY, (0.3, 0.0, 0.0), ZERO)
             sim.step()
+            v = float(sim.body_states().lin_vel[1, 0])
+            normal = sum(c.normal_force for c in sim.contacts())
+            assert v - v_prev <= mu * normal * dt / mass + 1e-6, f"step {k + 1}: more than Coulomb allows"
+            v_prev = v
+            rates.append(v)
         s = sim.body_states()
     assert s.pos[0] == pytest.approx((0.3, 0.0, 0.5), abs=1e-12)
-    assert s.pos[1, 0] == pytest.approx(0.3, rel=0.05)
-    assert s.pos[1, 0] == pytest.approx(0.294, abs=0.002)
+    assert np.abs(np.array(rates[2:]) - 0.3).max() < 1e-4  # carried from step 3 on (measured 5e-5 at step 3)
+    assert s.pos[1, 0] == pytest.approx(dt * sum(rates), abs=1e-12)
     assert s.pos[1, 2] == pytest.approx(0.65, abs=1e-3)  # still on the platform
 
 
@@ -232,6 +245,102 @@ def test_contact_shorter_than_a_step_is_reported() -> None:
             sim.step()
             seen.append(([(c.a, c.b) for c in sim.contacts()], sim._d.ncon))  # type: ignore[attr-defined]
     assert ([(0, 1)], 0) in seen
+
+
+# --- Coulomb friction (_coulomb.py) -------------------------------------------------------------------
+
+
+def _settled(size: tuple[float, float, float], mu: float, quat: tuple[float, float, float, float] = w.IDENTITY):
+    """A box of ``size`` on a plane (normal along ``quat``'s z), settled for 1 s (rest depth, 1e-6 m)."""
+    normal = quat_rotate(quat, (0.0, 0.0, 1.0))
+    plane = w.body("plane", Shape(ShapeKind.PLANE), ZERO, motion=Motion.STATIC, quat=quat)
+    box = w.box("box", size, tuple(size[2] / 2 * n for n in normal), density=500.0, quat=quat)
+    sim = make_backend("mujoco", w.world("slide", [plane, box], surface=Surface(mu=mu)))
+    for _ in range(100):
+        sim.step()
+    return sim, np.array(normal)
+
+
+@pytest.mark.parametrize(("size", "mu", "v0"), [((0.2, 0.2, 0.2), 0.5, 2.0), ((0.4, 0.4, 0.04), 5.0, 8.0)])
+def test_sliding_box_decelerates_at_mu_g_without_hopping(size: tuple[float, ...], mu: float, v0: float) -> None:
+    """Launched from rest on a plane: v drops by mu*g*dt every step, the box stays on the plane, stops
+    at the semi-implicit Coulomb distance. The slab (half-height/half-width 0.1) cannot tip below mu 10.
+
+    Without the correction MuJoCo's cone turned the slip into a separating push: the cube rose 9 mm and
+    lost 0.24 m/s in its first step (error 0.20 m/s, stop +0.76 mm); the slab flew (error 3.5 m/s).
+    Measured with it: 2.9e-5 and 1.2e-4 m/s (both in the step that stops), height within 1.3e-8 m, pitch
+    rate < 1.3e-4 rad/s, stop distance within 1e-6 m.
+    """
+    sim, _ = _settled(size, mu)
+    with sim:
+        rest = sim.body_states()
+        sim.reset_body(1, tuple(rest.pos[1]), tuple(rest.quat[1]), (v0, 0.0, 0.0), ZERO)
+        worst_v = worst_z = worst_w = 0.0
+        for k in range(1, 80):
+            sim.step()
+            s = sim.body_states()
+            worst_v = max(worst_v, abs(s.lin_vel[1, 0] - max(v0 - mu * G * k * 0.01, 0.0)))
+            worst_z = max(worst_z, abs(s.pos[1, 2] - rest.pos[1, 2]))
+            worst_w = max(worst_w, float(np.abs(s.ang_vel[1]).max()))
+    assert worst_v < 1e-4 * max(1.0, mu)  # one push-out's worth of mu*N error at most, as ODE's
+    assert worst_z < 1e-6
+    assert worst_w < 1e-3
+    n = math.floor(v0 / (mu * G * 0.01))  # steps with a positive speed
+    assert s.pos[1, 0] == pytest.approx(0.01 * (n * v0 - mu * G * 0.01 * n * (n + 1) / 2), abs=1e-5)
+
+
+def test_box_on_an_incline_slides_at_constant_acceleration() -> None:
+    """20 degrees, mu 0.1 < tan 20: the speed along the slope grows by g(sin - mu cos)dt every step and
+    the box keeps its rest depth. Measured over 99 steps from 2.43 m/s: 7e-13 m/s and 6e-10 m; before the
+    correction 0.048 m/s and 8 mm (it hovered and chattered).
+    """
+    tilt = math.radians(20.0)
+    sim, normal = _settled((0.2, 0.2, 0.2), 0.1, quat_from_axis_angle((0.0, 1.0, 0.0), tilt))
+    downhill = np.array([math.cos(tilt), 0.0, -math.sin(tilt)])
+    with sim:
+        sim.step()  # mu 0.1 cannot hold it: it slides from the settled state
+        s0 = sim.body_states()
+        v0, h0 = float(s0.lin_vel[1] @ downhill), float(s0.pos[1] @ normal)
+        for k in range(1, 100):
+            sim.step()
+            s = sim.body_states()
+            a = G * (math.sin(tilt) - 0.1 * math.cos(tilt))
+            assert float(s.lin_vel[1] @ downhill) == pytest.approx(v0 + a * k * 0.01, abs=1e-5), f"step {k}"
+            assert float(s.pos[1] @ normal) == pytest.approx(h0, abs=1e-7), f"step {k}"
+
+
+def test_a_box_that_can_stick_sticks() -> None:
+    """20 degrees, mu 0.5 > tan 20: the friction rows remove the slip in one step, up to MuJoCo's soft
+    regularisation: measured speed < 1.0e-5 m/s, 1.9e-5 m moved in 2 s (before: 3.3e-5 m/s, 3.8e-5 m)."""
+    sim, _ = _settled((0.2, 0.2, 0.2), 0.5, quat_from_axis_angle((0.0, 1.0, 0.0), math.radians(20.0)))
+    with sim:
+        start = sim.body_states().pos[1].copy()
+        for _ in range(200):
+            sim.step()
+            assert np.linalg.norm(sim.body_states().lin_vel[1]) < 2e-5
+        assert np.linalg.norm(sim.body_states().pos[1] - start) < 2e-5
+
+
+@pytest.mark.parametrize("slides", [False, True])
+def test_without_sliding_contacts_a_step_is_mj_step(monkeypatch: pytest.MonkeyPatch, slides: bool) -> None:
+    """The corrected step makes mj_step's calls in mj_step's order: a resting cube and a cube dropped
+    straight (mu 1), or landing at 3 m/s on a mu above MU_COULOMB (MuJoCo's cone), step bit for bit."""
+    import backends.mujoco._coulomb as coulomb
+
+    mu, vx = (coulomb.MU_COULOMB * 2, 3.0) if slides else (1.0, 0.0)
+    cube = w.box("cube", (0.2, 0.2, 0.2), (0.0, 0.0, 0.1), density=500.0)
+    falling = w.box("falling", (0.2, 0.2, 0.2), (1.0, 0.0, 0.5), density=500.0, lin_vel=(vx, 0.0, 0.0))
+    world = w.world("rest", [w.ground(), cube, falling], surface=Surface(mu=mu))
+
+    def run() -> np.ndarray:
+        with make_backend("mujoco", world) as sim:
+            for _ in range(60):  # `falling` lands at 0.29 s
+                sim.step()
+            return np.concatenate([sim._d.qpos, sim._d.qvel])  # type: ignore[attr-defined]
+
+    corrected = run()
+    monkeypatch.setattr(coulomb, "step", lambda m, d: mujoco.mj_step(m, d) or 1)
+    assert np.array_equal(run(), corrected)
 
 
 # --- what the adapter refuses -----------------------------------------------------------------------
