@@ -4,7 +4,7 @@ VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 
-.PHONY: demo test lint setup clean sounds schema conformance baselines bench bench-quick
+.PHONY: demo test lint setup clean sounds schema conformance baselines bench bench-quick fuzz
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -36,6 +36,9 @@ conformance: $(STAMP)
 
 baselines: $(STAMP)
 	$(BIN)/scenario baseline scenarios/*.yaml --backend pybullet,mujoco,dart,ode --dir baselines
+
+fuzz: $(STAMP)
+	FUZZ_CASES=20000 FUZZ_FAULTS=200 $(BIN)/python -m pytest -q -p no:cacheprovider tests/reliability
 
 bench: $(STAMP)
 	$(BIN)/python -m bench

@@ -68,7 +68,7 @@ def _overview(trace: Trace) -> Table:
         how = f"read up to its last complete chunk; stopped at: {trace.stop_reason}" if trace.recovered else "no footer"
         rows.append(("file", Text(f"unfinished ({how})", style="yellow")))
     for key, value in rows:
-        table.add_row(key, value)
+        table.add_row(key, Text(value) if isinstance(value, str) else value)
     return table
 
 
@@ -78,7 +78,7 @@ def _channels(trace: Trace) -> Table:
     table.add_column("schema")
     table.add_column("messages", justify="right")
     for info in trace.channels.values():
-        table.add_row(info.topic, info.schema, str(info.count))
+        table.add_row(Text(info.topic), Text(info.schema), str(info.count))
     return table
 
 
@@ -88,7 +88,7 @@ def _events(trace: Trace, limit: int) -> Table:
     table.add_column("event", no_wrap=True)
     table.add_column("source", overflow="fold")
     for e in trace.events[:limit]:
-        table.add_row(f"{e.t:.4f}", e.name, e.source)
+        table.add_row(f"{e.t:.4f}", Text(e.name), Text(e.source))
     if len(trace.events) > limit:
         table.add_row("…", f"{len(trace.events) - limit} more", "")
     return table
@@ -106,7 +106,7 @@ def _verdicts(trace: Trace) -> Table:
         result = Text("pass", "green") if passed else Text("FAIL", "bold red") if passed is False else Text("?")
         measured = _short(v.data[tf.VERDICT_MEASURED]) if tf.VERDICT_MEASURED in v.data else ""
         expected = _short(v.data[tf.VERDICT_EXPECTED]) if tf.VERDICT_EXPECTED in v.data else ""
-        table.add_row(f"{v.t:.4f}", v.name, result, measured, expected)
+        table.add_row(f"{v.t:.4f}", Text(v.name), result, Text(measured), Text(expected))
     return table
 
 
@@ -116,7 +116,7 @@ def _attachments(trace: Trace) -> Table:
     table.add_column("media type")
     table.add_column("size", justify="right")
     for a in trace.attachments:
-        table.add_row(a.name, a.media_type, _size(a.size))
+        table.add_row(Text(a.name), Text(a.media_type), _size(a.size))
     return table
 
 

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING, Any
 
+from .errors import ScenarioError
 from .hpr import hpr_to_quat, quat_to_hpr
 from .scenario import model_behaviour as B
 
@@ -13,7 +14,7 @@ if TYPE_CHECKING:
 MAX_SEND_DEPTH = 32
 
 
-class ActionError(RuntimeError):
+class ActionError(ScenarioError):
     """An action could not be carried out at run time (e.g. `send` recursing without end)."""
 
 
@@ -22,7 +23,7 @@ def run_actions(session: Session, actions: Any, at: float, depth: int = 0) -> No
         if session.ended:
             return
         if isinstance(action, B.IfAction):
-            branch = action.then if session.evaluate(action.if_) else action.else_
+            branch = action.then if session.truth(action.if_) else action.else_
             run_actions(session, branch, at, depth)
         elif isinstance(action, B.StartAction):
             session.intervals.start(action.start, at)

@@ -93,7 +93,7 @@ class AssertionTracker:
         self.checks = [_Check(s, type(s).__name__.removesuffix("Assertion").lower()) for s in specs]
 
     def _number(self, value: Any, r: Resolver) -> float:
-        return float(self.expr[value].evaluate(r)) if isinstance(value, str) else float(value)
+        return self.expr[value].number(r) if isinstance(value, str) else float(value)
 
     def _near(self, measured: float, near: Any, tol: Any, r: Resolver) -> tuple[bool, str]:
         target = self._number(near, r)
@@ -133,7 +133,7 @@ class AssertionTracker:
                         if isinstance(s, A.AlwaysAssertion)
                         else ("never" if isinstance(s, A.NeverAssertion) else "eventually")
                     )
-                    value = bool(self.expr[getattr(s, mode)].evaluate(r))
+                    value = self.expr[getattr(s, mode)].truth(r)
                 if mode == "always" and not value:
                     c.done = Verdict(s.name, c.kind, False, "false", "always true", t, f"false at t={t:.4f}")
                 elif mode == "never" and value:
@@ -144,7 +144,7 @@ class AssertionTracker:
                 lo, hi = _window(s.during)
                 if lo - TIME_EPS <= t <= hi + TIME_EPS:
                     is_max = isinstance(s, A.MaxAssertion)
-                    value = float(self.expr[s.max_of if is_max else s.min_of].evaluate(r))
+                    value = self.expr[s.max_of if is_max else s.min_of].number(r)
                     if c.best is None or (value > c.best if is_max else value < c.best) or math.isnan(value):
                         c.best, c.best_time = value, t
                     c.extra["r_time"] = t
@@ -154,13 +154,13 @@ class AssertionTracker:
     def _sample(self, s: Any, t: float, r: Resolver, contact: Callable[[str, str], bool]) -> Verdict:
         kind = type(s).__name__.removesuffix("Assertion").lower()
         if isinstance(s, A.CheckAssertion):
-            ok = bool(self.expr[s.check].evaluate(r))
+            ok = self.expr[s.check].truth(r)
             return Verdict(s.name, kind, ok, fmt(ok), "true", t)
         if isinstance(s, A.ContactAssertion):
             ok = contact(*s.contact)
             return Verdict(s.name, kind, ok, fmt(ok), "touching", t)
         measured = self.expr[s.value].evaluate(r)
-        value = float(measured) if not isinstance(measured, list) else math.nan
+        value = math.nan if isinstance(measured, list) else self.expr[s.value].number(r)
         if s.near is not None:
             ok, expected, target, tol = self._near(value, s.near, s.tol, r)
             return Verdict(s.name, kind, ok, fmt(value), expected, t, value=value, target=target, tolerance=tol)

@@ -11,16 +11,17 @@ import argparse
 import importlib
 import json
 import pkgutil
-import signal
 from collections.abc import Sequence
 from pathlib import Path
-from types import FrameType, ModuleType
+from types import ModuleType
 from typing import Any
 
 from rich.console import Console
+from rich.markup import escape
 
 from reports.trace_reader import TraceReadError
 
+from . import interrupts
 from .errors import (
     BackendNotInstalled,
     EngineFailure,
@@ -32,15 +33,8 @@ from .errors import (
     UnknownBackend,
     UnsupportedFeature,
 )
+from .interrupts import Terminated
 from .version import tool_version
-
-
-class Terminated(KeyboardInterrupt):
-    """SIGTERM, raised in the main thread so that traces are finished like on Ctrl-C."""
-
-
-def _on_sigterm(signum: int, frame: FrameType | None) -> None:
-    raise Terminated()
 
 
 def command_modules() -> list[ModuleType]:
@@ -76,24 +70,24 @@ def main(argv: Sequence[str] | None = None) -> int:
     err = _console(stderr=True)
     parser, modules = build_parser()
     args = parser.parse_args(argv)
-    previous = signal.signal(signal.SIGTERM, _on_sigterm)
+    restore = interrupts.install()
     try:
         return int(modules[args.command].execute(args, out, err))
     except ScenarioValidationError as exc:
         for issue in exc.issues:
-            err.print(f"[bold red]error:[/] {issue}", markup=True)
+            err.print(f"[bold red]error:[/] {escape(str(issue))}", markup=True)
         return ExitCode.BAD_INPUT
     except (ScenarioError, UnknownBackend, UnsupportedFeature) as exc:
-        err.print(f"[bold red]error:[/] {exc}", markup=True)
+        err.print(f"[bold red]error:[/] {escape(str(exc))}", markup=True)
         return ExitCode.BAD_INPUT
     except (BackendNotInstalled, EngineFailure) as exc:
-        err.print(f"[bold red]engine failure:[/] {exc}", markup=True)
+        err.print(f"[bold red]engine failure:[/] {escape(str(exc))}", markup=True)
         return ExitCode.ENGINE_FAILURE
     except TraceError as exc:
-        err.print(f"[bold red]trace error:[/] {exc}", markup=True)
+        err.print(f"[bold red]trace error:[/] {escape(str(exc))}", markup=True)
         return ExitCode.BAD_INPUT
     except PhysicsScenariosError as exc:
-        err.print(f"[bold red]error:[/] {exc}", markup=True)
+        err.print(f"[bold red]error:[/] {escape(str(exc))}", markup=True)
         return ExitCode.ENGINE_FAILURE
     except Terminated:
         err.print("terminated (SIGTERM); traces written so far are finished and marked interrupted")
@@ -102,12 +96,12 @@ def main(argv: Sequence[str] | None = None) -> int:
         err.print("interrupted (Ctrl-C); traces written so far are finished and marked interrupted")
         return ExitCode.INTERRUPTED
     except TraceReadError as exc:
-        err.print(f"[bold red]error:[/] cannot read the trace: {exc}", markup=True)
+        err.print(f"[bold red]error:[/] cannot read the trace: {escape(str(exc))}", markup=True)
         return ExitCode.BAD_INPUT
     except BrokenPipeError:
         return ExitCode.OK
     finally:
-        signal.signal(signal.SIGTERM, previous)
+        restore()
 
 
 def json_default(value: Any) -> Any:

@@ -18,6 +18,8 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Any, Protocol
 
+from .errors import ScenarioError
+
 MAX_LENGTH = 2000
 MAX_NODES = 500
 MAX_POWER = 1e6
@@ -25,6 +27,14 @@ MAX_POWER = 1e6
 
 class ExpressionError(ValueError):
     """The text is not a valid expression (the message says what and where in the text)."""
+
+
+class EvaluationError(ExpressionError, ScenarioError):
+    """A valid expression could not be evaluated during a run (wrong types, a function of nothing...).
+
+    A :class:`~runner.errors.ScenarioError`: the run stops, its trace is finished with status ``error``
+    and the command exits with code 2, naming the expression.
+    """
 
 
 class Resolver(Protocol):
@@ -37,7 +47,7 @@ def _aggregate(f: Callable[..., Any]) -> Callable[..., Any]:
         if len(args) == 1 and isinstance(args[0], list | tuple):
             args = tuple(args[0])
         if not args:
-            raise ExpressionError(f"{f.__name__}() of nothing")
+            raise EvaluationError(f"{f.__name__}() of nothing")
         return f(args)
 
     return wrapped
@@ -45,8 +55,49 @@ def _aggregate(f: Callable[..., Any]) -> Callable[..., Any]:
 
 def _safe_pow(a: float, b: float) -> float:
     if abs(b) > 64 or abs(a) > MAX_POWER:
-        raise ExpressionError("power too large")
+        raise EvaluationError("power too large")
     return float(a) ** b
+
+
+def _is_number(value: Any) -> bool:
+    return isinstance(value, bool | int | float)
+
+
+def _kind(value: Any) -> str:
+    if isinstance(value, str):
+        return f"text {value[:20]!r}"
+    if isinstance(value, list | tuple):
+        return f"a list of {len(value)} values (a body group? use max(), min(), mean()...)"
+    return type(value).__name__
+
+
+def _arithmetic(op: Callable[[Any, Any], Any]) -> Callable[[Any, Any], Any]:
+    """``op`` on numbers only (text or lists would repeat or concatenate: unbounded memory); a math
+    error gives NaN (1/0, an overflow), like the functions below."""
+
+    def run(a: Any, b: Any) -> Any:
+        if not (_is_number(a) and _is_number(b)):
+            raise EvaluationError(f"arithmetic needs numbers, found {_kind(a)} and {_kind(b)}")
+        try:
+            return op(a, b)
+        except (ZeroDivisionError, OverflowError):
+            return math.nan
+
+    return run
+
+
+def _nan_on_math_error(fn: Callable[..., Any]) -> Callable[..., Any]:
+    def run(*args: Any) -> Any:
+        try:
+            return fn(*args)
+        except ExpressionError:
+            raise
+        except (ValueError, OverflowError, ZeroDivisionError):  # sqrt(-1), log(0), round(inf)...
+            return math.nan
+        except TypeError as exc:
+            raise EvaluationError(f"{exc} (found {', '.join(_kind(a) for a in args)})") from None
+
+    return run
 
 
 PURE_FUNCTIONS: dict[str, Callable[..., Any]] = {
@@ -79,16 +130,17 @@ PURE_FUNCTIONS: dict[str, Callable[..., Any]] = {
 }
 #: Functions the runner resolves (they need the run's state): contact(a, b), playing('ival'), count('event').
 RUNNER_FUNCTIONS = frozenset({"contact", "playing", "count"})
+RUNNER_ARITY = {"contact": 2, "playing": 1, "count": 1}
 CONSTANTS = {"pi": math.pi, "e": math.e, "inf": math.inf, "true": True, "false": False, "True": True, "False": False}
 
 _BIN = {
-    ast.Add: operator.add,
-    ast.Sub: operator.sub,
-    ast.Mult: operator.mul,
-    ast.Div: operator.truediv,
-    ast.FloorDiv: operator.floordiv,
-    ast.Mod: operator.mod,
-    ast.Pow: _safe_pow,
+    ast.Add: _arithmetic(operator.add),
+    ast.Sub: _arithmetic(operator.sub),
+    ast.Mult: _arithmetic(operator.mul),
+    ast.Div: _arithmetic(operator.truediv),
+    ast.FloorDiv: _arithmetic(operator.floordiv),
+    ast.Mod: _arithmetic(operator.mod),
+    ast.Pow: _arithmetic(_safe_pow),
 }
 _CMP = {
     ast.Eq: operator.eq,
@@ -110,16 +162,30 @@ class Expression:
     names: frozenset[str]  # dotted names it reads
     calls: frozenset[str]  # runner functions it calls
     _fn: Evaluator
+    call_args: frozenset[tuple[str, tuple[str, ...]]] = frozenset()  # (function, literal arguments)
 
     def evaluate(self, resolver: Resolver) -> Any:
         try:
             return self._fn(resolver)
-        except ZeroDivisionError:
+        except EvaluationError as exc:
+            raise EvaluationError(f"cannot evaluate {self.text!r}: {exc}") from None
+        except (TypeError, ExpressionError) as exc:  # e.g. `1 < 'a'`, comparing a number with text
+            raise EvaluationError(f"cannot evaluate {self.text!r}: {exc}") from None
+        except (ZeroDivisionError, OverflowError, ValueError):
             return math.nan
-        except (OverflowError, ValueError) as exc:
-            if isinstance(exc, ExpressionError):
-                raise
-            return math.nan
+
+    def truth(self, resolver: Resolver) -> bool:
+        """The value as a condition: NaN (a failed operation) is false; text or a list is an error."""
+        value = self.evaluate(resolver)
+        if not _is_number(value):
+            raise EvaluationError(f"cannot evaluate {self.text!r}: expected true or false, found {_kind(value)}")
+        return bool(value) and not (isinstance(value, float) and math.isnan(value))
+
+    def number(self, resolver: Resolver) -> float:
+        value = self.evaluate(resolver)
+        if not _is_number(value):
+            raise EvaluationError(f"cannot evaluate {self.text!r}: expected a number, found {_kind(value)}")
+        return float(value)
 
 
 def _dotted(node: ast.AST) -> str | None:
@@ -138,6 +204,7 @@ class _Compiler:
         self.text = text
         self.names: set[str] = set()
         self.calls: set[str] = set()
+        self.call_args: set[tuple[str, tuple[str, ...]]] = set()
         self.count = 0
 
     def fail(self, node: ast.AST, what: str) -> ExpressionError:
@@ -208,13 +275,21 @@ class _Compiler:
         fname = node.func.id
         if fname in PURE_FUNCTIONS:
             args = [self.compile(a) for a in node.args]
-            fn = PURE_FUNCTIONS[fname]
+            fn = _nan_on_math_error(PURE_FUNCTIONS[fname])
             return lambda r: fn(*(a(r) for a in args))
         if fname in RUNNER_FUNCTIONS:
             self.calls.add(fname)
-            if not all(isinstance(a, ast.Constant | ast.Name | ast.Attribute) for a in node.args):
-                raise self.fail(node, f"{fname}() takes names or strings")
-            literal = [a.value if isinstance(a, ast.Constant) else _dotted(a) for a in node.args]
+            if len(node.args) != RUNNER_ARITY[fname]:
+                raise self.fail(node, f"{fname}() takes {RUNNER_ARITY[fname]} argument(s), found {len(node.args)}")
+            literal: list[str] = []
+            for a in node.args:
+                value = a.value if isinstance(a, ast.Constant) else _dotted(a)
+                if not isinstance(value, str):
+                    raise self.fail(node, f"{fname}() takes names or strings")
+                if not isinstance(a, ast.Constant) and any(p.startswith("_") for p in value.split(".")):
+                    raise self.fail(a, f"name `{value}` not allowed (underscore)")
+                literal.append(value)
+            self.call_args.add((fname, tuple(literal)))
             return lambda r: r.call(fname, literal)
         known = ", ".join(sorted([*PURE_FUNCTIONS, *RUNNER_FUNCTIONS]))
         raise self.fail(node, f"unknown function `{fname}` (known: {known})")
@@ -238,4 +313,10 @@ def compile_expression(text: str) -> Expression:
         fn = compiler.compile(tree.body)
     except RecursionError:
         raise ExpressionError(f"expression nested too deeply: {text!r}") from None
-    return Expression(text=source, names=frozenset(compiler.names), calls=frozenset(compiler.calls), _fn=fn)
+    return Expression(
+        text=source,
+        names=frozenset(compiler.names),
+        calls=frozenset(compiler.calls),
+        _fn=fn,
+        call_args=frozenset(compiler.call_args),
+    )

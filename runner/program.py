@@ -9,10 +9,11 @@ from typing import Any
 
 import numpy as np
 
-from backends.types import CompiledWorld
+from backends.types import CompiledWorld, Motion
 
 from .collisions import NodeDef, SolidDef
 from .compile_world import compile_world
+from .errors import ScenarioValidationError
 from .expressions import Expression, compile_expression
 from .intervals import FuncSpec, LerpSpec, ParallelSpec, SequenceSpec, SoundSpec, WaitSpec
 from .scenario import model_behaviour as B
@@ -107,11 +108,40 @@ def _expressions(model: Any) -> dict[str, Expression]:
     return {text: compile_expression(text) for text, _ in expressions_in(model)}
 
 
+#: Dynamic bodies' masses (kg) and principal moments (kg m^2) must lie in these ranges: MuJoCo refuses
+#: values below 1e-15 (mjMINVAL), and ODE in single precision aborts the process on zero or infinite ones.
+MASS_RANGE = (1e-15, 1e30)
+
+
+def check_world(world: CompiledWorld, loaded: LoadedScenario) -> None:
+    """Refuse a world whose numbers were each in range but whose masses or inertias are not."""
+    keys = {inst.name: inst.key for inst in expand_bodies(loaded.model)}
+    lo, hi = MASS_RANGE
+    issues = []
+    seen: set[str] = set()
+    for b in world.bodies:
+        if keys[b.name] in seen:
+            continue  # the copies of an array are alike: one issue for them all
+        if b.motion is Motion.DYNAMIC and not all(lo <= v <= hi for v in (b.mass, *b.inertia)):
+            seen.add(keys[b.name])
+            moments = ", ".join(f"{v:.3g}" for v in b.inertia)
+            issues.append(
+                loaded.positions.issue(
+                    ("bodies", keys[b.name]),
+                    f"body `{b.name}` has mass {b.mass:.3g} kg and principal moments {moments} kg m^2; "
+                    f"expected each within [{lo:g}, {hi:g}] (change its size, mass or density)",
+                )
+            )
+    if issues:
+        raise ScenarioValidationError(issues)
+
+
 def build_program(loaded: LoadedScenario) -> Program:
     from .hpr import quat_to_hpr
 
     model = loaded.model
     world = compile_world(model, model.scenario)
+    check_world(world, loaded)
     base = Path(loaded.path).parent
     sounds = {name: read_info((base / rel).resolve()) for name, rel in model.sounds.items()}
     intervals = {

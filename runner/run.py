@@ -11,6 +11,8 @@ from typing import Any
 from backends.errors import EngineFailure
 from backends.registry import check_capabilities, get_backend
 
+from . import interrupts
+from .errors import TraceError
 from .program import build_program
 from .scenario.load import LoadedScenario
 from .session import RunResult, Session
@@ -69,7 +71,10 @@ def run_loaded(
             return _run(program, loaded, backend, None, progress, record_every)
         from .trace import TraceMeta, TraceWriter
 
-        out_dir.mkdir(parents=True, exist_ok=True)
+        try:
+            out_dir.mkdir(parents=True, exist_ok=True)
+        except OSError as exc:
+            raise TraceError(f"cannot create the trace folder {out_dir}: {exc.strerror or exc}") from exc
         world = program.world
         meta = TraceMeta(
             scenario=loaded.model.scenario,
@@ -97,7 +102,7 @@ def run_loaded(
             from .trace_process import BackgroundTraceWriter
 
             writer = BackgroundTraceWriter
-        with writer(trace_path(out_dir, loaded, backend_name), meta, force=force) as trace:
+        with interrupts.deferred(), writer(trace_path(out_dir, loaded, backend_name), meta, force=force) as trace:
             _attach_sources(trace, loaded, program)
             trace.scene(0.0, _solids(program))
             return _run(program, loaded, backend, trace, progress, record_every)

@@ -26,6 +26,7 @@ import numpy as np
 from backends.base import Backend
 from backends.errors import EngineFailure
 
+from . import interrupts
 from .actions import run_actions
 from .assertions import AssertionTracker, Verdict
 from .collisions import EventHandler, SolidTraverser, quat_matrices
@@ -123,6 +124,9 @@ class Session:
     def evaluate(self, text: str) -> Any:
         return self.program.expressions[text].evaluate(self.resolver)
 
+    def truth(self, text: str) -> bool:
+        return self.program.expressions[text].truth(self.resolver)
+
     def in_contact(self, a: str, b: str) -> bool:
         return (a, b) in self.contact_pairs or (b, a) in self.contact_pairs
 
@@ -195,6 +199,28 @@ class Session:
         self.log(at, "info", f"scenario ended: {reason}", "scenario")
 
     # --- the loop --------------------------------------------------------------------------------
+    def _last_good(self, i: int) -> dict[str, Any] | None:
+        """Body ``i``'s last state that passed the checks, as every engine failure reports it."""
+        last = self.snapshot.bodies
+        if last is None:
+            return None
+        return {
+            "time": self.snapshot.time,
+            "pos": last.pos[i].tolist(),
+            "vel": last.lin_vel[i].tolist(),
+            "angvel": last.ang_vel[i].tolist(),
+        }
+
+    def _step(self, t_next: float) -> None:
+        """The engine's step; a blow-up the engine detects itself gets the same record as the runner's."""
+        try:
+            self.backend.step()
+        except EngineFailure as exc:
+            if exc.body in self.body_index:
+                exc.last_good = self._last_good(self.body_index[exc.body])
+                exc.time = t_next if exc.time is None else exc.time
+            raise
+
     def _read(self, t: float, contacts: bool = True) -> None:
         states = self.backend.body_states()
         bad = ~(
@@ -210,24 +236,13 @@ class Session:
         if broken.size:
             i = int(broken[0])
             name = self.world.bodies[i].name
-            last = self.snapshot.bodies
-            last_good = (
-                None
-                if last is None
-                else {
-                    "time": self.snapshot.time,
-                    "pos": last.pos[i].tolist(),
-                    "vel": last.lin_vel[i].tolist(),
-                    "angvel": last.ang_vel[i].tolist(),
-                }
-            )
             what = "a non-finite state" if bad[i] else f"a speed above {MAX_SPEED:g}"
             raise EngineFailure(
                 f"body `{name}` reached {what} at t={t:.4f} s on {self.backend.name}",
                 backend=self.backend.name,
                 body=name,
                 time=t,
-                last_good=last_good,
+                last_good=self._last_good(i),
             )
         self.snapshot.time = t
         self.snapshot.bodies = states
@@ -308,11 +323,12 @@ class Session:
             for i, f in self.forces.items():
                 self.backend.apply_force(i, tuple(f[:3]), tuple(f[3:]))
             self.forces.clear()
-            self.backend.step()
+            self._step(t_next)
             recorded = self.trace is not None and ((k + 1) % self.record_every == 0 or k == steps - 1)
             self._read(t_next, contacts=recorded)
             self._detect(t_next)
             self._record(t_next, k + 1, last=k == steps - 1)
+            interrupts.check()  # a SIGINT/SIGTERM that came during this step: the trace ends with it whole
             t = t_next
             if self.progress is not None and (k % 50 == 0 or k == steps - 1):
                 self.progress(k + 1, steps)

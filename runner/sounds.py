@@ -7,6 +7,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 MAX_SOUND_SECONDS = 600.0
+MAX_SOUND_BYTES = 50_000_000  # every sound is attached to every trace
 
 
 @dataclass(frozen=True)
@@ -23,6 +24,14 @@ class SoundFileError(ValueError):
 
 
 def read_info(path: Path) -> SoundInfo:
+    try:
+        size = path.stat().st_size
+    except FileNotFoundError:
+        raise SoundFileError("file not found") from None
+    except OSError as exc:
+        raise SoundFileError(f"not a WAV file ({exc})") from None
+    if size > MAX_SOUND_BYTES:
+        raise SoundFileError(f"larger than {MAX_SOUND_BYTES} bytes ({size} bytes)")
     try:
         with wave.open(str(path), "rb") as w:
             frames, rate = w.getnframes(), w.getframerate()

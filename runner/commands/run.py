@@ -9,6 +9,7 @@ from pathlib import Path
 from typing import Any
 
 from rich.console import Console
+from rich.markup import escape
 from rich.progress import BarColumn, Progress, TextColumn, TimeRemainingColumn
 from rich.table import Table
 
@@ -84,7 +85,7 @@ def verdict_table(result: RunResult, failures_only: bool = False) -> Table:
         mark = "[green]pass[/]" if v.passed else "[bold red]FAIL[/]"
         when = "" if v.time is None or math.isinf(v.time) else f"{v.time:.3f}"
         measured = v.measured + (f" ({v.message})" if v.message and not v.passed else "")
-        table.add_row(v.name, mark, measured, v.expected, when)
+        table.add_row(escape(v.name), mark, escape(measured), escape(v.expected), when)
     return table
 
 
@@ -153,6 +154,12 @@ def _execute(
         )
     cases.extend(load_files(_expand(args.files), args.variant, args.all_variants, overrides))
     out_dir: Path | None = None if args.no_trace else args.out
+    if out_dir is not None:
+        _refuse_duplicates(out_dir, cases, args.backend)
+        try:
+            out_dir.mkdir(parents=True, exist_ok=True)
+        except OSError as exc:
+            raise ScenarioError(f"cannot use {out_dir} as the trace folder: {exc.strerror or exc}") from None
     if out_dir is not None and not args.force:
         _refuse_overwrite(out_dir, cases, args.backend)
     show_progress = err.is_terminal and not (args.quiet or args.json) and not args.isolate
@@ -198,7 +205,7 @@ def _execute(
     else:
         _print_summary(out, results, len(crashed))
     for line in crashed:
-        out.print(f"[bold red]{line}[/]")
+        out.print(f"[bold red]{escape(line)}[/]")
     if crashed or any(r.status == "engine-failure" for r in results):
         return ExitCode.ENGINE_FAILURE
     return ExitCode.OK if all(r.passed for r in results) else ExitCode.ASSERTION_FAILED
@@ -207,15 +214,16 @@ def _execute(
 def _print_result(out: Console, result: RunResult, quiet: bool) -> None:
     if result.failure:
         out.print(
-            f"[bold red]engine failure[/] in {result.scenario} · {result.variant} · {result.backend}: {result.failure}"
+            f"[bold red]engine failure[/] in {result.scenario} · {result.variant} · {result.backend}: "
+            f"{escape(result.failure)}"
         )
         detail = result.extra.get("last_good")
         if detail:
-            out.print(f"  last good state of `{result.extra.get('body')}`: {json.dumps(detail)}")
+            out.print(f"  last good state of `{result.extra.get('body')}`: {escape(json.dumps(detail))}")
     if result.verdicts and (not quiet or not result.passed):
         out.print(verdict_table(result, failures_only=quiet))
     if result.trace and not quiet:
-        out.print(f"  trace: {result.trace}")
+        out.print(f"  trace: {escape(result.trace)}")
 
 
 def _print_summary(out: Console, results: list[RunResult], crashed: int = 0) -> None:
@@ -228,6 +236,21 @@ def _print_summary(out: Console, results: list[RunResult], crashed: int = 0) -> 
     for r in results:
         if not r.passed:
             out.print(f"  [red]{r.status}[/]: {r.scenario} · {r.variant} · {r.backend}")
+
+
+def _refuse_duplicates(out_dir: Path, cases: list[LoadedScenario], backend: str) -> None:
+    """Two cases of one command must not write the same trace (same scenario name and variant)."""
+    from ..run import trace_path
+
+    first: dict[Path, LoadedScenario] = {}
+    for case in cases:
+        path = trace_path(out_dir, case, backend)
+        if path in first:
+            raise ScenarioError(
+                f"{first[path].path} and {case.path} would both write {path} (scenario `{case.model.scenario}`, "
+                f"variant `{case.variant}`); give them different scenario names or run them separately"
+            )
+        first[path] = case
 
 
 def _refuse_overwrite(out_dir: Path, cases: list[LoadedScenario], backend: str) -> None:
@@ -258,7 +281,7 @@ def _run_isolated(
     where = f" (trace kept: {run.trace})" if run.trace is not None else ""
     crashed.append(f"{run.label}: {case.model.scenario} · {case.variant} · {args.backend}{where}")
     if run.message:
-        err.print(run.message)
+        err.print(escape(run.message))
     return None
 
 

@@ -7,6 +7,7 @@ from pathlib import Path
 from typing import Any
 
 from rich.console import Console
+from rich.markup import escape
 
 from ..errors import ExitCode, ScenarioValidationError
 
@@ -28,7 +29,7 @@ def execute(args: argparse.Namespace, out: Console, err: Console) -> int:
             names = variant_names(path)
             for name in names:
                 build_program(load_scenario(path, None if name == BASE_CASE else name))
-            out.print(f"ok {path} ({len(names)} case{'s' if len(names) != 1 else ''}: {', '.join(names)})")
+            out.print(f"ok {escape(str(path))} ({len(names)} case{'s' if len(names) != 1 else ''}: {', '.join(names)})")
         except ScenarioValidationError as exc:
             issues.extend(exc.issues)
     if issues:

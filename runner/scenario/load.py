@@ -48,17 +48,10 @@ def read_source(path: FsPath) -> tuple[str, Any, Positions]:
     try:
         text = raw.decode("utf-8")
     except UnicodeDecodeError as exc:
-        raise ScenarioValidationError(
-            [
-                Issue(
-                    str(path),
-                    0,
-                    0,
-                    "",
-                    f"expected UTF-8 text, found a byte 0x{raw[exc.start]:02x} at offset {exc.start}",
-                )
-            ]
-        ) from None
+        line = raw.count(b"\n", 0, exc.start) + 1
+        col = exc.start - (raw.rfind(b"\n", 0, exc.start) + 1) + 1
+        message = f"expected UTF-8 text, found a byte 0x{raw[exc.start]:02x} at offset {exc.start}"
+        raise ScenarioValidationError([Issue(str(path), line, col, "", message)]) from None
     data, positions = load_yaml(text, str(path))
     if not isinstance(data, dict):
         raise ScenarioValidationError(

@@ -8,8 +8,10 @@ from typing import Annotated, Any
 from pydantic import BaseModel, ConfigDict, Field, field_validator
 
 SCHEMA_VERSION = 1
+#: Every physical number stays within +-MAX_MAGNITUDE (SI units), so that the masses, inertias, poses and
+#: step indices computed from them stay finite (docs/reliability.md).
+MAX_MAGNITUDE = 1e9
 
-Vec3 = tuple[float, float, float]
 Name = Annotated[
     str,
     Field(
@@ -28,9 +30,11 @@ EventName = Annotated[
     ),
 ]
 Expr = Annotated[str, Field(min_length=1, max_length=2000, description="An expression (docs/language.md#expressions).")]
-PositiveFloat = Annotated[float, Field(gt=0, allow_inf_nan=False)]
-FiniteFloat = Annotated[float, Field(allow_inf_nan=False)]
-NonNegFloat = Annotated[float, Field(ge=0, allow_inf_nan=False)]
+PositiveFloat = Annotated[float, Field(gt=0, le=MAX_MAGNITUDE, allow_inf_nan=False)]
+FiniteFloat = Annotated[float, Field(ge=-MAX_MAGNITUDE, le=MAX_MAGNITUDE, allow_inf_nan=False)]
+NonNegFloat = Annotated[float, Field(ge=0, le=MAX_MAGNITUDE, allow_inf_nan=False)]
+Vec3 = tuple[FiniteFloat, FiniteFloat, FiniteFloat]
+Quat = tuple[FiniteFloat, FiniteFloat, FiniteFloat, FiniteFloat]
 
 
 class Strict(BaseModel):

@@ -13,6 +13,7 @@ from .model_base import (
     Name,
     NonNegFloat,
     PositiveFloat,
+    Quat,
     Strict,
     Vec3,
     finite_vec,
@@ -97,7 +98,7 @@ class ResetCommand(Strict):
     body: Name
     pos: Vec3 | None = Field(None, description="Default: the body's start position.")
     hpr: Vec3 | None = None
-    quat: tuple[float, float, float, float] | None = None
+    quat: Quat | None = None
     vel: Vec3 = (0.0, 0.0, 0.0)
     angvel: Vec3 = (0.0, 0.0, 0.0)
 

@@ -2,11 +2,12 @@
 
 from __future__ import annotations
 
+import math
 from typing import Annotated, Literal
 
 from pydantic import Field, field_validator, model_validator
 
-from .model_base import FiniteFloat, Name, NonNegFloat, PositiveFloat, Strict, Surface, Vec3, finite_vec
+from .model_base import FiniteFloat, Name, NonNegFloat, PositiveFloat, Quat, Strict, Surface, Vec3, finite_vec
 
 
 class World(Strict):
@@ -62,7 +63,7 @@ class Body(Strict):
     density: PositiveFloat | None = Field(None, description="kg/m^3; mass = density x volume (ODE dMassSet*).")
     pos: Vec3 = (0.0, 0.0, 0.0)
     hpr: Vec3 | None = Field(None, description="Heading, pitch, roll in degrees, Panda3D's convention.")
-    quat: tuple[float, float, float, float] | None = Field(None, description="Orientation as (w, x, y, z).")
+    quat: Quat | None = Field(None, description="Orientation as (w, x, y, z).")
     scale: PositiveFloat = Field(1.0, description="Uniform scale of the shape and its collision solids.")
     vel: Vec3 = Field((0.0, 0.0, 0.0), description="Initial linear velocity, m/s.")
     angvel: Vec3 = Field((0.0, 0.0, 0.0), description="Initial angular velocity, rad/s, world frame.")
@@ -124,6 +125,11 @@ class Joint(Strict):
             raise ValueError(f"a {self.type} joint takes no limits or motor")
         if self.type == "universal" and self.axis2 is None:
             raise ValueError("a universal joint needs axis2")
+        if self.axis2 is not None:
+            a, b = self.axis, self.axis2
+            cross = (a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0])
+            if math.hypot(*cross) <= 1e-6 * math.hypot(*a) * math.hypot(*b):
+                raise ValueError(f"expected axis2 not parallel to axis, found {list(a)} and {list(b)}")
         if self.bodies[0] == "environment":
             raise ValueError("the first body of a joint must be a body, found `environment`")
         return self

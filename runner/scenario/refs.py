@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import difflib
+import math
 from collections.abc import Iterable, Iterator
 from pathlib import Path as FsPath
 from typing import Any
@@ -15,12 +16,33 @@ from ..sounds import SoundFileError, read_info
 from . import model_assertions as A
 from . import model_behaviour as B
 from .model import Scenario
-from .names import RESERVED, check_name, expand_bodies, groups, readable_names
+from .names import RESERVED, array_counts, check_name, expand_bodies, groups, readable_names
 from .patterns import possible_events
 from .yaml_source import Path, Positions
 
 MAX_BODIES = 10_000
 MAX_STEPS = 10_000_000
+MAX_INPUTS = 100_000
+MAX_SURFACE_PAIRS = 100_000
+
+
+def _size_issues(model: Scenario, positions: Positions) -> list[Issue]:
+    """Limits on what a small file can expand to, from the counts alone: a few hundred bytes of arrays,
+    repeats or group surfaces would otherwise build millions of objects before any check."""
+    size = {key: math.prod(array_counts(body)) for key, body in model.bodies.items()}
+    bodies = sum(size.values())
+    inputs = sum(1 if i.repeat is None else i.repeat.count for i in model.inputs)
+    pairs = sum(size.get(s.bodies[0], 1) * size.get(s.bodies[1], 1) for s in model.surfaces)
+    limits = [
+        (bodies, MAX_BODIES, ("bodies",), "bodies (arrays expanded)"),
+        (inputs, MAX_INPUTS, ("inputs",), "timed inputs (repeats expanded)"),
+        (pairs, MAX_SURFACE_PAIRS, ("surfaces",), "body pairs in `surfaces` (groups expanded)"),
+    ]
+    return [
+        positions.issue(where, f"expected at most {limit} {what}, found {found}")
+        for found, limit, where, what in limits
+        if found > limit
+    ]
 
 
 def _unknown(kind: str, name: str, known: Iterable[str]) -> str:
@@ -81,13 +103,14 @@ def check_references(model: Scenario, positions: Positions, base_dir: FsPath) ->
     def bad(path: Path, message: str, at_key: bool = False) -> None:
         issues.append(positions.issue(path, message, at_key))
 
-    instances = expand_bodies(model)
-    body_names = {b.name for b in instances}
-    if len(instances) > MAX_BODIES:
-        bad(("bodies",), f"expected at most {MAX_BODIES} bodies (arrays expanded), found {len(instances)}")
     steps = model.world.duration / model.world.dt
     if steps > MAX_STEPS:
         bad(("world", "duration"), f"expected at most {MAX_STEPS} steps (duration / dt), found {steps:.0f}")
+    issues += _size_issues(model, positions)
+    if issues:  # before anything expands arrays, repeats or pairs
+        raise ScenarioValidationError(issues)
+    instances = expand_bodies(model)
+    body_names = {b.name for b in instances}
     group_names = set(groups(model))
     for name in [*model.bodies, *model.joints]:
         if name in RESERVED:
@@ -252,17 +275,24 @@ def expressions_in(model: Scenario) -> Iterator[tuple[str, Path]]:
 
 def _check_expressions(model: Scenario, bad: Any, owners: set[str]) -> None:
     valid = set(readable_names(model))
+    known = {
+        "contact": ("body", owners),
+        "playing": ("interval", set(model.intervals)),
+        "count": ("event (it can never happen)", possible_events(model)),
+    }
     for text, path in expressions_in(model):
         try:
             expr = compile_expression(text)
         except ExpressionError as exc:
             bad(path, str(exc))
             continue
-        for name in sorted(expr.names):
-            message = check_name(name, valid)
-            if message:
-                bad(path, message)
-                break
+        problems = [check_name(name, valid) for name in sorted(expr.names)]
+        for func, args in sorted(expr.call_args):
+            kind, names = known[func]
+            problems += [f"{func}(): {_unknown(kind, a, names)}" for a in args if a not in names]
+        first = next((p for p in problems if p), None)
+        if first:
+            bad(path, first)
 
 
 def _check_events(model: Scenario, bad: Any) -> None:

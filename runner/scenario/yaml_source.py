@@ -61,6 +61,7 @@ def format_path(path: Path) -> str:
 
 
 _PLAIN_TAGS = frozenset({"tag:yaml.org,2002:map", "tag:yaml.org,2002:seq"})
+_SCALAR_TAGS = frozenset(f"tag:yaml.org,2002:{t}" for t in ("str", "int", "float", "bool", "null"))
 
 
 class _Builder:
@@ -91,7 +92,7 @@ class _Builder:
             for key_node, value_node in node.value:
                 if not isinstance(key_node, yaml.ScalarNode):
                     raise self.fail(key_node, path, "expected a plain key, found a complex key")
-                key = self.loader.construct_object(key_node)
+                key = self.scalar(key_node, path)
                 if not isinstance(key, str):
                     key = str(key) if isinstance(key, int | float | bool) and key_node.style is None else key
                     if not isinstance(key, str):
@@ -104,11 +105,18 @@ class _Builder:
         if isinstance(node, yaml.SequenceNode):
             return [self.build(item, path + (i,)) for i, item in enumerate(node.value)]
         if isinstance(node, yaml.ScalarNode):
-            try:
-                return self.loader.construct_object(node)
-            except yaml.constructor.ConstructorError as exc:
-                raise self.fail(node, path, f"unsupported YAML value ({exc.problem})") from None
+            return self.scalar(node, path)
         raise self.fail(node, path, "unsupported YAML node")  # pragma: no cover
+
+    def scalar(self, node: yaml.ScalarNode, path: Path) -> Any:
+        if node.tag not in _SCALAR_TAGS:
+            raise self.fail(node, path, f"unsupported YAML tag {node.tag!r} (only plain data is allowed)")
+        try:
+            return self.loader.construct_object(node)
+        except (yaml.constructor.ConstructorError, ValueError, ArithmeticError, KeyError) as exc:
+            # `!!int abc`, `!!bool maybe`, an integer past Python's 4300-digit conversion limit...
+            problem = exc.problem if isinstance(exc, yaml.constructor.ConstructorError) else exc
+            raise self.fail(node, path, f"unsupported YAML value ({problem})") from None
 
 
 class _Loader(yaml.SafeLoader):
@@ -124,11 +132,32 @@ _Loader.add_implicit_resolver(
 )
 
 
+_BREAK = re.compile("\r\n|[\r\n\x85\u2028\u2029]")  # YAML's line breaks
+
+
+def line_col(text: str, index: int) -> tuple[int, int]:
+    """1-based line and column of character ``index`` of ``text``, counting lines as YAML does."""
+    line, start = 1, 0
+    for match in _BREAK.finditer(text, 0, index):
+        line, start = line + 1, match.end()
+    return line, index - start + 1
+
+
 def load_yaml(text: str, file: str) -> tuple[Any, Positions]:
     """Parse ``text`` safely; raise :class:`ScenarioValidationError` with a location on any problem."""
-    if len(text.encode("utf-8", "surrogatepass")) > MAX_FILE_BYTES:
-        raise ScenarioValidationError([Issue(file, 0, 0, "", f"file larger than {MAX_FILE_BYTES} bytes; refused")])
-    loader = _Loader(text)
+    size = len(text.encode("utf-8", "surrogatepass"))
+    if size > MAX_FILE_BYTES:
+        line, col = line_col(
+            text, len(text.encode("utf-8", "surrogatepass")[:MAX_FILE_BYTES].decode("utf-8", "ignore"))
+        )
+        message = f"file larger than {MAX_FILE_BYTES} bytes ({size} bytes; the limit is crossed here); refused"
+        raise ScenarioValidationError([Issue(file, line, col, "", message)])
+    try:
+        loader = _Loader(text)
+    except yaml.reader.ReaderError as exc:  # a control character: PyYAML checks the whole text up front
+        line, col = line_col(text, exc.position)
+        message = f"invalid YAML: character #x{exc.character:04x} is not allowed (control characters are refused)"
+        raise ScenarioValidationError([Issue(file, line, col, "", message)]) from None
     try:
         node = loader.get_single_node()
         if node is None:
@@ -143,7 +172,9 @@ def load_yaml(text: str, file: str) -> tuple[Any, Positions]:
     except yaml.YAMLError as exc:
         raise ScenarioValidationError([Issue(file, 0, 0, "", f"invalid YAML: {exc}")]) from None
     except RecursionError:
-        raise ScenarioValidationError([Issue(file, 0, 0, "", "nesting too deep; refused")]) from None
+        mark = loader.get_mark()
+        message = f"nesting deeper than {MAX_DEPTH} levels; refused"
+        raise ScenarioValidationError([Issue(file, mark.line + 1, mark.column + 1, "", message)]) from None
     finally:
         loader.dispose()
     return data, builder.positions

@@ -1,0 +1,56 @@
+"""The switch between the bounded run (``make test``) and the long run (``make fuzz``).
+
+``FUZZ_CASES`` sets how many hostile documents the loader fuzzing generates (default 200, about 5 s);
+``FUZZ_FAULTS`` how many signals are sent at random moments to running ``scenario run`` processes
+(default 2); ``FUZZ_SEED`` varies the generated cases (default: hypothesis's fixed derandomized seed,
+so that a run is reproducible). ``make fuzz`` sets ``FUZZ_CASES=20000 FUZZ_FAULTS=200``. The counts
+are printed at the end of the session.
+"""
+
+from __future__ import annotations
+
+import os
+from collections import Counter
+from collections.abc import Callable
+from typing import Any
+
+import pytest
+from hypothesis import HealthCheck, seed, settings
+
+FUZZ_CASES = int(os.environ.get("FUZZ_CASES", "200"))
+FUZZ_FAULTS = int(os.environ.get("FUZZ_FAULTS", "2"))
+FUZZ_SEED = os.environ.get("FUZZ_SEED")
+
+#: outcome -> count, per fuzzing test; printed in the terminal summary
+STATS: dict[str, Counter[str]] = {}
+
+
+def fuzz_settings(cases: int) -> Callable[[Any], Any]:
+    """Hypothesis settings for a fuzzing test: ``cases`` examples, reproducible unless FUZZ_SEED is set."""
+    chosen = settings(
+        max_examples=cases,
+        deadline=None,
+        derandomize=FUZZ_SEED is None,
+        database=None,
+        print_blob=True,
+        suppress_health_check=list(HealthCheck),
+    )
+
+    def apply(test: Any) -> Any:
+        test = chosen(test)
+        return seed(int(FUZZ_SEED))(test) if FUZZ_SEED is not None else test
+
+    return apply
+
+
+def count(test: str, outcome: str) -> None:
+    STATS.setdefault(test, Counter())[outcome] += 1
+
+
+def pytest_terminal_summary(terminalreporter: pytest.TerminalReporter) -> None:
+    if not STATS:
+        return
+    terminalreporter.section("reliability figures")
+    for test, outcomes in sorted(STATS.items()):
+        parts = ", ".join(f"{k} {v}" for k, v in sorted(outcomes.items()))
+        terminalreporter.write_line(f"{test}: {sum(outcomes.values())} cases ({parts})")

@@ -1,0 +1,129 @@
+"""Output safety: nothing is overwritten without --force, two cases never share a trace, a half-written
+trace never has the final name, and text from a scenario or an engine is printed as text.
+
+Found by this suite: two files with the same `scenario:` name run in one command wrote the same trace,
+the second silently replacing the first (without --force); text from a scenario was read as Rich
+markup, so an assertion named "[/x]" (or a wrong value "[/x]") ended `run`, `validate` and `inspect`
+with a MarkupError traceback (exit 1), and "[bold]x" was printed as "x".
+"""
+
+from __future__ import annotations
+
+import hashlib
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from reports import trace_format as tf
+from reports.trace_reader import read_trace
+
+SOURCE = """\
+schema_version: 1
+scenario: {name}
+world: {{gravity: [0, 0, -9.81], dt: 0.01, duration: 0.5}}
+bodies:
+  ball: {{sphere: 0.1, density: 1000, pos: [0, 0, {z}]}}
+assertions:
+  - {{name: falls, at: end, value: ball.vel.z, near: -g*0.5, tol: 1e-9}}
+"""
+
+
+def scenario(*args: str, cwd: Path) -> subprocess.CompletedProcess[str]:
+    return subprocess.run([sys.executable, "-m", "runner", *args], capture_output=True, text=True, cwd=cwd,
+                          timeout=120)  # fmt: skip
+
+
+def digest(path: Path) -> str:
+    return hashlib.sha256(path.read_bytes()).hexdigest()
+
+
+@pytest.fixture
+def source(tmp_path: Path) -> Path:
+    path = tmp_path / "fall.yaml"
+    path.write_text(SOURCE.format(name="fall", z=2))
+    return path
+
+
+def test_an_existing_trace_is_kept_without_force_and_replaced_with_it(tmp_path: Path, source: Path) -> None:
+    first = scenario("run", str(source), "--backend", "fake", "--out", "out", cwd=tmp_path)
+    assert first.returncode == 0, first.stderr
+    trace = tmp_path / "out" / "fall__base__fake.mcap"
+    before, inode = digest(trace), trace.stat().st_ino
+    source.write_text(SOURCE.format(name="fall", z=3))  # a different run would give different bytes
+    again = scenario("run", str(source), "--backend", "fake", "--out", "out", cwd=tmp_path)
+    assert again.returncode == 2 and "--force" in again.stderr and "Traceback" not in again.stderr
+    assert digest(trace) == before and trace.stat().st_ino == inode
+    forced = scenario("run", str(source), "--backend", "fake", "--out", "out", "--force", cwd=tmp_path)
+    assert forced.returncode == 0, forced.stderr
+    assert digest(trace) != before and read_trace(trace).bodies["ball"].pos[0, 2] == 3.0
+    assert not trace.with_name(trace.name + tf.PARTIAL_SUFFIX).exists()
+
+
+def test_a_leftover_partial_is_kept_without_force(tmp_path: Path, source: Path) -> None:
+    out = tmp_path / "out"
+    out.mkdir()
+    partial = out / "fall__base__fake.mcap.partial"
+    partial.write_bytes(b"what a killed run left")
+    done = scenario("run", str(source), "--backend", "fake", "--out", "out", cwd=tmp_path)
+    assert done.returncode == 2 and "--force" in done.stderr
+    assert partial.read_bytes() == b"what a killed run left" and not (out / "fall__base__fake.mcap").exists()
+    forced = scenario("run", str(source), "--backend", "fake", "--out", "out", "--force", cwd=tmp_path)
+    assert forced.returncode == 0 and not partial.exists() and read_trace(out / "fall__base__fake.mcap").complete
+
+
+def test_two_cases_never_write_the_same_trace(tmp_path: Path) -> None:
+    for folder, z in (("a", 2), ("b", 5)):
+        (tmp_path / folder).mkdir()
+        (tmp_path / folder / "fall.yaml").write_text(SOURCE.format(name="same", z=z))
+    for extra in ([], ["--force"]):
+        done = scenario("run", "a/fall.yaml", "b/fall.yaml", "--backend", "fake", "--out", "out", *extra,
+                        cwd=tmp_path)  # fmt: skip
+        assert done.returncode == 2, done.stdout + done.stderr
+        assert "same__base__fake.mcap" in done.stderr and "Traceback" not in done.stderr
+        assert not (tmp_path / "out" / "same__base__fake.mcap").exists()
+
+
+def test_an_unwritable_output_is_bad_input(tmp_path: Path, source: Path) -> None:
+    (tmp_path / "out").write_text("a file where the folder should be")
+    done = scenario("run", str(source), "--backend", "fake", "--out", "out", cwd=tmp_path)
+    assert done.returncode == 2 and "Traceback" not in done.stderr and "out" in done.stderr
+
+
+def test_no_trace_writes_nothing(tmp_path: Path, source: Path) -> None:
+    done = scenario("run", str(source), "--backend", "fake", "--no-trace", cwd=tmp_path)
+    assert done.returncode == 0, done.stderr
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["fall.yaml"]
+
+
+MARKUP = """\
+schema_version: 1
+scenario: markup
+world: {dt: 0.04, duration: 0.2}
+bodies:
+  box: {box: [0.3, 0.3, 0.3], density: 500, pos: [0, 0, 1]}
+inputs: [{at: 0.04, event: "[/e]"}]
+on:
+  "[/e]": [{log: {message: "[/m]"}}]
+assertions:
+  - {name: "[/x]", at: end, check: time < 0}
+  - {name: "[bold]y", at: end, check: time > 0}
+"""
+
+
+def test_scenario_text_is_printed_as_text_not_markup(tmp_path: Path) -> None:
+    folder = tmp_path / "[red]dir"
+    folder.mkdir()
+    (folder / "m.yaml").write_text(MARKUP)
+    (folder / "bad.yaml").write_text(MARKUP.replace("dt: 0.04", 'dt: "[/dt]"'))
+    ok = scenario("validate", "[red]dir/m.yaml", cwd=tmp_path)
+    assert ok.returncode == 0 and "[red]dir/m.yaml" in ok.stdout, ok.stdout + ok.stderr
+    bad = scenario("validate", "[red]dir/bad.yaml", cwd=tmp_path)
+    assert bad.returncode == 2 and "'[/dt]'" in bad.stderr and "Traceback" not in bad.stderr, bad.stderr
+    run = scenario("run", "[red]dir/m.yaml", "--backend", "fake", "--out", "out", cwd=tmp_path)
+    assert run.returncode == 1 and "Traceback" not in run.stderr, run.stderr
+    assert "[/x]" in run.stdout and "[bold]y" in run.stdout
+    inspect = scenario("inspect", "out/markup__base__fake.mcap", cwd=tmp_path)
+    assert inspect.returncode == 0 and "Traceback" not in inspect.stderr, inspect.stderr
+    assert "[/e]" in inspect.stdout and "[/x]" in inspect.stdout and "[bold]y" in inspect.stdout
