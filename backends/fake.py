@@ -13,26 +13,30 @@ import numpy as np
 
 from .base import Backend
 from .geometry import integrate_quat
-from .types import BodyStates, Capability, CompiledWorld, Contact, JointKind, JointStates, Motion, Quat, Vec3
+from .types import (
+    ALL_SHAPES,
+    BodyStates,
+    Capability,
+    CompiledWorld,
+    Contact,
+    JointKind,
+    JointStates,
+    Motion,
+    Quat,
+    Vec3,
+)
 
 
 class FakeBackend(Backend):
     name = "fake"
     engine_distribution = "numpy"
-    capabilities: ClassVar[frozenset[Capability]] = frozenset(
-        {
-            Capability.SHAPE_BOX,
-            Capability.SHAPE_SPHERE,
-            Capability.SHAPE_CAPSULE,
-            Capability.SHAPE_CYLINDER,
-            Capability.SHAPE_PLANE,
-            Capability.KINEMATIC,
-            Capability.JOINT_SLIDER,
-            Capability.JOINT_MOTOR,
-            Capability.JOINT_LIMITS,
-            Capability.SUBSTEPS,
-        }
-    )
+    capabilities: ClassVar[frozenset[Capability]] = ALL_SHAPES | {
+        Capability.KINEMATIC,
+        Capability.JOINT_SLIDER,
+        Capability.JOINT_MOTOR,
+        Capability.JOINT_LIMITS,
+        Capability.SUBSTEPS,
+    }
 
     def __init__(self, world: CompiledWorld) -> None:
         super().__init__(world)

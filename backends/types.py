@@ -75,6 +75,11 @@ class Capability(str, enum.Enum):
     SUBSTEPS = "world:substeps"
 
 
+#: Every shape; and everything but universal joints (what the pybullet, mujoco and dart adapters offer).
+ALL_SHAPES: frozenset[Capability] = frozenset(c for c in Capability if c.value.startswith("shape:"))
+RIGID_BODY_CAPABILITIES: frozenset[Capability] = frozenset(Capability) - {Capability.JOINT_UNIVERSAL}
+
+
 @dataclass(frozen=True)
 class Shape:
     kind: ShapeKind

@@ -383,17 +383,22 @@ class TraceWriter:
     ) -> None:
         if self._final is not None or self._closed:
             return
+        status, summary = exit_status(exc)
         if exc is None:
-            self.finish(tf.STATUS_ERROR, {"error": "the run ended without recording a result"})
+            self.finish(status, summary)
             return
-        if isinstance(exc, KeyboardInterrupt | SystemExit):
-            status, summary = tf.STATUS_INTERRUPTED, {"error": f"{type(exc).__name__}: {exc}".rstrip(": ")}
-        elif isinstance(exc, EngineFailure):
-            status = tf.STATUS_ENGINE_FAILURE
-            summary = {"error": f"{type(exc).__name__}: {exc}", "body": exc.body, "time": exc.time}
-        else:
-            status, summary = tf.STATUS_ERROR, {"error": f"{type(exc).__name__}: {exc}"}
         try:
             self.finish(status, summary)
         except Exception:  # noqa: BLE001 - never mask the exception that ended the run
             self._abandon()
+
+
+def exit_status(exc: BaseException | None) -> tuple[str, dict[str, Any]]:
+    """The status and summary a trace is finished with when its run ends without a result."""
+    if exc is None:
+        return tf.STATUS_ERROR, {"error": "the run ended without recording a result"}
+    if isinstance(exc, KeyboardInterrupt | SystemExit):
+        return tf.STATUS_INTERRUPTED, {"error": f"{type(exc).__name__}: {exc}".rstrip(": ")}
+    if isinstance(exc, EngineFailure):
+        return tf.STATUS_ENGINE_FAILURE, {"error": f"{type(exc).__name__}: {exc}", "body": exc.body, "time": exc.time}
+    return tf.STATUS_ERROR, {"error": f"{type(exc).__name__}: {exc}"}

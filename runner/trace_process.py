@@ -22,12 +22,11 @@ from pathlib import Path
 from types import TracebackType
 from typing import Any
 
-from backends.errors import EngineFailure
 from backends.types import BodyStates, Contact, JointStates
 from reports import trace_format as tf
 
 from .errors import TraceError
-from .trace import SolidVisual, TraceMeta, TraceWriter
+from .trace import SolidVisual, TraceMeta, TraceWriter, exit_status
 
 __all__ = ["BackgroundTraceWriter"]
 
@@ -170,16 +169,10 @@ class BackgroundTraceWriter:
                  tb: TracebackType | None) -> None:  # fmt: skip
         if self._final is not None or self._closed:
             return
+        status, summary = exit_status(exc)
         if exc is None:
-            self.finish(tf.STATUS_ERROR, {"error": "the run ended without recording a result"})
+            self.finish(status, summary)
             return
-        if isinstance(exc, KeyboardInterrupt | SystemExit):
-            status, summary = tf.STATUS_INTERRUPTED, {"error": f"{type(exc).__name__}: {exc}".rstrip(": ")}
-        elif isinstance(exc, EngineFailure):
-            status = tf.STATUS_ENGINE_FAILURE
-            summary = {"error": f"{type(exc).__name__}: {exc}", "body": exc.body, "time": exc.time}
-        else:
-            status, summary = tf.STATUS_ERROR, {"error": f"{type(exc).__name__}: {exc}"}
         try:
             self.finish(status, summary)
         except Exception:  # noqa: BLE001 - never mask the exception that ended the run

@@ -19,7 +19,18 @@ import numpy as np
 from ..base import Backend
 from ..errors import EngineFailure, UnsupportedFeature, map_engine_errors
 from ..geometry import integrate_quat
-from ..types import BodyStates, Capability, CompiledWorld, Contact, JointKind, JointStates, Motion, Quat, Vec3
+from ..types import (
+    RIGID_BODY_CAPABILITIES,
+    BodyStates,
+    Capability,
+    CompiledWorld,
+    Contact,
+    JointKind,
+    JointStates,
+    Motion,
+    Quat,
+    Vec3,
+)
 from . import _surfaces
 from ._build import DETECTORS, BodyHandle, JointHandle, build, place_free
 
@@ -29,24 +40,7 @@ _NAME = "dart"
 class DartBackend(Backend):
     name: ClassVar[str] = _NAME
     engine_distribution: ClassVar[str] = "dartpy"
-    capabilities: ClassVar[frozenset[Capability]] = frozenset(
-        {
-            Capability.SHAPE_BOX,
-            Capability.SHAPE_SPHERE,
-            Capability.SHAPE_CAPSULE,
-            Capability.SHAPE_CYLINDER,
-            Capability.SHAPE_PLANE,
-            Capability.JOINT_SLIDER,
-            Capability.JOINT_HINGE,
-            Capability.JOINT_BALL,
-            Capability.JOINT_FIXED,
-            Capability.JOINT_BETWEEN_BODIES,
-            Capability.JOINT_LIMITS,
-            Capability.JOINT_MOTOR,
-            Capability.KINEMATIC,
-            Capability.SUBSTEPS,
-        }
-    )
+    capabilities: ClassVar[frozenset[Capability]] = RIGID_BODY_CAPABILITIES
     option_keys: ClassVar[dict[str, str]] = {
         "collision_detector": "ode | fcl | bullet | dart: DART's collision detector (default ode: ODE-like "
         "contact sets, 4 points for a box on a plane)",

@@ -12,6 +12,7 @@ from ..base import Backend
 from ..errors import EngineFailure, UnsupportedFeature, map_engine_errors
 from ..geometry import integrate_quat, quat_conj, quat_rotate
 from ..types import (
+    RIGID_BODY_CAPABILITIES,
     BodyStates,
     Capability,
     CompiledWorld,
@@ -48,24 +49,7 @@ class MujocoBackend(Backend):
 
     name: ClassVar[str] = "mujoco"
     engine_distribution: ClassVar[str] = "mujoco"
-    capabilities: ClassVar[frozenset[Capability]] = frozenset(
-        {
-            Capability.SHAPE_BOX,
-            Capability.SHAPE_SPHERE,
-            Capability.SHAPE_CAPSULE,
-            Capability.SHAPE_CYLINDER,
-            Capability.SHAPE_PLANE,
-            Capability.JOINT_SLIDER,
-            Capability.JOINT_HINGE,
-            Capability.JOINT_BALL,
-            Capability.JOINT_FIXED,
-            Capability.JOINT_BETWEEN_BODIES,
-            Capability.JOINT_LIMITS,
-            Capability.JOINT_MOTOR,
-            Capability.KINEMATIC,
-            Capability.SUBSTEPS,
-        }
-    )
+    capabilities: ClassVar[frozenset[Capability]] = RIGID_BODY_CAPABILITIES
     option_keys: ClassVar[Mapping[str, str]] = {
         "erp": "ODE-style error reduction per engine step of contacts and joint stops (default 0.2)",
         "bounce_erp": "error reduction of contacts that bounce; adds up to this to the rebound (default 0.05)",

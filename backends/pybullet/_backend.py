@@ -19,7 +19,18 @@ import pybullet as p
 from ..base import Backend
 from ..errors import EngineFailure, UnsupportedFeature, map_engine_errors
 from ..geometry import integrate_quat
-from ..types import BodyStates, Capability, CompiledWorld, Contact, JointKind, JointStates, Motion, Quat, Vec3
+from ..types import (
+    RIGID_BODY_CAPABILITIES,
+    BodyStates,
+    Capability,
+    CompiledWorld,
+    Contact,
+    JointKind,
+    JointStates,
+    Motion,
+    Quat,
+    Vec3,
+)
 from ._build import PLANE_HALF_SIZE, Layout, build, initial_rate, read_options, xyzw
 from ._surfaces import FRICTION_CLAMP, SurfaceFit, fit_surfaces
 
@@ -40,24 +51,7 @@ class PyBulletBackend(Backend):
 
     name: ClassVar[str] = _NAME
     engine_distribution: ClassVar[str] = "pybullet"
-    capabilities: ClassVar[frozenset[Capability]] = frozenset(
-        {
-            Capability.SHAPE_BOX,
-            Capability.SHAPE_SPHERE,
-            Capability.SHAPE_CAPSULE,
-            Capability.SHAPE_CYLINDER,
-            Capability.SHAPE_PLANE,
-            Capability.JOINT_SLIDER,
-            Capability.JOINT_HINGE,
-            Capability.JOINT_BALL,
-            Capability.JOINT_FIXED,
-            Capability.JOINT_BETWEEN_BODIES,
-            Capability.JOINT_LIMITS,
-            Capability.JOINT_MOTOR,
-            Capability.KINEMATIC,
-            Capability.SUBSTEPS,
-        }
-    )
+    capabilities: ClassVar[frozenset[Capability]] = RIGID_BODY_CAPABILITIES
     option_keys: ClassVar[Mapping[str, str]] = {
         "solver_iterations": "numSolverIterations of the constraint solver (default 50)",
         "deterministic_overlapping_pairs": "sort broadphase pairs for run-to-run determinism (default true)",
