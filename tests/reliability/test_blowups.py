@@ -7,11 +7,9 @@ v = 1e9 * 0.01 / 4.18879 - g*dt = 2.387e6 m/s, past the runner's MAX_SPEED (1e4 
 stop at t = 0.51 with the state of t = 0.50 as the last good one: semi-implicit Euler gives
 z_50 = 10 - g*dt^2 * 50*51/2 = 8.749225 m and v_50 = -g * 0.5 = -4.905 m/s.
 
-Measured before the fix proposed in the report: MuJoCo, DART and ODE stop as required; PyBullet does
-not, because Bullet clamps a free body's speed to 100 m/s (btMultiBody's default maxJointVelocity also
-applies to the base; backends/pybullet sets it for links only), so the kicked sphere flies on at
-exactly 100.0 m/s and the run "passes". The same clamp makes a 12 s free fall end at -100 m/s instead
-of ODE's -117.72 m/s.
+Found on the way: PyBullet clamped a free body's speed to 100 m/s (btMultiBody's default
+maxJointVelocity also applies to the base), so the kicked sphere flew on at exactly 100.0 m/s and the
+run "passed", and a 12 s free fall ended at -100 m/s instead of ODE's -117.72; lifted in 10beb3d.
 """
 
 from __future__ import annotations
