@@ -381,16 +381,21 @@ class TraceWriter:
     def __exit__(
         self, exc_type: type[BaseException] | None, exc: BaseException | None, tb: TracebackType | None
     ) -> None:
-        if self._final is not None or self._closed:
-            return
-        status, summary = exit_status(exc)
-        if exc is None:
-            self.finish(status, summary)
-            return
-        try:
-            self.finish(status, summary)
-        except Exception:  # noqa: BLE001 - never mask the exception that ended the run
-            self._abandon()
+        if self._final is None and not self._closed:
+            finish_on_exit(self, exc)
+
+
+def finish_on_exit(writer: Any, exc: BaseException | None) -> None:
+    """Finish a writer left by its run (``__exit__`` of both writers): the status says how the run ended;
+    finishing never masks the exception that ended it."""
+    status, summary = exit_status(exc)
+    if exc is None:
+        writer.finish(status, summary)
+        return
+    try:
+        writer.finish(status, summary)
+    except Exception:  # noqa: BLE001 - never mask the exception that ended the run
+        writer._abandon()
 
 
 def exit_status(exc: BaseException | None) -> tuple[str, dict[str, Any]]:

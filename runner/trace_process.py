@@ -26,7 +26,7 @@ from backends.types import BodyStates, Contact, JointStates
 from reports import trace_format as tf
 
 from .errors import TraceError
-from .trace import SolidVisual, TraceMeta, TraceWriter, exit_status
+from .trace import SolidVisual, TraceMeta, TraceWriter, finish_on_exit
 
 __all__ = ["BackgroundTraceWriter"]
 
@@ -167,13 +167,5 @@ class BackgroundTraceWriter:
 
     def __exit__(self, exc_type: type[BaseException] | None, exc: BaseException | None,
                  tb: TracebackType | None) -> None:  # fmt: skip
-        if self._final is not None or self._closed:
-            return
-        status, summary = exit_status(exc)
-        if exc is None:
-            self.finish(status, summary)
-            return
-        try:
-            self.finish(status, summary)
-        except Exception:  # noqa: BLE001 - never mask the exception that ended the run
-            self._abandon()
+        if self._final is None and not self._closed:
+            finish_on_exit(self, exc)
