@@ -336,6 +336,30 @@ class StepTemplate:
         return {k: cls._MARK for k in keys}
 
 
+_PAIR_FAST = f'{{"a":%s,"b":%s,"points":%d,"depth":%de-{_EXP},"normal_force":%de-{_EXP}}}'
+_PAIR_SLOW = '{"a":%s,"b":%s,"points":%d,"depth":%s,"normal_force":%s}'
+
+
+def contacts_message(pairs: Sequence[tuple[int, int, int, float, float]], quoted: Sequence[str]) -> str:
+    """The /contacts message of one step; ``pairs`` = (a, b, points, depth, normal_force) rows (backends'
+    ``Contact``), ``quoted`` = body names already JSON-encoded. Depth and force at ``VALUE_RESOLUTION``,
+    like /bodies; a step with a non-finite or huge value writes shortest reprs, NaN and inf as null."""
+    if not pairs:
+        return '{"count":0,"pairs":[]}'
+    a, b, points, depth, force = zip(*pairs, strict=True)
+    values = np.array((depth, force), dtype=np.float64)
+    if np.isfinite(values).all() and np.abs(values).max() < _LIMIT:
+        depth_i, force_i = np.rint(values * _SCALE).astype(np.int64).tolist()
+        rows = zip([quoted[i] for i in a], [quoted[i] for i in b], points, depth_i, force_i, strict=True)
+        text = ",".join([_PAIR_FAST % row for row in rows])
+    else:
+        rows = zip(a, b, points, depth, force, strict=True)
+        text = ",".join(
+            [_PAIR_SLOW % (quoted[i], quoted[j], k, json_number(d), json_number(f)) for i, j, k, d, f in rows]
+        )
+    return f'{{"count":{len(pairs)},"pairs":[{text}]}}'
+
+
 def step_templates(bodies: Sequence[str], joints: Sequence[str]) -> tuple[StepTemplate, StepTemplate, StepTemplate]:
     """Templates of the /tf, /bodies and /joints messages.
 

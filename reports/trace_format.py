@@ -9,9 +9,9 @@ Constants only. A trace is one MCAP file per run and variant:
 * channels in JSON (schema encoding ``jsonschema``): three Foxglove well-known schemas for the 3D,
   Log and Plot panels, plus the project's own plottable channels below.
 
-Per-step numbers on /tf, /bodies and /joints are written with a fixed absolute resolution of
-:data:`VALUE_RESOLUTION` (as ``<integer>e-9`` JSON numbers, ten times cheaper to format than a
-float's shortest repr); non-finite values are written as ``null``.
+Per-step numbers on /tf, /bodies, /joints and /contacts (depth, normal force) are written with a
+fixed absolute resolution of :data:`VALUE_RESOLUTION` (as ``<integer>e-9`` JSON numbers, ten times
+cheaper to format than a float's shortest repr); non-finite values are written as ``null``.
 """
 
 from __future__ import annotations
@@ -33,7 +33,7 @@ PARTIAL_SUFFIX: Final = ".partial"  # appended to the final name while writing
 SCHEMA_ENCODING: Final = "jsonschema"
 MESSAGE_ENCODING: Final = "json"
 
-#: absolute resolution of per-step values on /tf, /bodies and /joints (SI units)
+#: absolute resolution of per-step values on /tf, /bodies, /joints and /contacts (SI units)
 VALUE_RESOLUTION: Final = 1e-9
 
 #: the root frame of the transform tree; every body's frame is its name, parented to it

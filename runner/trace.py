@@ -6,7 +6,8 @@ finished chunk is in the operating system at once; a chunk closes when it exceed
 and after the first step at or past each multiple of ``flush_interval`` simulated seconds, which bounds
 what a hard kill loses. ``finish()`` writes the ``result`` record and the summary, then renames the file
 to ``<path>``. /tf, /bodies and /joints are formatted through templates prepared once per trace
-(:class:`reports.foxglove_schemas.StepTemplate`), about ten times cheaper than ``json.dumps``.
+(:class:`reports.foxglove_schemas.StepTemplate`), about ten times cheaper than ``json.dumps``, and
+/contacts at the same fixed resolution (:func:`reports.foxglove_schemas.contacts_message`).
 """
 
 from __future__ import annotations
@@ -67,19 +68,6 @@ class SolidVisual:
     radius: float = 0.0
     size: Vec3 = (0.0, 0.0, 0.0)  # box: full edge lengths
     vertices: tuple[Vec3, ...] = ()  # polygon: body frame, already scaled; order gives the normal
-
-
-_PAIR = '{"a":%s,"b":%s,"points":%d,"depth":%s,"normal_force":%s}'
-
-
-def _contacts_json(contacts: Sequence[Contact], quoted: Sequence[str]) -> str:
-    """The /contacts message; ``quoted`` = body names already JSON-encoded. NaN and inf -> null."""
-    if math.isfinite(sum(c.depth + c.normal_force for c in contacts)):
-        pairs = [_PAIR % (quoted[c.a], quoted[c.b], c.points, c.depth, c.normal_force) for c in contacts]
-    else:
-        num = fx.json_number
-        pairs = [_PAIR % (quoted[c.a], quoted[c.b], c.points, num(c.depth), num(c.normal_force)) for c in contacts]
-    return f'{{"count":{len(pairs)},"pairs":[{",".join(pairs)}]}}'
 
 
 class _Sink:
@@ -288,7 +276,7 @@ class TraceWriter:
             jrows = np.empty((len(self._joint_names), 3))
             jrows[:, 0], jrows[:, 1], jrows[:, 2] = joints.position, joints.velocity, joints.motor_force
             self._write(tf.TOPIC_JOINTS, ns, self._joints_tpl.render(jrows.ravel()))
-        self._write(tf.TOPIC_CONTACTS, ns, _contacts_json(contacts, self._quoted))
+        self._write(tf.TOPIC_CONTACTS, ns, fx.contacts_message(contacts, self._quoted))
         if state_vars:
             if tf.TOPIC_STATE not in self._channels:
                 self._register(tf.TOPIC_STATE, fx.state_schema(state_vars))

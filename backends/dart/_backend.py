@@ -31,7 +31,7 @@ from ..types import (
     Quat,
     Vec3,
 )
-from . import _surfaces
+from . import _contacts, _surfaces
 from ._build import DETECTORS, BodyHandle, JointHandle, build, place_free
 
 _NAME = "dart"
@@ -69,11 +69,16 @@ class DartBackend(Backend):
         self._joints: list[JointHandle] = built.joints
         self._coefficients = built.coefficients
         self._free = [i for i, h in enumerate(self._bodies) if h.free]
-        self._free_skeletons = [self._bodies[i].skeleton for i in self._free]
+        self._free_at = _rows(self._free)
+        self._read_q = [self._bodies[i].skeleton.getPositions for i in self._free]
+        self._read_v = [self._bodies[i].skeleton.getVelocities for i in self._free]
         self._static = [i for i, b in enumerate(world.bodies) if b.motion is Motion.STATIC]
-        self._static_set = set(self._static)
-        self._object_body: dict[Any, int] = {}
+        self._static_at = _rows(self._static)
+        self._reader = _contacts.ContactReader(len(world.bodies), self._static)
         self._linked = [i for i in range(len(world.bodies)) if i not in set(self._free) | set(self._static)]
+        coordinate = (JointKind.SLIDER, JointKind.HINGE)
+        self._coordinates = [(j, h.joint, h.sign) for j, h in enumerate(self._joints) if h.spec.kind in coordinate]
+        self._servos: list[tuple[int, JointHandle]] = []
         self._static_pos = np.array([world.bodies[i].pos for i in self._static], dtype=float).reshape(-1, 3)
         self._static_quat = np.array([world.bodies[i].quat for i in self._static], dtype=float).reshape(-1, 4)
         self._prev_quat = np.array([b.quat for b in world.bodies], dtype=float).reshape(-1, 4)
@@ -120,6 +125,7 @@ class DartBackend(Backend):
                 handle.joint.setActuatorType(dart.dynamics.ActuatorType.PASSIVE)
         if handle.fmax == 0.0:
             self._motor_force[joint] = 0.0
+        self._servos = [(j, h) for j, h in enumerate(self._joints) if h.fmax > 0.0]
 
     def apply_force(self, body: int, force: Vec3, torque: Vec3) -> None:
         if self.world.bodies[body].motion is not Motion.DYNAMIC:
@@ -149,8 +155,8 @@ class DartBackend(Backend):
     # --- stepping -------------------------------------------------------------------------------------
 
     def step(self) -> None:
-        servos = [(j, h) for j, h in enumerate(self._joints) if h.fmax > 0.0]
-        impulse = np.zeros(len(servos))
+        servos = self._servos
+        impulse = [0.0] * len(servos)
         with map_engine_errors(_NAME, f"step {self._steps + 1}"):
             for _ in range(self._engine_steps):
                 # World.step() clears commands and external forces: re-issue them for every engine step.
@@ -185,23 +191,26 @@ class DartBackend(Backend):
         lin, ang = np.zeros((n, 3)), np.zeros((n, 3))
         with map_engine_errors(_NAME, "reading body states"):
             if self._free:
-                q = np.array([s.getPositions() for s in self._free_skeletons])
-                v = np.array([s.getVelocities() for s in self._free_skeletons])
-                pos[self._free], quat[self._free] = q[:, 3:], rotvec_to_quat(q[:, :3])
-                ang[self._free], lin[self._free] = v[:, :3], v[:, 3:]
+                q = np.concatenate([read() for read in self._read_q]).reshape(-1, 6)
+                v = np.concatenate([read() for read in self._read_v]).reshape(-1, 6)
+                free = self._free_at
+                pos[free], quat[free] = q[:, 3:], rotvec_to_quat(q[:, :3])
+                ang[free], lin[free] = v[:, :3], v[:, 3:]
             for i in self._linked:
                 node = self._bodies[i].node
                 transform = node.getWorldTransform()
                 pos[i], quat[i] = transform.translation(), transform.quaternion().wxyz()
                 lin[i], ang[i] = node.getLinearVelocity(), node.getAngularVelocity()
-        pos[self._static], quat[self._static] = self._static_pos, self._static_quat
+        if self._static:
+            pos[self._static_at], quat[self._static_at] = self._static_pos, self._static_quat
         # q and -q are one rotation: keep the sign continuous, as ODE's integrated quaternion is.
         flip = np.einsum("ij,ij->i", quat, self._prev_quat) < 0.0
-        quat[flip] *= -1.0
+        if flip.any():
+            quat[flip] *= -1.0
         self._prev_quat = quat.copy()
-        bad = ~np.isfinite(np.hstack([pos, quat, lin, ang])).all(axis=1)
-        if bad.any():
-            body = self.world.bodies[int(np.argmax(bad))].name
+        finite = np.isfinite
+        if not (finite(pos).all() and finite(quat).all() and finite(lin).all() and finite(ang).all()):
+            body = self.world.bodies[int(np.argmax(~finite(np.hstack([pos, quat, lin, ang])).all(axis=1)))].name
             raise EngineFailure(
                 f"dart: body `{body}` has a non-finite state after step {self._steps}",
                 backend=_NAME,
@@ -214,55 +223,14 @@ class DartBackend(Backend):
         m = len(self._joints)
         position, velocity = np.full(m, math.nan), np.full(m, math.nan)
         with map_engine_errors(_NAME, "reading joint states"):
-            for j, h in enumerate(self._joints):
-                if h.spec.kind in (JointKind.SLIDER, JointKind.HINGE):
-                    position[j] = h.sign * h.joint.getPosition(0)
-                    velocity[j] = h.sign * h.joint.getVelocity(0)
+            for j, joint, sign in self._coordinates:
+                position[j] = sign * joint.getPosition(0)
+                velocity[j] = sign * joint.getVelocity(0)
         return JointStates(position, velocity, self._motor_force.copy())
 
     def contacts(self) -> list[Contact]:
-        pairs: list[tuple[int, int]] = []
-        depth: list[float] = []
-        force: list[Any] = []
-        normal: list[Any] = []
         with map_engine_errors(_NAME, "reading contacts"):
-            for c in self._dart.getLastCollisionResult().getContacts():
-                pair = self._pair(c)
-                if pair is not None:
-                    pairs.append(pair)
-                    depth.append(c.penetrationDepth)
-                    force.append(c.force)
-                    normal.append(c.normal)
-        if not pairs:
-            return []
-        normal_force = np.abs(np.einsum("ij,ij->i", np.array(force), np.array(normal)))
-        found: dict[tuple[int, int], list[float]] = {}
-        for pair, d, f in zip(pairs, depth, normal_force.tolist(), strict=True):
-            entry = found.setdefault(pair, [0, 0.0, 0.0])
-            entry[0] += 1
-            entry[1] = max(entry[1], d)
-            entry[2] += f
-        return [Contact(a, b, int(e[0]), e[1], e[2]) for (a, b), e in sorted(found.items())]
-
-    def _pair(self, contact: Any) -> tuple[int, int] | None:
-        """The (a < b) body indices of a DART contact; None between two static bodies (never reported)."""
-        a, b = self._body_of(contact.collisionObject1), self._body_of(contact.collisionObject2)
-        if a in self._static_set and b in self._static_set:
-            return None
-        return (a, b) if a < b else (b, a)
-
-    def _body_of(self, collision_object: Any) -> int:
-        """The body index of a collision object (its shape node is named by the index).
-
-        Reading the name costs about 7 us; the wrapper objects are cached instead, which keeps them alive
-        so that dartpy hands back the same wrapper for the same object on later calls.
-        """
-        try:
-            return self._object_body[collision_object]
-        except KeyError:
-            index = int(collision_object.getShapeFrame().getName())
-            self._object_body[collision_object] = index
-            return index
+            return self._reader.contacts(self._dart.getLastCollisionResult().getContacts())
 
     def _match_touching_pairs(self) -> None:
         """Give the pairs about to touch their surfaces (worlds whose pairs have no fixed solution).
@@ -273,7 +241,7 @@ class DartBackend(Backend):
         solver = self._dart.getConstraintSolver()
         result = dart.collision.CollisionResult()
         solver.getCollisionGroup().collide(solver.getCollisionOption(), result)
-        touching = sorted({p for p in map(self._pair, result.getContacts()) if p in self._relevant})
+        touching = sorted(self._reader.pairs(result.getContacts()) & self._relevant)
         if touching == self._touching:
             return
         try:
@@ -303,10 +271,19 @@ def _split(step: float, longest: Any) -> int:
     return max(1, math.ceil(step / longest - 1e-9))
 
 
+def _rows(indices: list[int]) -> slice | np.ndarray:
+    """Row indices as a slice when they are consecutive (cheaper to assign through), else an array."""
+    if indices and indices == list(range(indices[0], indices[-1] + 1)):
+        return slice(indices[0], indices[-1] + 1)
+    return np.array(indices, dtype=np.intp)
+
+
 def rotvec_to_quat(rv: np.ndarray) -> np.ndarray:
     """(N, 3) rotation vectors -> (N, 4) unit quaternions (w, x, y, z)."""
-    angle = np.linalg.norm(rv, axis=1)
+    angle = np.sqrt(np.add.reduce(rv * rv, axis=(1,)))  # np.linalg.norm(rv, axis=1) without its checks
     small = angle < 1e-8
     safe = np.where(small, 1.0, angle)
     scale = np.where(small, 0.5 - angle * angle / 48.0, np.sin(0.5 * angle) / safe)
-    return np.hstack([np.cos(0.5 * angle)[:, None], rv * scale[:, None]])
+    quat = np.empty((len(rv), 4))
+    quat[:, 0], quat[:, 1:] = np.cos(0.5 * angle), rv * scale[:, None]
+    return quat

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from collections.abc import Mapping
+from itertools import repeat
 from typing import Any, ClassVar
 
 import mujoco
@@ -42,6 +43,10 @@ _no_log_file()
 _Pairs = tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]  # pair code a*N+b, points, depth, force
 _NO_PAIRS: _Pairs = (np.zeros(0, np.int64), np.zeros(0, np.int64), np.zeros(0), np.zeros(0))
 _BAD_STATE = (mujoco.mjtWarning.mjWARN_BADQPOS, mujoco.mjtWarning.mjWARN_BADQVEL, mujoco.mjtWarning.mjWARN_BADQACC)
+_BAD = slice(int(_BAD_STATE[0]), int(_BAD_STATE[-1]) + 1)  # their counters in MjData.warning.number
+_RATED = (JointKind.SLIDER, JointKind.HINGE)
+_YZX, _ZXY = np.array([1, 2, 0]), np.array([2, 0, 1])  # cross(a, r) = a[YZX]*r[ZXY] - a[ZXY]*r[YZX]
+_NEW_CONTACT = tuple.__new__  # Contact._make without its length check: the rows are built with 5 fields
 
 
 class MujocoBackend(Backend):
@@ -86,7 +91,18 @@ class MujocoBackend(Backend):
         self._helper_dof = lay.helper_dof[motors][np.argsort(lay.motor_id[motors])]
         self._target = np.zeros(motors.size)  # per slot, in the MuJoCo joint's coordinate
         self._motor_sum = np.zeros(motors.size)
-        self._pairs = _NO_PAIRS
+        self._earlier: list[_Pairs] = []  # grouped contacts of the step's engine steps but the last
+        self._listed: list[Contact] | None = []  # None: the last engine step's contacts are still in MjData
+        self._warnings = self._d.warning.number  # live views into MjData
+        self._qpos, self._qvel = self._d.qpos, self._d.qvel
+        owner = lay.geom_body
+        n = len(world.bodies)  # geom pair -> code a*N+b of its bodies (a < b), for _touching
+        self._pair_code = np.minimum.outer(owner, owner) * n + np.maximum.outer(owner, owner)
+        rated = np.array([j for j, joint in enumerate(world.joints) if joint.kind in _RATED], dtype=np.int64)
+        self._rated = rated  # the joints with a coordinate: slider, hinge
+        self._rated_qpos, self._rated_dof = m.jnt_qposadr[lay.joint_id[rated]], m.jnt_dofadr[lay.joint_id[rated]]
+        self._motored = motors  # world joints with a motor, their slots, signs
+        self._motored_slot, self._motored_sign = self._motor_of[motors], self._sign[motors]
         self._steps = 0
         self._stale = True
         for i, body in enumerate(world.bodies):
@@ -138,32 +154,38 @@ class MujocoBackend(Backend):
     # --- stepping -------------------------------------------------------------------------------
 
     def step(self) -> None:
-        m, d = self._m, self._d
+        m, d, nsteps, motors = self._m, self._d, self._nsteps, self._helper_dof.size > 0
+        earlier: list[_Pairs] = []
         with map_engine_errors(self.name, "mj_step"):
             if self._forced:
                 d.xfrc_applied[:] = self._xfrc  # held for every substep of this step, then cleared
-            self._motor_sum[:] = 0.0
-            touching = []
-            for k in range(self._nsteps):
+            if motors:
+                self._motor_sum[:] = 0.0
+            for k in range(nsteps):
                 if k:
                     self._place_kinematic(k * self._h)
-                d.qvel[self._helper_dof] = self._target
+                if motors:
+                    d.qvel[self._helper_dof] = self._target
                 _coulomb.step(m, d)
-                self._motor_sum -= d.qfrc_constraint[self._helper_dof]  # the helper feels -(motor force)
-                touching.append(self._touching())
+                if motors:
+                    self._motor_sum -= d.qfrc_constraint[self._helper_dof]  # the helper feels -(motor force)
+                if k + 1 < nsteps:  # the last engine step's contacts stay in MjData until contacts() asks
+                    earlier.append(self._touching())
             if self._forced:
                 d.xfrc_applied[:] = 0.0
                 self._xfrc[:] = 0.0
                 self._forced = False
             self._steps += 1
-            for i, (pos, quat, lin, ang) in self._kinematic.items():  # now exactly where the velocity says
+            if self._kinematic:
                 dt = self.world.dt
-                end = (pos[0] + lin[0] * dt, pos[1] + lin[1] * dt, pos[2] + lin[2] * dt)
-                self._kinematic[i] = (end, integrate_quat(quat, ang, dt), lin, ang)
-            self._place_kinematic(0.0)
-        self._check()
-        self._pairs = self._merge(touching)
+                for i, (pos, quat, lin, ang) in self._kinematic.items():  # now exactly where the velocity says
+                    end = (pos[0] + lin[0] * dt, pos[1] + lin[1] * dt, pos[2] + lin[2] * dt)
+                    self._kinematic[i] = (end, integrate_quat(quat, ang, dt), lin, ang)
+                self._place_kinematic(0.0)
+        self._earlier = earlier
+        self._listed = None  # contacts() groups the last engine step's contacts when first asked
         self._stale = True
+        self._check()
 
     def _place_kinematic(self, t: float) -> None:
         """Impose every kinematic body's pose at time ``t`` into the step, and its velocity."""
@@ -204,10 +226,9 @@ class MujocoBackend(Backend):
                 self._d.qvel[dof : dof + 3] = quat_rotate(quat_conj(child.quat), ang)
 
     def _check(self) -> None:
-        d = self._d
-        bad = any(d.warning[w].number for w in _BAD_STATE)
-        if not bad and np.isfinite(d.qpos).all() and np.isfinite(d.qvel).all():
+        if not self._warnings[_BAD].any() and np.isfinite(self._qpos).all() and np.isfinite(self._qvel).all():
             return
+        d = self._d
         dofs = set(np.flatnonzero(~np.isfinite(d.qvel)))
         dofs |= {d.warning[w].lastinfo for w in _BAD_STATE[1:] if d.warning[w].number}  # lastinfo: the dof
         bad_bodies = {self._m.dof_bodyid[i] for i in dofs if 0 <= i < self._m.nv}
@@ -224,19 +245,20 @@ class MujocoBackend(Backend):
     # --- contacts -------------------------------------------------------------------------------
 
     def _touching(self) -> _Pairs:
-        """Body pairs touching (distance <= 0) in the last engine step."""
+        """Body pairs touching (distance <= 0) in the last engine step (MjData keeps them until the next)."""
         d, n = self._d, self._d.ncon
         if n == 0:
             return _NO_PAIRS
         c = d.contact
-        keep = c.dist[:n] <= 0.0
-        owners = self._layout.geom_body[c.geom[:n][keep]]
-        code = owners.min(axis=1) * len(self.world.bodies) + owners.max(axis=1)
-        rows = c.efc_address[:n][keep]
-        force = np.zeros(rows.size)  # a contact at distance 0 is "in the gap": touching, with no row
-        active = rows >= 0
-        force[active] = d.efc_force[rows[active]]  # elliptic cone: a contact's first row is its normal
-        return _by_pair(code, -c.dist[:n][keep], force)
+        dist, geom, rows = c.dist[:n], c.geom[:n], c.efc_address[:n]
+        keep = dist <= 0.0
+        if not keep.all():
+            dist, geom, rows = dist[keep], geom[keep], rows[keep]
+        code = self._pair_code[geom[:, 0], geom[:, 1]]
+        # elliptic cone: a contact's first row is its normal; a contact at distance 0 is "in the gap":
+        # touching, with no row (address -1, 0 N; efc_force[-1] is only read, then dropped, when nefc > 0)
+        force = np.where(rows >= 0, d.efc_force[rows], 0.0) if d.nefc else np.zeros(rows.size)
+        return _by_pair(code, -dist, force)
 
     def _merge(self, touching: list[_Pairs]) -> _Pairs:
         """Pairs touching in any engine step of the scenario step: most points, deepest, summed force."""
@@ -246,12 +268,14 @@ class MujocoBackend(Backend):
         return _by_pair(code, depth, force, points)
 
     def contacts(self) -> list[Contact]:
-        code, points, depth, force = self._pairs
-        n = len(self.world.bodies)
-        return [
-            Contact(int(p // n), int(p % n), int(k), float(x), float(f / self._nsteps))  # force: step mean
-            for p, k, x, f in zip(code, points, depth, force, strict=True)
-        ]
+        if self._listed is None:  # first call since the step: group the last engine step's contacts now
+            code, points, depth, force = self._merge([*self._earlier, self._touching()])
+            n = len(self.world.bodies)
+            mean = force / self._nsteps if self._nsteps > 1 else force  # force: the step's mean
+            a, b = (code // n).tolist(), (code % n).tolist()
+            rows = zip(a, b, points.tolist(), depth.tolist(), mean.tolist(), strict=True)
+            self._listed = list(map(_NEW_CONTACT, repeat(Contact), rows))
+        return self._listed.copy()
 
     # --- reads ----------------------------------------------------------------------------------
 
@@ -267,23 +291,21 @@ class MujocoBackend(Backend):
     def body_states(self) -> BodyStates:
         self._refresh()
         d, ids = self._d, self._layout.body_id
-        pos = d.xpos[ids].copy()
-        ang = d.cvel[ids, :3].copy()
-        lin = d.cvel[ids, 3:] + np.cross(ang, pos - d.subtree_com[self._root])  # cvel is about the root's COM
-        return BodyStates(pos=pos, quat=d.xquat[ids].copy(), lin_vel=lin, ang_vel=ang)
+        pos = d.xpos[ids]
+        ang = d.cvel[ids, :3]
+        r = pos - d.subtree_com[self._root]  # cvel is about the root's COM; np.cross's products, in its order:
+        lin = d.cvel[ids, 3:] + (ang[:, _YZX] * r[:, _ZXY] - ang[:, _ZXY] * r[:, _YZX])
+        return BodyStates(pos=pos, quat=d.xquat[ids], lin_vel=lin, ang_vel=ang)
 
     def joint_states(self) -> JointStates:
-        n = len(self.world.joints)
+        n, rated, motored = len(self.world.joints), self._rated, self._motored
         position, velocity, force = np.full(n, np.nan), np.full(n, np.nan), np.zeros(n)
-        m, d, lay = self._m, self._d, self._layout
-        for j, joint in enumerate(self.world.joints):
-            if joint.kind not in (JointKind.SLIDER, JointKind.HINGE):
-                continue
-            jid, sign = lay.joint_id[j], self._sign[j]
-            position[j] = sign * d.qpos[m.jnt_qposadr[jid]]
-            velocity[j] = sign * d.qvel[m.jnt_dofadr[jid]]
-            if self._motor_of[j] >= 0:
-                force[j] = sign * self._motor_sum[self._motor_of[j]] / self._nsteps
+        if rated.size:
+            sign = self._sign[rated]
+            position[rated] = sign * self._qpos[self._rated_qpos]
+            velocity[rated] = sign * self._qvel[self._rated_dof]
+        if motored.size:
+            force[motored] = self._motored_sign * self._motor_sum[self._motored_slot] / self._nsteps
         return JointStates(position=position, velocity=velocity, motor_force=force)
 
     def settings(self) -> dict[str, Any]:
@@ -315,7 +337,12 @@ def _by_pair(code: np.ndarray, depth: np.ndarray, force: np.ndarray, points: np.
         return _NO_PAIRS
     order = np.lexsort((depth, code))  # by pair, deepest last
     code, depth, force = code[order], depth[order], force[order]
-    last = np.flatnonzero(np.append(code[1:] != code[:-1], True))
-    first = np.concatenate(([0], last[:-1] + 1))
+    starts = np.empty(code.size, dtype=bool)
+    starts[0] = True
+    np.not_equal(code[1:], code[:-1], out=starts[1:])
+    first = np.flatnonzero(starts)
+    last = np.empty_like(first)
+    last[:-1] = first[1:] - 1
+    last[-1] = code.size - 1
     count = last - first + 1 if points is None else np.maximum.reduceat(points[order], first)
-    return code[last], count, depth[last], np.add.reduceat(force, first)
+    return code[first], count, depth[last], np.add.reduceat(force, first)

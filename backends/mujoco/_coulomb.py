@@ -47,10 +47,13 @@ def step(m: mujoco.MjModel, d: mujoco.MjData) -> int:
     n = d.ncon
     if n:
         con = d.contact
-        adr, mu = con.efc_address[:n], con.friction[:n, 0]
-        keep = (adr >= 0) & (con.dim[:n] == 3) & (mu <= MU_COULOMB)  # the adapter's pairs: condim 3 or 1
-        if keep.any():
-            solves += _correct(m, d, adr[keep], mu[keep], con.mu[:n][keep])
+        mu = con.friction[:n, 0]
+        keep = mu <= MU_COULOMB
+        if keep.any():  # else no contact is corrected (cheapest test first)
+            adr = con.efc_address[:n]
+            keep &= (adr >= 0) & (con.dim[:n] == 3)  # the adapter's pairs: condim 3 or 1
+            if keep.any():
+                solves += _correct(m, d, adr[keep], mu[keep], con.mu[:n][keep])
     mujoco.mj_checkAcc(m, d)
     mujoco.mj_implicit(m, d)  # mj_step's integrator for implicitfast
     return solves

@@ -13,6 +13,7 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
+from panda3d.core import Datagram
 
 from ..base import Backend
 from ..errors import BackendError, EngineFailure, map_engine_errors
@@ -70,6 +71,13 @@ class OdeBackend(Backend):
             if b.motion is Motion.KINEMATIC
         }
         self._dynamic = [i for i, b in enumerate(world.bodies) if b.motion is Motion.DYNAMIC]
+        self._dynamic_bodies = [self._scene.bodies[i] for i in self._dynamic]
+        # Each body's state row (pos, quat, lin_vel, ang_vel): static rows set here, the others per read.
+        self._fixed_rows = np.zeros((n, 13))
+        for i, b in enumerate(world.bodies):
+            if b.motion is Motion.STATIC:
+                self._fixed_rows[i, 0:3], self._fixed_rows[i, 3:7] = b.pos, b.quat
+        self._stepper = self._scene.world.step if self.options.stepper == "step" else self._scene.world.quickStep
         self._motor_force = np.zeros(len(world.joints))
         self._steps = 0
         self._states: BodyStates | None = None  # fresh states, dropped by anything that moves a body
@@ -95,31 +103,37 @@ class OdeBackend(Backend):
 
     def step(self) -> None:
         self._require_open()
-        world, scene = self.world, self._scene
+        world, scene, collider, stepper = self.world, self._scene, self._collider, self._stepper
         n, dt = world.substeps, world.dt
         h = dt / n
-        stepper = scene.world.step if self.options.stepper == "step" else scene.world.quickStep
-        motor = np.zeros(len(scene.joints))
+        joints, pushed, kinematic = scene.joints, self._pushed, self._kinematic
+        motor = np.zeros(len(joints)) if joints else None
         with map_engine_errors(self.name, f"step at t={self._steps * dt:.6g} s"):
             for sub in range(n):
                 last = sub == n - 1
-                self._collider.collide(report=last)
-                for i in self._pushed:
+                collider.collide(report=last)
+                for i in pushed:
                     body = scene.bodies[i]
                     body.addForce(*self._force[i])  # type: ignore[union-attr]
                     body.addTorque(*self._torque[i])  # type: ignore[union-attr]
-                limits = [self._limit(j) for j in scene.joints]
-                stepper(h)
-                for k, (joint, limit) in enumerate(zip(scene.joints, limits, strict=True)):
-                    motor[k] += self._motor(k, joint, limit)
-                self._collider.after_step(report=last)
-                self._place_kinematic(dt if last else h * (sub + 1), advance=last)
-        self._force[:] = 0.0
-        self._torque[:] = 0.0
-        self._pushed.clear()
-        self._motor_force = motor / n
+                if motor is None:
+                    stepper(h)
+                else:
+                    limits = [self._limit(j) for j in joints]
+                    stepper(h)
+                    for k, (joint, limit) in enumerate(zip(joints, limits, strict=True)):
+                        motor[k] += self._motor(k, joint, limit)
+                collider.after_step(report=last)
+                if kinematic:
+                    self._place_kinematic(dt if last else h * (sub + 1), advance=last)
+        if pushed:
+            self._force[:] = 0.0
+            self._torque[:] = 0.0
+            pushed.clear()
+        if motor is not None:
+            self._motor_force = motor / n
         self._steps += 1
-        self._states = self._good = self._check(self._read_states())
+        self._states = self._good = self._check(self._read_rows())
 
     def _place_kinematic(self, t: float, *, advance: bool) -> None:
         """Put each kinematic body where its velocity takes it ``t`` after the step began."""
@@ -185,29 +199,33 @@ class OdeBackend(Backend):
 
     # --- reading -------------------------------------------------------------------------------------
 
-    def _read_states(self) -> BodyStates:
-        n = len(self.world.bodies)
-        pos, quat = np.zeros((n, 3)), np.zeros((n, 4))
-        lin, ang = np.zeros((n, 3)), np.zeros((n, 3))
-        for i, spec in enumerate(self.world.bodies):
-            if spec.motion is Motion.STATIC:
-                pos[i], quat[i] = spec.pos, spec.quat
-            elif spec.motion is Motion.KINEMATIC:  # the commanded pose, exact (ODE stores float32)
-                k = self._kinematic[i]
-                pos[i], quat[i], lin[i], ang[i] = k.pos, k.quat, k.lin, k.ang
-        dynamic = self._dynamic
-        if dynamic:
-            rows: list[tuple[float, ...]] = []
-            for i in dynamic:
-                b = self._scene.bodies[i]
-                p, q, v, w = b.getPosition(), b.getQuaternion(), b.getLinearVel(), b.getAngularVel()  # type: ignore[union-attr]
-                rows.append((p[0], p[1], p[2], q[0], q[1], q[2], q[3], v[0], v[1], v[2], w[0], w[1], w[2]))
-            data = np.array(rows, dtype=float)
-            pos[dynamic], quat[dynamic] = data[:, 0:3], data[:, 3:7]
-            lin[dynamic], ang[dynamic] = data[:, 7:10], data[:, 10:13]
-        return BodyStates(pos, quat, lin, ang)
+    def _read_rows(self) -> np.ndarray:
+        """All bodies' states, one (N, 13) array: each row pos, quat, lin_vel, ang_vel."""
+        rows = self._fixed_rows.copy()
+        for i, k in self._kinematic.items():  # the commanded pose, exact (ODE stores float32)
+            row = rows[i]
+            row[0:3], row[3:7], row[7:10], row[10:13] = k.pos, k.quat, k.lin, k.ang
+        if self._dynamic:
+            # Each vector written as ODE's float32 values (little-endian), widened to float64 exactly.
+            dg = Datagram()
+            for b in self._dynamic_bodies:
+                b.getPosition().writeDatagramFixed(dg)  # type: ignore[union-attr]
+                b.getQuaternion().writeDatagramFixed(dg)  # type: ignore[union-attr]
+                b.getLinearVel().writeDatagramFixed(dg)  # type: ignore[union-attr]
+                b.getAngularVel().writeDatagramFixed(dg)  # type: ignore[union-attr]
+            rows[self._dynamic] = np.frombuffer(dg.getMessage(), dtype="<f4").reshape(-1, 13)
+        return rows
 
-    def _check(self, states: BodyStates) -> BodyStates:
+    @staticmethod
+    def _states_of(rows: np.ndarray) -> BodyStates:
+        return BodyStates(rows[:, 0:3], rows[:, 3:7], rows[:, 7:10], rows[:, 10:13])
+
+    def _check(self, rows: np.ndarray) -> BodyStates:
+        """The states of ``rows``, or EngineFailure when a body blew up (non-finite, or far or fast)."""
+        states = self._states_of(rows)
+        # One look first: with no component above half the limits, every norm is below them (sqrt(3)/2 < 1).
+        if rows.size and np.abs(rows).max() < 0.5 * min(RUNAWAY_DISTANCE, RUNAWAY_SPEED):
+            return states
         bad = ~np.isfinite(states.pos).all(axis=1) | ~np.isfinite(states.lin_vel).all(axis=1)
         bad |= ~np.isfinite(states.quat).all(axis=1) | ~np.isfinite(states.ang_vel).all(axis=1)
         with np.errstate(invalid="ignore"):
@@ -229,12 +247,14 @@ class OdeBackend(Backend):
         self._require_open()
         if self._states is None:
             with map_engine_errors(self.name, "reading body states"):
-                self._states = self._read_states()
+                self._states = self._states_of(self._read_rows())
         s = self._states
         return BodyStates(s.pos.copy(), s.quat.copy(), s.lin_vel.copy(), s.ang_vel.copy())
 
     def joint_states(self) -> JointStates:
         self._require_open()
+        if not self._scene.joints:
+            return JointStates(np.zeros(0), np.zeros(0), self._motor_force.copy())
         with map_engine_errors(self.name, "reading joint states"):
             read = [self._position(j) for j in self._scene.joints]
         m = len(read)

@@ -14,11 +14,15 @@ Two ways, selected by the ``collide`` option, that make the same contact joints:
 ``dContactApprox1`` makes ODE bound friction by mu times the normal force (a Coulomb coefficient, the
 scenario language's meaning) instead of by mu newtons. The report (pairs, points, depth) comes from
 the last substep's collision; with ``contact_forces`` the normal force is read from joint feedback.
+
+Per step only what arming feedback needs is done (one tuple per touching pair); the contact geoms,
+depths and forces are read through panda3d only when ``contacts()`` is called.
 """
 
 from __future__ import annotations
 
 import math
+from operator import itemgetter
 from typing import Any
 
 from panda3d.core import EventQueue
@@ -36,19 +40,13 @@ from ._build import MAX_SURFACE_CLASSES, Scene
 
 CALLBACK_MAX_CONTACTS = 150  # PyODE's ode.collide() default, as the lab calls it
 _MODE = OdeSurfaceParameters.MFContactBounce | OdeSurfaceParameters.MFContactApprox1
+_JT_CONTACT = OdeJoint.JTContact
+_BY_PAIR = itemgetter(0, 1)
 
-
-class _Pair:
-    """One touching pair in the last substep: its contact geoms and (when armed) feedback slots."""
-
-    __slots__ = ("a", "b", "geoms", "owner", "start", "feedback")
-
-    def __init__(self, i: int, j: int, geoms: tuple[Any, ...]) -> None:
-        self.a, self.b = (i, j) if i < j else (j, i)
-        self.geoms = geoms  # OdeContactGeom, in ODE's order
-        self.owner = -1  # the body whose joint list holds this pair's contact joints
-        self.start = 0  # how many contacts that body had in earlier pairs of this collide
-        self.feedback: list[OdeJointFeedback] = []
+#: One touching pair of the reported substep: (a, b, entry, first) with a < b its bodies, entry its
+#: OdeCollisionEntry (contact geoms in ODE's order) and first the index of its first feedback slot in
+#: the pool (its contacts' slots follow in that order), -1 when not armed.
+_Record = tuple[int, int, Any, int]
 
 
 class Collider:
@@ -58,16 +56,20 @@ class Collider:
         self.scene = scene
         self.contact_forces = contact_forces
         self._event = event_name
+        self._queue = EventQueue.getGlobalEventQueue()
+        self._index = scene.geom_index
+        self._bodies = scene.bodies
         self._pool: list[OdeJointFeedback] = []
         self._used = 0
-        self._pairs: list[_Pair] = []
+        self._pairs: list[_Record] = []
         self._report: list[Contact] | None = []
-        self._reported: list[_Pair] = []
-        self._seen: dict[int, int] = {}
+        self._reported: list[_Record] = []
         classes = max(scene.surface_class, default=0) + 1
         # autoCollide's table is indexed by a byte; beyond that, the callback does every pair.
         self.mode = mode if classes <= MAX_SURFACE_CLASSES else "callback"
-        if self.mode == "auto":
+        self._auto = self.mode == "auto"
+        self._event_set: str | None = None  # the collision event last given to the space ("": none)
+        if self._auto:
             world, space = scene.world, scene.space
             world.initSurfaceTable(classes)
             cfm = world.getCfm()
@@ -85,17 +87,18 @@ class Collider:
 
     def collide(self, report: bool) -> None:
         """Make this substep's contact joints; with ``report``, record the pairs (and arm feedback)."""
-        self._pairs = []
         self._used = 0
-        if self.mode == "auto":
-            self.scene.space.setCollisionEvent(self._event if report else "")
-            self.scene.space.autoCollide()
-            if report:
-                self._drain_events()
-                if self.contact_forces:
-                    self._arm_auto_feedback()
+        space = self.scene.space
+        if self._auto:
+            event = self._event if report else ""
+            if event != self._event_set:
+                space.setCollisionEvent(event)
+                self._event_set = event
+            space.autoCollide()
+            self._pairs = self._drain_events() if report else []
         else:
-            self.scene.space.collide(report, self._near_callback)
+            self._pairs = []
+            space.collide(report, self._near_callback)
 
     def after_step(self, report: bool) -> None:
         """Keep the reported pairs (read lazily: feedback was filled by the step), empty the group."""
@@ -106,58 +109,81 @@ class Collider:
 
     def contacts(self) -> list[Contact]:
         if self._report is None:
-            pairs = sorted(self._reported, key=lambda p: (p.a, p.b))
-            self._report = [_summary(p) for p in pairs]
+            self._report = _summaries(sorted(self._reported, key=_BY_PAIR), self._pool)
         return list(self._report)
 
     # --- auto ----------------------------------------------------------------------------------------
 
-    def _drain_events(self) -> None:
-        queue = EventQueue.getGlobalEventQueue()
-        index, bodies = self.scene.geom_index, self.scene.bodies
-        seen: dict[int, int] = {}  # body index -> contacts so far (its contact joints, oldest first)
-        others = []
-        while not queue.isQueueEmpty():
-            event = queue.dequeueEvent()
-            if event.name != self._event:
+    def _drain_events(self) -> list[_Record]:
+        """This collide's pairs, from the collision events autoCollide threw, in their order."""
+        queue, name = self._queue, self._event
+        empty, dequeue = queue.isQueueEmpty, queue.dequeueEvent
+        entries: list[Any] = []  # OdeCollisionEntry
+        others: list[Any] = []
+        while not empty():
+            event = dequeue()
+            if event.name == name:
+                entries.append(event.getParameter(0).getTypedRefCountValue())  # OdeCollisionEntry
+            else:
                 others.append(event)
-                continue
-            entry = event.getParameter(0).getPtr().getValue()  # OdeCollisionEntry
-            i, j = index[hash(entry.getGeom1().getId())], index[hash(entry.getGeom2().getId())]
-            pair = _Pair(i, j, entry.getContactGeoms())
-            pair.owner = i if bodies[i] is not None else j
-            pair.start = seen.get(pair.owner, 0)
-            for x in (i, j):
-                if bodies[x] is not None:
-                    seen[x] = seen.get(x, 0) + len(pair.geoms)
-            self._pairs.append(pair)
-        self._seen = seen
         for event in others:  # not ours: put back
             queue.queueEvent(event)
+        index = self._index
+        if self.contact_forces:
+            return self._arm_auto_feedback(entries)
+        records: list[_Record] = []
+        for e in entries:
+            i, j = index[hash(e.getGeom1().getId())], index[hash(e.getGeom2().getId())]
+            records.append((i, j, e, -1) if i < j else (j, i, e, -1))
+        return records
 
-    def _arm_auto_feedback(self) -> None:
+    def _arm_auto_feedback(self, entries: list[Any]) -> list[_Record]:
         """Attach feedback to the contact joints autoCollide made (C++ objects we hold no handle to).
 
         ODE prepends each joint to its bodies' joint lists, so a body's first K joints are its K newest
-        contact joints, newest first; their creation order is the collision events' order.
+        contact joints, newest first; their creation order is the collision events' order. A pair's
+        joints are found through its first geom's body (the second's when the first is static).
         """
-        bodies, seen, pool = self.scene.bodies, self._seen, self._pool
-        total = sum(len(p.geoms) for p in self._pairs)
-        pool.extend(OdeJointFeedback() for _ in range(total - len(pool)))
+        index, bodies = self._index, self._bodies
+        seen: dict[int, int] = {}  # body index -> contacts so far (its contact joints, oldest first)
+        get = seen.get
+        plan: list[tuple[int, int, Any, int, int, int]] = []  # (i, j, entry, owner, owner's earlier contacts, count)
+        total = 0
+        for e in entries:
+            i, j = index[hash(e.getGeom1().getId())], index[hash(e.getGeom2().getId())]
+            count = e.getNumContacts()
+            total += count
+            if bodies[i] is not None:
+                start = get(i, 0)
+                seen[i] = start + count
+                if bodies[j] is not None:
+                    seen[j] = get(j, 0) + count
+                plan.append((i, j, e, i, start, count))
+            else:
+                start = get(j, 0)
+                seen[j] = start + count
+                plan.append((i, j, e, j, start, count))
+        pool = self._pool
+        if total > len(pool):
+            pool.extend([OdeJointFeedback() for _ in range(total - len(pool))])
+        records: list[_Record] = []
+        append = records.append
         used = 0
-        for pair in self._pairs:
-            body = bodies[pair.owner]
-            top = seen[pair.owner] - 1 - pair.start  # index of the pair's first contact joint
-            first = body.getJoint(top)  # type: ignore[union-attr]
-            if first.getJointType() != OdeJoint.JTContact:  # the order assumption broke: no force
+        for i, j, e, owner, start, count in plan:
+            joint = bodies[owner].getJoint  # type: ignore[union-attr]
+            top = seen[owner] - 1 - start  # index of the pair's first contact joint
+            first = joint(top)
+            a, b = (i, j) if i < j else (j, i)
+            if first.getJointType() != _JT_CONTACT:  # the order assumption broke: no force
+                append((a, b, e, -1))
                 continue
-            count = len(pair.geoms)
-            pair.feedback = pool[used : used + count]
-            used += count
-            first.setFeedback(pair.feedback[0])
+            first.setFeedback(pool[used])
             for k in range(1, count):
-                body.getJoint(top - k).setFeedback(pair.feedback[k])  # type: ignore[union-attr]
+                joint(top - k).setFeedback(pool[used + k])
+            append((a, b, e, used))
+            used += count
         self._used = used
+        return records
 
     # --- callback ------------------------------------------------------------------------------------
 
@@ -169,21 +195,18 @@ class Collider:
         i, j = scene.geom_index[hash(geom1.getId())], scene.geom_index[hash(geom2.getId())]
         params = self._params[(scene.surface_class[i], scene.surface_class[j])]
         body1, body2 = scene.bodies[i], scene.bodies[j]
-        geoms = entry.getContactGeoms()
         arm = report and self.contact_forces
-        pair = _Pair(i, j, geoms)
-        for geom in geoms:
+        first = self._used if arm else -1
+        for geom in entry.getContactGeoms():
             contact = OdeContact()
             contact.setGeom(geom)
             contact.setSurface(params)
             joint = OdeContactJoint(scene.world, scene.contact_group, contact)
             joint.attach(body1, body2)
             if arm:
-                fb = self._feedback()
-                joint.setFeedback(fb)
-                pair.feedback.append(fb)
+                joint.setFeedback(self._feedback())
         if report:
-            self._pairs.append(pair)
+            self._pairs.append((i, j, entry, first) if i < j else (j, i, entry, first))
 
     def _feedback(self) -> OdeJointFeedback:
         if self._used == len(self._pool):
@@ -193,16 +216,27 @@ class Collider:
         return fb
 
 
-def _summary(pair: _Pair) -> Contact:
-    force = math.nan
-    if pair.feedback:
-        # A contact row's force is along its normal and the friction rows are orthogonal to it, so
-        # |F1 . n| is that contact's normal force whichever body is the joint's first.
-        force = 0.0
-        for fb, geom in zip(pair.feedback, pair.geoms, strict=True):
-            force += abs(fb.getForce1().dot(geom.getNormal()))
-    depth = max(geom.getDepth() for geom in pair.geoms)
-    return Contact(pair.a, pair.b, len(pair.geoms), max(0.0, depth), force)
+def _summaries(records: list[_Record], pool: list[OdeJointFeedback]) -> list[Contact]:
+    """One Contact per pair, from its contact geoms and (when armed) its contacts' feedback."""
+    out: list[Contact] = []
+    append = out.append
+    for a, b, entry, first in records:
+        geoms = entry.getContactGeoms()
+        if first < 0:
+            force = math.nan
+            depth = max([geom.getDepth() for geom in geoms])
+        else:
+            # A contact row's force is along its normal and the friction rows are orthogonal to it, so
+            # |F1 . n| is that contact's normal force whichever body is the joint's first.
+            force = 0.0
+            depth = geoms[0].getDepth()  # then the largest, as max() picks it
+            for fb, geom in zip(pool[first : first + len(geoms)], geoms, strict=False):  # one slot per contact
+                force += abs(fb.getForce1().dot(geom.getNormal()))
+                d = geom.getDepth()
+                if d > depth:
+                    depth = d
+        append(Contact(a, b, len(geoms), depth if depth > 0.0 else 0.0, force))
+    return out
 
 
 def _mu(surface: Surface) -> float:

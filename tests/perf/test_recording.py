@@ -14,7 +14,8 @@ from runner.errors import TraceError
 from runner.run import run_loaded, trace_path
 from runner.scenario.load import load_scenario
 from runner.trace import TraceMeta
-from runner.trace_process import BackgroundTraceWriter
+from runner.trace_process import BATCH_STEPS, BackgroundTraceWriter
+from tests.unit.test_trace import write_trace
 
 ROOT = Path(__file__).resolve().parents[2]
 PILE = ROOT / "scenarios" / "box_pile.yaml"
@@ -42,6 +43,16 @@ def test_trace_process_writes_the_same_bytes(tmp_path: Path) -> None:
         process = run_loaded(loaded, "pybullet", tmp_path / "process", trace_process=True)
         assert inline.status == process.status == "passed"
         assert Path(process.trace).read_bytes() == Path(inline.trace).read_bytes()
+
+
+def test_trace_process_sends_every_kind_of_call_in_batches_and_writes_the_same_bytes(tmp_path: Path) -> None:
+    """53 steps = 3 full batches and a part; a NaN contact force, events, sounds, logs, a rescaled
+    scene and state variables between steps, in the in-process writer's order."""
+    steps = 3 * BATCH_STEPS + 5
+    write_trace(tmp_path / "inline.mcap", steps=steps)
+    write_trace(tmp_path / "process.mcap", steps=steps, writer=BackgroundTraceWriter)
+    assert (tmp_path / "process.mcap").read_bytes() == (tmp_path / "inline.mcap").read_bytes()
+    assert len(read_trace(tmp_path / "process.mcap").times) == steps
 
 
 def test_trace_process_refuses_an_existing_trace_and_finishes_interrupted_runs(tmp_path: Path) -> None:

@@ -64,8 +64,8 @@ def joints_at(t: float) -> bt.JointStates:
     return bt.JointStates(np.array([0.3 * t]), np.array([0.3]), np.array([-12.5]))
 
 
-def write_trace(path: Path, steps: int = 50, finish: bool = True, **kw: Any) -> TraceWriter:
-    w = TraceWriter(path, make_meta(), **kw)
+def write_trace(path: Path, steps: int = 50, finish: bool = True, writer: Any = TraceWriter, **kw: Any) -> Any:
+    w = writer(path, make_meta(), **kw)
     w.attach("unit.yaml", YAML, "application/yaml")
     w.attach("sounds/thud.wav", WAV, "audio/wav")
     w.scene(0.0, [

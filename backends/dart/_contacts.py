@@ -1,0 +1,103 @@
+"""Touching body pairs from DART's contact points: the per-step contact read of the DART backend.
+
+``CollisionResult.getContacts()`` lists contact points, each naming two collision objects. Reading a
+field of a point through dartpy costs 0.1-0.3 us (a numpy view for a vector), so each field is read
+once, one field at a time over all points, and the rest is done on arrays: body pairs from a cache
+of the collision objects, normal forces as one ``einsum``, and the per-pair count, deepest depth and
+summed normal force after a stable sort by pair, which keeps each pair's points in DART's order. The
+sums are added column by column, each pair's points in that order, so that every total is the same
+double as a point-by-point sum from 0.0, and the depths fold from 0.0 as Python's ``max`` does. This
+module does not import the engine.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from operator import attrgetter
+from typing import Any
+
+import numpy as np
+
+from ..types import Contact
+
+_FIRST, _SECOND = attrgetter("collisionObject1"), attrgetter("collisionObject2")
+_DEPTH, _FORCE, _NORMAL = attrgetter("penetrationDepth"), attrgetter("force"), attrgetter("normal")
+
+
+class ContactReader:
+    """Turns DART contact points into one :class:`Contact` per body pair (``a < b``), sorted by (a, b).
+
+    ``n_bodies`` is the number of bodies, ``static`` the indices of the static ones: pairs of two
+    static bodies are never reported.
+    """
+
+    def __init__(self, n_bodies: int, static: Sequence[int]) -> None:
+        self._n = n_bodies
+        self._static = np.zeros(n_bodies, dtype=bool)
+        self._static[list(static)] = True
+        self._object_body: dict[Any, int] = {}
+
+    def contacts(self, points: Sequence[Any]) -> list[Contact]:
+        """The touching pairs of ``points``: point count, deepest penetration, summed |force . normal|."""
+        if not points:
+            return []
+        lo, hi = self._pair_of_points(tuple(map(_FIRST, points)), tuple(map(_SECOND, points)))
+        key = lo * self._n + hi
+        depths = np.array(tuple(map(_DEPTH, points)))
+        vectors = np.frombuffer(b"".join((*map(_FORCE, points), *map(_NORMAL, points)))).reshape(2, -1, 3)
+        both_static = self._static[lo] & self._static[hi]
+        if both_static.any():
+            kept = ~both_static
+            if not kept.any():
+                return []
+            key, depths, vectors = key[kept], depths[kept], vectors[:, kept]
+        normal_force = np.abs(np.einsum("ij,ij->i", vectors[0], vectors[1]))
+        return _by_pair(self._n, key, depths, normal_force)
+
+    def pairs(self, points: Sequence[Any]) -> set[tuple[int, int]]:
+        """The (a < b) body pairs of ``points``, static pairs included."""
+        if not points:
+            return set()
+        lo, hi = self._pair_of_points(tuple(map(_FIRST, points)), tuple(map(_SECOND, points)))
+        return set(zip(lo.tolist(), hi.tolist(), strict=True))
+
+    def _pair_of_points(self, first: Sequence[Any], second: Sequence[Any]) -> tuple[np.ndarray, np.ndarray]:
+        """(lower, higher) body index of every point, from its two collision objects."""
+        a, b = self._bodies(first), self._bodies(second)
+        return np.minimum(a, b), np.maximum(a, b)
+
+    def _bodies(self, objects: Sequence[Any]) -> np.ndarray:
+        """The body indices of collision objects (each object's shape node is named by the index).
+
+        Reading the name costs about 7 us; the wrapper objects are cached instead, which keeps them
+        alive so that dartpy hands back the same wrapper for the same object on later calls.
+        """
+        known = self._object_body
+        try:
+            return np.fromiter(map(known.__getitem__, objects), dtype=np.intp, count=len(objects))
+        except KeyError:
+            for obj in objects:
+                if obj not in known:
+                    known[obj] = int(obj.getShapeFrame().getName())
+            return np.fromiter(map(known.__getitem__, objects), dtype=np.intp, count=len(objects))
+
+
+def _by_pair(n: int, key: np.ndarray, depth: np.ndarray, normal_force: np.ndarray) -> list[Contact]:
+    """One Contact per distinct ``key`` (a * n + b), in key order; points of a key kept in their order."""
+    order = np.argsort(key, kind="stable")
+    key, depth, normal_force = key[order], depth[order], normal_force[order]
+    start = np.flatnonzero(np.concatenate(([True], key[1:] != key[:-1])))
+    count = np.diff(np.append(start, len(key)))
+    if np.isnan(depth).any():  # NaN is skipped by Python's max fold but spreads through np.maximum
+        values = depth.tolist()
+        deepest = [max(0.0, *values[s : s + c]) for s, c in zip(start.tolist(), count.tolist(), strict=True)]
+    else:
+        top = np.maximum.reduceat(depth, start)
+        deepest = np.where(top > 0.0, top, 0.0).tolist()
+    total = normal_force[start]  # 0.0 + f == f, as every f = |F.n| >= +0.0
+    for j in range(1, int(count.max())):
+        more = count > j
+        total[more] += normal_force[start[more] + j]
+    pair = key[start]
+    rows = zip((pair // n).tolist(), (pair % n).tolist(), count.tolist(), deepest, total.tolist(), strict=True)
+    return list(map(Contact._make, rows))
