@@ -40,12 +40,35 @@ class BatchFigures:
     via: str = ""
     seconds: dict[int, list[float]] = field(default_factory=dict)  # jobs -> per repetition
     exit_codes: set[int] = field(default_factory=set)
+    #: jobs -> wall seconds of a fixed pure-Python loop split over that many processes, per repetition
+    ceiling: dict[int, list[float]] = field(default_factory=dict)
 
     def median(self, jobs: int) -> float:
         return statistics.median(self.seconds[jobs])
 
     def speedup(self, jobs: int) -> float:
         return self.median(1) / self.median(jobs)
+
+    def ceiling_speedup(self, jobs: int) -> float:
+        """What this machine gives perfectly parallel CPU work on ``jobs`` processes (NaN if not measured)."""
+        if jobs not in self.ceiling or 1 not in self.ceiling:
+            return float("nan")
+        return statistics.median(self.ceiling[1]) / statistics.median(self.ceiling[jobs])
+
+
+#: iterations of the calibration loop, split over the processes (about 2 s of one core)
+SPIN_WORK = 24_000_000
+
+
+def spin(jobs: int, work: int = SPIN_WORK) -> float:
+    """Wall seconds for ``work`` iterations of a pure-Python loop split over ``jobs`` processes started
+    together: perfectly parallel work with no I/O and no shared data, the machine's ceiling for ``-j``."""
+    code = f"x = 0\nfor i in range({work // jobs}):\n    x += i\n"
+    start = time.perf_counter()
+    children = [subprocess.Popen([sys.executable, "-c", code]) for _ in range(jobs)]
+    for child in children:
+        child.wait()
+    return time.perf_counter() - start
 
 
 def _command(files: Sequence[Path], backend: str, jobs: int, out: Path, cli: bool) -> list[str]:
@@ -72,7 +95,8 @@ def run(
                 fig.seconds.setdefault(j, []).append(time.perf_counter() - start)
                 fig.exit_codes.add(done.returncode)
                 shutil.rmtree(out, ignore_errors=True)
-            times = ", ".join(f"-j {j} {fig.seconds[j][-1]:.2f}s" for j in jobs)
+                fig.ceiling.setdefault(j, []).append(spin(j))
+            times = ", ".join(f"-j {j} {fig.seconds[j][-1]:.2f}s (pure loop {fig.ceiling[j][-1]:.2f}s)" for j in jobs)
             log(f"  batch round {rep + 1}/{repetitions}: {times}")
     return fig
 
