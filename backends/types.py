@@ -22,8 +22,9 @@ from __future__ import annotations
 
 import enum
 import math
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
+from functools import partial
 from typing import Any, NamedTuple
 
 import numpy as np
@@ -195,6 +196,15 @@ class BodyStates:
     lin_vel: np.ndarray  # (N, 3)
     ang_vel: np.ndarray  # (N, 3)
 
+    @classmethod
+    def from_rows(cls, rows: np.ndarray) -> BodyStates:
+        """Views of an (N, 13) array whose rows are pos, quat (w x y z), lin_vel, ang_vel."""
+        return cls(rows[:, 0:3], rows[:, 3:7], rows[:, 7:10], rows[:, 10:13])
+
+    def rows(self) -> np.ndarray:
+        """One (N, 13) float64 array: each row pos, quat (w x y z), lin_vel, ang_vel."""
+        return np.hstack((self.pos, self.quat, self.lin_vel, self.ang_vel)).astype(np.float64, copy=False)
+
 
 @dataclass
 class JointStates:
@@ -217,3 +227,9 @@ class Contact(NamedTuple):
     points: int  # number of contact points with distance <= 0
     depth: float  # largest penetration depth, >= 0
     normal_force: float  # summed normal force in N; NaN if the engine cannot say
+
+
+#: ``Contact`` from a (a, b, points, depth, normal_force) tuple without ``NamedTuple.__new__``'s Python
+#: frame (``Contact._make`` minus its length check): for adapters that build one per pair per step.
+#: The fields must already be plain ``int`` and ``float``.
+new_contact: Callable[[tuple[int, int, int, float, float]], Contact] = partial(tuple.__new__, Contact)

@@ -281,32 +281,32 @@ def _batch(b: BatchFigures) -> list[str]:
 #: process on the 100-box pile), for "what remains". Every item was measured; none is a guess.
 KNOWN_CAUSES = (
     "The trace in the run's process: /tf and /bodies format 20 numbers per body per step and /contacts one "
-    'object per touching pair, as integers of nanounits, then MCAP chunks them with LZ4: 0.3-0.4 ms per step '
+    "object per touching pair, as integers of nanounits, then MCAP chunks them with LZ4: 0.3-0.4 ms per step "
     "for 100 bodies alone, 0.5-0.75 ms inside runs (the engine's step evicts the caches between steps). "
-    '`--trace-process` moves formatting and writing to a second process; the run pays 0.1-0.15 ms per step '
+    "`--trace-process` moves formatting and writing to a second process; the run pays 0.1-0.15 ms per step "
     "for it (packing a step's doubles, 16 steps per pipe write, starting the writer and waiting for it at the"
-    ' end). What it gains depends on a free core and varies between runs on this two-core virtual machine '
+    " end). What it gains depends on a free core and varies between runs on this two-core virtual machine "
     "(compare each engine's two rows in the targets): the engine's step and reads get slower while the writer"
-    ' runs on the other core (shared cache and memory bandwidth), most on DART. `--record-every K` divides '
+    " runs on the other core (shared cache and memory bandwidth), most on DART. `--record-every K` divides "
     "the trace's cost by K.",
-    'Reading contacts is only needed for the trace here (the pile has no contact assertion), so the untraced '
+    "Reading contacts is only needed for the trace here (the pile has no contact assertion), so the untraced "
     "runs skip it; with the trace on, the engines' per-point costs dominate: PyBullet's getContactPoints "
-    'about 0.45 us per point (400-600 points), DART 0.1-0.3 us per field per point through dartpy (no batched'
-    ' read in dartpy 6.20), ODE about 4 panda3d calls per contact plus 2 per contact to arm joint feedback '
-    'for the normal forces.',
-    'Reading states: PyBullet and DART have no batched call for separate bodies (two engine calls per body '
-    'per step: about 0.2 ms for 100 bodies on PyBullet, 0.3-0.5 ms on DART); MuJoCo and ODE read in bulk '
-    '(under 0.06 ms).',
-    'MuJoCo: the pile is a small world for MuJoCo (0.5 ms per step), so any fixed Python cost per step weighs'
+    "about 0.45 us per point (400-600 points), DART 0.1-0.3 us per field per point through dartpy (no batched"
+    " read in dartpy 6.20), ODE about 4 panda3d calls per contact plus 2 per contact to arm joint feedback "
+    "for the normal forces.",
+    "Reading states: PyBullet and DART have no batched call for separate bodies (two engine calls per body "
+    "per step: about 0.2 ms for 100 bodies on PyBullet, 0.3-0.5 ms on DART); MuJoCo and ODE read in bulk "
+    "(under 0.06 ms).",
+    "MuJoCo: the pile is a small world for MuJoCo (0.5 ms per step), so any fixed Python cost per step weighs"
     " twice as much as on the other engines; the adapter's step adds about 0.03 ms to the custom Coulomb step"
-    ' measured alone (more inside runs, as above), and its explicit contact pairs (N(N+1)/2: 5,050 at 100 '
-    'boxes, 500,500 at 1000, 14 s and 765 MiB to build) make mj_collision about a third of mj_step1.',
-    'ODE: dWorldStep evicts the caches, so the same Python per step costs 2-3 times more inside the step loop'
+    " measured alone (more inside runs, as above), and its explicit contact pairs (N(N+1)/2: 5,050 at 100 "
+    "boxes, 500,500 at 1000, 14 s and 765 MiB to build) make mj_collision about a third of mj_step1.",
+    "ODE: dWorldStep evicts the caches, so the same Python per step costs 2-3 times more inside the step loop"
     " than alone; what the adapter adds to the hand-written loop (collision events drained from panda3d's "
     "queue, feedback armed) is near panda3d's per-call floor.",
     "The adapters' speed-ups behind these figures left every trace byte for byte the same (32 traces per "
-    'engine, every scenario and variant, compared before and after): a faster adapter never changes the '
-    'physics it reports.',
+    "engine, every scenario and variant, compared before and after): a faster adapter never changes the "
+    "physics it reports.",
 )
 
 

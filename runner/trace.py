@@ -267,7 +267,7 @@ class TraceWriter:
         state_vars: Mapping[str, bool | float | str],
     ) -> None:
         ns = self._ns(t)
-        rows = np.hstack((states.pos, states.quat, states.lin_vel, states.ang_vel)).astype(np.float64, copy=False)
+        rows = states.rows()
         sec, nsec = divmod(ns, 1_000_000_000)
         stamp = f'{{"sec":{sec},"nsec":{nsec}}}'
         self._write(tf.TOPIC_TF, ns, self._tf_tpl.render(rows[:, _TF_COLS].ravel(), stamp))

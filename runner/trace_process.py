@@ -42,7 +42,7 @@ _CONTACT_FIELDS = 5  # a, b, points, depth, normal_force
 
 
 def _pack_step(states: BodyStates, joints: JointStates, contacts: Sequence[Contact]) -> tuple[bytes, bytes, bytes]:
-    rows = np.hstack((states.pos, states.quat, states.lin_vel, states.ang_vel)).astype(np.float64, copy=False)
+    rows = states.rows()
     jrows = np.concatenate((joints.position, joints.velocity, joints.motor_force)).astype(np.float64, copy=False)
     pairs = struct.pack(f"{_CONTACT_FIELDS * len(contacts)}d", *chain.from_iterable(contacts))
     return rows.tobytes(), jrows.tobytes(), pairs
@@ -53,7 +53,7 @@ def _unpack_step(rows: bytes, jrows: bytes, pairs: bytes) -> tuple[BodyStates, J
     j = np.frombuffer(jrows, dtype=np.float64).reshape(3, -1)
     c = np.frombuffer(pairs, dtype=np.float64).reshape(-1, _CONTACT_FIELDS).tolist()
     contacts = [Contact(int(a), int(b), int(k), d, f) for a, b, k, d, f in c]
-    return BodyStates(r[:, 0:3], r[:, 3:7], r[:, 7:10], r[:, 10:13]), JointStates(j[0], j[1], j[2]), contacts
+    return BodyStates.from_rows(r), JointStates(j[0], j[1], j[2]), contacts
 
 
 def _serve(conn: Any, path: Path, meta: TraceMeta, kwargs: dict[str, Any]) -> None:

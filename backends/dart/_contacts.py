@@ -18,7 +18,7 @@ from typing import Any
 
 import numpy as np
 
-from ..types import Contact
+from ..types import Contact, new_contact
 
 _FIRST, _SECOND = attrgetter("collisionObject1"), attrgetter("collisionObject2")
 _DEPTH, _FORCE, _NORMAL = attrgetter("penetrationDepth"), attrgetter("force"), attrgetter("normal")
@@ -100,4 +100,4 @@ def _by_pair(n: int, key: np.ndarray, depth: np.ndarray, normal_force: np.ndarra
         total[more] += normal_force[start[more] + j]
     pair = key[start]
     rows = zip((pair // n).tolist(), (pair % n).tolist(), count.tolist(), deepest, total.tolist(), strict=True)
-    return list(map(Contact._make, rows))
+    return list(map(new_contact, rows))

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 from collections.abc import Mapping
-from itertools import repeat
 from typing import Any, ClassVar
 
 import mujoco
@@ -23,6 +22,7 @@ from ..types import (
     Motion,
     Quat,
     Vec3,
+    new_contact,
 )
 from . import _coulomb
 from ._model import IMPEDANCE, KINEMATIC_MASS_RATIO, MU_MAX, Options, build
@@ -46,7 +46,6 @@ _BAD_STATE = (mujoco.mjtWarning.mjWARN_BADQPOS, mujoco.mjtWarning.mjWARN_BADQVEL
 _BAD = slice(int(_BAD_STATE[0]), int(_BAD_STATE[-1]) + 1)  # their counters in MjData.warning.number
 _RATED = (JointKind.SLIDER, JointKind.HINGE)
 _YZX, _ZXY = np.array([1, 2, 0]), np.array([2, 0, 1])  # cross(a, r) = a[YZX]*r[ZXY] - a[ZXY]*r[YZX]
-_NEW_CONTACT = tuple.__new__  # Contact._make without its length check: the rows are built with 5 fields
 
 
 class MujocoBackend(Backend):
@@ -274,7 +273,7 @@ class MujocoBackend(Backend):
             mean = force / self._nsteps if self._nsteps > 1 else force  # force: the step's mean
             a, b = (code // n).tolist(), (code % n).tolist()
             rows = zip(a, b, points.tolist(), depth.tolist(), mean.tolist(), strict=True)
-            self._listed = list(map(_NEW_CONTACT, repeat(Contact), rows))
+            self._listed = list(map(new_contact, rows))
         return self._listed.copy()
 
     # --- reads ----------------------------------------------------------------------------------

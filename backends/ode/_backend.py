@@ -216,13 +216,9 @@ class OdeBackend(Backend):
             rows[self._dynamic] = np.frombuffer(dg.getMessage(), dtype="<f4").reshape(-1, 13)
         return rows
 
-    @staticmethod
-    def _states_of(rows: np.ndarray) -> BodyStates:
-        return BodyStates(rows[:, 0:3], rows[:, 3:7], rows[:, 7:10], rows[:, 10:13])
-
     def _check(self, rows: np.ndarray) -> BodyStates:
         """The states of ``rows``, or EngineFailure when a body blew up (non-finite, or far or fast)."""
-        states = self._states_of(rows)
+        states = BodyStates.from_rows(rows)
         # One look first: with no component above half the limits, every norm is below them (sqrt(3)/2 < 1).
         if rows.size and np.abs(rows).max() < 0.5 * min(RUNAWAY_DISTANCE, RUNAWAY_SPEED):
             return states
@@ -247,7 +243,7 @@ class OdeBackend(Backend):
         self._require_open()
         if self._states is None:
             with map_engine_errors(self.name, "reading body states"):
-                self._states = self._states_of(self._read_rows())
+                self._states = BodyStates.from_rows(self._read_rows())
         s = self._states
         return BodyStates(s.pos.copy(), s.quat.copy(), s.lin_vel.copy(), s.ang_vel.copy())
 

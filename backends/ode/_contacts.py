@@ -128,14 +128,10 @@ class Collider:
                 others.append(event)
         for event in others:  # not ours: put back
             queue.queueEvent(event)
-        index = self._index
         if self.contact_forces:
             return self._arm_auto_feedback(entries)
-        records: list[_Record] = []
-        for e in entries:
-            i, j = index[hash(e.getGeom1().getId())], index[hash(e.getGeom2().getId())]
-            records.append((i, j, e, -1) if i < j else (j, i, e, -1))
-        return records
+        index = self._index
+        return [_record(index[hash(e.getGeom1().getId())], index[hash(e.getGeom2().getId())], e, -1) for e in entries]
 
     def _arm_auto_feedback(self, entries: list[Any]) -> list[_Record]:
         """Attach feedback to the contact joints autoCollide made (C++ objects we hold no handle to).
@@ -173,14 +169,13 @@ class Collider:
             joint = bodies[owner].getJoint  # type: ignore[union-attr]
             top = seen[owner] - 1 - start  # index of the pair's first contact joint
             first = joint(top)
-            a, b = (i, j) if i < j else (j, i)
             if first.getJointType() != _JT_CONTACT:  # the order assumption broke: no force
-                append((a, b, e, -1))
+                append(_record(i, j, e, -1))
                 continue
             first.setFeedback(pool[used])
             for k in range(1, count):
                 joint(top - k).setFeedback(pool[used + k])
-            append((a, b, e, used))
+            append(_record(i, j, e, used))
             used += count
         self._used = used
         return records
@@ -206,7 +201,7 @@ class Collider:
             if arm:
                 joint.setFeedback(self._feedback())
         if report:
-            self._pairs.append((i, j, entry, first) if i < j else (j, i, entry, first))
+            self._pairs.append(_record(i, j, entry, first))
 
     def _feedback(self) -> OdeJointFeedback:
         if self._used == len(self._pool):
@@ -214,6 +209,11 @@ class Collider:
         fb = self._pool[self._used]
         self._used += 1
         return fb
+
+
+def _record(i: int, j: int, entry: Any, first: int) -> _Record:
+    """A pair's record, its bodies in order (a < b)."""
+    return (i, j, entry, first) if i < j else (j, i, entry, first)
 
 
 def _summaries(records: list[_Record], pool: list[OdeJointFeedback]) -> list[Contact]:

@@ -12,22 +12,19 @@ the tuples costs more than the loop) [checked].
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
-from functools import partial
+from collections.abc import Sequence
 from itertools import chain, repeat
 from typing import Any
 
 import numpy as np
 import pybullet as p
 
-from ..types import Contact
+from ..types import Contact, new_contact
 
 #: One base's row: position (3), orientation x y z w (4), linear (3) and angular (3) velocity.
 ROW = 13
 
 _flat = chain.from_iterable
-#: Contact from a (a, b, points, depth, normal_force) tuple, without NamedTuple.__new__'s Python frame.
-_contact: Callable[[tuple[int, int, int, float, float]], Contact] = partial(tuple.__new__, Contact)
 #: (uid, uid, link, link) of a contact point's two bodies, then the point's run summary.
 _Ids = tuple[int, int, int, int]
 _Run = tuple[_Ids, int, float, float]
@@ -83,7 +80,7 @@ class ContactReader:
             if pair[0] in rows:
                 return self._point_by_point(points)
             rows[pair[0]] = (pair[1], pair[2], n, depth, force)
-        return list(map(_contact, map(rows.__getitem__, sorted(rows))))
+        return list(map(new_contact, map(rows.__getitem__, sorted(rows))))
 
     def _pair(self, ids: _Ids) -> tuple[int, int, int]:
         lut = self._lut
@@ -109,4 +106,4 @@ class ContactReader:
                 entry[2] += cp[9]
                 if -dist > entry[1]:
                     entry[1] = -dist
-        return [_contact((a, b, e[0], e[1], e[2])) for (a, b), e in sorted(acc.items())]
+        return [new_contact((a, b, e[0], e[1], e[2])) for (a, b), e in sorted(acc.items())]

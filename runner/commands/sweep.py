@@ -174,7 +174,7 @@ def final_values(loaded: Any, trace_path: Path, expressions: Sequence[str]) -> d
     snap.time = float(trace.times[-1])
     rows = np.array([np.concatenate([s.pos[-1], s.quat[-1], s.vel[-1], s.angvel[-1]])
                      for s in (trace.bodies[b.name] for b in world.bodies)]).reshape(len(world.bodies), 13)  # fmt: skip
-    snap.bodies = BodyStates(rows[:, 0:3], rows[:, 3:7], rows[:, 7:10], rows[:, 10:13])
+    snap.bodies = BodyStates.from_rows(rows)
     j = [trace.joints[x.name] for x in world.joints]
     snap.joints = JointStates(*(np.array([getattr(s, f)[-1] for s in j], dtype=float) for f in
                                 ("position", "velocity", "motor_force")))  # fmt: skip
