@@ -2,7 +2,7 @@
 
 Each measurement is a whole command in a child process (start-up included), as a user or CI pays it:
 ``scenario run FILES --all-variants -j N`` when the CLI has ``-j``, otherwise ``python -m bench.batch``
-running the same cases through :class:`runner.executors.LocalExecutor`, which ``run -j`` uses.
+running the same cases through :class:`runner.exec.executors.LocalExecutor`, which ``run -j`` uses.
 """
 
 from __future__ import annotations
@@ -83,7 +83,7 @@ def run(
     files: Sequence[Path], backend: str, jobs: Sequence[int], repetitions: int, log: Callable[[str], None] = print
 ) -> BatchFigures:
     cli = cli_has_jobs()
-    fig = BatchFigures(backend, len(files), via="scenario run -j" if cli else "runner.executors.LocalExecutor")
+    fig = BatchFigures(backend, len(files), via="scenario run -j" if cli else "runner.exec.executors.LocalExecutor")
     fig.cases = _count_cases(files)
     with tempfile.TemporaryDirectory(prefix="bench-batch-") as tmp:
         for rep in range(repetitions):
@@ -102,15 +102,15 @@ def run(
 
 
 def _count_cases(files: Sequence[Path]) -> int:
-    from runner.scenario.load import variant_names
+    from runner.language.load import variant_names
 
     return sum(len(variant_names(f)) for f in files)
 
 
 def _child(argv: Sequence[str]) -> int:
     """The batch without `run -j`: every variant of every file through the local executor."""
-    from runner.executors import Case, LocalExecutor, estimate_cost, status_code
-    from runner.scenario.load import load_all
+    from runner.exec.executors import Case, LocalExecutor, estimate_cost, status_code
+    from runner.language.load import load_all
 
     backend, jobs, out = argv[0], int(argv[1]), argv[2]
     cases = [

@@ -15,12 +15,12 @@ import numpy as np
 
 from backends.registry import create_backend, get_backend
 from backends.types import CompiledWorld
-from runner.assertions import AssertionTracker
-from runner.program import build_program
-from runner.run import run_loaded
-from runner.scenario.load import LoadedScenario, load_scenario
-from runner.session import Session
-from runner.trace import TraceWriter
+from runner.compile.program import build_program
+from runner.language.load import LoadedScenario, load_scenario
+from runner.sim.assertions import AssertionTracker
+from runner.sim.run import run_loaded
+from runner.sim.session import Session
+from runner.trace.writer import TraceWriter
 
 from . import instrument as ins
 from .raw_common import RawTiming, time_loop
@@ -63,7 +63,7 @@ class RunnerTiming:
 
 
 def supports_trace_process() -> bool:
-    """Whether run_loaded can write the trace in a second process (runner/trace_process.py)."""
+    """Whether run_loaded can write the trace in a second process (runner/trace/process.py)."""
     return "trace_process" in inspect.signature(run_loaded).parameters
 
 
@@ -76,7 +76,7 @@ def run_runner(loaded: LoadedScenario, backend: str, out_dir: Path | None, trace
         "detect": (Session, ("_detect",)),
     }
     try:  # the writer in a second process (proposed in the performance report): its calls cost the run
-        from runner.trace_process import BackgroundTraceWriter
+        from runner.trace.process import BackgroundTraceWriter
 
         targets["trace-process"] = (BackgroundTraceWriter, ins.TRACE_METHODS)
     except ImportError:

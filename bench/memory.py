@@ -53,7 +53,7 @@ def run(
 
 
 def _child(argv: Sequence[str]) -> int:
-    from runner.run import run_loaded
+    from runner.sim.run import run_loaded
 
     from .measure import pile
 

@@ -15,7 +15,7 @@ from typing import Any
 
 import numpy as np
 
-from runner.run import trace_path
+from runner.sim.run import trace_path
 
 from . import measure as m
 

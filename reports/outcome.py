@@ -1,7 +1,7 @@
 """How an isolated run's process ended, when its trace cannot say so: the outcome file beside the trace.
 
 A run whose child process crashed, hung or could not start leaves no ``result`` record in its trace
-(only a ``.mcap.partial``, or nothing at all). The parent (:mod:`runner.isolation`) then writes
+(only a ``.mcap.partial``, or nothing at all). The parent (:mod:`runner.exec.isolation`) then writes
 ``<scenario>__<variant>__<backend>.outcome.json`` next to where the trace belongs (as the runner keeps a
 run's wall-clock cost in ``<...>.cost.json``), so that a report rebuilt from the files alone
 (``scenario report``) says "crashed (signal 11)" exactly as the comparison that ran it did. A run that
@@ -95,7 +95,7 @@ class RunOutcome:
         return {"format": OUTCOME_FORMAT, **asdict(self)}
 
 
-COST_SUFFIX: Final = ".cost.json"  # written by runner.run.write_cost beside a finished trace
+COST_SUFFIX: Final = ".cost.json"  # written by runner.sim.run.write_cost beside a finished trace
 
 
 def trace_key(path: Path) -> Path | None:

@@ -1,4 +1,4 @@
-"""The MCAP trace format: the one place where the writer (runner/trace.py) and the readers agree.
+"""The MCAP trace format: the one place where the writer (runner/trace/writer.py) and the readers agree.
 
 Constants only. A trace is one MCAP file per run and variant:
 

@@ -1,7 +1,7 @@
 """SIGINT and SIGTERM during a run take effect at the next step boundary, never inside the trace writer.
 
 `scenario` installs the handlers (:func:`install`). While a run is recording (:class:`deferred`, entered
-by :func:`runner.run.run_loaded`), a signal is only remembered; the step loop calls :func:`check` after
+by :func:`runner.sim.run.run_loaded`), a signal is only remembered; the step loop calls :func:`check` after
 each recorded step and raises it there, so a trace interrupted by Ctrl-C or SIGTERM always ends with a
 whole step and is finished cleanly (status interrupted). Outside a run, or on a second signal (an engine
 call that does not return), the signal is raised at once, as Python's default would.

@@ -8,10 +8,10 @@ turns the results into the matrix (check x backend: error against the analytic v
 
 from __future__ import annotations
 
-from .cases import DEFAULT_SUITE, Case, Check, discover
-from .matrix import REFERENCE, broken, build_matrix
-from .pool import BackendRun, run_backend, run_suite
-from .render import console, markdown
+from runner.conformance.cases import DEFAULT_SUITE, Case, Check, discover
+from runner.conformance.matrix import REFERENCE, broken, build_matrix
+from runner.conformance.pool import BackendRun, run_backend, run_suite
+from runner.conformance.render import console, markdown
 
 __all__ = [
     "DEFAULT_SUITE",

@@ -11,9 +11,9 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from ..errors import ScenarioValidationError
-from ..scenario import model_assertions as A
-from ..scenario.load import BASE_CASE, load_scenario, variant_names
+from runner.errors import ScenarioValidationError
+from runner.language import model_assertions as A
+from runner.language.load import BASE_CASE, load_scenario, variant_names
 
 #: The suite of the source tree (the package is installed from it, editable or not).
 DEFAULT_SUITE = Path(__file__).resolve().parents[2] / "scenarios" / "conformance"
@@ -148,6 +148,6 @@ def discover(suite: Path) -> list[Case]:
 
 
 def _issue(path: Path, message: str) -> Any:
-    from ..errors import Issue
+    from runner.errors import Issue
 
     return Issue(str(path), 0, 0, "", message)

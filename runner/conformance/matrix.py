@@ -15,9 +15,9 @@ import math
 from collections.abc import Mapping, Sequence
 from typing import Any
 
-from ..version import tool_version
-from .cases import Case
-from .pool import BackendRun
+from runner.conformance.cases import Case
+from runner.conformance.pool import BackendRun
+from runner.version import tool_version
 
 REFERENCE = "ode"
 SCHEMA = "physics-scenarios/conformance-matrix/1"

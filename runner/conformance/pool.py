@@ -24,8 +24,7 @@ from pathlib import Path
 from typing import Any
 
 from backends.registry import engine_version
-
-from .cases import Case
+from runner.conformance.cases import Case
 
 #: The source tree holding the ``runner`` and ``backends`` packages, put first on the worker's path.
 ROOT = Path(__file__).resolve().parents[2]

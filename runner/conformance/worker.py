@@ -22,11 +22,10 @@ from typing import Any
 
 from backends.errors import BackendNotInstalled, EngineFailure, UnsupportedFeature
 from backends.registry import check_capabilities, get_backend
-
-from ..errors import ScenarioValidationError
-from ..program import build_program
-from ..scenario.load import load_scenario
-from ..session import RunResult, Session
+from runner.compile.program import build_program
+from runner.errors import ScenarioValidationError
+from runner.language.load import load_scenario
+from runner.sim.session import RunResult, Session
 
 
 def _num(value: Any) -> float | None:

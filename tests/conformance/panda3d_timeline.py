@@ -112,7 +112,7 @@ def play(base: Any, clock: Any, job: dict[str, Any], t0: float) -> dict[str, Any
         Point3,
     )
 
-    from runner.scenario.load import load_scenario
+    from runner.language.load import load_scenario
 
     model = load_scenario(Path(job["path"]), job["variant"]).model
     prefix = f"job{int(t0 / T0)}-"  # interval names of different jobs never meet

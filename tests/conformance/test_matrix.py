@@ -13,7 +13,7 @@ from pathlib import Path
 
 import pytest
 
-from runner.cli import main
+from runner.cli.main import main
 from runner.conformance import broken, build_matrix, discover, markdown, run_backend
 from runner.conformance.pool import BackendRun
 from runner.conformance.worker import run_case

@@ -33,8 +33,8 @@ import pytest
 
 from reports.trace_reader import Trace, read_trace
 from runner.conformance import DEFAULT_SUITE
-from runner.run import run_loaded
-from runner.scenario.load import load_scenario
+from runner.language.load import load_scenario
+from runner.sim.run import run_loaded
 
 pytestmark = pytest.mark.slow  # about 5 s in all: six runs, and one Panda3D process for the six timelines
 
@@ -78,7 +78,7 @@ def _panda(jobs: list[dict[str, Any]]) -> list[dict[str, Any]]:
 
 
 def _quat(hpr: list[float]) -> np.ndarray:
-    from runner.hpr import hpr_to_quat
+    from runner.language.hpr import hpr_to_quat
 
     return np.asarray(hpr_to_quat(tuple(hpr)))
 

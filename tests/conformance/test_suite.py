@@ -9,8 +9,8 @@ import pytest
 from backends.registry import KNOWN_BACKENDS
 from runner.conformance import DEFAULT_SUITE, discover
 from runner.conformance.worker import run_case
-from runner.scenario import model_assertions as A
-from runner.scenario.load import load_scenario, variant_names
+from runner.language import model_assertions as A
+from runner.language.load import load_scenario, variant_names
 
 SCHEMA_LINE = "# yaml-language-server: $schema=../../runner/schema/scenario.schema.json"
 FILES = sorted(DEFAULT_SUITE.glob("*.yaml"))

@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 
 from reports.trace_reader import read_trace
-from runner.run import run_loaded
-from runner.scenario.load import load_scenario, variant_names
+from runner.language.load import load_scenario, variant_names
+from runner.sim.run import run_loaded
 
 from .conftest import ROOT, SCENARIOS
 

@@ -14,7 +14,7 @@ import pytest
 
 from backends.registry import is_installed
 from bench import measure
-from runner.run import trace_path
+from runner.sim.run import trace_path
 
 
 @pytest.mark.parametrize("backend", sorted(measure.RAW_LOOPS))

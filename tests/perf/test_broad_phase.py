@@ -1,7 +1,7 @@
 """The solid traverser reports exactly the pairs that testing every collider against every node reports.
 
 Random scenes of spheres, boxes and polygons, rotated and scaled, many of them just touching: the
-traverser (which may skip far pairs, see runner/collisions.py) must agree with the exhaustive
+traverser (which may skip far pairs, see runner/sim/collisions.py) must agree with the exhaustive
 ``nodes_collide`` over all pairs, in the same order. About 1 s.
 """
 
@@ -10,7 +10,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from runner.collisions import NodeDef, Pose, SolidDef, SolidTraverser, nodes_collide, quat_matrix
+from runner.sim.collisions import NodeDef, Pose, SolidDef, SolidTraverser, nodes_collide, quat_matrix
 
 
 def random_solid(rng: np.random.Generator) -> SolidDef:

@@ -17,10 +17,10 @@ from typing import Any
 
 import pytest
 
-import runner.run
+import runner.sim.run
 from backends.fake import FakeBackend
 from backends.types import Contact
-from runner.scenario.load import load_scenario
+from runner.language.load import load_scenario
 
 ROOT = Path(__file__).resolve().parents[2]
 COUNTED = (str(ROOT / "runner"), str(ROOT / "reports"))
@@ -61,7 +61,7 @@ assertions:
 
 
 def lines_run(path: Path, steps: int, out: Path, monkeypatch: pytest.MonkeyPatch) -> int:
-    monkeypatch.setattr(runner.run, "get_backend", lambda name: TouchingFake)
+    monkeypatch.setattr(runner.sim.run, "get_backend", lambda name: TouchingFake)
     loaded = load_scenario(path, None, (("world.duration", steps * 0.01),))
     count = 0
 
@@ -76,7 +76,7 @@ def lines_run(path: Path, steps: int, out: Path, monkeypatch: pytest.MonkeyPatch
 
     sys.settrace(tracer)
     try:
-        result = runner.run.run_loaded(loaded, "fake", out)
+        result = runner.sim.run.run_loaded(loaded, "fake", out)
     finally:
         sys.settrace(None)
     assert result.steps == steps

@@ -1,7 +1,7 @@
 """Hostile scenario documents for the fuzzing tests: seeds, tree mutations, text mutations (hypothesis).
 
 A case starts from a seed (every scenario in ``scenarios/`` and the small documents of
-tests/unit/test_bad_input.py), applies one to four mutations to its data tree (wrong types, missing,
+tests/language/test_bad_input.py), applies one to four mutations to its data tree (wrong types, missing,
 extra and renamed keys, huge, negative and non-finite numbers, deep nesting, unicode, broken
 references, YAML hazards), dumps it as YAML and may then damage the text itself; or it is random text
 or bytes. Everything is drawn through hypothesis, so a failure shrinks to a small reproducer.
@@ -20,8 +20,8 @@ import yaml
 from hypothesis import strategies as st
 
 from runner.errors import ScenarioValidationError
-from runner.scenario.yaml_source import load_yaml
-from tests.unit.test_bad_input import BASE, CASES
+from runner.language.yaml_source import load_yaml
+from tests.language.test_bad_input import BASE, CASES
 
 ROOT = Path(__file__).resolve().parents[2]
 SCENARIOS = sorted((ROOT / "scenarios").glob("*.yaml"))

@@ -19,9 +19,9 @@ import pytest
 
 from reports.trace_reader import read_trace
 from runner.errors import ScenarioError
-from runner.expressions import ExpressionError, compile_expression
-from runner.run import run_loaded
-from runner.scenario.load import load_scenario
+from runner.language.expressions import ExpressionError, compile_expression
+from runner.language.load import load_scenario
+from runner.sim.run import run_loaded
 
 BASE = """\
 schema_version: 1

@@ -23,10 +23,10 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from backends.types import Motion
+from runner.compile.program import Program, build_program
 from runner.errors import Issue, ScenarioValidationError
-from runner.program import Program, build_program
-from runner.scenario.load import LoadedScenario, load_all, load_scenario, parse_overrides
-from runner.scenario.refs import MAX_BODIES, MAX_STEPS
+from runner.language.load import LoadedScenario, load_all, load_scenario, parse_overrides
+from runner.language.refs import MAX_BODIES, MAX_STEPS
 
 from .conftest import FUZZ_CASES, count, fuzz_settings
 from .hostile import NUMBERS, ROOT, SEEDS, STRINGS, Case, documents, texts, walk

@@ -18,10 +18,10 @@ from pathlib import Path
 import pytest
 
 from runner.errors import ScenarioValidationError
-from runner.scenario.load import load_scenario
-from runner.scenario.refs import MAX_BODIES, MAX_STEPS
-from runner.scenario.yaml_source import MAX_FILE_BYTES
-from runner.sounds import MAX_SOUND_SECONDS
+from runner.language.load import load_scenario
+from runner.language.refs import MAX_BODIES, MAX_STEPS
+from runner.language.sounds import MAX_SOUND_SECONDS
+from runner.language.yaml_source import MAX_FILE_BYTES
 
 HEAD = "schema_version: 1\nscenario: t\nworld: {dt: 0.04, duration: 1}\nbodies:\n"
 FAST = 1.0  # seconds: generous for a loaded 2-core machine; the checks take 0.001-0.04 s

@@ -1,7 +1,7 @@
 """Safe by construction: nothing in a scenario runs code, builds objects or reads outside its folder.
 
 * the expression grammar refuses attribute escapes, calls outside the whitelist and dunder names, also
-  in the spellings tests/unit/test_expressions.py does not try (unicode look-alikes, starred and
+  in the spellings tests/language/test_expressions.py does not try (unicode look-alikes, starred and
   generator arguments, names passed to the runner's own functions);
 * no ``eval``/``exec``/``compile``/``__import__``/pickle/unsafe YAML anywhere in the package (an AST
   scan), and a scenario that tries to run ``touch`` through YAML tags, expressions or ``--set`` leaves
@@ -24,8 +24,8 @@ from pathlib import Path
 import pytest
 
 from runner.errors import ScenarioValidationError
-from runner.expressions import ExpressionError, compile_expression
-from runner.scenario.load import load_scenario
+from runner.language.expressions import ExpressionError, compile_expression
+from runner.language.load import load_scenario
 
 from .hostile import ROOT
 
@@ -101,7 +101,7 @@ FORBIDDEN_ATTRS = {
 }  # fmt: skip
 SUBPROCESS = {"run", "Popen", "call", "check_call", "check_output", "getoutput", "getstatusoutput"}
 #: The only dynamic imports: command modules found in runner/commands and the backend table's targets.
-ALLOWED_IMPORT_MODULE = {"runner/cli.py", "backends/registry.py"}
+ALLOWED_IMPORT_MODULE = {"runner/cli/main.py", "backends/registry.py"}
 
 
 def _own_python_module(call: ast.Call, lists: dict[str, ast.List]) -> bool:

@@ -72,8 +72,8 @@ def sound_report(tmp_path_factory: pytest.TempPathFactory) -> SoundReport:
     """factory_intervals (door-closed: the box hits the door, thud.wav plays) on fake and ode, in process:
     about 1 s. Every body is kinematic, so the two runs are identical."""
     from reports.build import write_report
-    from runner.run import run_loaded
-    from runner.scenario.load import load_scenario
+    from runner.language.load import load_scenario
+    from runner.sim.run import run_loaded
 
     if not is_installed("ode"):
         pytest.skip("engine not installed: ode")

@@ -1,4 +1,4 @@
-"""runner.isolation: one case in a child process; crashes, hangs and refusals come back as outcomes.
+"""runner.exec.isolation: one case in a child process; crashes, hangs and refusals come back as outcomes.
 
 Each test starts one or two child processes (about 0.5 s each); the hang test waits for its 4 s limit
 and a 1 s grace period, about 6 s in all.
@@ -16,9 +16,9 @@ import pytest
 
 from reports import outcome as oc
 from reports.trace_reader import read_trace
-from runner.isolation import COMPLETED, run_isolated, run_many
-from runner.run import run_loaded
-from runner.scenario.load import load_scenario
+from runner.exec.isolation import COMPLETED, run_isolated, run_many
+from runner.language.load import load_scenario
+from runner.sim.run import run_loaded
 
 from .conftest import CLI, FACTORY
 

@@ -1,0 +1,365 @@
+"""`scenario sweep`: run the cross product of parameter values x variants x backends, and tabulate it.
+
+Metrics (``--metric EXPR``) are evaluated here, on the last recorded state of each case's trace, once the
+cases (run by runner.exec.executors) are done.
+
+Writes into ``--out``: ``sweep.csv`` and ``sweep.json`` (one row per case: parameter values, variant,
+backend, status, every assertion's verdict, every ``--metric`` evaluated on the final recorded state),
+``sweep.svg`` when a parameter is numeric (each metric, or the share of assertions passed, against the
+first numeric parameter), and the traces under ``traces/<case>/``. Nothing in the tables depends on
+wall time or on the executor: the same sweep gives the same files locally and on Ray.
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import io
+import itertools
+import json
+import math
+import re
+from collections.abc import Callable, Sequence
+from pathlib import Path
+from typing import Any
+
+from rich.console import Console
+from rich.table import Table
+
+from runner.errors import UsageError
+
+NAME = "sweep"
+HELP = "run a scenario over a grid of parameter values (x variants x backends) and tabulate the results"
+DEFAULT_OUT = Path("traces/sweep")
+_PALETTE = ("#1f77b4", "#d62728", "#2ca02c", "#ff7f0e", "#9467bd", "#8c564b", "#e377c2", "#17becf")
+
+
+def configure(p: argparse.ArgumentParser) -> None:
+    from runner.exec.executors import add_arguments
+
+    p.add_argument("file", type=Path, metavar="FILE")
+    p.add_argument("--param", action="append", default=[], required=True, metavar="NAME=v1,v2,...",
+                   help="a --set path (or a declared parameter's name) and its values; repeat for a grid")  # fmt: skip
+    p.add_argument("--backends", default=None, help="comma-separated backends (default: the default backend)")
+    group = p.add_mutually_exclusive_group()
+    group.add_argument("--variant", help="run this variant (default: the file's first variant)")
+    group.add_argument("--all-variants", action="store_true", help="run every variant")
+    p.add_argument("--metric", action="append", default=[], metavar="EXPR",
+                   help="an expression evaluated at each run's end, e.g. 'max(crate.pos.z)' (repeatable)")  # fmt: skip
+    p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE", help="a fixed override (repeatable)")
+    p.add_argument("--out", type=Path, default=DEFAULT_OUT, help=f"output folder (default {DEFAULT_OUT})")
+    out = p.add_mutually_exclusive_group()
+    out.add_argument("--quiet", "-q", action="store_true", help="print only the summary")
+    out.add_argument("--json", action="store_true", help="print the table as JSON")
+    add_arguments(p)
+
+
+def split_values(text: str) -> list[str]:
+    """``1,2,[0, 0, 1]`` -> ['1', '2', '[0, 0, 1]']: commas inside brackets or braces do not split."""
+    parts, depth, current = [], 0, ""
+    for ch in text:
+        depth += (ch in "[{") - (ch in "]}")
+        if ch == "," and depth == 0:
+            parts.append(current.strip())
+            current = ""
+        else:
+            current += ch
+    parts.append(current.strip())
+    if any(not v for v in parts):
+        raise UsageError(f"Invalid `--param` values `{text}`. Expected a comma-separated list of values.")
+    return parts
+
+
+def parse_params(items: list[str], declared: set[str]) -> list[tuple[str, list[Any]]]:
+    """``--param`` items -> [(--set path, values)]; the name of a parameter the file declares means params.NAME."""
+    from runner.language.load import parse_overrides
+
+    grid: list[tuple[str, list[Any]]] = []
+    for item in items:
+        name, sep, values = item.partition("=")
+        name = name.strip()
+        if not sep or not name:
+            raise UsageError(f"Invalid `--param {item}`. Expected NAME=v1,v2,...")
+        if name in declared:
+            name = f"params.{name}"
+        if name in (g[0] for g in grid):
+            raise UsageError(f"`--param {name}` is given twice")
+        grid.append((name, [v for _, v in parse_overrides([f"{name}={v}" for v in split_values(values)])]))
+    return grid
+
+
+def _slug(values: dict[str, Any]) -> str:
+    text = "_".join(f"{k.removeprefix('params.')}={v}" for k, v in values.items())
+    return re.sub(r"[^A-Za-z0-9_.=-]+", "-", text)[:80]
+
+
+def execute(args: argparse.Namespace, out: Console, err: Console) -> int:
+    from backends.registry import DEFAULT_BACKEND, entry, is_installed
+    from runner.errors import BackendNotInstalled
+    from runner.exec.executors import Case, estimate_cost, make_executor, status_code
+    from runner.language.load import load_all, load_scenario, parse_overrides
+
+    fixed = parse_overrides(args.set)
+    base = load_scenario(args.file, None, fixed)
+    grid = parse_params(args.param, set(base.model.params))
+    backends = [b.strip() for b in (args.backends or DEFAULT_BACKEND).split(",") if b.strip()]
+    for b in backends:
+        entry(b)  # unknown: bad input before anything runs
+        if not is_installed(b):
+            raise BackendNotInstalled(f"Backend `{b}` is not installed. Install it with: {entry(b).hint}")
+    check_metrics(args.metric, base.model)
+    names = [n for n, _ in grid]
+    combos = [dict(zip(names, values, strict=True)) for values in itertools.product(*(v for _, v in grid))]
+    cases: list[Case] = []
+    labels: list[dict[str, Any]] = []
+    loads: list[Any] = []
+    for k, combo in enumerate(combos):
+        overrides = fixed + tuple(combo.items())
+        for loaded in load_all(args.file, args.variant, args.all_variants, overrides):  # bad values: exit 2 here
+            variant = None if loaded.variant == "base" else loaded.variant
+            for b in backends:
+                folder = args.out / "traces" / f"{len(cases):03d}_{_slug(combo)}"
+                cases.append(Case(str(args.file), variant, b, overrides, str(folder), cost=estimate_cost(loaded)))
+                labels.append({"combo": k, "params": combo, "variant": loaded.variant, "backend": b})
+                loads.append(loaded)
+    executor = make_executor(args.executor, args.jobs, args.ray_address)
+    try:
+        show = err.is_terminal and not (args.quiet or args.json)
+        results = executor.run(cases, (lambda i, r: err.print(f"  {i + 1}/{len(cases)} {r.status}")) if show else None)
+    finally:
+        executor.close()
+    metrics = [
+        final_values(loaded, Path(r.result.trace), args.metric) if args.metric and r.result and r.result.trace else {}
+        for loaded, r in zip(loads, results, strict=True)
+    ]
+    table = build_table(args.file, grid, labels, results, metrics, args.metric)
+    args.out.mkdir(parents=True, exist_ok=True)
+    (args.out / "sweep.json").write_text(json.dumps(table, indent=2, allow_nan=False) + "\n")
+    (args.out / "sweep.csv").write_text(to_csv(table))
+    svg = plot(table)
+    if svg:
+        (args.out / "sweep.svg").write_text(svg)
+    if args.json:
+        out.print_json(json.dumps(table, allow_nan=False))
+    else:
+        _print(out, table, args.out, bool(svg), args.quiet)
+    for r in results:
+        r.raise_error()  # bad input or a missing engine in some case: its exit code, after the table
+    return status_code(results)
+
+
+def final_values(loaded: Any, trace_path: Path, expressions: Sequence[str]) -> dict[str, Any]:
+    """Each expression evaluated on the last recorded state of a trace (bodies, joints, state variables,
+    contacts and event counts; ``playing()`` has no recorded state and is refused)."""
+    import numpy as np
+
+    from backends.types import BodyStates, JointStates
+    from reports.trace_reader import TraceReadError, read_trace
+    from runner.compile.program import build_program
+    from runner.errors import TraceError
+    from runner.language.expressions import compile_expression
+    from runner.sim.resolver import Snapshot, StateResolver
+
+    program = build_program(loaded)
+    world = program.world
+    try:
+        trace = read_trace(trace_path)
+    except TraceReadError as exc:
+        raise TraceError(f"metrics: {exc}") from exc
+    snap = Snapshot()
+    if not trace.times.size:
+        raise UsageError(f"metrics: the trace {trace_path.name} recorded no step")
+    snap.time = float(trace.times[-1])
+    rows = np.array([np.concatenate([s.pos[-1], s.quat[-1], s.vel[-1], s.angvel[-1]])
+                     for s in (trace.bodies[b.name] for b in world.bodies)]).reshape(len(world.bodies), 13)  # fmt: skip
+    snap.bodies = BodyStates.from_rows(rows)
+    j = [trace.joints[x.name] for x in world.joints]
+    snap.joints = JointStates(*(np.array([getattr(s, f)[-1] for s in j], dtype=float) for f in
+                                ("position", "velocity", "motor_force")))  # fmt: skip
+    state = {k: v[-1] for k, v in trace.state.items()}
+    last = trace.contacts[-1] if trace.contacts and math.isclose(trace.contacts[-1][0], snap.time) else (0.0, [])
+    touching = {frozenset((p["a"], p["b"])) for p in last[1]}
+
+    def refuse(args: Sequence[Any]) -> Any:
+        raise UsageError("metrics: playing() has no recorded state; use a state variable instead")
+
+    functions: dict[str, Callable[[Sequence[Any]], Any]] = {
+        "contact": lambda a: frozenset((str(a[0]), str(a[1]))) in touching,
+        "count": lambda a: sum(e.name == str(a[0]) for e in trace.events),
+        "playing": refuse,
+    }
+    resolver = StateResolver(world, program.groups, state, dict(loaded.model.params), snap, functions)
+    out: dict[str, Any] = {}
+    for text in expressions:
+        try:
+            out[text] = compile_expression(text).evaluate(resolver)
+        except (KeyError, ValueError, TypeError, ZeroDivisionError) as exc:
+            raise UsageError(f"metric `{text}` cannot be evaluated: {exc}") from exc
+    return out
+
+
+def check_metrics(texts: list[str], model: Any) -> None:
+    """Refuse, before anything runs, a metric that does not parse or reads what a trace does not hold."""
+    from runner.language.expressions import compile_expression
+    from runner.language.names import readable_names
+
+    valid = set(readable_names(model))
+    for text in texts:
+        try:
+            expr = compile_expression(text)
+        except ValueError as exc:
+            raise UsageError(f"Invalid `--metric {text}`: {exc}") from exc
+        unknown = sorted(n for n in expr.names if n not in valid) + sorted(expr.calls - {"contact", "count"})
+        if unknown:
+            raise UsageError(f"Invalid `--metric {text}`: it reads {', '.join(unknown)}, which no trace holds "
+                             f"(names: bodies, joints, state., param., time; functions: contact, count)")  # fmt: skip
+
+
+def _json_value(v: Any) -> Any:
+    if isinstance(v, float) and not math.isfinite(v):
+        return None
+    if isinstance(v, list):
+        return [_json_value(x) for x in v]
+    return v
+
+
+def build_table(file: Path, grid: list[tuple[str, list[Any]]], labels: list[dict[str, Any]], results: list[Any],
+                values: list[dict[str, Any]], metrics: list[str]) -> dict[str, Any]:  # fmt: skip
+    assertions: list[str] = []
+    rows = []
+    for i, (label, r, found) in enumerate(zip(labels, results, values, strict=True)):
+        verdicts = {v.name: v for v in (r.result.verdicts if r.result is not None else [])}
+        assertions += [n for n in verdicts if n not in assertions]
+        trace = r.result.trace if r.result is not None else None
+        rows.append({
+            "case": i,
+            "params": {k: _json_value(v) for k, v in label["params"].items()},
+            "variant": label["variant"],
+            "backend": label["backend"],
+            "status": r.status,
+            "passed": sum(v.passed for v in verdicts.values()),
+            "failed": sum(not v.passed for v in verdicts.values()),
+            "verdicts": {n: {"passed": v.passed, "measured": v.measured} for n, v in verdicts.items()},
+            "metrics": {m: _json_value(found.get(m)) for m in metrics},
+            "failure": r.failure,
+            "trace": str(Path(trace).relative_to(Path(r.case.out_dir).parent.parent)) if trace else None,
+        })  # fmt: skip
+    return {"file": file.name, "parameters": [n for n, _ in grid], "metrics": list(metrics),
+            "assertions": assertions, "rows": rows}  # fmt: skip
+
+
+def to_csv(table: dict[str, Any]) -> str:
+    buf = io.StringIO()
+    w = csv.writer(buf, lineterminator="\n")
+    names, assertions, metrics = table["parameters"], table["assertions"], table["metrics"]
+    w.writerow(["case", *names, "variant", "backend", "status", "passed", "failed", *assertions, *metrics, "trace"])
+    for row in table["rows"]:
+        found = row["verdicts"]
+        verdict = [("pass" if found[a]["passed"] else "FAIL") if a in found else "" for a in assertions]
+        values = [json.dumps(row["params"][n]) if isinstance(row["params"][n], list | dict) else row["params"][n]
+                  for n in names]  # fmt: skip
+        cells = [json.dumps(row["metrics"][m]) if isinstance(row["metrics"][m], list) else row["metrics"][m]
+                 for m in metrics]  # fmt: skip
+        w.writerow([row["case"], *values, row["variant"], row["backend"], row["status"], row["passed"],
+                    row["failed"], *verdict, *["" if c is None else c for c in cells], row["trace"] or ""])  # fmt: skip
+    return buf.getvalue()
+
+
+def _print(out: Console, table: dict[str, Any], folder: Path, svg: bool, quiet: bool) -> None:
+    rows = table["rows"]
+    if not quiet:
+        t = Table(title=f"sweep of {table['file']}", title_justify="left")
+        for col in [*table["parameters"], "variant", "backend", "status", "assertions", *table["metrics"]]:
+            t.add_column(col.removeprefix("params."), overflow="fold")
+        for row in rows:
+            status = row["status"] if row["status"] != "passed" else "[green]passed[/]"
+            metrics = [_short(row["metrics"][m]) for m in table["metrics"]]
+            t.add_row(*(_short(row["params"][n]) for n in table["parameters"]), row["variant"], row["backend"],
+                      status, f"{row['passed']}/{row['passed'] + row['failed']}", *metrics)  # fmt: skip
+        out.print(t)
+    passed = sum(r["status"] == "passed" for r in rows)
+    out.print(f"[bold]{passed}/{len(rows)} cases passed[/]; table: {folder / 'sweep.csv'}, {folder / 'sweep.json'}"
+              + (f", plot: {folder / 'sweep.svg'}" if svg else ""))  # fmt: skip
+
+
+def _short(v: Any) -> str:
+    return f"{v:.6g}" if isinstance(v, float) else str(v)
+
+
+def _numeric(v: Any) -> bool:
+    return isinstance(v, int | float) and not isinstance(v, bool) and math.isfinite(v)
+
+
+def plot(table: dict[str, Any]) -> str:
+    """An SVG: one panel per numeric metric (or the share of assertions passed) against the first numeric
+    parameter, one line per combination of the other parameters, variant and backend. '' if none is numeric."""
+    rows = table["rows"]
+    xs = [n for n in table["parameters"] if all(_numeric(r["params"][n]) for r in rows)]
+    if not xs or not rows:
+        return ""
+    x = xs[0]
+    panels = [m for m in table["metrics"] if any(_numeric(r["metrics"][m]) for r in rows)] or ["assertions passed"]
+    series: dict[str, list[tuple[float, dict[str, Any]]]] = {}
+    for r in rows:
+        rest = ", ".join(f"{n.removeprefix('params.')}={r['params'][n]}" for n in table["parameters"] if n != x)
+        key = " · ".join(s for s in (rest, r["variant"], r["backend"]) if s)
+        series.setdefault(key, []).append((float(r["params"][x]), r))
+    width, panel_h, left, top = 640, 220, 70, 30
+    height = top + len(panels) * (panel_h + 40) + 18 * len(series) + 10
+    parts = [f'<svg xmlns="http://www.w3.org/2000/svg" width="{width}" height="{height}" font-family="sans-serif" '
+             f'font-size="11"><rect width="100%" height="100%" fill="white"/>',
+             f'<text x="{left}" y="18" font-size="13">{_esc(table["file"])}: sweep over {_esc(x)}</text>']  # fmt: skip
+    for k, name in enumerate(panels):
+        y0 = top + k * (panel_h + 40)
+
+        def value(r: dict[str, Any], name: str = name) -> float | None:
+            if name == "assertions passed":
+                total = r["passed"] + r["failed"]
+                return r["passed"] / total if total else None
+            v = r["metrics"][name]
+            return float(v) if _numeric(v) else None
+
+        points = [(px, value(r)) for pts in series.values() for px, r in pts]
+        ys = [v for _, v in points if v is not None]
+        x_lo, x_hi = _span([px for px, _ in points])
+        y_lo, y_hi = _span(ys or [0.0])
+        plot_w = width - left - 20
+
+        def sx(v: float, lo: float = x_lo, hi: float = x_hi, w: int = plot_w) -> float:
+            return left + (v - lo) / (hi - lo) * w
+
+        def sy(v: float, lo: float = y_lo, hi: float = y_hi, y0: int = y0) -> float:
+            return y0 + panel_h - (v - lo) / (hi - lo) * panel_h
+
+        parts.append(f'<rect x="{left}" y="{y0}" width="{plot_w}" height="{panel_h}" fill="none" stroke="#888"/>')
+        parts.append(f'<text x="{left}" y="{y0 - 6}">{_esc(name)}</text>')
+        for t in (x_lo, (x_lo + x_hi) / 2, x_hi):
+            parts.append(f'<text x="{sx(t):.1f}" y="{y0 + panel_h + 14}" text-anchor="middle">{t:.4g}</text>')
+        for t in (y_lo, (y_lo + y_hi) / 2, y_hi):
+            parts.append(f'<text x="{left - 6}" y="{sy(t) + 4:.1f}" text-anchor="end">{t:.4g}</text>')
+        for c, pts in enumerate(series.values()):
+            colour = _PALETTE[c % len(_PALETTE)]
+            coords = [(sx(px), sy(v)) for px, r in sorted(pts, key=lambda p: p[0]) if (v := value(r)) is not None]
+            if len(coords) > 1:
+                line = " ".join(f"{a:.1f},{b:.1f}" for a, b in coords)
+                parts.append(f'<polyline points="{line}" fill="none" stroke="{colour}" stroke-width="1.5"/>')
+            parts += [f'<circle cx="{a:.1f}" cy="{b:.1f}" r="3" fill="{colour}"/>' for a, b in coords]
+    y = top + len(panels) * (panel_h + 40)
+    for c, key in enumerate(series):
+        colour = _PALETTE[c % len(_PALETTE)]
+        parts.append(f'<rect x="{left}" y="{y + 18 * c}" width="10" height="10" fill="{colour}"/>'
+                     f'<text x="{left + 16}" y="{y + 18 * c + 9}">{_esc(key or "all")}</text>')  # fmt: skip
+    parts.append("</svg>")
+    return "\n".join(parts) + "\n"
+
+
+def _span(values: list[float]) -> tuple[float, float]:
+    lo, hi = min(values), max(values)
+    if hi - lo < 1e-12 * max(1.0, abs(hi)):
+        pad = max(abs(hi) * 0.05, 0.5)
+        return lo - pad, hi + pad
+    return lo, hi
+
+
+def _esc(text: str) -> str:
+    return str(text).replace("&", "&amp;").replace("<", "&lt;").replace(">", "&gt;")

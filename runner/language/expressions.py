@@ -1,0 +1,322 @@
+"""A small, safe expression language for conditions and assertions.
+
+Syntax is a subset of Python's: numbers, ``true``/``false`` (and True/False), strings, ``+ - * / // % **``,
+comparisons (chains allowed), ``and or not``, ``x if c else y``, parentheses, calls to a fixed list of
+functions, and dotted names such as ``box.pos.z``, ``slider.position``, ``state.door_open``,
+``param.count``, ``time``, ``dt``. Text is parsed with :mod:`ast` and every node is checked against a
+whitelist, then compiled into plain Python closures: nothing is ever passed to ``eval``/``exec``;
+attribute access on values is impossible (dotted names are resolved by the runner as whole names);
+names starting with an underscore are refused.
+"""
+
+from __future__ import annotations
+
+import ast
+import math
+import operator
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from typing import Any, Protocol
+
+from runner.errors import ScenarioError
+
+MAX_LENGTH = 2000
+MAX_NODES = 500
+MAX_POWER = 1e6
+
+
+class ExpressionError(ValueError):
+    """The text is not a valid expression (the message says what and where in the text)."""
+
+
+class EvaluationError(ExpressionError, ScenarioError):
+    """A valid expression could not be evaluated during a run (wrong types, a function of nothing...).
+
+    A :class:`~runner.errors.ScenarioError`: the run stops, its trace is finished with status ``error``
+    and the command exits with code 2, naming the expression.
+    """
+
+
+class Resolver(Protocol):
+    def value(self, name: str) -> Any: ...  # a dotted name, e.g. "box.pos.z"
+    def call(self, func: str, args: Sequence[Any]) -> Any: ...  # runner-level functions (contact, playing...)
+
+
+def _aggregate(f: Callable[..., Any]) -> Callable[..., Any]:
+    def wrapped(*args: Any) -> Any:
+        if len(args) == 1 and isinstance(args[0], list | tuple):
+            args = tuple(args[0])
+        if not args:
+            raise EvaluationError(f"{f.__name__}() of nothing")
+        return f(args)
+
+    return wrapped
+
+
+def _safe_pow(a: float, b: float) -> float:
+    if abs(b) > 64 or abs(a) > MAX_POWER:
+        raise EvaluationError("power too large")
+    return float(a) ** b
+
+
+def _is_number(value: Any) -> bool:
+    return isinstance(value, bool | int | float)
+
+
+def _kind(value: Any) -> str:
+    if isinstance(value, str):
+        return f"text {value[:20]!r}"
+    if isinstance(value, list | tuple):
+        return f"a list of {len(value)} values (a body group? use max(), min(), mean()...)"
+    return type(value).__name__
+
+
+def _arithmetic(op: Callable[[Any, Any], Any]) -> Callable[[Any, Any], Any]:
+    """``op`` on numbers only (text or lists would repeat or concatenate: unbounded memory); a math
+    error gives NaN (1/0, an overflow), like the functions below."""
+
+    def run(a: Any, b: Any) -> Any:
+        if not (_is_number(a) and _is_number(b)):
+            raise EvaluationError(f"arithmetic needs numbers, found {_kind(a)} and {_kind(b)}")
+        try:
+            return op(a, b)
+        except (ZeroDivisionError, OverflowError):
+            return math.nan
+
+    return run
+
+
+def _nan_on_math_error(fn: Callable[..., Any]) -> Callable[..., Any]:
+    def run(*args: Any) -> Any:
+        try:
+            return fn(*args)
+        except ExpressionError:
+            raise
+        except (ValueError, OverflowError, ZeroDivisionError):  # sqrt(-1), log(0), round(inf)...
+            return math.nan
+        except TypeError as exc:
+            raise EvaluationError(f"{exc} (found {', '.join(_kind(a) for a in args)})") from None
+
+    return run
+
+
+PURE_FUNCTIONS: dict[str, Callable[..., Any]] = {
+    "abs": abs,
+    "sqrt": math.sqrt,
+    "sin": math.sin,
+    "cos": math.cos,
+    "tan": math.tan,
+    "asin": math.asin,
+    "acos": math.acos,
+    "atan": math.atan,
+    "atan2": math.atan2,
+    "exp": math.exp,
+    "log": math.log,
+    "hypot": math.hypot,
+    "radians": math.radians,
+    "degrees": math.degrees,
+    "floor": math.floor,
+    "ceil": math.ceil,
+    "round": round,
+    "sign": lambda x: (x > 0) - (x < 0),
+    "min": _aggregate(min),
+    "max": _aggregate(max),
+    "sum": _aggregate(sum),
+    "mean": _aggregate(lambda v: sum(v) / len(v)),
+    "all": _aggregate(all),
+    "any": _aggregate(any),
+    "len": lambda v: len(v),
+    "clamp": lambda x, lo, hi: max(lo, min(hi, x)),
+}
+#: Functions the runner resolves (they need the run's state): contact(a, b), playing('ival'), count('event').
+RUNNER_FUNCTIONS = frozenset({"contact", "playing", "count"})
+RUNNER_ARITY = {"contact": 2, "playing": 1, "count": 1}
+CONSTANTS = {"pi": math.pi, "e": math.e, "inf": math.inf, "true": True, "false": False, "True": True, "False": False}
+
+_BIN = {
+    ast.Add: _arithmetic(operator.add),
+    ast.Sub: _arithmetic(operator.sub),
+    ast.Mult: _arithmetic(operator.mul),
+    ast.Div: _arithmetic(operator.truediv),
+    ast.FloorDiv: _arithmetic(operator.floordiv),
+    ast.Mod: _arithmetic(operator.mod),
+    ast.Pow: _arithmetic(_safe_pow),
+}
+_CMP = {
+    ast.Eq: operator.eq,
+    ast.NotEq: operator.ne,
+    ast.Lt: operator.lt,
+    ast.LtE: operator.le,
+    ast.Gt: operator.gt,
+    ast.GtE: operator.ge,
+}
+
+Evaluator = Callable[[Resolver], Any]
+
+
+@dataclass(frozen=True)
+class Expression:
+    """A compiled expression: call :meth:`evaluate` with a resolver."""
+
+    text: str
+    names: frozenset[str]  # dotted names it reads
+    calls: frozenset[str]  # runner functions it calls
+    _fn: Evaluator
+    call_args: frozenset[tuple[str, tuple[str, ...]]] = frozenset()  # (function, literal arguments)
+
+    def evaluate(self, resolver: Resolver) -> Any:
+        try:
+            return self._fn(resolver)
+        except EvaluationError as exc:
+            raise EvaluationError(f"cannot evaluate {self.text!r}: {exc}") from None
+        except (TypeError, ExpressionError) as exc:  # e.g. `1 < 'a'`, comparing a number with text
+            raise EvaluationError(f"cannot evaluate {self.text!r}: {exc}") from None
+        except (ZeroDivisionError, OverflowError, ValueError):
+            return math.nan
+
+    def truth(self, resolver: Resolver) -> bool:
+        """The value as a condition: NaN (a failed operation) is false; text or a list is an error."""
+        value = self.evaluate(resolver)
+        if not _is_number(value):
+            raise EvaluationError(f"cannot evaluate {self.text!r}: expected true or false, found {_kind(value)}")
+        return bool(value) and not (isinstance(value, float) and math.isnan(value))
+
+    def number(self, resolver: Resolver) -> float:
+        value = self.evaluate(resolver)
+        if not _is_number(value):
+            raise EvaluationError(f"cannot evaluate {self.text!r}: expected a number, found {_kind(value)}")
+        return float(value)
+
+
+def _dotted(node: ast.AST) -> str | None:
+    parts: list[str] = []
+    while isinstance(node, ast.Attribute):
+        parts.append(node.attr)
+        node = node.value
+    if isinstance(node, ast.Name):
+        parts.append(node.id)
+        return ".".join(reversed(parts))
+    return None
+
+
+class _Compiler:
+    def __init__(self, text: str) -> None:
+        self.text = text
+        self.names: set[str] = set()
+        self.calls: set[str] = set()
+        self.call_args: set[tuple[str, tuple[str, ...]]] = set()
+        self.count = 0
+
+    def fail(self, node: ast.AST, what: str) -> ExpressionError:
+        col = getattr(node, "col_offset", None)
+        where = f" at character {col + 1}" if col is not None else ""
+        return ExpressionError(f"{what}{where} in expression {self.text!r}")
+
+    def compile(self, node: ast.AST) -> Evaluator:  # noqa: C901 - one dispatch over the whitelist
+        self.count += 1
+        if self.count > MAX_NODES:
+            raise self.fail(node, "expression too long")
+        if isinstance(node, ast.Constant):
+            if isinstance(node.value, bool | int | float | str):
+                value = node.value
+                return lambda r: value
+            raise self.fail(node, f"constant {node.value!r} not allowed")
+        if isinstance(node, ast.Name | ast.Attribute):
+            name = _dotted(node)
+            if name is None:
+                raise self.fail(node, "attribute access is only allowed on names")
+            if any(part.startswith("_") for part in name.split(".")):
+                raise self.fail(node, f"name `{name}` not allowed (underscore)")
+            if name in CONSTANTS:
+                constant = CONSTANTS[name]
+                return lambda r: constant
+            self.names.add(name)
+            return lambda r: r.value(name)
+        if isinstance(node, ast.BinOp) and type(node.op) in _BIN:
+            op, left, right = _BIN[type(node.op)], self.compile(node.left), self.compile(node.right)
+            return lambda r: op(left(r), right(r))
+        if isinstance(node, ast.UnaryOp):
+            operand = self.compile(node.operand)
+            if isinstance(node.op, ast.USub):
+                return lambda r: -operand(r)
+            if isinstance(node.op, ast.UAdd):
+                return lambda r: +operand(r)
+            if isinstance(node.op, ast.Not):
+                return lambda r: not operand(r)
+        if isinstance(node, ast.BoolOp):
+            parts = [self.compile(v) for v in node.values]
+            if isinstance(node.op, ast.And):
+                return lambda r: all(p(r) for p in parts)
+            return lambda r: any(p(r) for p in parts)
+        if isinstance(node, ast.Compare) and all(type(o) in _CMP for o in node.ops):
+            first = self.compile(node.left)
+            rest = [(_CMP[type(o)], self.compile(c)) for o, c in zip(node.ops, node.comparators, strict=True)]
+
+            def compare(r: Resolver) -> bool:
+                left = first(r)
+                for op, right_fn in rest:
+                    right = right_fn(r)
+                    if not op(left, right):
+                        return False
+                    left = right
+                return True
+
+            return compare
+        if isinstance(node, ast.IfExp):
+            test, body, orelse = self.compile(node.test), self.compile(node.body), self.compile(node.orelse)
+            return lambda r: body(r) if test(r) else orelse(r)
+        if isinstance(node, ast.Call):
+            return self._call(node)
+        raise self.fail(node, f"`{type(node).__name__}` is not allowed")
+
+    def _call(self, node: ast.Call) -> Evaluator:
+        if not isinstance(node.func, ast.Name) or node.keywords:
+            raise self.fail(node, "only plain calls of known functions are allowed")
+        fname = node.func.id
+        if fname in PURE_FUNCTIONS:
+            args = [self.compile(a) for a in node.args]
+            fn = _nan_on_math_error(PURE_FUNCTIONS[fname])
+            return lambda r: fn(*(a(r) for a in args))
+        if fname in RUNNER_FUNCTIONS:
+            self.calls.add(fname)
+            if len(node.args) != RUNNER_ARITY[fname]:
+                raise self.fail(node, f"{fname}() takes {RUNNER_ARITY[fname]} argument(s), found {len(node.args)}")
+            literal: list[str] = []
+            for a in node.args:
+                value = a.value if isinstance(a, ast.Constant) else _dotted(a)
+                if not isinstance(value, str):
+                    raise self.fail(node, f"{fname}() takes names or strings")
+                if not isinstance(a, ast.Constant) and any(p.startswith("_") for p in value.split(".")):
+                    raise self.fail(a, f"name `{value}` not allowed (underscore)")
+                literal.append(value)
+            self.call_args.add((fname, tuple(literal)))
+            return lambda r: r.call(fname, literal)
+        known = ", ".join(sorted([*PURE_FUNCTIONS, *RUNNER_FUNCTIONS]))
+        raise self.fail(node, f"unknown function `{fname}` (known: {known})")
+
+
+def compile_expression(text: str) -> Expression:
+    """Parse and check ``text``; raise :class:`ExpressionError` if it is outside the grammar."""
+    if not isinstance(text, str) or not text.strip():
+        raise ExpressionError("expected an expression, found nothing")
+    if len(text) > MAX_LENGTH:
+        raise ExpressionError(f"expression longer than {MAX_LENGTH} characters")
+    source = text.strip()
+    try:
+        tree = ast.parse(source, mode="eval")
+    except SyntaxError as exc:
+        raise ExpressionError(f"syntax error at character {exc.offset or 0} in expression {text!r}") from None
+    except (ValueError, RecursionError, MemoryError):
+        raise ExpressionError(f"cannot parse expression {text!r}") from None
+    compiler = _Compiler(source)
+    try:
+        fn = compiler.compile(tree.body)
+    except RecursionError:
+        raise ExpressionError(f"expression nested too deeply: {text!r}") from None
+    return Expression(
+        text=source,
+        names=frozenset(compiler.names),
+        calls=frozenset(compiler.calls),
+        _fn=fn,
+        call_args=frozenset(compiler.call_args),
+    )

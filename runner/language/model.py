@@ -1,0 +1,54 @@
+"""The scenario document: the root of the language (schema version 1)."""
+
+from __future__ import annotations
+
+from typing import Annotated, Any, Literal
+
+from pydantic import Field
+
+from runner.language.model_assertions import Assertion
+from runner.language.model_base import SCHEMA_VERSION, EventName, Name, Strict, Surface
+from runner.language.model_behaviour import Action, Collisions, Input, IntervalDef, IntervalId, StateValue
+from runner.language.model_physics import Body, Joint, PairSurface, World
+
+
+class Variant(Strict):
+    """A named case: overrides applied to the base scenario."""
+
+    description: str | None = Field(None, max_length=2000)
+    set: dict[str, Any] = Field(
+        default_factory=dict,
+        description="Dotted paths to replace, e.g. `world.duration: 10` or `bodies.door.pos: [0, 0, 1]`.",
+    )
+    inputs: list[Input] | None = Field(None, description="Replaces the base timeline when given.")
+    assertions: list[Assertion] = Field(default_factory=list, description="Added to the base assertions.")
+
+
+class Scenario(Strict):
+    schema_version: Literal[1] = Field(description=f"The language version; this runner reads {SCHEMA_VERSION}.")
+    scenario: Annotated[str, Field(min_length=1, max_length=128, pattern=r"^[A-Za-z0-9_.-]+$")] = Field(
+        description="The scenario's name."
+    )
+    description: str | None = Field(None, max_length=5000)
+    params: dict[Name, StateValue] = Field(
+        default_factory=dict,
+        description="Values substituted for `${name}` anywhere, readable as `param.name`; set with --set.",
+    )
+    world: World
+    surface: Surface = Field(default_factory=Surface, description="The default contact surface.")
+    surfaces: list[PairSurface] = Field(default_factory=list, description="Overrides per body pair.")
+    bodies: dict[Name, Body] = Field(min_length=1)
+    joints: dict[Name, Joint] = Field(default_factory=dict)
+    sounds: dict[Name, str] = Field(default_factory=dict, description="WAV files, relative to the scenario.")
+    state: dict[Name, StateValue] = Field(default_factory=dict, description="State variables and initial values.")
+    collisions: Collisions = Field(default_factory=Collisions)
+    intervals: dict[IntervalId, IntervalDef] = Field(default_factory=dict)
+    on: dict[EventName, list[Action]] = Field(
+        default_factory=dict, description="Event handlers. `start` is sent before the first step."
+    )
+    inputs: list[Input] = Field(default_factory=list, description="Timed input events.")
+    assertions: list[Assertion] = Field(default_factory=list)
+    variants: dict[Annotated[str, Field(pattern=r"^[A-Za-z0-9_.-]+$")], Variant] = Field(default_factory=dict)
+    backend_options: dict[Name, dict[str, Any]] = Field(
+        default_factory=dict, description="Per-backend engine options (see `scenario backends`)."
+    )

@@ -1,0 +1,168 @@
+"""Named pass/fail assertions."""
+
+from __future__ import annotations
+
+from typing import Annotated, Any, Literal, Union
+
+from pydantic import Discriminator, Field, Tag, field_validator, model_validator
+
+from runner.language.model_base import EventName, Expr, Name, NonNegFloat, Strict, check_time_or_end
+from runner.language.model_behaviour import tag_of
+
+Tolerance = Annotated[float, Field(ge=0, allow_inf_nan=False)] | Expr | dict[str, Annotated[float, Field(ge=0)] | Expr]
+Number = float | Expr  # a number, or an expression evaluated when the assertion is checked
+TimeOrEnd = Annotated[float | Literal["end"], Field(description="Seconds, or `end`.")]
+Window = tuple[TimeOrEnd, TimeOrEnd]
+
+
+class AssertionBase(Strict):
+    name: Annotated[str, Field(min_length=1, max_length=128)]
+    description: str | None = Field(None, max_length=2000)
+
+    @field_validator("*", mode="before")
+    @classmethod
+    def _times(cls, v: Any, info: Any) -> Any:
+        if info.field_name in ("at", "first"):
+            return check_time_or_end(v)
+        return v
+
+
+def _tol_check(tol: Any) -> None:
+    if isinstance(tol, dict) and not tol:
+        raise ValueError("expected a tolerance number or a map {default: x, <backend>: y}, found {}")
+
+
+class ValueAssertion(AssertionBase):
+    """`value` at a time: near a number within tol, or between min and max."""
+
+    at: TimeOrEnd
+    value: Expr
+    near: Number | None = None
+    tol: Tolerance = 0.0
+    min: Number | None = None
+    max: Number | None = None
+
+    @model_validator(mode="after")
+    def _how(self) -> ValueAssertion:
+        if self.near is None and self.min is None and self.max is None:
+            raise ValueError("expected `near` (with `tol`) or `min`/`max`, found none")
+        _tol_check(self.tol)
+        return self
+
+
+class CheckAssertion(AssertionBase):
+    """A condition that must hold at a time."""
+
+    at: TimeOrEnd
+    check: Expr
+
+
+class AlwaysAssertion(AssertionBase):
+    always: Expr
+    during: Window = (0.0, "end")
+
+
+class NeverAssertion(AssertionBase):
+    never: Expr
+    during: Window = (0.0, "end")
+
+
+class EventuallyAssertion(AssertionBase):
+    eventually: Expr
+    during: Window = (0.0, "end")
+
+
+class MaxAssertion(AssertionBase):
+    """The largest value of an expression over a window."""
+
+    max_of: Expr = Field(alias="max")
+    during: Window = (0.0, "end")
+    near: Number
+    tol: Tolerance = 0.0
+
+
+class MinAssertion(AssertionBase):
+    min_of: Expr = Field(alias="min")
+    during: Window = (0.0, "end")
+    near: Number
+    tol: Tolerance = 0.0
+
+
+class CountRange(Strict):
+    min: Annotated[int, Field(ge=0)] = 0
+    max: Annotated[int, Field(ge=0)] | None = None
+
+
+class EventAssertion(AssertionBase):
+    """An event's count, first time, or order relative to another event."""
+
+    event: EventName
+    count: Annotated[int, Field(ge=0)] | CountRange | None = None
+    first: TimeOrEnd | None = Field(None, description="The time it first happens.")
+    tol: Tolerance = 0.0
+    before: EventName | None = Field(None, description="It first happens before this event first happens.")
+    after: EventName | None = None
+
+    @model_validator(mode="after")
+    def _how(self) -> EventAssertion:
+        if self.count is None and self.first is None and self.before is None and self.after is None:
+            raise ValueError("expected one of count, first, before, after; found none")
+        return self
+
+
+class SoundAssertion(AssertionBase):
+    """A sound started at a time (within tol), or a number of times."""
+
+    sound: Name
+    played_at: NonNegFloat | None = None
+    tol: Tolerance = 0.0
+    count: Annotated[int, Field(ge=0)] | CountRange | None = None
+
+    @model_validator(mode="after")
+    def _how(self) -> SoundAssertion:
+        if self.played_at is None and self.count is None:
+            raise ValueError("expected played_at or count, found neither")
+        return self
+
+
+class ContactAssertion(AssertionBase):
+    """Two bodies touch (physics contact): at a time, or always / never / eventually over a window."""
+
+    contact: tuple[Name, Name]
+    at: TimeOrEnd | None = None
+    when: Literal["always", "never", "eventually"] | None = None
+    during: Window = (0.0, "end")
+
+    @model_validator(mode="after")
+    def _how(self) -> ContactAssertion:
+        if (self.at is None) == (self.when is None):
+            raise ValueError("expected exactly one of `at` or `when` (always, never, eventually)")
+        return self
+
+
+ASSERTION_TAGS: dict[str, type[Strict]] = {
+    "value": ValueAssertion,
+    "check": CheckAssertion,
+    "always": AlwaysAssertion,
+    "never": NeverAssertion,
+    "eventually": EventuallyAssertion,
+    "max": MaxAssertion,
+    "min": MinAssertion,
+    "event": EventAssertion,
+    "sound": SoundAssertion,
+    "contact": ContactAssertion,
+}
+
+
+def _assertion_tag(v: Any) -> str | None:
+    if isinstance(v, dict) and "value" in v:
+        return "value"  # `value` may come with min/max: it decides the kind
+    return tag_of(v, ASSERTION_TAGS)
+
+
+Assertion = Annotated[
+    Union[tuple(Annotated[cls, Tag(tag)] for tag, cls in ASSERTION_TAGS.items())],  # type: ignore[valid-type]  # noqa: UP007
+    Discriminator(_assertion_tag),
+]
+
+__all__ = ["ASSERTION_TAGS", "Assertion", "NonNegFloat"]

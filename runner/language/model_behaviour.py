@@ -1,0 +1,295 @@
+"""Sounds, collision solids, intervals, actions, handlers and timed inputs."""
+
+from __future__ import annotations
+
+from typing import Annotated, Any, Literal, Union
+
+from pydantic import Discriminator, Field, Tag, field_validator, model_validator
+
+from runner.language.model_base import (
+    EventName,
+    Expr,
+    FiniteFloat,
+    Name,
+    NonNegFloat,
+    PositiveFloat,
+    Quat,
+    Strict,
+    Vec3,
+    finite_vec,
+)
+
+IntervalId = Annotated[str, Field(pattern=r"^[A-Za-z_][A-Za-z0-9_-]*$", max_length=64)]
+Blend = Literal["noBlend", "easeIn", "easeOut", "easeInOut"]
+StateValue = bool | int | float | str
+
+
+# --- collision solids (Panda3D CollisionNode / CollisionHandlerEvent) --------------------------------
+class SphereSolid(Strict):
+    center: Vec3 = (0.0, 0.0, 0.0)
+    radius: PositiveFloat
+
+
+class BoxSolid(Strict):
+    center: Vec3 = (0.0, 0.0, 0.0)
+    size: Vec3 = Field(description="Full edge lengths in the body frame, before scale.")
+
+
+class Solid(Strict):
+    sphere: SphereSolid | None = None
+    polygon: list[Vec3] | None = Field(None, description="Vertices, counter-clockwise seen from the normal side.")
+    box: BoxSolid | None = None
+
+    @model_validator(mode="after")
+    def _one(self) -> Solid:
+        kinds = [k for k in ("sphere", "polygon", "box") if getattr(self, k) is not None]
+        if len(kinds) != 1:
+            raise ValueError(f"expected exactly one of sphere, polygon, box; found {', '.join(kinds) or 'none'}")
+        return self
+
+
+class CollisionNode(Strict):
+    body: Name
+    solids: list[Solid] = Field(default_factory=list)
+    sphere: SphereSolid | None = Field(None, description="Shorthand for one sphere solid.")
+    polygon: list[Vec3] | None = Field(None, description="Shorthand for one polygon solid.")
+    box: BoxSolid | None = Field(None, description="Shorthand for one box solid.")
+
+    def all_solids(self) -> list[Solid]:
+        extra = [Solid(**{k: getattr(self, k)}) for k in ("sphere", "polygon", "box") if getattr(self, k) is not None]
+        return [*self.solids, *extra]
+
+    @model_validator(mode="after")
+    def _some(self) -> CollisionNode:
+        if not self.all_solids():
+            raise ValueError("expected at least one solid (sphere, polygon or box), found none")
+        return self
+
+
+class Collisions(Strict):
+    nodes: dict[Name, CollisionNode] = Field(default_factory=dict)
+    from_: list[Name] = Field(
+        default_factory=list, alias="from", description="Collision nodes that are colliders (Panda3D addCollider)."
+    )
+    contacts_from: list[Name] = Field(
+        default_factory=list, description="Bodies whose physics contacts also raise in/again/out events."
+    )
+    in_: list[str] = Field(["%fn-into-%in"], alias="in", description="In patterns (%fn, %in, %fs, %is, %ig).")
+    again: list[str] = Field(default_factory=list, description="Again patterns.")
+    out: list[str] = Field(default_factory=list, description="Out patterns.")
+
+
+# --- actions --------------------------------------------------------------------------------------
+class MotorCommand(Strict):
+    joint: Name
+    vel: FiniteFloat
+    fmax: NonNegFloat | None = Field(None, description="Unchanged when omitted.")
+
+
+class ForceCommand(Strict):
+    body: Name
+    value: Vec3 = Field(description="World frame, at the centre of mass (N, or N s for an impulse).")
+    torque: Vec3 = Field((0.0, 0.0, 0.0), description="World frame (N m, or N m s for an impulse).")
+
+    _v = field_validator("value", "torque", mode="before")(finite_vec)
+
+
+class ResetCommand(Strict):
+    body: Name
+    pos: Vec3 | None = Field(None, description="Default: the body's start position.")
+    hpr: Vec3 | None = None
+    quat: Quat | None = None
+    vel: Vec3 = (0.0, 0.0, 0.0)
+    angvel: Vec3 = (0.0, 0.0, 0.0)
+
+    _v = field_validator("pos", "hpr", "quat", "vel", "angvel", mode="before")(finite_vec)
+
+
+class LogCommand(Strict):
+    message: str = Field(max_length=2000)
+    level: Literal["debug", "info", "warning", "error"] = "info"
+
+
+class StartAction(Strict):
+    start: IntervalId
+
+
+class PauseAction(Strict):
+    pause: IntervalId
+
+
+class ResumeAction(Strict):
+    resume: IntervalId
+
+
+class FinishAction(Strict):
+    finish: IntervalId
+
+
+class LoopAction(Strict):
+    loop: IntervalId
+
+
+class SetAction(Strict):
+    set: dict[Name, StateValue] = Field(description="State variables to set to constants.")
+
+
+class CalcAction(Strict):
+    calc: dict[Name, Expr] = Field(description="State variables to set to the value of an expression.")
+
+
+class PlaySoundAction(Strict):
+    play_sound: Name
+
+
+class StopSoundAction(Strict):
+    stop_sound: Name
+
+
+class MotorAction(Strict):
+    motor: MotorCommand
+
+
+class ForceAction(Strict):
+    force: ForceCommand
+
+
+class ImpulseAction(Strict):
+    impulse: ForceCommand
+
+
+class ResetAction(Strict):
+    reset: Name | ResetCommand
+
+
+class LogAction(Strict):
+    log: str | LogCommand
+
+
+class SendAction(Strict):
+    send: EventName
+
+
+class EndAction(Strict):
+    end: bool | str = Field(description="`true`, or the reason to log.")
+
+
+class IfAction(Strict):
+    if_: Expr = Field(alias="if")
+    then: list[Action] = Field(default_factory=list)
+    else_: list[Action] = Field(default_factory=list, alias="else")
+
+
+ACTION_TAGS: dict[str, type[Strict]] = {
+    "start": StartAction,
+    "pause": PauseAction,
+    "resume": ResumeAction,
+    "finish": FinishAction,
+    "loop": LoopAction,
+    "set": SetAction,
+    "calc": CalcAction,
+    "play_sound": PlaySoundAction,
+    "stop_sound": StopSoundAction,
+    "motor": MotorAction,
+    "force": ForceAction,
+    "impulse": ImpulseAction,
+    "reset": ResetAction,
+    "log": LogAction,
+    "send": SendAction,
+    "end": EndAction,
+    "if": IfAction,
+}
+
+
+def tag_of(value: Any, tags: dict[str, type[Strict]]) -> str | None:
+    """The tag of a union member: the first key naming a kind (dict input) or the model's kind."""
+    if isinstance(value, dict):
+        return next((k for k in value if k in tags), None)
+    return next((k for k, cls in tags.items() if isinstance(value, cls)), None)
+
+
+Action = Annotated[
+    Union[tuple(Annotated[cls, Tag(tag)] for tag, cls in ACTION_TAGS.items())],  # type: ignore[valid-type]  # noqa: UP007
+    Discriminator(lambda v: tag_of(v, ACTION_TAGS)),
+]
+IfAction.model_rebuild()
+
+
+# --- intervals ------------------------------------------------------------------------------------
+class Lerp(Strict):
+    body: Name
+    duration: NonNegFloat
+    blend: Blend = "noBlend"
+    pos: Vec3 | None = None
+    hpr: Vec3 | None = Field(None, description="Degrees, per component, no wrap.")
+    scale: PositiveFloat | None = None
+    start_pos: Vec3 | None = Field(None, description="Default: captured at the interval's first step.")
+    start_hpr: Vec3 | None = None
+    start_scale: PositiveFloat | None = None
+
+    @model_validator(mode="after")
+    def _some(self) -> Lerp:
+        if self.pos is None and self.hpr is None and self.scale is None:
+            raise ValueError("expected at least one of pos, hpr, scale to lerp to, found none")
+        return self
+
+
+class SoundStep(Strict):
+    sound: Name
+    duration: PositiveFloat | None = Field(None, description="Default: the sound's length minus start_time.")
+    volume: Annotated[float, Field(ge=0, le=1)] = 1.0
+    loop: bool = False
+    start_time: NonNegFloat = 0.0
+
+
+class Step(Strict):
+    """One interval: exactly one of lerp, sequence, parallel, wait, sound, func, interval."""
+
+    lerp: Lerp | None = None
+    sequence: list[Step] | None = None
+    parallel: list[Step] | None = None
+    wait: NonNegFloat | None = None
+    sound: Name | SoundStep | None = None
+    func: list[Action] | None = Field(None, description="An action step (Panda3D Func): actions run at once.")
+    interval: IntervalId | None = Field(None, description="Another named interval, inlined here.")
+    duration: PositiveFloat | None = Field(None, description="Sequence/parallel only: a fixed ('phony') duration.")
+
+    @model_validator(mode="after")
+    def _one(self) -> Step:
+        kinds = [
+            k
+            for k in ("lerp", "sequence", "parallel", "wait", "sound", "func", "interval")
+            if getattr(self, k) is not None
+        ]
+        if len(kinds) != 1:
+            raise ValueError(
+                "expected exactly one of lerp, sequence, parallel, wait, sound, func, interval; "
+                f"found {', '.join(kinds) or 'none'}"
+            )
+        if self.duration is not None and kinds[0] not in ("sequence", "parallel"):
+            raise ValueError(f"`duration` belongs to sequence or parallel, not {kinds[0]}")
+        return self
+
+
+class IntervalDef(Step):
+    name: str | None = Field(
+        None,
+        max_length=128,
+        description="The Panda3D name. Starting an interval whose "
+        "name is playing finishes the old one first (same-name takeover). Default: the id.",
+    )
+
+
+# --- timed inputs ---------------------------------------------------------------------------------
+class Repeat(Strict):
+    every: PositiveFloat
+    count: Annotated[int, Field(ge=1, le=100_000)]
+
+
+class Input(Strict):
+    at: NonNegFloat = Field(description="Simulated time in seconds.")
+    event: EventName
+    repeat: Repeat | None = None
+
+
+__all__ = ["ACTION_TAGS", "Action", "Collisions", "Input", "IntervalDef", "Step", "tag_of"]

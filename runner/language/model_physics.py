@@ -1,0 +1,152 @@
+"""World, bodies, joints and surfaces of the scenario language."""
+
+from __future__ import annotations
+
+import math
+from typing import Annotated, Literal
+
+from pydantic import Field, field_validator, model_validator
+
+from runner.language.model_base import (
+    FiniteFloat,
+    Name,
+    NonNegFloat,
+    PositiveFloat,
+    Quat,
+    Strict,
+    Surface,
+    Vec3,
+    finite_vec,
+)
+
+
+class World(Strict):
+    gravity: Vec3 = Field((0.0, 0.0, -9.81), description="m/s^2, world frame (Z up).")
+    dt: PositiveFloat = Field(description="The scenario step in seconds (the lab uses 0.04).")
+    duration: PositiveFloat = Field(description="Simulated seconds to run.")
+    substeps: Annotated[int, Field(ge=1, le=1000)] = Field(1, description="Physics steps per scenario step.")
+
+    _v = field_validator("gravity", mode="before")(finite_vec)
+
+
+class Cylinder(Strict):
+    radius: PositiveFloat
+    length: PositiveFloat = Field(description="Length of the cylindrical part, along the body's local z.")
+
+
+class Plane(Strict):
+    """An infinite static plane through the body's position, normal along its local +z."""
+
+
+class BodyArray(Strict):
+    """Copies of a body named `<name>_0` ... `<name>_<n-1>`; the plain name refers to the whole group."""
+
+    count: Annotated[int, Field(ge=1, le=10_000)] | tuple[int, int, int] = Field(
+        description="How many copies: n (a column along z) or [nx, ny, nz]."
+    )
+    spacing: Vec3 = Field((0.0, 0.0, 1.0), description="Offset between neighbours along x, y, z (metres).")
+    layer_shift: Vec3 = Field((0.0, 0.0, 0.0), description="Extra offset added per layer (z index).")
+
+    @field_validator("count")
+    @classmethod
+    def _count(cls, v: int | tuple[int, int, int]) -> int | tuple[int, int, int]:
+        if isinstance(v, tuple) and (min(v) < 1 or v[0] * v[1] * v[2] > 10_000):
+            raise ValueError(f"expected counts >= 1 with at most 10000 copies in all, found {list(v)}")
+        return v
+
+
+Rgba = tuple[float, float, float] | tuple[float, float, float, float]
+
+
+class Body(Strict):
+    box: Vec3 | None = Field(None, description="Full edge lengths (x, y, z), before scale.")
+    sphere: PositiveFloat | None = Field(None, description="Radius, before scale.")
+    capsule: Cylinder | None = None
+    cylinder: Cylinder | None = None
+    plane: Plane | None = None
+    motion: Literal["dynamic", "kinematic", "static"] = Field(
+        "dynamic",
+        description="dynamic: simulated; kinematic: moved by intervals and actions, carries what "
+        "rests on it; static: never moves.",
+    )
+    mass: PositiveFloat | None = Field(None, description="kg; inertia from the shape (ODE dMassSet*Total).")
+    density: PositiveFloat | None = Field(None, description="kg/m^3; mass = density x volume (ODE dMassSet*).")
+    pos: Vec3 = (0.0, 0.0, 0.0)
+    hpr: Vec3 | None = Field(None, description="Heading, pitch, roll in degrees, Panda3D's convention.")
+    quat: Quat | None = Field(None, description="Orientation as (w, x, y, z).")
+    scale: PositiveFloat = Field(1.0, description="Uniform scale of the shape and its collision solids.")
+    vel: Vec3 = Field((0.0, 0.0, 0.0), description="Initial linear velocity, m/s.")
+    angvel: Vec3 = Field((0.0, 0.0, 0.0), description="Initial angular velocity, rad/s, world frame.")
+    color: Rgba | None = Field(None, description="RGB or RGBA, 0..1, for the 3D view.")
+    array: BodyArray | None = None
+
+    _v = field_validator("pos", "vel", "angvel", "hpr", "quat", "box", mode="before")(finite_vec)
+
+    @model_validator(mode="after")
+    def _one_shape(self) -> Body:
+        shapes = [k for k in ("box", "sphere", "capsule", "cylinder", "plane") if getattr(self, k) is not None]
+        if len(shapes) != 1:
+            found = ", ".join(shapes) if shapes else "none"
+            raise ValueError(f"expected exactly one shape (box, sphere, capsule, cylinder or plane), found {found}")
+        if self.box is not None and min(self.box) <= 0:
+            raise ValueError(f"expected box sizes > 0, found {list(self.box)}")
+        if self.hpr is not None and self.quat is not None:
+            raise ValueError("expected either hpr or quat, found both")
+        if self.quat is not None and sum(c * c for c in self.quat) < 1e-12:
+            raise ValueError("expected a non-zero quaternion, found (0, 0, 0, 0)")
+        if self.mass is not None and self.density is not None:
+            raise ValueError("expected either mass or density, found both")
+        if self.plane is not None and self.motion != "static":
+            raise ValueError(f"a plane must be static, found motion: {self.motion}")
+        if self.motion == "dynamic" and self.mass is None and self.density is None:
+            raise ValueError("a dynamic body needs mass or density, found neither")
+        if self.color is not None and not all(0.0 <= c <= 1.0 for c in self.color):
+            raise ValueError(f"expected colour components in 0..1, found {list(self.color)}")
+        return self
+
+
+class Motor(Strict):
+    vel: FiniteFloat = Field(0.0, description="Target rate: m/s (slider) or rad/s (hinge) (ODE dParamVel).")
+    fmax: NonNegFloat = Field(
+        description="Largest force (N) or torque (N m) the motor may use; 0 = off (ODE dParamFMax)."
+    )
+
+
+class Joint(Strict):
+    type: Literal["slider", "hinge", "ball", "fixed", "universal"]
+    bodies: tuple[Name, Name] = Field(description="[body, other]; other may be `environment`.")
+    axis: Vec3 = Field((1.0, 0.0, 0.0), description="World-frame axis at the start (slider, hinge, universal).")
+    axis2: Vec3 | None = Field(None, description="Second axis of a universal joint.")
+    anchor: Vec3 | None = Field(None, description="World-frame anchor; default: the first body's position.")
+    limits: tuple[FiniteFloat, FiniteFloat] | None = Field(
+        None, description="[lo, hi] stops: metres (slider) or radians (hinge)."
+    )
+    motor: Motor | None = None
+
+    _v = field_validator("axis", "axis2", "anchor", mode="before")(finite_vec)
+
+    @model_validator(mode="after")
+    def _check(self) -> Joint:
+        if sum(c * c for c in self.axis) < 1e-12:
+            raise ValueError("expected a non-zero axis, found (0, 0, 0)")
+        if self.limits is not None and self.limits[0] > self.limits[1]:
+            raise ValueError(f"expected limits [lo, hi] with lo <= hi, found {list(self.limits)}")
+        if self.type in ("ball", "fixed") and (self.limits is not None or self.motor is not None):
+            raise ValueError(f"a {self.type} joint takes no limits or motor")
+        if self.type == "universal" and self.axis2 is None:
+            raise ValueError("a universal joint needs axis2")
+        if self.axis2 is not None:
+            a, b = self.axis, self.axis2
+            cross = (a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0])
+            if math.hypot(*cross) <= 1e-6 * math.hypot(*a) * math.hypot(*b):
+                raise ValueError(f"expected axis2 not parallel to axis, found {list(a)} and {list(b)}")
+        if self.bodies[0] == "environment":
+            raise ValueError("the first body of a joint must be a body, found `environment`")
+        return self
+
+
+class PairSurface(Surface):
+    bodies: tuple[Name, Name] = Field(description="The two bodies (or body groups) this surface is for.")
+
+
+__all__ = ["Body", "BodyArray", "Cylinder", "Joint", "Motor", "NonNegFloat", "PairSurface", "Plane", "World"]

@@ -1,0 +1,99 @@
+"""The names a scenario defines: bodies (arrays expanded), groups, joints, and what expressions may read."""
+
+from __future__ import annotations
+
+import difflib
+from dataclasses import dataclass
+
+from runner.language.model import Scenario
+from runner.language.model_physics import Body
+
+BODY_FIELDS = {
+    "pos": ("x", "y", "z"),
+    "vel": ("x", "y", "z"),
+    "angvel": ("x", "y", "z"),
+    "quat": ("w", "x", "y", "z"),
+}
+BODY_SCALARS = ("speed",)
+JOINT_FIELDS = ("position", "velocity", "force")
+GLOBALS = ("time", "dt", "duration", "g", "gravity.x", "gravity.y", "gravity.z")
+RESERVED = frozenset(
+    {
+        "time",
+        "dt",
+        "duration",
+        "g",
+        "gravity",
+        "state",
+        "param",
+        "environment",
+        "world",
+        "true",
+        "false",
+        "pi",
+        "e",
+        "inf",
+    }
+)
+
+
+@dataclass(frozen=True)
+class BodyInstance:
+    name: str  # e.g. "crate_3" for an array copy, else the key
+    key: str  # the key in `bodies`
+    index: tuple[int, int, int]  # (ix, iy, iz) within the array; (0, 0, 0) for a single body
+    body: Body
+
+
+def array_counts(body: Body) -> tuple[int, int, int]:
+    if body.array is None:
+        return (1, 1, 1)
+    count = body.array.count
+    return (1, 1, count) if isinstance(count, int) else count
+
+
+def expand_bodies(model: Scenario) -> list[BodyInstance]:
+    out: list[BodyInstance] = []
+    for key, body in model.bodies.items():
+        if body.array is None:
+            out.append(BodyInstance(key, key, (0, 0, 0), body))
+            continue
+        nx, ny, nz = array_counts(body)
+        n = 0
+        for iz in range(nz):
+            for iy in range(ny):
+                for ix in range(nx):
+                    out.append(BodyInstance(f"{key}_{n}", key, (ix, iy, iz), body))
+                    n += 1
+    return out
+
+
+def groups(model: Scenario) -> dict[str, list[str]]:
+    """Array name -> its copies' names."""
+    out: dict[str, list[str]] = {}
+    for inst in expand_bodies(model):
+        if inst.body.array is not None:
+            out.setdefault(inst.key, []).append(inst.name)
+    return out
+
+
+def readable_names(model: Scenario) -> list[str]:
+    """Every dotted name an expression may read (for suggestions)."""
+    names = list(GLOBALS)
+    names += [f"state.{s}" for s in model.state] + [f"param.{p}" for p in model.params]
+    owners = [b.name for b in expand_bodies(model)] + list(groups(model))
+    for owner in owners:
+        names += [f"{owner}.{f}.{c}" for f, comps in BODY_FIELDS.items() for c in comps]
+        names += [f"{owner}.{s}" for s in BODY_SCALARS]
+    for joint in model.joints:
+        names += [f"{joint}.{f}" for f in JOINT_FIELDS]
+    return names
+
+
+def check_name(name: str, valid: set[str]) -> str | None:
+    """An error message if ``name`` cannot be read, else None."""
+    if name in valid:
+        return None
+    close = difflib.get_close_matches(name, sorted(valid), n=1, cutoff=0.7)
+    hint = f"; did you mean `{close[0]}`?" if close else ""
+    return f"unknown name `{name}` in expression{hint}"

@@ -1,0 +1,312 @@
+"""Cross-reference checks: every name used is defined, files exist, geometry makes sense."""
+
+from __future__ import annotations
+
+import difflib
+import math
+from collections.abc import Iterable, Iterator
+from pathlib import Path as FsPath
+from typing import Any
+
+import numpy as np
+
+from runner.errors import Issue, ScenarioValidationError
+from runner.language import model_assertions as A
+from runner.language import model_behaviour as B
+from runner.language.expressions import ExpressionError, compile_expression
+from runner.language.model import Scenario
+from runner.language.names import RESERVED, array_counts, check_name, expand_bodies, groups, readable_names
+from runner.language.patterns import possible_events
+from runner.language.sounds import SoundFileError, read_info
+from runner.language.yaml_source import Path, Positions
+
+MAX_BODIES = 10_000
+MAX_STEPS = 10_000_000
+MAX_INPUTS = 100_000
+MAX_SURFACE_PAIRS = 100_000
+
+
+def _size_issues(model: Scenario, positions: Positions) -> list[Issue]:
+    """Limits on what a small file can expand to, from the counts alone: a few hundred bytes of arrays,
+    repeats or group surfaces would otherwise build millions of objects before any check."""
+    size = {key: math.prod(array_counts(body)) for key, body in model.bodies.items()}
+    bodies = sum(size.values())
+    inputs = sum(1 if i.repeat is None else i.repeat.count for i in model.inputs)
+    pairs = sum(size.get(s.bodies[0], 1) * size.get(s.bodies[1], 1) for s in model.surfaces)
+    limits = [
+        (bodies, MAX_BODIES, ("bodies",), "bodies (arrays expanded)"),
+        (inputs, MAX_INPUTS, ("inputs",), "timed inputs (repeats expanded)"),
+        (pairs, MAX_SURFACE_PAIRS, ("surfaces",), "body pairs in `surfaces` (groups expanded)"),
+    ]
+    return [
+        positions.issue(where, f"expected at most {limit} {what}, found {found}")
+        for found, limit, where, what in limits
+        if found > limit
+    ]
+
+
+def _unknown(kind: str, name: str, known: Iterable[str]) -> str:
+    known = sorted(known)
+    close = difflib.get_close_matches(name, known, n=1, cutoff=0.6)
+    hint = f"did you mean `{close[0]}`?" if close else f"defined: {', '.join(known) or 'none'}"
+    return f"unknown {kind} `{name}`; {hint}"
+
+
+def walk_actions(actions: list[Any], path: Path) -> Iterator[tuple[Any, Path]]:
+    for i, action in enumerate(actions):
+        yield action, path + (i,)
+        if isinstance(action, B.IfAction):
+            yield from walk_actions(action.then, path + (i, "then"))
+            yield from walk_actions(action.else_, path + (i, "else"))
+
+
+def walk_steps(step: B.Step, path: Path) -> Iterator[tuple[B.Step, Path]]:
+    yield step, path
+    for kind in ("sequence", "parallel"):
+        for i, child in enumerate(getattr(step, kind) or []):
+            yield from walk_steps(child, path + (kind, i))
+
+
+def all_actions(model: Scenario) -> Iterator[tuple[Any, Path]]:
+    for event, actions in model.on.items():
+        yield from walk_actions(actions, ("on", event))
+    for ival, definition in model.intervals.items():
+        for step, path in walk_steps(definition, ("intervals", ival)):
+            if step.func is not None:
+                yield from walk_actions(step.func, path + ("func",))
+
+
+def polygon_problem(vertices: list[tuple[float, float, float]]) -> str | None:
+    pts = np.asarray(vertices, dtype=float)
+    if len(pts) < 3:
+        return f"a polygon needs at least 3 vertices, found {len(pts)}"
+    normal = np.zeros(3)
+    for i in range(len(pts)):
+        normal += np.cross(pts[i], pts[(i + 1) % len(pts)])
+    size = float(np.linalg.norm(normal))
+    if size < 1e-12:
+        return "the polygon's vertices are collinear or repeated (no area)"
+    normal /= size
+    extent = float(np.max(np.linalg.norm(pts - pts[0], axis=1)))
+    if np.max(np.abs((pts - pts[0]) @ normal)) > 1e-6 * max(extent, 1.0):
+        return "the polygon is not planar"
+    for i in range(len(pts)):
+        a, b, c = pts[i], pts[(i + 1) % len(pts)], pts[(i + 2) % len(pts)]
+        if float(np.dot(np.cross(b - a, c - b), normal)) < -1e-12:
+            return "the polygon is not convex"
+    return None
+
+
+def check_references(model: Scenario, positions: Positions, base_dir: FsPath) -> None:  # noqa: C901
+    issues: list[Issue] = []
+
+    def bad(path: Path, message: str, at_key: bool = False) -> None:
+        issues.append(positions.issue(path, message, at_key))
+
+    steps = model.world.duration / model.world.dt
+    if steps > MAX_STEPS:
+        bad(("world", "duration"), f"expected at most {MAX_STEPS} steps (duration / dt), found {steps:.0f}")
+    issues += _size_issues(model, positions)
+    if issues:  # before anything expands arrays, repeats or pairs
+        raise ScenarioValidationError(issues)
+    instances = expand_bodies(model)
+    body_names = {b.name for b in instances}
+    group_names = set(groups(model))
+    for name in [*model.bodies, *model.joints]:
+        if name in RESERVED:
+            where = ("bodies", name) if name in model.bodies else ("joints", name)
+            bad(where, f"`{name}` is a reserved name; choose another", at_key=True)
+    for joint in model.joints:
+        if joint in body_names or joint in group_names:
+            bad(("joints", joint), f"joint `{joint}` has the name of a body; names must be unique", at_key=True)
+    for key, body in model.bodies.items():
+        if body.array is not None and any(f"{key}_" in n and n in model.bodies for n in body_names):
+            clash = next(n for n in model.bodies if n.startswith(f"{key}_") and n in body_names and n != key)
+            bad(("bodies", clash), f"`{clash}` clashes with a copy of array `{key}`", at_key=True)
+    for name, joint in model.joints.items():
+        for i, ref in enumerate(joint.bodies):
+            if ref != "environment" and ref not in body_names:
+                bad(("joints", name, "bodies", i), _unknown("body", ref, body_names | {"environment"}))
+        if joint.bodies[0] == joint.bodies[1]:
+            bad(("joints", name, "bodies"), "a joint needs two different bodies")
+        for i, ref in enumerate(joint.bodies):
+            if ref in body_names and model.bodies.get(ref) and model.bodies[ref].motion == "static" and i == 0:
+                bad(("joints", name, "bodies", 0), f"body `{ref}` is static; a joint's first body must move")
+    for i, pair in enumerate(model.surfaces):
+        for j, ref in enumerate(pair.bodies):
+            if ref not in body_names and ref not in group_names:
+                bad(("surfaces", i, "bodies", j), _unknown("body", ref, body_names | group_names))
+    sound_lengths: dict[str, float] = {}
+    root = base_dir.resolve()
+    for name, rel in model.sounds.items():
+        target = (base_dir / rel).resolve()
+        if not target.is_relative_to(root):
+            bad(("sounds", name), f"the sound file must be inside the scenario's folder {root}; found {rel!r}")
+            continue
+        try:
+            sound_lengths[name] = read_info(target).length
+        except SoundFileError as exc:
+            bad(("sounds", name), f"expected a WAV file at {rel!r}: {exc}")
+    nodes = model.collisions.nodes
+    for node_name, node in nodes.items():
+        if node.body not in body_names:
+            bad(("collisions", "nodes", node_name, "body"), _unknown("body", node.body, body_names))
+        for k, solid in enumerate(node.all_solids()):
+            if solid.polygon is not None:
+                problem = polygon_problem(solid.polygon)
+                if problem:
+                    where = ("collisions", "nodes", node_name) + (
+                        ("solids", k) if k < len(node.solids) else ("polygon",)
+                    )
+                    bad(where, problem)
+    for i, ref in enumerate(model.collisions.from_):
+        if ref not in nodes:
+            bad(("collisions", "from", i), _unknown("collision node", ref, nodes))
+        elif any(s.sphere is None for s in nodes[ref].all_solids()):
+            bad(
+                ("collisions", "from", i),
+                f"collider `{ref}` must hold only spheres (Panda3D from-solids supported here: sphere)",
+            )
+    for i, ref in enumerate(model.collisions.contacts_from):
+        if ref not in body_names:
+            bad(("collisions", "contacts_from", i), _unknown("body", ref, body_names))
+    for ival, definition in model.intervals.items():
+        for step, path in walk_steps(definition, ("intervals", ival)):
+            if step.lerp is not None:
+                ref = step.lerp.body
+                if ref not in body_names:
+                    bad(path + ("lerp", "body"), _unknown("body", ref, body_names))
+                elif model.bodies.get(ref) is not None and model.bodies[ref].motion != "kinematic":
+                    bad(
+                        path + ("lerp", "body"),
+                        f"intervals move kinematic bodies; `{ref}` is {model.bodies[ref].motion}",
+                    )
+            if step.sound is not None:
+                ref = step.sound if isinstance(step.sound, str) else step.sound.sound
+                if ref not in model.sounds:
+                    bad(path + ("sound",), _unknown("sound", ref, model.sounds))
+            if step.interval is not None:
+                if step.interval not in model.intervals:
+                    bad(path + ("interval",), _unknown("interval", step.interval, model.intervals))
+                elif step.interval == ival:
+                    bad(path + ("interval",), f"interval `{ival}` contains itself")
+    _check_actions(model, bad, body_names, sound_lengths)
+    _check_expressions(model, bad, body_names | group_names)
+    _check_events(model, bad)
+    if issues:
+        raise ScenarioValidationError(issues)
+
+
+_INTERVAL_ACTIONS: dict[type, str] = {
+    B.StartAction: "start",
+    B.PauseAction: "pause",
+    B.ResumeAction: "resume",
+    B.FinishAction: "finish",
+    B.LoopAction: "loop",
+}
+
+
+def _check_actions(model: Scenario, bad: Any, body_names: set[str], sounds: dict[str, float]) -> None:
+    for action, path in all_actions(model):
+        kind = _INTERVAL_ACTIONS.get(type(action))
+        if kind is not None and getattr(action, kind) not in model.intervals:
+            bad(path + (kind,), _unknown("interval", getattr(action, kind), model.intervals))
+        if isinstance(action, B.SetAction | B.CalcAction):
+            field = "set" if isinstance(action, B.SetAction) else "calc"
+            for var in getattr(action, field):
+                if var not in model.state:
+                    bad(path + (field, var), _unknown("state variable", var, model.state), True)
+        if isinstance(action, B.PlaySoundAction | B.StopSoundAction):
+            field = "play_sound" if isinstance(action, B.PlaySoundAction) else "stop_sound"
+            ref = getattr(action, field)
+            if ref not in model.sounds:
+                bad(path + (field,), _unknown("sound", ref, model.sounds))
+        if isinstance(action, B.MotorAction):
+            joint = model.joints.get(action.motor.joint)
+            if joint is None:
+                bad(path + ("motor", "joint"), _unknown("joint", action.motor.joint, model.joints))
+            elif joint.type not in ("slider", "hinge"):
+                bad(
+                    path + ("motor", "joint"),
+                    f"joint `{action.motor.joint}` is a {joint.type}; motors drive sliders and hinges",
+                )
+        if isinstance(action, B.ForceAction | B.ImpulseAction):
+            cmd = action.force if isinstance(action, B.ForceAction) else action.impulse
+            field = "force" if isinstance(action, B.ForceAction) else "impulse"
+            if cmd.body not in body_names:
+                bad(path + (field, "body"), _unknown("body", cmd.body, body_names))
+        if isinstance(action, B.ResetAction):
+            ref = action.reset if isinstance(action.reset, str) else action.reset.body
+            if ref not in body_names:
+                bad(path + ("reset",), _unknown("body", ref, body_names))
+            elif any(ref in j.bodies for j in model.joints.values()):
+                bad(path + ("reset",), f"body `{ref}` is held by a joint; only free bodies can be reset")
+
+
+def expressions_in(model: Scenario) -> Iterator[tuple[str, Path]]:
+    """Every expression text in the scenario, with where it is."""
+    for action, path in all_actions(model):
+        if isinstance(action, B.IfAction):
+            yield action.if_, path + ("if",)
+        if isinstance(action, B.CalcAction):
+            for var, text in action.calc.items():
+                yield text, path + ("calc", var)
+    for i, a in enumerate(model.assertions):
+        for field in (
+            "value",
+            "check",
+            "always",
+            "never",
+            "eventually",
+            "max_of",
+            "min_of",
+            "near",
+            "min",
+            "max",
+            "tol",
+        ):
+            value = getattr(a, field, None)
+            alias = {"max_of": "max", "min_of": "min"}.get(field, field)
+            if isinstance(value, dict):
+                yield from ((t, ("assertions", i, alias, k)) for k, t in value.items() if isinstance(t, str))
+            elif isinstance(value, str):
+                yield value, ("assertions", i, alias)
+
+
+def _check_expressions(model: Scenario, bad: Any, owners: set[str]) -> None:
+    valid = set(readable_names(model))
+    known = {
+        "contact": ("body", owners),
+        "playing": ("interval", set(model.intervals)),
+        "count": ("event (it can never happen)", possible_events(model)),
+    }
+    for text, path in expressions_in(model):
+        try:
+            expr = compile_expression(text)
+        except ExpressionError as exc:
+            bad(path, str(exc))
+            continue
+        problems = [check_name(name, valid) for name in sorted(expr.names)]
+        for func, args in sorted(expr.call_args):
+            kind, names = known[func]
+            problems += [f"{func}(): {_unknown(kind, a, names)}" for a in args if a not in names]
+        first = next((p for p in problems if p), None)
+        if first:
+            bad(path, first)
+
+
+def _check_events(model: Scenario, bad: Any) -> None:
+    events = possible_events(model)
+    for i, a in enumerate(model.assertions):
+        if isinstance(a, A.EventAssertion):
+            for field in ("event", "before", "after"):
+                name = getattr(a, field)
+                if name is not None and name not in events:
+                    bad(("assertions", i, field), _unknown("event (it can never happen)", name, events))
+        if isinstance(a, A.SoundAssertion) and a.sound not in model.sounds:
+            bad(("assertions", i, "sound"), _unknown("sound", a.sound, model.sounds))
+        if isinstance(a, A.ContactAssertion):
+            names = {b.name for b in expand_bodies(model)}
+            for j, ref in enumerate(a.contact):
+                if ref not in names:
+                    bad(("assertions", i, "contact", j), _unknown("body", ref, names))

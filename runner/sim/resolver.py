@@ -1,0 +1,98 @@
+"""Resolve dotted names (``box.pos.z``, ``slider.force``, ``state.x``, ``time``) against the current state."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Sequence
+from typing import Any
+
+import numpy as np
+
+from backends.types import BodyStates, CompiledWorld, JointStates
+
+_COMPONENT = {"x": 0, "y": 1, "z": 2}
+_QUAT = {"w": 0, "x": 1, "y": 2, "z": 3}
+_BODY_ARRAYS = {"pos": "pos", "vel": "lin_vel", "angvel": "ang_vel", "quat": "quat"}
+_JOINT_ARRAYS = {"position": "position", "velocity": "velocity", "force": "motor_force"}
+
+
+class Snapshot:
+    """The latest recorded state, as the resolver reads it."""
+
+    def __init__(self) -> None:
+        self.time = 0.0
+        self.bodies: BodyStates | None = None
+        self.joints: JointStates | None = None
+
+
+class StateResolver:
+    """Implements :class:`runner.language.expressions.Resolver` for a run. Getters are built once per name."""
+
+    def __init__(
+        self,
+        world: CompiledWorld,
+        groups: dict[str, list[str]],
+        state: dict[str, Any],
+        params: dict[str, Any],
+        snapshot: Snapshot,
+        functions: dict[str, Callable[[Sequence[Any]], Any]],
+    ):
+        self.world = world
+        self.body_index = {b.name: i for i, b in enumerate(world.bodies)}
+        self.joint_index = {j.name: i for i, j in enumerate(world.joints)}
+        self.groups = {g: [self.body_index[n] for n in names] for g, names in groups.items()}
+        self.state = state
+        self.params = params
+        self.snap = snapshot
+        self.functions = functions
+        self._getters: dict[str, Callable[[], Any]] = {}
+        gx, gy, gz = world.gravity
+        self._constants = {
+            "dt": world.dt,
+            "duration": world.duration,
+            "g": math.sqrt(gx * gx + gy * gy + gz * gz),
+            "gravity.x": gx,
+            "gravity.y": gy,
+            "gravity.z": gz,
+        }
+
+    def value(self, name: str) -> Any:
+        getter = self._getters.get(name)
+        if getter is None:
+            getter = self._getters[name] = self._build(name)
+        return getter()
+
+    def call(self, func: str, args: Sequence[Any]) -> Any:
+        return self.functions[func](args)
+
+    def _build(self, name: str) -> Callable[[], Any]:  # noqa: C901 - one switch over the name forms
+        snap = self.snap
+        if name == "time":
+            return lambda: snap.time
+        if name in self._constants:
+            value = self._constants[name]
+            return lambda: value
+        head, _, rest = name.partition(".")
+        if head == "state":
+            return lambda: self.state[rest]
+        if head == "param":
+            value = self.params[rest]
+            return lambda: value
+        if head in self.joint_index and rest in _JOINT_ARRAYS:
+            j, attr = self.joint_index[head], _JOINT_ARRAYS[rest]
+            return lambda: float(getattr(snap.joints, attr)[j])
+        rows: list[int] | int | None = self.body_index.get(head)
+        if rows is None:
+            rows = self.groups.get(head)
+        if rows is None:
+            raise KeyError(name)
+        if rest == "speed":
+            if isinstance(rows, int):
+                return lambda: float(np.linalg.norm(snap.bodies.lin_vel[rows]))
+            return lambda: [float(v) for v in np.linalg.norm(snap.bodies.lin_vel[rows], axis=1)]
+        field, _, comp = rest.partition(".")
+        attr = _BODY_ARRAYS[field]
+        col = (_QUAT if field == "quat" else _COMPONENT)[comp]
+        if isinstance(rows, int):
+            return lambda: float(getattr(snap.bodies, attr)[rows, col])
+        return lambda: [float(v) for v in getattr(snap.bodies, attr)[rows, col]]

@@ -1,0 +1,352 @@
+"""One run of one scenario variant on one backend: the step loop (docs/semantics.md, "Step order").
+
+Per step k, from t_k = k*dt to t_{k+1}:
+ 1. deliver events due at t_k: queued events (collisions seen at the end of the last step, in the order
+    Panda3D's handler throws them) and timed inputs, to their handlers;
+ 2. step intervals to t_{k+1}: kinematic bodies get the pose they must have at the end of this step;
+ 3. give the engine each kinematic body's pose *and* velocity over the step; apply one-step forces;
+    motor targets were set by the handlers;
+ 4. physics step (with substeps if set);
+ 5. read states; detect contacts and collision-solid overlaps at t_{k+1};
+ 6. turn them into in / again / out events, queued for step k+1;
+ 7. record t_{k+1} in the trace; 8. check running assertions at t_{k+1}.
+"""
+
+from __future__ import annotations
+
+import math
+import time as wallclock
+from collections import deque
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from backends.base import Backend
+from backends.errors import EngineFailure
+from runner import interrupts
+from runner.compile.program import Program
+from runner.sim.actions import run_actions
+from runner.sim.assertions import AssertionTracker, Verdict
+from runner.sim.collisions import EventHandler, SolidTraverser, quat_matrices
+from runner.sim.intervals import IntervalManager
+from runner.sim.kinematics import KinematicTable
+from runner.sim.resolver import Snapshot, StateResolver
+
+MAX_SPEED = 1.0e4  # m/s or rad/s: beyond this a body is taken to have blown up
+
+
+@dataclass
+class RunResult:
+    scenario: str
+    variant: str
+    backend: str
+    status: str  # passed | failed | engine-failure | interrupted
+    verdicts: list[Verdict]
+    end_time: float
+    steps: int
+    events: list[tuple[float, str, str]]
+    sounds: list[tuple[float, str]]
+    wall_seconds: float
+    trace: str | None = None
+    failure: str | None = None
+    extra: dict[str, Any] = field(default_factory=dict)
+
+    @property
+    def passed(self) -> bool:
+        return self.status == "passed"
+
+
+class Session:
+    def __init__(
+        self,
+        program: Program,
+        backend: Backend,
+        trace: Any | None = None,
+        progress: Callable[[int, int], None] | None = None,
+        record_every: int = 1,
+    ) -> None:
+        self.program = program
+        self.record_every = max(1, int(record_every))  # the trace gets every k-th step (and the last)
+        self._recorded: float | None = None  # time of the last step in the trace
+        self.world = program.world
+        self.backend = backend
+        self.trace = trace
+        self.progress = progress
+        self.dt = self.world.dt
+        self.names = [b.name for b in self.world.bodies]
+        self.body_index = {b.name: i for i, b in enumerate(self.world.bodies)}
+        self.joint_index = {j.name: i for i, j in enumerate(self.world.joints)}
+        model = program.loaded.model
+        self.state: dict[str, Any] = dict(model.state)
+        self.motors = {j.name: (j.motor.vel, j.motor.fmax) if j.motor else (0.0, 0.0) for j in self.world.joints}
+        self.kinematics = KinematicTable(self.world, program.start_hpr, program.start_scale)
+        self.intervals = IntervalManager(self, program.intervals)
+        self.snapshot = Snapshot()
+        self.contact_pairs: set[tuple[str, str]] = set()
+        self.contacts: list[Any] = []
+        self._contacts_at: float | None = None  # when self.contacts was read
+        # Contacts are read every step only when something uses them: contact events, contact() in an
+        # expression, a contact assertion; otherwise only for the steps the trace records.
+        self._contacts_always = (
+            bool(program.contact_colliders)
+            or any("contact" in e.calls for e in program.expressions.values())
+            or any(type(a).__name__ == "ContactAssertion" for a in model.assertions)
+        )
+        self.events: list[tuple[float, str, str]] = []
+        self.event_counts: dict[str, int] = {}
+        self.sound_starts: list[tuple[float, str]] = []
+        self.playing_sounds: dict[str, float] = {}
+        self.forces: dict[int, np.ndarray] = {}
+        self.queue: deque[tuple[str, str]] = deque()
+        self.ended = False
+        self.end_reason = ""
+        self.resolver = StateResolver(
+            self.world,
+            program.groups,
+            self.state,
+            dict(model.params),
+            self.snapshot,
+            {
+                "contact": lambda a: self.in_contact(str(a[0]), str(a[1])),
+                "playing": lambda a: self.intervals.is_playing(str(a[0])),
+                "count": lambda a: self.event_counts.get(str(a[0]), 0),
+            },
+        )
+        self.tracker = AssertionTracker(model.assertions, program.expressions, backend.name, self.dt)
+        self.traverser = SolidTraverser(program.nodes, program.colliders)
+        c = model.collisions
+        self.collision_events = EventHandler(c.in_, c.again, c.out)
+
+    # --- services used by actions and intervals (runner.sim.intervals.IntervalHost) --------------------
+    def evaluate(self, text: str) -> Any:
+        return self.program.expressions[text].evaluate(self.resolver)
+
+    def truth(self, text: str) -> bool:
+        return self.program.expressions[text].truth(self.resolver)
+
+    def in_contact(self, a: str, b: str) -> bool:
+        return (a, b) in self.contact_pairs or (b, a) in self.contact_pairs
+
+    def get_pos(self, body: str) -> tuple[float, float, float]:
+        return self.kinematics.get(body).target_pos
+
+    def get_hpr(self, body: str) -> tuple[float, float, float]:
+        return self.kinematics.get(body).target_hpr
+
+    def get_scale(self, body: str) -> float:
+        return self.kinematics.get(body).target_scale
+
+    def set_pos(self, body: str, pos: Sequence[float]) -> None:
+        self.kinematics.get(body).target_pos = (float(pos[0]), float(pos[1]), float(pos[2]))
+
+    def set_hpr(self, body: str, hpr: Sequence[float]) -> None:
+        self.kinematics.get(body).target_hpr = (float(hpr[0]), float(hpr[1]), float(hpr[2]))
+
+    def set_scale(self, body: str, scale: float) -> None:
+        self.kinematics.get(body).target_scale = float(scale)
+
+    def run_actions(self, actions: Any, at: float) -> None:
+        run_actions(self, actions, at)
+
+    def play_sound(self, sound: str, offset: float, volume: float, loop: bool, at: float) -> None:
+        if sound in self.playing_sounds and self.trace is not None:
+            self.trace.sound(at, sound, "stop")  # a replay restarts the sound (OpenAL play() stops first)
+        length = self.program.sounds[sound].length
+        self.playing_sounds[sound] = math.inf if loop else at + max(length - offset, 0.0)
+        self.sound_starts.append((at, sound))
+        if self.trace is not None:
+            self.trace.sound(at, sound, "start", offset, volume)
+
+    def stop_sound(self, sound: str, at: float) -> None:
+        if self.playing_sounds.pop(sound, None) is not None and self.trace is not None:
+            self.trace.sound(at, sound, "stop")
+
+    def interval_event(self, ival: str, what: str, at: float) -> None:
+        if self.trace is not None:
+            self.trace.log(at, "debug", f"interval {ival}: {what}", "intervals")
+
+    def set_motor(self, joint: str, vel: float, fmax: float | None) -> None:
+        fmax = self.motors[joint][1] if fmax is None else fmax
+        self.motors[joint] = (vel, fmax)
+        self.backend.set_motor(self.joint_index[joint], vel, fmax)
+
+    def add_force(self, body: str, force: Sequence[float], torque: Sequence[float], scale: float) -> None:
+        i = self.body_index[body]
+        acc = self.forces.setdefault(i, np.zeros(6))
+        acc[:3] += np.asarray(force, float) * scale
+        acc[3:] += np.asarray(torque, float) * scale
+
+    def log(self, at: float, level: str, message: str, name: str) -> None:
+        if self.trace is not None:
+            self.trace.log(at, level, message, name)
+
+    def dispatch(self, event: str, at: float, source: str, depth: int = 0) -> None:
+        """Deliver an event to its handler now (Panda3D's messenger.send is synchronous)."""
+        self.events.append((at, event, source))
+        self.event_counts[event] = self.event_counts.get(event, 0) + 1
+        if self.trace is not None:
+            self.trace.event(at, event, source)
+        handler = self.program.handlers.get(event)
+        if handler:
+            run_actions(self, handler, at, depth)
+
+    def end(self, at: float, reason: str) -> None:
+        self.ended = True
+        self.end_reason = reason
+        self.log(at, "info", f"scenario ended: {reason}", "scenario")
+
+    # --- the loop --------------------------------------------------------------------------------
+    def _last_good(self, i: int) -> dict[str, Any] | None:
+        """Body ``i``'s last state that passed the checks, as every engine failure reports it."""
+        last = self.snapshot.bodies
+        if last is None:
+            return None
+        return {
+            "time": self.snapshot.time,
+            "pos": last.pos[i].tolist(),
+            "vel": last.lin_vel[i].tolist(),
+            "angvel": last.ang_vel[i].tolist(),
+        }
+
+    def _step(self, t_next: float) -> None:
+        """The engine's step; a blow-up the engine detects itself gets the same record as the runner's."""
+        try:
+            self.backend.step()
+        except EngineFailure as exc:
+            if exc.body in self.body_index:
+                exc.last_good = self._last_good(self.body_index[exc.body])
+                exc.time = t_next if exc.time is None else exc.time
+            raise
+
+    def _read(self, t: float, contacts: bool = True) -> None:
+        states = self.backend.body_states()
+        bad = ~(
+            np.isfinite(states.pos).all(axis=1)
+            & np.isfinite(states.quat).all(axis=1)
+            & np.isfinite(states.lin_vel).all(axis=1)
+            & np.isfinite(states.ang_vel).all(axis=1)
+        )
+        fast = (np.linalg.norm(np.nan_to_num(states.lin_vel, nan=np.inf), axis=1) > MAX_SPEED) | (
+            np.linalg.norm(np.nan_to_num(states.ang_vel, nan=np.inf), axis=1) > MAX_SPEED
+        )
+        broken = np.flatnonzero(bad | fast)
+        if broken.size:
+            i = int(broken[0])
+            name = self.world.bodies[i].name
+            what = "a non-finite state" if bad[i] else f"a speed above {MAX_SPEED:g}"
+            raise EngineFailure(
+                f"body `{name}` reached {what} at t={t:.4f} s on {self.backend.name}",
+                backend=self.backend.name,
+                body=name,
+                time=t,
+                last_good=self._last_good(i),
+            )
+        self.snapshot.time = t
+        self.snapshot.bodies = states
+        self.snapshot.joints = self.backend.joint_states()
+        if contacts or self._contacts_always:
+            self._read_contacts(t)
+
+    def _read_contacts(self, t: float) -> None:
+        names = self.names
+        self.contacts = self.backend.contacts()
+        self.contact_pairs = {(names[c.a], names[c.b]) for c in self.contacts}
+        self._contacts_at = t
+
+    def _solid_hits(self) -> list[tuple[str, str, bool]]:
+        s = self.snapshot.bodies
+        scale = np.array([k.scale for k in self.kinematics.by_name.values()])  # world order
+        return self.traverser.traverse_arrays(s.pos, quat_matrices(s.quat), scale)
+
+    def _detect(self, t: float) -> None:
+        hits = self._solid_hits() if self.traverser.colliders else []
+        names = self.names
+        if self.program.contact_colliders:
+            touching: dict[int, list[int]] = {}  # body -> the bodies it touches, in contact order
+            for c in self.contacts:
+                touching.setdefault(c.a, []).append(c.b)
+                touching.setdefault(c.b, []).append(c.a)
+            for i in self.program.contact_colliders:
+                hits.extend((names[i], names[other], True) for other in touching.get(i, ()))
+        for ev in self.collision_events.update(hits):
+            self.queue.append((ev.name, f"collision-{ev.kind}"))
+
+    def _record(self, t: float, k: int = 0, last: bool = False) -> None:
+        """Step ``k`` ends at ``t``: sounds that ended, the trace (every ``record_every``-th step and the
+        last), running assertions (every step)."""
+        for name, end in list(self.playing_sounds.items()):
+            if end <= t + 1e-9:
+                del self.playing_sounds[name]
+                if self.trace is not None:
+                    self.trace.sound(end, name, "stop")
+        if self.trace is not None and (k % self.record_every == 0 or last):
+            self._trace_step(t)
+        self.tracker.on_step(t, self.resolver, self.in_contact)
+
+    def _trace_step(self, t: float) -> None:
+        if self._contacts_at != t:
+            self._read_contacts(t)
+        if self.kinematics.scale_changed:
+            start = self.program.start_scale
+            self.trace.scene(t, scales={n: k.scale / start[n] for n, k in self.kinematics.by_name.items()})
+            self.kinematics.scale_changed.clear()
+        self.trace.step(t, self.snapshot.bodies, self.snapshot.joints, self.contacts, self.state)
+        self._recorded = t
+
+    def run(self) -> RunResult:
+        start = wallclock.perf_counter()
+        steps = self.program.steps
+        inputs = deque(self.program.inputs)
+        self._read(0.0)
+        self._record(0.0)
+        self.queue.append(("start", "start"))
+        t = 0.0
+        k = 0
+        for k in range(steps):
+            t = k * self.dt
+            pending = list(self.queue)
+            self.queue.clear()
+            while inputs and inputs[0].step <= k:
+                pending.append((inputs.popleft().event, "input"))
+            for event, source in pending:
+                self.dispatch(event, t, source)
+                if self.ended:
+                    break
+            if self.ended:
+                break
+            t_next = (k + 1) * self.dt
+            self.intervals.step(t_next)
+            self.kinematics.drive(self.backend, self.dt)
+            for i, f in self.forces.items():
+                self.backend.apply_force(i, tuple(f[:3]), tuple(f[3:]))
+            self.forces.clear()
+            self._step(t_next)
+            recorded = self.trace is not None and ((k + 1) % self.record_every == 0 or k == steps - 1)
+            self._read(t_next, contacts=recorded)
+            self._detect(t_next)
+            self._record(t_next, k + 1, last=k == steps - 1)
+            interrupts.check()  # a SIGINT/SIGTERM that came during this step: the trace ends with it whole
+            t = t_next
+            if self.progress is not None and (k % 50 == 0 or k == steps - 1):
+                self.progress(k + 1, steps)
+        else:
+            k = steps
+        if self.trace is not None and self._recorded != t:  # ended between recorded steps: keep the last state
+            self._trace_step(t)
+        self.tracker.on_step(t, self.resolver, self.in_contact, final=True)
+        verdicts = self.tracker.finish(t, [(e[0], e[1]) for e in self.events], self.sound_starts, self.resolver)
+        status = "passed" if all(v.passed for v in verdicts) else "failed"
+        return RunResult(
+            self.program.name,
+            self.program.loaded.variant,
+            self.backend.name,
+            status,
+            verdicts,
+            t,
+            k,
+            self.events,
+            self.sound_starts,
+            wallclock.perf_counter() - start,
+        )

@@ -1,0 +1,397 @@
+"""The MCAP trace writer: the only writer-side importer of ``mcap``.
+
+Layout, topics and metadata: :mod:`reports.trace_format`. The file is written while the run goes on
+(chunked, LZ4, memory constant in the duration) to ``<path>.partial`` through an unbuffered sink, so a
+finished chunk is in the operating system at once; a chunk closes when it exceeds ``chunk_size`` bytes
+and after the first step at or past each multiple of ``flush_interval`` simulated seconds, which bounds
+what a hard kill loses. ``finish()`` writes the ``result`` record and the summary, then renames the file
+to ``<path>``. /tf, /bodies and /joints are formatted through templates prepared once per trace
+(:class:`runner.trace.foxglove.StepTemplate`), about ten times cheaper than ``json.dumps``, and
+/contacts at the same fixed resolution (:func:`runner.trace.foxglove.contacts_message`).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import json
+import math
+import os
+from collections.abc import Mapping, Sequence
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+from types import TracebackType
+from typing import Any
+
+import numpy as np
+from mcap.exceptions import McapError
+from mcap.writer import CompressionType, Writer
+
+from backends.errors import EngineFailure
+from backends.types import BodySpec, BodyStates, Contact, JointSpec, JointStates, Vec3
+from reports import trace_format as tf
+from runner.errors import TraceError
+from runner.trace import foxglove as fx
+
+__all__ = ["SolidVisual", "TraceMeta", "TraceWriter"]
+
+_TF_COLS = [0, 1, 2, 4, 5, 6, 3]  # /bodies row (pos, quat w x y z, ...) -> /tf translation, rotation x y z w
+
+
+@dataclass(frozen=True)
+class TraceMeta:
+    scenario: str
+    variant: str
+    backend: str
+    backend_version: str
+    engine_settings: Mapping[str, Any]
+    dt: float
+    substeps: int
+    duration: float
+    tool_version: str
+    scenario_sha256: str
+    scenario_path: str
+    schema_version: int
+    bodies: Sequence[BodySpec]
+    joints: Sequence[JointSpec]
+    state_names: Sequence[str]
+    extra: Mapping[str, str] = field(default_factory=dict)
+
+
+@dataclass(frozen=True)
+class SolidVisual:
+    """A Panda3D-style collision solid for the 3D view (translucent), in its body's frame."""
+
+    node: str
+    body: str
+    kind: str  # "sphere" | "polygon" | "box"
+    center: Vec3 = (0.0, 0.0, 0.0)
+    radius: float = 0.0
+    size: Vec3 = (0.0, 0.0, 0.0)  # box: full edge lengths
+    vertices: tuple[Vec3, ...] = ()  # polygon: body frame, already scaled; order gives the normal
+
+
+class _Sink:
+    """An unbuffered file: the mcap writer hands it whole records, so nothing waits in Python."""
+
+    def __init__(self, path: Path, exclusive: bool) -> None:
+        self._file = open(path, "xb" if exclusive else "wb", buffering=0)
+        self._pos = 0
+
+    def write(self, data: bytes | memoryview) -> int:
+        view = memoryview(data).cast("B")
+        total = len(view)
+        while view:
+            view = view[self._file.write(view) :]
+        self._pos += total
+        return total
+
+    def tell(self) -> int:
+        return self._pos
+
+    def flush(self) -> None:
+        """Nothing is buffered here."""
+
+    def close(self, sync: bool) -> None:
+        if self._file.closed:
+            return
+        try:
+            if sync:
+                os.fsync(self._file.fileno())
+        finally:
+            self._file.close()
+
+
+class TraceWriter:
+    """Writes one run's trace; a context manager that finishes the trace whatever happens.
+
+    ``__exit__`` after an exception finishes with status "interrupted" (KeyboardInterrupt, SystemExit),
+    "engine-failure" (EngineFailure) or "error"; on a clean exit without ``finish()`` it records
+    "error". ``force=False`` refuses to overwrite an existing trace or partial trace.
+    """
+
+    def __init__(
+        self,
+        path: Path,
+        meta: TraceMeta,
+        *,
+        force: bool = True,
+        chunk_size: int = 1024 * 1024,
+        flush_interval: float = 1.0,
+    ) -> None:
+        self.path = Path(path)
+        self.partial_path = self.path.with_name(self.path.name + tf.PARTIAL_SUFFIX)
+        self.meta = meta
+        self._force = force
+        self._names = [b.name for b in meta.bodies]
+        self._joint_names = [j.name for j in meta.joints]
+        self._quoted = [json.dumps(n) for n in self._names]
+        if len(set(self._names)) != len(self._names) or len(set(self._joint_names)) != len(self._joint_names):
+            raise ValueError("body and joint names must be unique")
+        if set(meta.extra) & set(tf.SCENARIO_KEYS):
+            raise ValueError(f"TraceMeta.extra must not redefine {sorted(set(meta.extra) & set(tf.SCENARIO_KEYS))}")
+        self._flush_ns = max(1, round(flush_interval * 1e9))
+        self._next_flush_ns = self._flush_ns
+        self._last_ns = 0
+        self._steps = 0
+        self._final: Path | None = None
+        self._closed = False
+        self._tf_tpl, self._bodies_tpl, self._joints_tpl = fx.step_templates(self._names, self._joint_names)
+        self._sink = self._open()
+        try:
+            self._writer = Writer(self._sink, chunk_size=chunk_size, compression=CompressionType.LZ4)
+            self._writer.start(profile=tf.PROFILE, library=tf.LIBRARY)
+            self._channels: dict[str, int] = {}
+            self._register_all()
+            self._writer.add_metadata(tf.METADATA_SCENARIO, self._scenario_record())
+        except BaseException as exc:
+            self._abandon()
+            if isinstance(exc, OSError | McapError):
+                raise TraceError(f"cannot write trace {self.partial_path}: {exc}") from exc
+            raise
+
+    # ---- opening ---------------------------------------------------------------------------------
+
+    def _open(self) -> _Sink:
+        if not self._force and self.path.exists():
+            raise TraceError(f"{self.path} already exists; pass --force to overwrite it")
+        if not self._force and self.partial_path.exists():
+            raise TraceError(
+                f"{self.partial_path} (an unfinished trace) already exists; read it with "
+                f"`scenario inspect --recover {self.partial_path}` or pass --force to overwrite it"
+            )
+        try:
+            self.path.parent.mkdir(parents=True, exist_ok=True)
+            return _Sink(self.partial_path, exclusive=not self._force)
+        except OSError as exc:
+            raise TraceError(f"cannot write trace {self.partial_path}: {exc.strerror or exc}") from exc
+
+    def _register(self, topic: str, schema: Mapping[str, Any]) -> None:
+        sid = self._writer.register_schema(schema["title"], tf.SCHEMA_ENCODING, fx.schema_bytes(schema))
+        self._channels[topic] = self._writer.register_channel(topic, tf.MESSAGE_ENCODING, sid)
+
+    def _register_all(self) -> None:
+        channels = [
+            (tf.TOPIC_TF, fx.FRAME_TRANSFORMS),
+            (tf.TOPIC_SCENE, fx.SCENE_UPDATE),
+            (tf.TOPIC_LOG, fx.LOG),
+            (tf.TOPIC_BODIES, fx.bodies_schema(self._names)),
+            (tf.TOPIC_JOINTS, fx.joints_schema(self._joint_names) if self._joint_names else None),
+            (tf.TOPIC_CONTACTS, fx.CONTACTS),
+            (tf.TOPIC_STATE, fx.state_schema(self.meta.state_names) if self.meta.state_names else None),
+            (tf.TOPIC_EVENTS, fx.EVENT),
+            (tf.TOPIC_SOUNDS, fx.SOUND),
+            (tf.TOPIC_VERDICTS, fx.VERDICTS),
+        ]
+        for topic, schema in channels:
+            if schema is not None:
+                self._register(topic, schema)
+
+    def _scenario_record(self) -> dict[str, str]:
+        m = self.meta
+        record = {
+            tf.KEY_NAME: m.scenario,
+            tf.KEY_VARIANT: m.variant,
+            tf.KEY_BACKEND: m.backend,
+            tf.KEY_BACKEND_VERSION: m.backend_version,
+            tf.KEY_ENGINE_SETTINGS: fx.dumps(m.engine_settings, sort_keys=True),
+            tf.KEY_DT: repr(float(m.dt)),
+            tf.KEY_SUBSTEPS: str(int(m.substeps)),
+            tf.KEY_DURATION: repr(float(m.duration)),
+            tf.KEY_TOOL_VERSION: m.tool_version,
+            tf.KEY_SCENARIO_SHA256: m.scenario_sha256,
+            tf.KEY_SCENARIO_PATH: m.scenario_path,
+            tf.KEY_SCHEMA_VERSION: str(m.schema_version),
+            tf.KEY_TRACE_FORMAT: str(tf.TRACE_FORMAT_VERSION),
+            tf.KEY_BODIES: fx.dumps(self._names),
+            tf.KEY_BODY_SPECS: fx.dumps([asdict(b) for b in m.bodies]),
+            tf.KEY_JOINTS: fx.dumps(self._joint_names),
+            tf.KEY_JOINT_SPECS: fx.dumps([asdict(j) for j in m.joints]),
+            tf.KEY_STATE: fx.dumps(list(m.state_names)),
+        }
+        record.update({str(k): str(v) for k, v in m.extra.items()})
+        return record
+
+    # ---- writing ---------------------------------------------------------------------------------
+
+    def _ns(self, t: float) -> int:
+        if self._closed:
+            raise TraceError(f"trace {self.path} is already finished")
+        if not math.isfinite(t) or t < 0.0:
+            raise ValueError(f"simulated time must be finite and >= 0, got {t!r}")
+        ns = round(t * 1e9)
+        self._last_ns = max(self._last_ns, ns)
+        return ns
+
+    def _write(self, topic: str, ns: int, text: str) -> None:
+        try:
+            self._writer.add_message(self._channels[topic], ns, text.encode(), ns)
+        except OSError as exc:
+            raise TraceError(f"cannot write trace {self.partial_path}: {exc}") from exc
+
+    def _log(self, ns: int, level: int, message: str, name: str) -> None:
+        self._write(tf.TOPIC_LOG, ns, fx.dumps(fx.log(ns, level, message, name)))
+
+    def attach(self, name: str, data: bytes, media_type: str) -> None:
+        if self._closed:
+            raise TraceError(f"trace {self.path} is already finished")
+        self._writer.add_attachment(0, self._last_ns, name, media_type, bytes(data))
+
+    def scene(self, t: float, solids: Sequence[SolidVisual] = (), scales: Mapping[str, float] | None = None) -> None:
+        """Publish every body's shape and the given solids (already scaled, body frame).
+
+        ``scales[name]`` multiplies the *compiled* shape (which already includes the start scale), so
+        pass ``current scale / start scale``; default 1. Entities keep their ids ("body/<name>",
+        "solid/<body>/<node>"), so a later call replaces them; pass the solids again to resize them.
+        """
+        ns = self._ns(t)
+        scales = scales or {}
+        entities = []
+        for b in self.meta.bodies:
+            sh = b.shape
+            prims = fx.shape_primitives(sh.kind.value, sh.size, sh.radius, sh.length, b.color, scales.get(b.name, 1.0))
+            info = {"shape": sh.kind.value, "motion": b.motion.value}
+            entities.append(fx.entity(ns, b.name, f"body/{b.name}", info, **prims))
+        for s in solids:
+            if s.body not in self._names:
+                raise ValueError(f"solid {s.node!r} is attached to unknown body {s.body!r}")
+            prims = fx.solid_primitives(s.kind, s.center, s.radius, s.size, s.vertices)
+            entities.append(fx.entity(ns, s.body, f"solid/{s.body}/{s.node}", {"solid": s.node}, **prims))
+        self._write(tf.TOPIC_SCENE, ns, fx.dumps({"deletions": [], "entities": entities}))
+
+    def step(
+        self,
+        t: float,
+        states: BodyStates,
+        joints: JointStates,
+        contacts: Sequence[Contact],
+        state_vars: Mapping[str, bool | float | str],
+    ) -> None:
+        ns = self._ns(t)
+        rows = states.rows()
+        sec, nsec = divmod(ns, 1_000_000_000)
+        stamp = f'{{"sec":{sec},"nsec":{nsec}}}'
+        self._write(tf.TOPIC_TF, ns, self._tf_tpl.render(rows[:, _TF_COLS].ravel(), stamp))
+        self._write(tf.TOPIC_BODIES, ns, self._bodies_tpl.render(rows.ravel()))
+        if self._joint_names:
+            jrows = np.empty((len(self._joint_names), 3))
+            jrows[:, 0], jrows[:, 1], jrows[:, 2] = joints.position, joints.velocity, joints.motor_force
+            self._write(tf.TOPIC_JOINTS, ns, self._joints_tpl.render(jrows.ravel()))
+        self._write(tf.TOPIC_CONTACTS, ns, fx.contacts_message(contacts, self._quoted))
+        if state_vars:
+            if tf.TOPIC_STATE not in self._channels:
+                self._register(tf.TOPIC_STATE, fx.state_schema(state_vars))
+            self._write(tf.TOPIC_STATE, ns, fx.dumps(state_vars))
+        self._steps += 1
+        if ns >= self._next_flush_ns:
+            self._writer.flush()
+            self._next_flush_ns = (ns // self._flush_ns + 1) * self._flush_ns
+
+    def event(self, t: float, name: str, source: str, detail: Mapping[str, Any] | None = None) -> None:
+        ns = self._ns(t)
+        self._write(tf.TOPIC_EVENTS, ns, fx.dumps({"time": t, "name": name, "source": source, "detail": detail or {}}))
+        extra = f" {fx.dumps(detail)}" if detail else ""
+        self._log(ns, tf.LOG_LEVELS["info"], f"{name} ({source}){extra}", tf.LOGGER_EVENT)
+
+    def log(self, t: float, level: str, message: str, name: str = tf.LOGGER_SCENARIO) -> None:
+        code = tf.LOG_LEVELS.get(level.lower())
+        if code is None:
+            raise ValueError(f"unknown log level {level!r}; expected one of {sorted(tf.LOG_LEVELS)}")
+        self._log(self._ns(t), code, message, name)
+
+    def sound(self, t: float, name: str, action: str, offset: float = 0.0, volume: float = 1.0) -> None:
+        if action not in tf.SOUND_ACTIONS:
+            raise ValueError(f"unknown sound action {action!r}; expected one of {sorted(tf.SOUND_ACTIONS)}")
+        ns = self._ns(t)
+        record = {"time": t, "name": name, "action": action, "offset": offset, "volume": volume}
+        self._write(tf.TOPIC_SOUNDS, ns, fx.dumps(record))
+        text = (
+            f"{action} {name}"
+            + (f" from {offset:g} s" if offset else "")
+            + (f" at volume {volume:g}" if volume != 1.0 else "")
+        )
+        self._log(ns, tf.LOG_LEVELS["info"], text, tf.LOGGER_SOUND)
+
+    def verdicts(self, t: float, verdicts: Sequence[Mapping[str, Any]]) -> None:
+        ns = self._ns(t)
+        self._write(tf.TOPIC_VERDICTS, ns, fx.dumps({"time": t, "verdicts": list(verdicts)}))
+        for v in verdicts:
+            passed = v.get(tf.VERDICT_PASSED)
+            level = "info" if passed is True else "error" if passed is False else "warning"
+            label = "PASS" if passed is True else "FAIL" if passed is False else "????"
+            text = f"{label} {v.get(tf.VERDICT_NAME, '?')}"
+            for key in (tf.VERDICT_MEASURED, tf.VERDICT_EXPECTED):
+                if key in v:
+                    text += f"; {key} {fx.dumps(v[key])}"
+            self._log(ns, tf.LOG_LEVELS[level], text, tf.LOGGER_VERDICT)
+
+    # ---- finishing -------------------------------------------------------------------------------
+
+    def finish(self, status: str, summary: Mapping[str, Any]) -> Path:
+        """Write the result, close the file and give it its final name. Idempotent: returns the path."""
+        if self._final is not None:
+            return self._final
+        if status not in tf.STATUSES:
+            raise ValueError(f"unknown status {status!r}; expected one of {sorted(tf.STATUSES)}")
+        if self._closed:
+            raise TraceError(f"trace {self.path} was abandoned; what was written is in {self.partial_path}")
+        result = {
+            tf.KEY_STATUS: status,
+            tf.KEY_SUMMARY: fx.dumps(summary, sort_keys=True),
+            tf.KEY_STEPS: str(self._steps),
+            tf.KEY_END_TIME: repr(self._last_ns / 1e9),
+        }
+        try:
+            self._writer.add_metadata(tf.METADATA_RESULT, result)
+            self._writer.finish()
+            self._closed = True
+            self._sink.close(sync=True)
+        except (OSError, McapError) as exc:
+            self._abandon()
+            raise TraceError(f"cannot finish trace {self.partial_path}: {exc}") from exc
+        if not self._force and self.path.exists():
+            raise TraceError(f"{self.path} appeared while this run was writing; the trace is in {self.partial_path}")
+        try:
+            os.replace(self.partial_path, self.path)
+        except OSError as exc:
+            raise TraceError(f"cannot rename {self.partial_path} to {self.path}: {exc.strerror or exc}") from exc
+        self._final = self.path
+        return self.path
+
+    def _abandon(self) -> None:
+        """Close without finishing: the .partial file stays, readable with recover=True."""
+        self._closed = True
+        with contextlib.suppress(OSError):
+            self._sink.close(sync=False)
+
+    def __enter__(self) -> TraceWriter:
+        return self
+
+    def __exit__(
+        self, exc_type: type[BaseException] | None, exc: BaseException | None, tb: TracebackType | None
+    ) -> None:
+        if self._final is None and not self._closed:
+            finish_on_exit(self, exc)
+
+
+def finish_on_exit(writer: Any, exc: BaseException | None) -> None:
+    """Finish a writer left by its run (``__exit__`` of both writers): the status says how the run ended;
+    finishing never masks the exception that ended it."""
+    status, summary = exit_status(exc)
+    if exc is None:
+        writer.finish(status, summary)
+        return
+    try:
+        writer.finish(status, summary)
+    except Exception:  # noqa: BLE001 - never mask the exception that ended the run
+        writer._abandon()
+
+
+def exit_status(exc: BaseException | None) -> tuple[str, dict[str, Any]]:
+    """The status and summary a trace is finished with when its run ends without a result."""
+    if exc is None:
+        return tf.STATUS_ERROR, {"error": "the run ended without recording a result"}
+    if isinstance(exc, KeyboardInterrupt | SystemExit):
+        return tf.STATUS_INTERRUPTED, {"error": f"{type(exc).__name__}: {exc}".rstrip(": ")}
+    if isinstance(exc, EngineFailure):
+        return tf.STATUS_ENGINE_FAILURE, {"error": f"{type(exc).__name__}: {exc}", "body": exc.body, "time": exc.time}
+    return tf.STATUS_ERROR, {"error": f"{type(exc).__name__}: {exc}"}
