@@ -24,6 +24,7 @@ test: $(STAMP)
 
 lint: $(STAMP)
 	$(BIN)/ruff check runner backends reports tests bench
+	$(BIN)/mypy
 
 sounds: $(STAMP)
 	$(BIN)/python scenarios/sounds/make_sounds.py

@@ -59,9 +59,9 @@ class FakeBackend(Backend):
         h = self.world.dt / self.world.substeps
         g = np.asarray(self.world.gravity)
         for _ in range(self.world.substeps):
-            for i in np.flatnonzero(self.moves):
-                self.vel[i] += (g + self.force[i, :3] / self.mass[i]) * h
-                self.ang[i] += self.force[i, 3:] / self.inertia[i].mean() * h
+            for d in np.flatnonzero(self.moves):
+                self.vel[d] += (g + self.force[d, :3] / self.mass[d]) * h
+                self.ang[d] += self.force[d, 3:] / self.inertia[d].mean() * h
             for k, (i, axis, joint) in enumerate(self.sliders):
                 vel, fmax = self.motor[joint.name]
                 along = float(self.vel[i] @ axis)
@@ -71,12 +71,12 @@ class FakeBackend(Backend):
                 dv = np.clip(vel - along, -fmax * h / self.mass[i], fmax * h / self.mass[i]) if fmax > 0 else 0.0
                 self.vel[i] += dv * axis
                 self.applied[k] = dv * self.mass[i] / h
-            for i in np.flatnonzero(self.moves):
-                self.pos[i] += self.vel[i] * h
-                self.quat[i] = integrate_quat(self.quat[i], self.ang[i], h)
-            for i in np.flatnonzero(~self.moves):
-                self.pos[i] += self.vel[i] * h
-                self.quat[i] = integrate_quat(self.quat[i], self.ang[i], h)
+            for d in np.flatnonzero(self.moves):
+                self.pos[d] += self.vel[d] * h
+                self.quat[d] = integrate_quat(self.quat[d], self.ang[d], h)
+            for d in np.flatnonzero(~self.moves):
+                self.pos[d] += self.vel[d] * h
+                self.quat[d] = integrate_quat(self.quat[d], self.ang[d], h)
         self.force[:] = 0.0
 
     def body_states(self) -> BodyStates:

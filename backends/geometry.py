@@ -7,10 +7,13 @@ from collections.abc import Sequence
 
 import numpy as np
 
+#: A 3- or 4-vector: a tuple, a list or a numpy row.
+Vector = Sequence[float] | np.ndarray
+
 IDENTITY: tuple[float, float, float, float] = (1.0, 0.0, 0.0, 0.0)
 
 
-def quat_mul(a: Sequence[float], b: Sequence[float]) -> tuple[float, float, float, float]:
+def quat_mul(a: Vector, b: Vector) -> tuple[float, float, float, float]:
     aw, ax, ay, az = a
     bw, bx, by, bz = b
     return (
@@ -21,18 +24,18 @@ def quat_mul(a: Sequence[float], b: Sequence[float]) -> tuple[float, float, floa
     )
 
 
-def quat_conj(q: Sequence[float]) -> tuple[float, float, float, float]:
+def quat_conj(q: Vector) -> tuple[float, float, float, float]:
     return (q[0], -q[1], -q[2], -q[3])
 
 
-def quat_normalize(q: Sequence[float]) -> tuple[float, float, float, float]:
+def quat_normalize(q: Vector) -> tuple[float, float, float, float]:
     n = math.sqrt(sum(c * c for c in q))
     if n == 0.0 or not math.isfinite(n):
         raise ValueError(f"cannot normalise quaternion {tuple(q)}")
     return (q[0] / n, q[1] / n, q[2] / n, q[3] / n)
 
 
-def quat_from_axis_angle(axis: Sequence[float], angle: float) -> tuple[float, float, float, float]:
+def quat_from_axis_angle(axis: Vector, angle: float) -> tuple[float, float, float, float]:
     n = math.sqrt(sum(c * c for c in axis))
     if n == 0.0:
         return IDENTITY
@@ -40,7 +43,7 @@ def quat_from_axis_angle(axis: Sequence[float], angle: float) -> tuple[float, fl
     return (math.cos(angle / 2.0), axis[0] * s, axis[1] * s, axis[2] * s)
 
 
-def quat_rotate(q: Sequence[float], v: Sequence[float]) -> tuple[float, float, float]:
+def quat_rotate(q: Vector, v: Vector) -> tuple[float, float, float]:
     w, x, y, z = q
     # v' = v + 2w (u x v) + 2 u x (u x v), u = (x, y, z)
     cx = y * v[2] - z * v[1]
@@ -53,7 +56,7 @@ def quat_rotate(q: Sequence[float], v: Sequence[float]) -> tuple[float, float, f
     )
 
 
-def rotation_vector(q_from: Sequence[float], q_to: Sequence[float]) -> tuple[float, float, float]:
+def rotation_vector(q_from: Vector, q_to: Vector) -> tuple[float, float, float]:
     """The world-frame rotation vector (axis * angle) that turns ``q_from`` into ``q_to`` (shortest)."""
     d = quat_mul(q_to, quat_conj(q_from))
     if d[0] < 0.0:
@@ -65,7 +68,7 @@ def rotation_vector(q_from: Sequence[float], q_to: Sequence[float]) -> tuple[flo
     return (d[1] / s * angle, d[2] / s * angle, d[3] / s * angle)
 
 
-def integrate_quat(q: Sequence[float], ang_vel: Sequence[float], dt: float) -> tuple[float, float, float, float]:
+def integrate_quat(q: Vector, ang_vel: Vector, dt: float) -> tuple[float, float, float, float]:
     """Rotate ``q`` by the world-frame angular velocity over ``dt`` (exact for constant velocity)."""
     w = math.sqrt(sum(c * c for c in ang_vel))
     if w == 0.0:

@@ -79,6 +79,8 @@ if list(_KNOWN) != sorted(_KNOWN):  # pragma: no cover - a guard for whoever edi
 
 KNOWN_BACKENDS = MappingProxyType(_KNOWN)
 DEFAULT_BACKEND = "pybullet"
+#: The backend every other one is compared with where no analytic truth exists: real ODE.
+REFERENCE_BACKEND = "ode"
 
 
 def entry(name: str) -> BackendEntry:
@@ -104,6 +106,11 @@ def engine_version(name: str) -> str:
 
 def list_backends(include_hidden: bool = False) -> list[BackendEntry]:
     return [e for e in _KNOWN.values() if include_hidden or not e.hidden]
+
+
+def engine_modules() -> frozenset[str]:
+    """The import names of every engine (to tell whether one is loaded in this process)."""
+    return frozenset(e.module for e in _KNOWN.values() if e.extra or e.name == DEFAULT_BACKEND)
 
 
 def installed_backends() -> list[str]:

@@ -122,6 +122,6 @@ def animate(
         cube = np.array([[r, g, b] for r in range(6) for g in range(6) for b in range(6)]) * 51
         lut = np.array([int(np.argmin(((cube - np.array(c)) ** 2).sum(axis=1))) for c in colors])
         frames = [lut[f] for f in frames]
-        colors = [tuple(int(v) for v in c) for c in cube]
+        colors = [(int(c[0]), int(c[1]), int(c[2])) for c in cube]
     delay = max(2, int(round(100.0 * (end / max(count - 1, 1)) if count > 1 else 100)))
-    return encode_gif([f.astype(np.uint8) for f in frames], colors, delay)  # type: ignore[arg-type]
+    return encode_gif([f.astype(np.uint8) for f in frames], colors, delay)

@@ -17,6 +17,7 @@ from typing import Any
 import numpy as np
 import yaml
 
+from backends.registry import REFERENCE_BACKEND
 from reports import divergence as dv
 from reports import trace_format as tf
 from reports.events_data import compare_events, key_moments
@@ -26,7 +27,7 @@ from reports.trace_reader import Trace
 __all__ = ["REPORT_FORMAT", "build_document", "default_reference", "round9"]
 
 REPORT_FORMAT = 1
-REFERENCE_PREFERENCE = "ode"
+REFERENCE_PREFERENCE = REFERENCE_BACKEND
 
 
 def round9(x: float) -> float | None:

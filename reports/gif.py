@@ -119,6 +119,6 @@ def encode_gif(frames: Sequence[np.ndarray], palette: Sequence[tuple[int, int, i
         images.append([patch, int(c0), int(r0), delay_cs, transparent])
         previous = frame
     for pixels, left, top, delay, transp in images:
-        out += _image(pixels, left, top, min(int(delay), 65535), transp, bits)  # type: ignore[arg-type]
+        out += _image(pixels, left, top, min(int(delay), 65535), transp, bits)  # type: ignore[arg-type,call-overload]
     out += b"\x3b"
     return bytes(out)

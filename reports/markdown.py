@@ -69,13 +69,13 @@ def render_markdown(doc: dict[str, Any]) -> str:
     out += ["", "### Cost (sum over cases)", "", "| backend | engine | wall time (s) | steps/s | real-time factor |",
             "|---|---|---|---|---|"]  # fmt: skip
     for b in backends:
-        runs = [r for c in doc["cases"] for r in c["runs"] if r["backend"] == b]
-        walls = [r["cost"]["wall_seconds"] for r in runs]
-        known = [r for r, w in zip(runs, walls, strict=True) if w]
+        of_b = [r for c in doc["cases"] for r in c["runs"] if r["backend"] == b]
+        walls = [r["cost"]["wall_seconds"] for r in of_b]
+        known = [r for r, w in zip(of_b, walls, strict=True) if w]
         wall = sum(r["cost"]["wall_seconds"] for r in known) if known else None
         steps = sum(r["cost"]["steps"] for r in known)
         sim = sum(r["cost"]["simulated_seconds"] or 0.0 for r in known)
-        version = runs[0]["engine_version"] if runs else ""
+        version = of_b[0]["engine_version"] if of_b else ""
         sps = steps / wall if wall else None
         rtf = sim / wall if wall else None
         out.append(f"| {b} | {_cell(version)} | {_num(wall)} | {_num(sps)} | {_num(rtf)} |")

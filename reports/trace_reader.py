@@ -13,7 +13,7 @@ import struct
 from collections.abc import Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import IO, Any
+from typing import IO, Any, cast
 
 import numpy as np
 from mcap.exceptions import InvalidMagic, McapError
@@ -207,7 +207,7 @@ _BROKEN = (_Truncated, McapError, struct.error, ValueError, RuntimeError, EOFErr
 
 
 def _records(stream: _StrictStream, recover: bool, path: Path) -> Iterator[Any]:
-    records = iter(StreamReader(stream, validate_crcs=True).records)
+    records = iter(StreamReader(cast(IO[bytes], stream), validate_crcs=True).records)
     started = False
     while True:
         try:

@@ -156,7 +156,7 @@ def _solve_component(
     if t_fixed is None:
         t_fixed = 0.5 * (lo + hi)  # both bounds are finite: a component has both parities
     if t_fixed < lo - _LOG_TOL or t_fixed > hi + _LOG_TOL:
-        worst = max(order, key=lambda i: c[i] + s[i] * t_fixed)  # type: ignore[operator]
+        worst = max(order, key=lambda i: c[i] + s[i] * t_fixed)
         pair = adjacency[worst][0][2]
         raise UnsupportedFeature(
             f"Backend `dart` combines restitution as the product of the two shapes' coefficients, each "

@@ -245,12 +245,12 @@ def build_scene(world: CompiledWorld, options: OdeOptions) -> Scene:
         geoms.append(geom)
 
     joints: list[JointHandle] = []
-    for spec in world.joints:
-        body = bodies[world.body_index(spec.body)]
+    for jspec in world.joints:
+        body = bodies[world.body_index(jspec.body)]
         if body is None:
-            raise UnsupportedFeature(f"Joint `{spec.name}`: its body `{spec.body}` is static.")
-        other = None if spec.other is None else bodies[world.body_index(spec.other)]  # static = environment
-        joints.append(_joint(ode_world, spec, body, other))
+            raise UnsupportedFeature(f"Joint `{jspec.name}`: its body `{jspec.body}` is static.")
+        other = None if jspec.other is None else bodies[world.body_index(jspec.other)]  # static = environment
+        joints.append(_joint(ode_world, jspec, body, other))
 
     classes, table = _surface_classes(world)
     return Scene(

@@ -235,9 +235,12 @@ def read_golden(path: Path) -> Recording:
     return loads(text, str(path))
 
 
+Rows = dict[str, dict[str, dict[int, list[Any]]]]  # kind -> name -> step -> values
+
+
 def loads(text: str, origin: str = "<golden>") -> Recording:
     rec = Recording(header={})
-    rows: dict[str, dict[int, list[Any]]] = {"body": {}, "joint": {}, "var": {}}
+    rows: Rows = {"body": {}, "joint": {}, "var": {}}
     steps: set[int] = set()
     for number, line in enumerate(text.splitlines(), 1):
         if not line.strip() or line.startswith("#"):
@@ -259,14 +262,14 @@ def loads(text: str, origin: str = "<golden>") -> Recording:
     return rec
 
 
-def _parse_line(rec: Recording, tokens: list[str], rows: dict[str, dict[int, list[Any]]], steps: set[int]) -> None:
+def _parse_line(rec: Recording, tokens: list[str], rows: Rows, steps: set[int]) -> None:
     kind = tokens[0]
     if kind == "tolerance":
-        values = dict(t.split("=", 1) for t in tokens[2:])
-        unknown = set(values) - {"atol", "rtol"}
+        keyed = dict(t.split("=", 1) for t in tokens[2:])
+        unknown = set(keyed) - {"atol", "rtol"}
         if unknown:
             raise ValueError(f"unknown tolerance key {sorted(unknown)[0]}; expected atol= and rtol=")
-        rec.tolerances[tokens[1]] = Tol(*(float(values[k]) if k in values else None for k in ("atol", "rtol")))
+        rec.tolerances[tokens[1]] = Tol(*(float(keyed[k]) if k in keyed else None for k in ("atol", "rtol")))
     elif kind == "verdict":
         status, when, name, measured, expected = tokens[1:6]
         if status not in ("pass", "FAIL"):
@@ -303,13 +306,14 @@ def _parse_line(rec: Recording, tokens: list[str], rows: dict[str, dict[int, lis
         raise ValueError(f"unknown line kind `{kind}`")
 
 
-def _fill(rec: Recording, rows: dict[str, dict[int, list[Any]]]) -> None:
+def _fill(rec: Recording, rows: Rows) -> None:
     """Rows per sampled step, carrying a value forward where its line was left out."""
     for kind, series in rows.items():
         for name, by_step in series.items():
             if not rec.steps or rec.steps[0] not in by_step:
                 raise BaselineError(f"{kind} `{name}` has no line at the first sample")
-            out, current = [], by_step[rec.steps[0]]
+            out: list[list[Any]] = []
+            current = by_step[rec.steps[0]]
             for k in rec.steps:
                 current = by_step.get(k, current)
                 out.append(current)

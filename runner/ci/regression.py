@@ -162,7 +162,7 @@ def render(renderable: object, width: int = 120) -> str:
 def verdict_text(result: RunResult, failures_only: bool = False) -> str:
     from rich import box
 
-    from runner.cli.commands.run import verdict_table
+    from runner.cli.render import verdict_table
 
     if not result.verdicts:
         return ""

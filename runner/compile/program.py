@@ -10,6 +10,8 @@ from typing import Any
 import numpy as np
 
 from backends.types import CompiledWorld, Motion
+from runner.compile.interval_specs import FuncSpec, LerpSpec, ParallelSpec, SequenceSpec, SoundSpec, WaitSpec
+from runner.compile.solids import NodeDef, SolidDef
 from runner.compile.world import compile_world
 from runner.errors import ScenarioValidationError
 from runner.language import model_behaviour as B
@@ -18,8 +20,6 @@ from runner.language.load import LoadedScenario
 from runner.language.names import expand_bodies, groups
 from runner.language.refs import expressions_in
 from runner.language.sounds import SoundInfo, read_info
-from runner.sim.collisions import NodeDef, SolidDef
-from runner.sim.intervals import FuncSpec, LerpSpec, ParallelSpec, SequenceSpec, SoundSpec, WaitSpec
 
 STEP_EPS = 1e-9  # a timed input at t is due at the first step whose time is >= t - STEP_EPS
 
@@ -100,6 +100,8 @@ def _solid(solid: B.Solid) -> SolidDef:
         verts = np.asarray(solid.polygon, float)
         return SolidDef("polygon", verts.mean(axis=0), vertices=verts)
     box = solid.box
+    if box is None:
+        raise ValueError("a solid needs one of sphere, polygon or box")  # the model validation refuses it first
     return SolidDef("box", np.asarray(box.center, float), half=np.asarray(box.size, float) / 2.0)
 
 

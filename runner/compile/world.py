@@ -117,13 +117,12 @@ def compile_body(inst: BodyInstance, number: int) -> BodySpec:
     else:
         mass = (body.density or KINEMATIC_DENSITY) * volume(shape)
     inertia = mass_properties(shape, mass) if mass > 0 else (0.0, 0.0, 0.0)
-    color = (
+    given = (
         tuple(body.color)
         if body.color is not None
         else (STATIC_COLOR if motion is Motion.STATIC else PALETTE[number % len(PALETTE)])
     )
-    if len(color) == 3:
-        color = (*color, 1.0)
+    color = (float(given[0]), float(given[1]), float(given[2]), float(given[3]) if len(given) > 3 else 1.0)
     return BodySpec(
         name=inst.name,
         motion=motion,
@@ -135,7 +134,7 @@ def compile_body(inst: BodyInstance, number: int) -> BodySpec:
         lin_vel=body.vel,
         ang_vel=body.angvel,
         color=color,
-    )  # type: ignore[arg-type]
+    )
 
 
 def _unit(v: Sequence[float]) -> tuple[float, float, float]:

@@ -15,11 +15,12 @@ import math
 from collections.abc import Mapping, Sequence
 from typing import Any
 
+from backends.registry import REFERENCE_BACKEND
 from runner.conformance.cases import Case
 from runner.conformance.pool import BackendRun
 from runner.version import tool_version
 
-REFERENCE = "ode"
+REFERENCE = REFERENCE_BACKEND
 SCHEMA = "physics-scenarios/conformance-matrix/1"
 
 
@@ -60,7 +61,7 @@ def build_matrix(
     """The matrix of ``cases`` x ``runs`` (backends in the order given)."""
     backends = list(runs)
     reference = REFERENCE if REFERENCE in runs else None
-    out_cases = []
+    out_cases: list[dict[str, Any]] = []
     for case in cases:
         results = {b: runs[b].results.get(case.id) for b in backends}
         per_backend = {b: _checks_by_index(results[b], len(case.checks)) for b in backends}

@@ -133,8 +133,7 @@ def run_case(case: Case) -> CaseResult:
             out_dir = Path(tmp, "out")  # gathered back by the caller
         try:
             loaded = load_scenario(path, case.variant, case.overrides)
-            options = {"record_every": case.record_every} if case.record_every > 1 else {}
-            result = run_loaded(loaded, case.backend, out_dir, **options)
+            result = run_loaded(loaded, case.backend, out_dir, record_every=case.record_every)
         except (PhysicsScenariosError, OSError) as exc:
             return CaseResult(case, "error", failure=str(exc), error_type=type(exc).__name__,
                               wall_seconds=time.perf_counter() - start)  # fmt: skip
@@ -257,8 +256,10 @@ def _context() -> Any:
     import sys
     import threading
 
+    from backends.registry import engine_modules
+
     methods = multiprocessing.get_all_start_methods()
-    engines = {"pybullet", "mujoco", "dartpy", "panda3d"} & set(sys.modules)
+    engines = engine_modules() & set(sys.modules)
     if sys.platform.startswith("linux") and "fork" in methods and threading.active_count() == 1 and not engines:
         return multiprocessing.get_context("fork")
     if "forkserver" in methods:

@@ -186,7 +186,8 @@ def _apply_variant(data: dict[str, Any], variant: Any, vpath: Path, positions: P
         positions.remap(vpath + ("inputs",), ("inputs",))
     extra = variant.get("assertions") or []
     if isinstance(extra, list) and extra:
-        base = data.get("assertions") if isinstance(data.get("assertions"), list) else []
+        current = data.get("assertions")
+        base: list[Any] = current if isinstance(current, list) else []
         offset = len(base)
         data["assertions"] = [*base, *copy.deepcopy(extra)]
         for i in range(len(extra)):

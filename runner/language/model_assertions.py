@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from typing import Annotated, Any, Literal, Union
+from typing import TYPE_CHECKING, Annotated, Any, Literal, Union
 
 from pydantic import Discriminator, Field, Tag, field_validator, model_validator
 
@@ -160,9 +160,15 @@ def _assertion_tag(v: Any) -> str | None:
     return tag_of(v, ASSERTION_TAGS)
 
 
-Assertion = Annotated[
-    Union[tuple(Annotated[cls, Tag(tag)] for tag, cls in ASSERTION_TAGS.items())],  # type: ignore[valid-type]  # noqa: UP007
-    Discriminator(_assertion_tag),
-]
+if TYPE_CHECKING:  # the static view of the tagged union built below from ASSERTION_TAGS
+    Assertion = (
+        ValueAssertion | CheckAssertion | AlwaysAssertion | NeverAssertion | EventuallyAssertion | MaxAssertion |
+        MinAssertion | EventAssertion | SoundAssertion | ContactAssertion
+    )
+else:
+    Assertion = Annotated[
+        Union[tuple(Annotated[cls, Tag(tag)] for tag, cls in ASSERTION_TAGS.items())],  # noqa: UP007
+        Discriminator(_assertion_tag),
+    ]
 
 __all__ = ["ASSERTION_TAGS", "Assertion", "NonNegFloat"]

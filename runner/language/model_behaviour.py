@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from typing import Annotated, Any, Literal, Union
+from typing import TYPE_CHECKING, Annotated, Any, Literal, Union
 
 from pydantic import Discriminator, Field, Tag, field_validator, model_validator
 
@@ -208,10 +208,17 @@ def tag_of(value: Any, tags: dict[str, type[Strict]]) -> str | None:
     return next((k for k, cls in tags.items() if isinstance(value, cls)), None)
 
 
-Action = Annotated[
-    Union[tuple(Annotated[cls, Tag(tag)] for tag, cls in ACTION_TAGS.items())],  # type: ignore[valid-type]  # noqa: UP007
-    Discriminator(lambda v: tag_of(v, ACTION_TAGS)),
-]
+if TYPE_CHECKING:  # the static view of the tagged union built below from ACTION_TAGS
+    Action = (
+        StartAction | PauseAction | ResumeAction | FinishAction | LoopAction | SetAction | CalcAction |
+        PlaySoundAction | StopSoundAction | MotorAction | ForceAction | ImpulseAction | ResetAction | LogAction |
+        SendAction | EndAction | IfAction
+    )
+else:
+    Action = Annotated[
+        Union[tuple(Annotated[cls, Tag(tag)] for tag, cls in ACTION_TAGS.items())],  # noqa: UP007
+        Discriminator(lambda v: tag_of(v, ACTION_TAGS)),
+    ]
 IfAction.model_rebuild()
 
 

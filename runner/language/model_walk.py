@@ -1,16 +1,22 @@
-"""Find which model describes a place in a document (for 'did you mean' suggestions)."""
+"""Walks over a scenario: which model describes a place in a document (for 'did you mean' suggestions), and every
+action wherever it is written."""
 
 from __future__ import annotations
 
 import types
 import typing
-from typing import Any
+from collections.abc import Iterator
+from typing import TYPE_CHECKING, Any
 
 from pydantic import BaseModel
 
+from runner.language import model_behaviour as B
 from runner.language.model_assertions import ASSERTION_TAGS, _assertion_tag
 from runner.language.model_behaviour import ACTION_TAGS, tag_of
 from runner.language.yaml_source import Path
+
+if TYPE_CHECKING:
+    from runner.language.model import Scenario
 
 
 def _models_in(annotation: Any) -> list[type[BaseModel]]:
@@ -56,7 +62,7 @@ def keys_at(root: type[BaseModel], data: Any, path: Path) -> list[str]:
     pending_container: str | None = None
     for part in path:
         if pending_container is not None:
-            value = value[part] if isinstance(value, dict | list) and _has(value, part) else None
+            value = value[part] if isinstance(value, dict | list) and _has(value, part) else None  # type: ignore[index]
             pending_container = None
             model = _pick(_models_in(annotation), value)
             continue
@@ -78,3 +84,28 @@ def _has(container: Any, part: Any) -> bool:
     if isinstance(container, dict):
         return part in container
     return isinstance(part, int) and 0 <= part < len(container)
+
+
+# ---- the scenario's actions, wherever they are (handlers, interval Func steps) ----------------------
+def walk_actions(actions: list[Any], path: Path) -> Iterator[tuple[Any, Path]]:
+    for i, action in enumerate(actions):
+        yield action, path + (i,)
+        if isinstance(action, B.IfAction):
+            yield from walk_actions(action.then, path + (i, "then"))
+            yield from walk_actions(action.else_, path + (i, "else"))
+
+
+def walk_steps(step: B.Step, path: Path) -> Iterator[tuple[B.Step, Path]]:
+    yield step, path
+    for kind in ("sequence", "parallel"):
+        for i, child in enumerate(getattr(step, kind) or []):
+            yield from walk_steps(child, path + (kind, i))
+
+
+def all_actions(model: Scenario) -> Iterator[tuple[Any, Path]]:
+    for event, actions in model.on.items():
+        yield from walk_actions(actions, ("on", event))
+    for ival, definition in model.intervals.items():
+        for step, path in walk_steps(definition, ("intervals", ival)):
+            if step.func is not None:
+                yield from walk_actions(step.func, path + ("func",))

@@ -27,8 +27,8 @@ def expand(pattern: str, from_name: str, into_name: str, into_is_geometry: bool 
 
 def possible_events(model: Scenario) -> set[str]:
     """Every event name this scenario can ever see (for checking names used in assertions)."""
+    from runner.language.model_walk import all_actions
     from runner.language.names import expand_bodies
-    from runner.language.refs import all_actions
 
     events = {"start"}
     for item in model.inputs:

@@ -15,6 +15,7 @@ from runner.language import model_assertions as A
 from runner.language import model_behaviour as B
 from runner.language.expressions import ExpressionError, compile_expression
 from runner.language.model import Scenario
+from runner.language.model_walk import all_actions, walk_steps
 from runner.language.names import RESERVED, array_counts, check_name, expand_bodies, groups, readable_names
 from runner.language.patterns import possible_events
 from runner.language.sounds import SoundFileError, read_info
@@ -50,30 +51,6 @@ def _unknown(kind: str, name: str, known: Iterable[str]) -> str:
     close = difflib.get_close_matches(name, known, n=1, cutoff=0.6)
     hint = f"did you mean `{close[0]}`?" if close else f"defined: {', '.join(known) or 'none'}"
     return f"unknown {kind} `{name}`; {hint}"
-
-
-def walk_actions(actions: list[Any], path: Path) -> Iterator[tuple[Any, Path]]:
-    for i, action in enumerate(actions):
-        yield action, path + (i,)
-        if isinstance(action, B.IfAction):
-            yield from walk_actions(action.then, path + (i, "then"))
-            yield from walk_actions(action.else_, path + (i, "else"))
-
-
-def walk_steps(step: B.Step, path: Path) -> Iterator[tuple[B.Step, Path]]:
-    yield step, path
-    for kind in ("sequence", "parallel"):
-        for i, child in enumerate(getattr(step, kind) or []):
-            yield from walk_steps(child, path + (kind, i))
-
-
-def all_actions(model: Scenario) -> Iterator[tuple[Any, Path]]:
-    for event, actions in model.on.items():
-        yield from walk_actions(actions, ("on", event))
-    for ival, definition in model.intervals.items():
-        for step, path in walk_steps(definition, ("intervals", ival)):
-            if step.func is not None:
-                yield from walk_actions(step.func, path + ("func",))
 
 
 def polygon_problem(vertices: list[tuple[float, float, float]]) -> str | None:
@@ -116,9 +93,10 @@ def check_references(model: Scenario, positions: Positions, base_dir: FsPath) ->
         if name in RESERVED:
             where = ("bodies", name) if name in model.bodies else ("joints", name)
             bad(where, f"`{name}` is a reserved name; choose another", at_key=True)
-    for joint in model.joints:
-        if joint in body_names or joint in group_names:
-            bad(("joints", joint), f"joint `{joint}` has the name of a body; names must be unique", at_key=True)
+    for joint_name in model.joints:
+        if joint_name in body_names or joint_name in group_names:
+            clash = f"joint `{joint_name}` has the name of a body; names must be unique"
+            bad(("joints", joint_name), clash, at_key=True)
     for key, body in model.bodies.items():
         if body.array is not None and any(f"{key}_" in n and n in model.bodies for n in body_names):
             clash = next(n for n in model.bodies if n.startswith(f"{key}_") and n in body_names and n != key)
@@ -155,10 +133,8 @@ def check_references(model: Scenario, positions: Positions, base_dir: FsPath) ->
             if solid.polygon is not None:
                 problem = polygon_problem(solid.polygon)
                 if problem:
-                    where = ("collisions", "nodes", node_name) + (
-                        ("solids", k) if k < len(node.solids) else ("polygon",)
-                    )
-                    bad(where, problem)
+                    tail: tuple[str | int, ...] = ("solids", k) if k < len(node.solids) else ("polygon",)
+                    bad(("collisions", "nodes", node_name, *tail), problem)
     for i, ref in enumerate(model.collisions.from_):
         if ref not in nodes:
             bad(("collisions", "from", i), _unknown("collision node", ref, nodes))

@@ -1,24 +1,57 @@
-"""Running handler actions (and interval action steps) against a session."""
+"""Running handler actions (and interval action steps) against the host that owns the run's state.
+
+The host is the step loop (:class:`runner.sim.session.Session`); actions see it only through
+:class:`ActionHost`, so what an action may touch is written down here and nowhere else.
+"""
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any
+from collections.abc import Sequence
+from typing import Any, Protocol
 
 from runner.errors import ScenarioError
 from runner.language import model_behaviour as B
-from runner.language.hpr import hpr_to_quat, quat_to_hpr
-
-if TYPE_CHECKING:
-    from runner.sim.session import Session
 
 MAX_SEND_DEPTH = 32
+
+
+class IntervalControl(Protocol):
+    """The play API of the scenario's intervals (Panda3D's ``ival.start()`` and friends)."""
+
+    def start(self, ival: str, now: float) -> None: ...
+    def pause(self, ival: str, now: float) -> float: ...
+    def resume(self, ival: str, now: float) -> None: ...
+    def finish(self, ival: str, now: float) -> None: ...
+    def loop(self, ival: str, now: float) -> None: ...
+
+
+class ActionHost(Protocol):
+    """What handler actions may read and change."""
+
+    ended: bool
+    dt: float
+    state: dict[str, Any]
+
+    @property
+    def intervals(self) -> IntervalControl: ...
+
+    def truth(self, text: str) -> bool: ...
+    def evaluate(self, text: str) -> Any: ...
+    def play_sound(self, sound: str, offset: float, volume: float, loop: bool, at: float) -> None: ...
+    def stop_sound(self, sound: str, at: float) -> None: ...
+    def set_motor(self, joint: str, vel: float, fmax: float | None) -> None: ...
+    def add_force(self, body: str, force: Sequence[float], torque: Sequence[float], scale: float) -> None: ...
+    def reset(self, command: B.ResetCommand) -> None: ...
+    def log(self, at: float, level: str, message: str, name: str) -> None: ...
+    def dispatch(self, event: str, at: float, source: str, depth: int = 0) -> None: ...
+    def end(self, at: float, reason: str) -> None: ...
 
 
 class ActionError(ScenarioError):
     """An action could not be carried out at run time (e.g. `send` recursing without end)."""
 
 
-def run_actions(session: Session, actions: Any, at: float, depth: int = 0) -> None:  # noqa: C901 - one dispatch
+def run_actions(session: ActionHost, actions: Any, at: float, depth: int = 0) -> None:  # noqa: C901 - one dispatch
     for action in actions:
         if session.ended:
             return
@@ -52,7 +85,8 @@ def run_actions(session: Session, actions: Any, at: float, depth: int = 0) -> No
             # an impulse J over one step is the force J/dt for that step (semi-implicit Euler, exactly)
             session.add_force(action.impulse.body, action.impulse.value, action.impulse.torque, 1.0 / session.dt)
         elif isinstance(action, B.ResetAction):
-            _reset(session, action.reset)
+            spec = action.reset
+            session.reset(B.ResetCommand(body=spec) if isinstance(spec, str) else spec)
         elif isinstance(action, B.LogAction):
             message, level = (
                 (action.log, "info") if isinstance(action.log, str) else (action.log.message, action.log.level)
@@ -66,25 +100,3 @@ def run_actions(session: Session, actions: Any, at: float, depth: int = 0) -> No
             reason = action.end if isinstance(action.end, str) else "end action"
             if action.end is not False:
                 session.end(at, reason)
-
-
-def _reset(session: Session, spec: str | B.ResetCommand) -> None:
-    cmd = B.ResetCommand(body=spec) if isinstance(spec, str) else spec
-    index = session.body_index[cmd.body]
-    body = session.world.bodies[index]
-    pos = cmd.pos if cmd.pos is not None else body.pos
-    if cmd.quat is not None:
-        quat = cmd.quat
-    elif cmd.hpr is not None:
-        quat = hpr_to_quat(cmd.hpr)
-    else:
-        quat = body.quat
-    if body.motion.value == "kinematic":
-        hpr = (
-            cmd.hpr
-            if cmd.hpr is not None
-            else (quat_to_hpr(quat) if cmd.quat is not None else session.program.start_hpr[body.name])
-        )
-        session.kinematics.teleport(session.backend, body.name, pos, hpr)
-    elif body.motion.value == "dynamic":
-        session.backend.reset_body(index, pos, quat, cmd.vel, cmd.angvel)

@@ -95,7 +95,7 @@ class AssertionTracker:
     def _number(self, value: Any, r: Resolver) -> float:
         return self.expr[value].number(r) if isinstance(value, str) else float(value)
 
-    def _near(self, measured: float, near: Any, tol: Any, r: Resolver) -> tuple[bool, str]:
+    def _near(self, measured: float, near: Any, tol: Any, r: Resolver) -> tuple[bool, str, float, float]:
         target = self._number(near, r)
         t = self._number(tolerance(tol, self.backend), r)
         ok = math.isfinite(measured) and abs(measured - target) <= t + 1e-12 * max(1.0, abs(target))
@@ -144,9 +144,10 @@ class AssertionTracker:
                 lo, hi = _window(s.during)
                 if lo - TIME_EPS <= t <= hi + TIME_EPS:
                     is_max = isinstance(s, A.MaxAssertion)
-                    value = self.expr[s.max_of if is_max else s.min_of].number(r)
-                    if c.best is None or (value > c.best if is_max else value < c.best) or math.isnan(value):
-                        c.best, c.best_time = value, t
+                    of = s.max_of if isinstance(s, A.MaxAssertion) else s.min_of
+                    number = self.expr[of].number(r)
+                    if c.best is None or (number > c.best if is_max else number < c.best) or math.isnan(number):
+                        c.best, c.best_time = number, t
                     c.extra["r_time"] = t
                     if c.best is not None and hi <= t + TIME_EPS:
                         c.done = self._extremum(c, r)
@@ -261,11 +262,11 @@ class AssertionTracker:
             if len(times) < lo or (hi is not None and len(times) > hi):
                 problems.append(f"happened {len(times)} times")
         if s.first is not None:
-            t = self._number(tolerance(s.tol, self.backend), r)
-            target = _time(s.first)
-            expected.append(f"first {fmt(target)} ± {fmt(t)}")
-            numbers = (first, target, t)
-            if first is None or abs(first - target) > t + TIME_EPS:
+            within = self._number(tolerance(s.tol, self.backend), r)
+            first_at = _time(s.first)
+            expected.append(f"first {fmt(first_at)} ± {fmt(within)}")
+            numbers = (first, first_at, within)
+            if first is None or abs(first - first_at) > within + TIME_EPS:
                 problems.append("first time off" if first is not None else "never happened")
         for field_name, other in (("before", s.before), ("after", s.after)):
             if other is None:
@@ -298,10 +299,11 @@ class AssertionTracker:
             numbers = (float(len(times)), float(s.count), 0.0)
         if s.played_at is not None:
             tol = self._number(tolerance(s.tol, self.backend), r)
-            nearest = min(times, key=lambda t: abs(t - s.played_at)) if times else None
-            numbers = (nearest, float(s.played_at), tol)
-            expected.append(f"played at {fmt(s.played_at)} ± {fmt(tol)}")
-            if not any(abs(t - s.played_at) <= tol + TIME_EPS for t in times):
+            played_at = float(s.played_at)
+            nearest = min(times, key=lambda t: abs(t - played_at)) if times else None
+            numbers = (nearest, played_at, tol)
+            expected.append(f"played at {fmt(played_at)} ± {fmt(tol)}")
+            if not any(abs(t - played_at) <= tol + TIME_EPS for t in times):
                 problems.append("not played at that time")
         if s.count is not None:
             lo, hi = (s.count, s.count) if isinstance(s.count, int) else (s.count.min, s.count.max)

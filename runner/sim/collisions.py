@@ -14,25 +14,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from runner.compile.solids import NodeDef, SolidDef
 from runner.language.patterns import expand
-
-
-@dataclass(frozen=True)
-class SolidDef:
-    """A solid in its body's frame, unscaled (the body's current scale is applied at test time)."""
-
-    kind: str  # sphere | polygon | box
-    center: np.ndarray  # (3,)
-    radius: float = 0.0
-    half: np.ndarray | None = None  # box half sizes
-    vertices: np.ndarray | None = None  # (n, 3) polygon
-
-
-@dataclass(frozen=True)
-class NodeDef:
-    name: str
-    body: int  # index into the world's bodies
-    solids: tuple[SolidDef, ...]
 
 
 @dataclass(frozen=True)
@@ -86,7 +69,7 @@ def sphere_hits(center: np.ndarray, radius: float, into: SolidDef, pose: Pose) -
     # box: closest point of the oriented box to the sphere's centre
     box_center = pose.pos + pose.scale * (pose.rot @ into.center)
     local = pose.rot.T @ (center - box_center)
-    half = into.half * pose.scale
+    half = (into.half if into.half is not None else np.zeros(3)) * pose.scale
     closest = np.clip(local, -half, half)
     return float(np.dot(local - closest, local - closest)) <= radius * radius
 

@@ -21,8 +21,8 @@ class Snapshot:
 
     def __init__(self) -> None:
         self.time = 0.0
-        self.bodies: BodyStates | None = None
-        self.joints: JointStates | None = None
+        self.bodies = BodyStates.from_rows(np.zeros((0, 13)))  # until the first read
+        self.joints = JointStates(np.zeros(0), np.zeros(0), np.zeros(0))
 
 
 class StateResolver:

@@ -25,8 +25,11 @@ import numpy as np
 
 from backends.base import Backend
 from backends.errors import EngineFailure
+from backends.types import Motion
 from runner import interrupts
 from runner.compile.program import Program
+from runner.language import model_behaviour as B
+from runner.language.hpr import hpr_to_quat, quat_to_hpr
 from runner.sim.actions import run_actions
 from runner.sim.assertions import AssertionTracker, Verdict
 from runner.sim.collisions import EventHandler, SolidTraverser, quat_matrices
@@ -178,6 +181,26 @@ class Session:
         acc[:3] += np.asarray(force, float) * scale
         acc[3:] += np.asarray(torque, float) * scale
 
+    def reset(self, command: B.ResetCommand) -> None:
+        """The lab's reset: a dynamic body teleported with new velocities, a kinematic one moved to a pose."""
+        index = self.body_index[command.body]
+        body = self.world.bodies[index]
+        pos = command.pos if command.pos is not None else body.pos
+        if command.quat is not None:
+            quat = command.quat
+        elif command.hpr is not None:
+            quat = hpr_to_quat(command.hpr)
+        else:
+            quat = body.quat
+        if body.motion is Motion.KINEMATIC:
+            if command.hpr is not None:
+                hpr = command.hpr
+            else:
+                hpr = quat_to_hpr(quat) if command.quat is not None else self.program.start_hpr[body.name]
+            self.kinematics.teleport(self.backend, body.name, pos, hpr)
+        elif body.motion is Motion.DYNAMIC:
+            self.backend.reset_body(index, pos, quat, command.vel, command.angvel)
+
     def log(self, at: float, level: str, message: str, name: str) -> None:
         if self.trace is not None:
             self.trace.log(at, level, message, name)
@@ -201,7 +224,7 @@ class Session:
     def _last_good(self, i: int) -> dict[str, Any] | None:
         """Body ``i``'s last state that passed the checks, as every engine failure reports it."""
         last = self.snapshot.bodies
-        if last is None:
+        if not len(last.pos):  # nothing read yet
             return None
         return {
             "time": self.snapshot.time,
@@ -286,13 +309,16 @@ class Session:
         self.tracker.on_step(t, self.resolver, self.in_contact)
 
     def _trace_step(self, t: float) -> None:
+        trace = self.trace
+        if trace is None:
+            return
         if self._contacts_at != t:
             self._read_contacts(t)
         if self.kinematics.scale_changed:
             start = self.program.start_scale
-            self.trace.scene(t, scales={n: k.scale / start[n] for n, k in self.kinematics.by_name.items()})
+            trace.scene(t, scales={n: k.scale / start[n] for n, k in self.kinematics.by_name.items()})
             self.kinematics.scale_changed.clear()
-        self.trace.step(t, self.snapshot.bodies, self.snapshot.joints, self.contacts, self.state)
+        trace.step(t, self.snapshot.bodies, self.snapshot.joints, self.contacts, self.state)
         self._recorded = t
 
     def run(self) -> RunResult:

@@ -126,7 +126,7 @@ class BackgroundTraceWriter:
 
     def _reply(self) -> tuple[str, str | None, str | None]:
         try:
-            return self._conn.recv()  # type: ignore[no-any-return]
+            return self._conn.recv()
         except (EOFError, OSError) as exc:
             raise TraceError(f"the trace writer process for {self.path} ended unexpectedly") from exc
 

@@ -20,7 +20,7 @@ from collections.abc import Mapping, Sequence
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from types import TracebackType
-from typing import Any
+from typing import IO, Any, cast
 
 import numpy as np
 from mcap.exceptions import McapError
@@ -138,7 +138,7 @@ class TraceWriter:
         self._tf_tpl, self._bodies_tpl, self._joints_tpl = fx.step_templates(self._names, self._joint_names)
         self._sink = self._open()
         try:
-            self._writer = Writer(self._sink, chunk_size=chunk_size, compression=CompressionType.LZ4)
+            self._writer = Writer(cast(IO[bytes], self._sink), chunk_size=chunk_size, compression=CompressionType.LZ4)
             self._writer.start(profile=tf.PROFILE, library=tf.LIBRARY)
             self._channels: dict[str, int] = {}
             self._register_all()

@@ -5,8 +5,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from runner.compile.solids import NodeDef, SolidDef
 from runner.language.patterns import expand, unsupported_token
-from runner.sim.collisions import EventHandler, NodeDef, Pose, SolidDef, SolidTraverser, sphere_hits
+from runner.sim.collisions import EventHandler, Pose, SolidTraverser, sphere_hits
 
 I3 = np.eye(3)
 QUAD = SolidDef("polygon", np.zeros(3), vertices=np.array([[-1, -1, 0], [1, -1, 0], [1, 1, 0], [-1, 1, 0]], float))

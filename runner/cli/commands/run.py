@@ -4,17 +4,16 @@ from __future__ import annotations
 
 import argparse
 import json
-import math
 from pathlib import Path
 from typing import Any
 
 from rich.console import Console
 from rich.markup import escape
-from rich.progress import BarColumn, Progress, TextColumn, TimeRemainingColumn
-from rich.table import Table
+from rich.progress import BarColumn, Progress, TaskID, TextColumn, TimeRemainingColumn
 
 from backends.errors import BackendError, BackendNotInstalled, EngineFailure
 from backends.registry import DEFAULT_BACKEND, entry, is_installed
+from runner.cli.render import verdict_table
 from runner.errors import ExitCode, ScenarioError, ScenarioValidationError, UsageError
 from runner.language.load import LoadedScenario, load_files, parse_overrides
 from runner.sim.run import run_loaded
@@ -70,22 +69,6 @@ def configure(run: argparse.ArgumentParser) -> None:
         "--trace-process", action="store_true", help="format and write traces in a second process (uses a free core)"
     )
     add_arguments(run)
-
-
-def verdict_table(result: RunResult, failures_only: bool = False) -> Table:
-    """The verdict table of one run (also used by `check`, JUnit reports and the pytest plugin)."""
-    title = f"{result.scenario} · {result.variant} · {result.backend}"
-    table = Table(title=title, title_justify="left", show_lines=False)
-    for col in ("assertion", "result", "measured", "expected", "time"):
-        table.add_column(col, overflow="fold")
-    for v in result.verdicts:
-        if failures_only and v.passed:
-            continue
-        mark = "[green]pass[/]" if v.passed else "[bold red]FAIL[/]"
-        when = "" if v.time is None or math.isinf(v.time) else f"{v.time:.3f}"
-        measured = v.measured + (f" ({v.message})" if v.message and not v.passed else "")
-        table.add_row(escape(v.name), mark, escape(measured), escape(v.expected), when)
-    return table
 
 
 def _result_json(r: RunResult) -> dict[str, Any]:
@@ -185,13 +168,11 @@ def _execute(
                 transient=True,
             ) as progress:
                 task = progress.add_task(f"{case.model.scenario} · {case.variant}", total=None)
-                result = run_loaded(
-                    case,
-                    args.backend,
-                    out_dir,
-                    lambda k, n, task=task: progress.update(task, completed=k, total=n),
-                    **options,
-                )
+
+                def advance(k: int, n: int, task: TaskID = task) -> None:
+                    progress.update(task, completed=k, total=n)
+
+                result = run_loaded(case, args.backend, out_dir, advance, **options)
         else:
             result = run_loaded(case, args.backend, out_dir, **options)
         results.append(result)

@@ -9,13 +9,9 @@ including same-name takeover and name-ordered stepping.
 
 from __future__ import annotations
 
-from runner.sim.intervals.base import PRECISION, TIME_EPS
-from runner.sim.intervals.lerp import compute_delta
-from runner.sim.intervals.manager import IntervalManager
-from runner.sim.intervals.specs import (
+from runner.compile.interval_specs import (
     BLEND_TYPES,
     FuncSpec,
-    IntervalHost,
     IntervalSpec,
     LerpSpec,
     ParallelSpec,
@@ -24,6 +20,10 @@ from runner.sim.intervals.specs import (
     Vec3,
     WaitSpec,
 )
+from runner.sim.intervals.base import PRECISION, TIME_EPS
+from runner.sim.intervals.host import IntervalHost
+from runner.sim.intervals.lerp import compute_delta
+from runner.sim.intervals.manager import IntervalManager
 
 __all__ = [
     "BLEND_TYPES",

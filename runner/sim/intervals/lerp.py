@@ -9,8 +9,9 @@ from __future__ import annotations
 
 from typing import Final
 
+from runner.compile.interval_specs import BLEND_TYPES, LerpSpec, Vec3
 from runner.sim.intervals.base import Node, State
-from runner.sim.intervals.specs import BLEND_TYPES, IntervalHost, LerpSpec, Vec3
+from runner.sim.intervals.host import IntervalHost
 
 __all__ = ["LerpLeaf", "WaitLeaf", "compute_delta", "lerp_value", "lerp_vec3"]
 

@@ -31,14 +31,8 @@ import bisect
 from collections.abc import Callable, Iterator, Mapping
 from contextlib import contextmanager
 
-from runner.sim.intervals.base import Node, State
-from runner.sim.intervals.lerp import LerpLeaf, WaitLeaf
-from runner.sim.intervals.meta import MetaTimeline
-from runner.sim.intervals.play import Play
-from runner.sim.intervals.pyleaves import FuncLeaf, SoundLeaf
-from runner.sim.intervals.specs import (
+from runner.compile.interval_specs import (
     FuncSpec,
-    IntervalHost,
     IntervalSpec,
     LerpSpec,
     ParallelSpec,
@@ -46,6 +40,12 @@ from runner.sim.intervals.specs import (
     SoundSpec,
     WaitSpec,
 )
+from runner.sim.intervals.base import Node, State
+from runner.sim.intervals.host import IntervalHost
+from runner.sim.intervals.lerp import LerpLeaf, WaitLeaf
+from runner.sim.intervals.meta import MetaTimeline
+from runner.sim.intervals.play import Play
+from runner.sim.intervals.pyleaves import FuncLeaf, SoundLeaf
 
 __all__ = ["IntervalManager"]
 

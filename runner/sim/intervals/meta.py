@@ -17,8 +17,8 @@ from collections import deque
 from collections.abc import Callable
 from typing import Final
 
+from runner.compile.interval_specs import FuncSpec, IntervalSpec, ParallelSpec, SequenceSpec, WaitSpec
 from runner.sim.intervals.base import Ev, Node, State, from_ms, to_ms
-from runner.sim.intervals.specs import FuncSpec, IntervalSpec, ParallelSpec, SequenceSpec, WaitSpec
 
 __all__ = ["MetaTimeline"]
 

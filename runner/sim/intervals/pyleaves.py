@@ -19,8 +19,9 @@ before ``ivalMgr.step()``. Their overrides have quirks that the runner reproduce
 
 from __future__ import annotations
 
+from runner.compile.interval_specs import FuncSpec, SoundSpec
 from runner.sim.intervals.base import Node, State
-from runner.sim.intervals.specs import FuncSpec, IntervalHost, SoundSpec
+from runner.sim.intervals.host import IntervalHost
 
 __all__ = ["FuncLeaf", "SoundLeaf"]
 

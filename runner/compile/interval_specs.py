@@ -3,8 +3,8 @@
 The specs are frozen, engine-neutral descriptions of Panda3D intervals (``direct.interval``): a
 ``LerpSpec`` is one LerpPos/Hpr/PosHpr/Scale/PosHprScaleInterval of one body, ``WaitSpec`` a
 ``Wait``, ``FuncSpec`` a ``Func`` (an action step), ``SoundSpec`` a ``SoundInterval``, and
-``SequenceSpec``/``ParallelSpec`` the meta intervals. :class:`IntervalHost` is the runner's side: the
-manager reads and writes body poses and fires actions and sounds through it.
+``SequenceSpec``/``ParallelSpec`` the meta intervals. The step loop plays them
+(:mod:`runner.sim.intervals`).
 
 Every spec is one Panda3D *object*: a spec used in two places (two interval ids, or twice in one
 Sequence) is built as two independent objects, each with its own play state and baked start values.
@@ -14,12 +14,11 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Any, Final, Protocol
+from typing import Any, Final
 
 __all__ = [
     "BLEND_TYPES",
     "FuncSpec",
-    "IntervalHost",
     "IntervalSpec",
     "LerpSpec",
     "ParallelSpec",
@@ -131,28 +130,3 @@ class ParallelSpec:
 
 
 IntervalSpec = LerpSpec | WaitSpec | FuncSpec | SoundSpec | SequenceSpec | ParallelSpec
-
-
-class IntervalHost(Protocol):
-    """Implemented by the runner. Every ``at`` is a simulated time no later than the current ``now``."""
-
-    def get_pos(self, body: str) -> Vec3: ...
-
-    def get_hpr(self, body: str) -> Vec3: ...  # as last set (Panda3D getHpr returns what was set)
-
-    def get_scale(self, body: str) -> float: ...
-
-    def set_pos(self, body: str, pos: Vec3) -> None: ...
-
-    def set_hpr(self, body: str, hpr: Vec3) -> None: ...
-
-    def set_scale(self, body: str, scale: float) -> None: ...
-
-    def run_actions(self, actions: Any, at: float) -> None: ...  # a Func fired
-
-    def play_sound(self, sound: str, offset: float, volume: float, loop: bool, at: float) -> None: ...
-
-    def stop_sound(self, sound: str, at: float) -> None: ...
-
-    # started/paused/resumed/finished/looped/taken_over/done
-    def interval_event(self, ival: str, what: str, at: float) -> None: ...

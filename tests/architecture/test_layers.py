@@ -1,0 +1,83 @@
+"""The house rules of docs/architecture.md, checked on the source: no import cycles, data flowing one way
+(language -> compile -> sim -> trace; reports read traces only; backends know nothing of the runner), and
+only an engine's own adapter importing that engine."""
+
+from __future__ import annotations
+
+import pytest
+
+from backends.registry import KNOWN_BACKENDS
+from tests.architecture.imports import cycles, external_imports, graph, modules
+
+GRAPH = graph()
+
+#: For each stage of the runner, the stages it must never import (directly or lazily).
+FORBIDDEN = {
+    "runner.language": ("runner.compile", "runner.sim", "runner.trace", "runner.exec", "runner.ci", "runner.cli",
+                        "runner.conformance", "reports"),
+    "runner.compile": ("runner.sim", "runner.trace", "runner.exec", "runner.ci", "runner.cli", "runner.conformance",
+                       "reports"),
+    "runner.sim": ("runner.exec", "runner.ci", "runner.cli", "runner.conformance"),
+    "runner.trace": ("runner.language", "runner.compile", "runner.sim", "runner.exec", "runner.ci", "runner.cli",
+                     "runner.conformance"),
+    "runner.exec": ("runner.ci", "runner.cli"),
+    "runner.ci": ("runner.exec", "runner.conformance"),
+    "backends": ("runner", "reports"),
+    "reports": ("runner",),
+}  # fmt: skip
+
+#: Engine modules, imported only inside their own adapter package.
+ENGINES = {"pybullet": "backends.pybullet", "pybullet_data": "backends.pybullet", "mujoco": "backends.mujoco",
+           "dartpy": "backends.dart", "panda3d": "backends.ode", "direct": "backends.ode"}  # fmt: skip
+
+
+def test_there_is_no_import_cycle() -> None:
+    found = cycles(GRAPH)
+    assert not found, "import cycles (each list imports itself through the others): " + "; ".join(map(str, found))
+
+
+def test_the_graph_sees_lazy_imports() -> None:
+    """A function-level import counts as an edge too (a cycle hidden in a function is still a cycle)."""
+    assert "runner.trace.writer" in GRAPH["runner.sim.run"]  # imported inside run_loaded
+
+
+def _in(module: str, package: str) -> bool:
+    return module == package or module.startswith(package + ".")
+
+
+@pytest.mark.parametrize("stage", sorted(FORBIDDEN))
+def test_stages_import_only_what_comes_before_them(stage: str) -> None:
+    wrong = sorted(
+        f"{a} -> {b}"
+        for a, targets in GRAPH.items()
+        if _in(a, stage)
+        for b in targets
+        for banned in FORBIDDEN[stage]
+        if _in(b, banned) and not (stage == "runner.ci" and b == "runner.cli.render")
+    )
+    assert not wrong, f"{stage} imports a later stage: " + ", ".join(wrong)
+
+
+def test_only_an_engines_adapter_imports_the_engine() -> None:
+    wrong = []
+    for name, path in modules().items():
+        for engine in external_imports(name, path) & set(ENGINES):
+            if not _in(name, ENGINES[engine]):
+                wrong.append(f"{name} imports {engine}")
+    assert not wrong, ", ".join(wrong)
+
+
+def test_engine_names_are_written_only_in_the_registry() -> None:
+    """Outside backends/ (the adapters, the registry) no module of the runner spells an engine's registry name
+    as a string literal: the registry is the one place that knows them."""
+    import ast
+
+    names = {n for n, e in KNOWN_BACKENDS.items() if not e.hidden}
+    wrong = []
+    for name, path in modules().items():
+        if name.startswith("backends"):
+            continue
+        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+            if isinstance(node, ast.Constant) and isinstance(node.value, str) and node.value in names:
+                wrong.append(f"{name}:{node.lineno} {node.value!r}")
+    assert not wrong, "engine names outside the registry: " + ", ".join(wrong)
