@@ -11,7 +11,9 @@ The tree lives at the bottom layer so that backends can raise it without importi
     │   ├── UnknownBackend                name not in the registry (exit 2)
     │   ├── UnsupportedFeature            the scenario needs a capability the backend lacks (exit 2)
     │   └── EngineFailure                 the engine raised, crashed or blew up (NaN, inf, runaway)
-    └── TraceError                        (runner.errors) a trace cannot be written or read
+    ├── TraceError                        (runner.errors) a trace cannot be written or read
+    └── InternalError                     a bug in this tool, not in the input or the engine: exit code 70
+        └── ContractViolation             a backend's contract misused (docs/architecture.md, the contract)
 
 Engine exceptions are translated at the adapter boundary with :func:`map_engine_errors`.
 """
@@ -62,6 +64,14 @@ class EngineFailure(BackendError):
         self.body = body
         self.time = time
         self.last_good = last_good
+
+
+class InternalError(PhysicsScenariosError):
+    """A bug in this tool (a broken invariant, an adapter fault): never the user's input or the engine's doing."""
+
+
+class ContractViolation(InternalError):
+    """A backend method called in a way its contract forbids (see backends/base.py)."""
 
 
 @contextmanager

@@ -11,7 +11,9 @@ The whole tree (the root and the backend branch live in :mod:`backends.errors`):
     │   ├── BackendNotInstalled       engine missing (install hint)   exit 3
     │   ├── UnsupportedFeature        capability missing              exit 2
     │   └── EngineFailure             NaN, inf, blow-up, engine error exit 3
-    └── TraceError                    a trace cannot be written/read  exit 2 (bad path) / 3
+    ├── TraceError                    a trace cannot be written/read  exit 2 (bad path) / 3
+    └── InternalError                 a bug in this tool              exit 70
+        └── ContractViolation         a backend contract misused
 """
 
 from __future__ import annotations
@@ -22,7 +24,9 @@ from dataclasses import dataclass
 from backends.errors import (
     BackendError,
     BackendNotInstalled,
+    ContractViolation,
     EngineFailure,
+    InternalError,
     PhysicsScenariosError,
     UnknownBackend,
     UnsupportedFeature,
@@ -31,8 +35,10 @@ from backends.errors import (
 __all__ = [
     "BackendError",
     "BackendNotInstalled",
+    "ContractViolation",
     "EngineFailure",
     "ExitCode",
+    "InternalError",
     "Issue",
     "PhysicsScenariosError",
     "ScenarioError",
@@ -53,6 +59,8 @@ class ExitCode(enum.IntEnum):
     BAD_INPUT = 2
     #: a backend or engine failed (missing engine, engine error, NaN or blow-up)
     ENGINE_FAILURE = 3
+    #: a bug in this tool ("internal error, please report"); BSD sysexits' EX_SOFTWARE
+    INTERNAL_ERROR = 70
     #: interrupted by SIGINT (Ctrl-C)
     INTERRUPTED = 130
     #: terminated by SIGTERM
