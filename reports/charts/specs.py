@@ -136,14 +136,14 @@ def line_chart(
         fade = {"condition": {"param": "pick", "value": 1}, "value": 0.12}
         line["encoding"]["opacity"] = fade
         markers["encoding"]["opacity"] = fade
-        hover = {"name": "hover", "select": {"type": "point", "on": "pointerover", "nearest": True, "clear":
-                 "pointerout", "fields": ["x", "s"]}}  # fmt: skip
+        # no "nearest" (its Voronoi cells lose the series name in the tooltip): wide, invisible points instead
+        hover = {"name": "hover", "select": {"type": "point", "on": "pointerover", "clear": "pointerout"}}
         layers.append({
             "params": [hover],
-            "mark": {"type": "point", "size": 70, "filled": False, "strokeWidth": 2, "clip": True},
+            "mark": {"type": "point", "size": 160, "filled": True, "clip": True, "color": "#1d232b"},
             "encoding": {
-                "x": x, "y": y, "color": {**by, "scale": color, "legend": None},
-                "opacity": {"condition": {"param": "hover", "empty": False, "value": 1}, "value": 0},
+                "x": x, "y": y,
+                "opacity": {"condition": {"param": "hover", "empty": False, "value": 0.35}, "value": 0},
                 "tooltip": [{"field": "s", "title": legend_title}, {"field": "x", "title": x_title, "format": ".4~g"},
                             {"field": "y", "title": y_title, "format": ".5~g"}],
             },
@@ -164,8 +164,8 @@ def line_chart(
 
 def _rule_layer(rule: Rule, axis: dict[str, Any]) -> dict[str, Any]:
     channel = "x" if rule.vertical else "y"
-    text: dict[str, Any] = {"type": "text", "align": "right" if not rule.vertical else "left", "baseline": "bottom",
-                            "fontSize": 10, "color": "#4d5560", "dy": -2}  # fmt: skip
+    text: dict[str, Any] = {"type": "text", "align": "right" if not rule.vertical else "left", "baseline": "top",
+                            "fontSize": 10, "color": "#4d5560", "dy": 2}  # fmt: skip
     enc_text: dict[str, Any] = {channel: {**axis, "field": "v"}, "text": {"field": "label"}}
     if rule.vertical:
         text.update({"dx": 3, "y": 0, "baseline": "top"})
