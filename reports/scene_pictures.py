@@ -24,7 +24,7 @@ import numpy as np
 from PIL import Image
 
 from reports.runs import Run
-from reports.scene3d.framing import CameraSpec, frame_camera
+from reports.scene3d.framing import CameraSpec, frame_camera, local_box
 from reports.scene3d.model import SceneModel, scene_model
 
 __all__ = ["HEIGHT", "MAX_FRAMES", "WIDTH", "CasePictures", "Picture", "Replay", "case_pictures"]
@@ -43,7 +43,7 @@ class Picture:
     label: str
     backends: list[str]
     png: bytes
-    bodies: dict[str, Any]  # name -> {"px": [x, y] | None, "rgb": [r, g, b], "plane": bool}
+    bodies: dict[str, Any]  # name -> {"px": [x, y] | None, "box": [x0, y0, x1, y1] | None, "rgb", "plane": bool}
 
 
 @dataclass
@@ -80,17 +80,40 @@ def _rgb(model: SceneModel, body: str) -> list[int]:
     return [int(round(255 * c)) for c in model.color.get(body, (0.7, 0.7, 0.7, 1.0))[:3]]
 
 
-def _centres(renderer: Any, scene: Any, camera: CameraSpec, model: SceneModel, t: float) -> list[list[float] | None]:
-    points, names = [], []
+def _footprints(renderer: Any, scene: Any, camera: CameraSpec, model: SceneModel, t: float
+                ) -> list[dict[str, Any] | None]:  # fmt: skip
+    """Per body (model order): where its centre lands in the picture and the pixel box around its projected
+    corners (clipped to the picture); None for planes and bodies without a pose."""
+    out: list[dict[str, Any] | None] = []
     for name in model.bodies:
         pose = model.pose(name, t)
-        if pose is not None and model.shape.get(name) != "plane":
-            points.append(pose[0])
-            names.append(name)
-    px = renderer.project(scene, camera, points) if points else np.zeros((0, 2))
-    found = {n: ([round(float(p[0]), 1), round(float(p[1]), 1)] if np.isfinite(p).all() else None)
-             for n, p in zip(names, px, strict=True)}  # fmt: skip
-    return [found.get(n) for n in model.bodies]
+        if pose is None or model.shape.get(name) == "plane":
+            out.append(None)
+            continue
+        low, high = local_box(model, name)
+        corners = np.array([[a[0], b[1], c[2]] for a in (low, high) for b in (low, high) for c in (low, high)])
+        world = corners @ _rotation(pose[1]).T + pose[0]
+        px = renderer.project(scene, camera, [pose[0], *world])
+        centre = px[0] if np.isfinite(px[0]).all() else None
+        seen = px[1:][np.isfinite(px[1:]).all(axis=1)]
+        box = None
+        if len(seen):
+            lo = np.clip(seen.min(axis=0), 0, [WIDTH - 1, HEIGHT - 1])
+            hi = np.clip(seen.max(axis=0), 0, [WIDTH - 1, HEIGHT - 1])
+            box = [round(float(v), 1) for v in (*lo, *hi)]
+        out.append({"px": None if centre is None else [round(float(centre[0]), 1), round(float(centre[1]), 1)],
+                    "box": box})  # fmt: skip
+    return out
+
+
+def _centres(renderer: Any, scene: Any, camera: CameraSpec, model: SceneModel, t: float) -> list[list[float] | None]:
+    return [f["px"] if f is not None else None for f in _footprints(renderer, scene, camera, model, t)]
+
+
+def _rotation(q: np.ndarray) -> np.ndarray:
+    from reports.scene3d.meshes import _matrix
+
+    return _matrix((float(q[0]), float(q[1]), float(q[2]), float(q[3])))
 
 
 def alike(a: np.ndarray, b: np.ndarray) -> bool:
@@ -132,9 +155,9 @@ def case_pictures(case: dict[str, Any], runs: dict[str, Run]) -> CasePictures:
             if same is not None:
                 same.backends.append(backend)
                 continue
-            centres = _centres(renderer, scene, camera, model, moment["t"])
-            bodies = {n: {"px": c, "rgb": _rgb(model, n), "plane": model.shape.get(n) == "plane"}
-                      for n, c in zip(model.bodies, centres, strict=True)}  # fmt: skip
+            feet = _footprints(renderer, scene, camera, model, moment["t"])
+            bodies = {n: {**(f or {"px": None, "box": None}), "rgb": _rgb(model, n),
+                          "plane": model.shape.get(n) == "plane"} for n, f in zip(model.bodies, feet, strict=True)}
             groups.append((pixels, Picture(moment["t"], moment["label"], [backend], _png(image), bodies)))
         out.pictures.append([p for _, p in groups])
     out.replay = _replay(renderer, camera, models, scenes, case)

@@ -1,11 +1,11 @@
-"""Vega-Lite charts rendered by vl-convert: static SVG and PNG, compiled Vega for the browser, and
-the Vega runtime to inline.
+"""Vega-Lite charts rendered by vl-convert: static SVG and PNG, and the Vega-Embed bundle to inline.
 
 vl-convert (the Vega project's converter) runs Vega-Lite and Vega in an embedded JavaScript engine, so
-static images need no browser and the same spec gives the same bytes. For interactive pages each chart
-is given to Vega-Embed (with Vega-Lite, Vega and the Vega tooltip), which comes from vl-convert's own
-bundle, gzipped (the page inflates it with the browser's DecompressionStream: about 300 kB instead of
-900 kB). The bundle's ``vega`` and ``vegaLite`` globals are not usable (null), ``vegaEmbed`` is.
+static images need no browser and the same spec gives the same bytes (SVG ids renumbered per document).
+For interactive pages each chart is given to Vega-Embed (with Vega-Lite, Vega and the Vega tooltip),
+which comes from vl-convert's own bundle, gzipped (the page inflates it with the browser's
+DecompressionStream: about 300 kB instead of 900 kB). The bundle's ``vega`` and ``vegaLite`` globals
+are not usable (null), ``vegaEmbed`` is.
 """
 
 from __future__ import annotations
@@ -13,6 +13,7 @@ from __future__ import annotations
 import base64
 import gzip
 import json
+import re
 from functools import lru_cache
 from importlib.metadata import version
 from typing import Any
@@ -29,9 +30,23 @@ def _text(spec: dict[str, Any]) -> str:
     return json.dumps(spec, separators=(",", ":"), allow_nan=False, sort_keys=True)
 
 
+_IDS = re.compile(r"\b(clip|gradient|pattern)(\d+)\b")
+
+
+def _renumber(text: str) -> str:
+    """Vega numbers clip paths and gradients with a counter that lives as long as the process; number them
+    from 1 in order of appearance, so a chart's SVG does not depend on the charts drawn before it."""
+    seen: dict[str, str] = {}
+
+    def one(m: re.Match[str]) -> str:
+        return seen.setdefault(m.group(0), f"{m.group(1)}{sum(k.startswith(m.group(1)) for k in seen) + 1}")
+
+    return _IDS.sub(one, text)
+
+
 def svg(spec: dict[str, Any]) -> str:
-    """The chart as an SVG document."""
-    return vlc.vegalite_to_svg(_text(spec))
+    """The chart as an SVG document (the same bytes for the same spec)."""
+    return _renumber(vlc.vegalite_to_svg(_text(spec)))
 
 
 def png(spec: dict[str, Any], scale: float = 1.0) -> bytes:
