@@ -201,3 +201,13 @@ def test_bad_input_exits_two(tmp_path: Path) -> None:
     not_a_trace.write_text("hello")
     refused = scenario("report", str(not_a_trace), "--out", str(tmp_path / "r"))
     assert refused.returncode == 2 and "is not a trace" in refused.stderr and "Traceback" not in refused.stderr
+
+
+def test_the_report_links_the_foxglove_layout_beside_the_traces(compare_run: CompareRun, tmp_path: Path) -> None:
+    traces = tmp_path / "traces"
+    shutil.copytree(compare_run.traces, traces)
+    assert "foxglove-layout.json" not in (compare_run.out / "report.html").read_text(encoding="utf-8")
+    (traces / "foxglove-layout.json").write_text("{}", encoding="utf-8")  # what `compare` leaves with its traces
+    write_report([traces], tmp_path)
+    assert '<a href="traces/foxglove-layout.json">Foxglove layout</a>' in (tmp_path / "report.html").read_text()
+    assert "[Foxglove layout](traces/foxglove-layout.json)" in (tmp_path / "report.md").read_text()
