@@ -5,6 +5,11 @@ were read from (:mod:`reports.runs`): no clock, no absolute paths, stable orderi
 traces' resolution. ``report.json`` is this document; the HTML and markdown pages are drawn from it
 (plus the traces' poses, shapes and sounds for pictures and audio). The layout is documented in
 docs/report-schema.md and checked by docs/report.schema.json; :mod:`reports.build` writes it.
+
+Each case says first how every engine, the reference included, compares with the truth where one is
+known (values the assertions state, analytic references, what joints allow: reports.truth), then how
+the rest compares with the reference engine (reports.quantities), and a headline that keeps assertions
+and agreement apart (reports.headline).
 """
 
 from __future__ import annotations
@@ -20,13 +25,17 @@ import yaml
 from backends.registry import REFERENCE_BACKEND
 from reports import divergence as dv
 from reports import trace_format as tf
-from reports.events_data import compare_events, key_moments
+from reports.events_data import compare_events
+from reports.headline import headline, merge
+from reports.moments import key_moments
+from reports.quantities import KINDS, UNITS, quantities
 from reports.runs import ReportError, Run
 from reports.trace_reader import Trace
+from reports.truth import Reference, stated_values
 
 __all__ = ["REPORT_FORMAT", "build_document", "default_reference", "round9"]
 
-REPORT_FORMAT = 1
+REPORT_FORMAT = 2
 REFERENCE_PREFERENCE = REFERENCE_BACKEND
 
 
@@ -119,65 +128,20 @@ def _trajectory(run: Run) -> dict[str, Any] | None:
     return {"t": _series(t.times), "bodies": bodies, "joints": joints}
 
 
-def _divergence(run: Run, ref: Run | None, thresholds: dict[str, float]) -> dict[str, Any]:
-    if ref is None or not ref.has_steps or ref.trace is None:
-        return {"available": False, "reason": "the reference has no recorded steps"}
-    if not run.has_steps or run.trace is None:
-        return {"available": False, "reason": "this run has no recorded steps"}
-    where = dv.align(run.trace.times, ref.trace.times)
-    if not where.times.size:
-        return {"available": False, "reason": "no simulated time in common with the reference"}
-    bodies: dict[str, Any] = {}
-    series: dict[str, Any] = {"t": _series(where.times), "bodies": {}, "joints": {}}
-    for body in _moving_bodies(ref.trace):
-        if body not in run.trace.bodies:
-            continue
-        pos_err, ang_err = dv.body_errors(run.trace, ref.trace, body, where)
-        bodies[body] = {
-            "position": dv.stats(where.times, pos_err, thresholds["position"]),
-            "angle": dv.stats(where.times, ang_err, thresholds["angle"]),
-        }
-        series["bodies"][body] = {"position": _series(pos_err), "angle": _series(ang_err)}
-    joints: dict[str, Any] = {}
-    for joint in ref.trace.joints:
-        if joint not in run.trace.joints:
-            continue
-        jt, err = dv.joint_errors(run.trace, ref.trace, joint)
-        if not np.isfinite(err).any():
-            continue
-        joints[joint] = dv.stats(jt, err, thresholds["joint"])
-        series["joints"][joint] = {"t": _series(jt), "error": _series(err)}
-
-    def worst(items: list[float | None]) -> float | None:
-        vals = [x for x in items if x is not None]
-        return max(vals) if vals else None
-
-    return {
-        "available": True,
-        "compared_from": round9(where.times[0]),
-        "compared_until": round9(where.times[-1]),
-        "samples": int(where.times.size),
-        "bodies": {b: {k: _rounded(s) for k, s in v.items()} for b, v in bodies.items()},
-        "joints": {j: _rounded(s) for j, s in joints.items()},
-        "max": {
-            "position": round9(worst([v["position"]["max"] for v in bodies.values()]) or 0.0),
-            "angle": round9(worst([v["angle"]["max"] for v in bodies.values()]) or 0.0),
-            "joint": round9(worst([v["max"] for v in joints.values()]) or 0.0),
-        },
-        "series": series,
-    }
+def _within(backend: str, qs: list[dict[str, Any]], max_divergence: float | None) -> bool | None:
+    """Whether every position quantity of ``backend`` stays within ``max_divergence`` metres (None without it)."""
+    if max_divergence is None:
+        return None
+    worst = [q["deviation"][backend]["max"] for q in qs if q["kind"] == "position" and backend in q["deviation"]]
+    return all(w is None or w <= max_divergence for w in worst)
 
 
-def _rounded(s: dict[str, Any]) -> dict[str, Any]:
-    return {k: round9(v) if isinstance(v, float) else v for k, v in s.items()}
-
-
-def _run_entry(run: Run, div: dict[str, Any] | None, max_divergence: float | None) -> dict[str, Any]:
+def _run_entry(run: Run, qs: list[dict[str, Any]], max_divergence: float | None) -> dict[str, Any]:
     verdicts = _verdicts(run)
     failed = sum(v["passed"] is not True for v in verdicts)
-    within: bool | None = None
-    if max_divergence is not None and div is not None and div.get("available"):
-        within = max(div["max"]["position"] or 0.0, div["max"]["joint"] or 0.0) <= max_divergence
+    within = _within(run.backend, qs, max_divergence)
+    diverging = [q["id"] for q in qs if run.backend in q["diverging"]]
+    firsts = [q["deviation"][run.backend]["first_over"] for q in qs if run.backend in q["diverging"]]
     return {
         "backend": run.backend,
         "engine_version": run.backend_version,
@@ -188,6 +152,7 @@ def _run_entry(run: Run, div: dict[str, Any] | None, max_divergence: float | Non
         "detail": run.detail,
         "passed": run.passed,
         "assertions": {"total": len(verdicts), "passed": len(verdicts) - failed, "failed": failed},
+        "agreement": {"diverging": diverging, "first_over": min(firsts) if firsts else None},
         "end_time": round9(run.trace.times[-1]) if run.has_steps and run.trace is not None else None,
         "outcome": run.outcome.to_json() if run.outcome is not None else None,
         "cost": _cost(run),
@@ -196,23 +161,29 @@ def _run_entry(run: Run, div: dict[str, Any] | None, max_divergence: float | Non
     }
 
 
-def _case(runs: list[Run], reference: str, thresholds: dict[str, float], max_div: float | None) -> dict[str, Any]:
+def _case(runs: list[Run], reference: str, thresholds: dict[str, float], max_div: float | None,
+          references: list[Reference]) -> dict[str, Any]:  # fmt: skip
     ref = next((r for r in runs if r.backend == reference), None)
     first = next((r for r in runs if r.trace is not None), None)
     meta = first.trace.scenario if first is not None and first.trace is not None else {}
-    divergence = {r.backend: _divergence(r, ref, thresholds) for r in runs if r.backend != reference}
-    return {
+    qs = quantities(runs, ref, thresholds, references)
+    entries = [_run_entry(r, qs, max_div) for r in runs]
+    dt = float(meta[tf.KEY_DT]) if tf.KEY_DT in meta else None
+    duration = float(meta[tf.KEY_DURATION]) if tf.KEY_DURATION in meta else None
+    case: dict[str, Any] = {
         "scenario": runs[0].scenario,
         "variant": runs[0].variant,
         "scenario_file": meta.get(tf.KEY_SCENARIO_PATH),
         "scenario_sha256": meta.get(tf.KEY_SCENARIO_SHA256),
-        "dt": float(meta[tf.KEY_DT]) if tf.KEY_DT in meta else None,
-        "duration": float(meta[tf.KEY_DURATION]) if tf.KEY_DURATION in meta else None,
+        "dt": dt,
+        "duration": duration,
         "reference": reference if ref is not None else None,
-        "runs": [_run_entry(r, divergence.get(r.backend), max_div) for r in runs],
+        "headline": headline(entries, qs),
+        "runs": entries,
         "verdicts": _verdict_matrix(runs),
+        "stated": stated_values(runs),
+        "quantities": qs,
         "trajectories": {r.backend: _trajectory(r) for r in runs},
-        "divergence": divergence,
         "events": compare_events(runs, reference),
         "sounds": {
             r.backend: [
@@ -223,8 +194,10 @@ def _case(runs: list[Run], reference: str, thresholds: dict[str, float], max_div
             else []
             for r in runs
         },
-        "key_moments": {r.backend: key_moments(r) for r in runs},
     }
+    ends = [e["end_time"] for e in entries if e["end_time"] is not None]
+    case["key_moments"] = key_moments(case, max(ends + [0.0]), dt or 0.0) if ends else []
+    return case
 
 
 def build_document(
@@ -233,19 +206,22 @@ def build_document(
     reference: str | None = None,
     max_divergence: float | None = None,
     thresholds: dict[str, float] | None = None,
+    references: Sequence[Reference] = (),
 ) -> dict[str, Any]:
     """The report as JSON data. ``reference`` defaults to :func:`default_reference` of the runs' backends;
-    ``max_divergence`` (metres for bodies, joint units for joints) makes a larger error a failure and is
-    also the threshold for "first time over" of positions and joints."""
+    ``max_divergence`` (metres) makes a run whose position quantities (bodies, sliders, joint drift) stray
+    further from their truth a failure, and is then the position threshold; ``thresholds`` override the
+    defaults per physical kind (``position`` in m, ``angle`` in rad); ``references`` are analytic truths."""
     if not runs:
         raise ReportError("no runs to report on")
     names = sorted({r.backend for r in runs})
     reference = reference or default_reference(names)
     if reference not in names:
         raise ReportError(f"the reference `{reference}` is not among the runs' backends ({', '.join(names)})")
-    limits = dict(dv.DEFAULT_THRESHOLDS, **(thresholds or {}))
+    limits = {k: dv.DEFAULT_THRESHOLDS[k] for k in KINDS}
+    limits.update({k: float(v) for k, v in (thresholds or {}).items() if k in KINDS})
     if max_divergence is not None:
-        limits["position"] = limits["joint"] = float(max_divergence)
+        limits["position"] = float(max_divergence)
     backends = [reference, *[n for n in names if n != reference]]
     rank = {b: i for i, b in enumerate(backends)}
     groups: dict[tuple[str, str], list[Run]] = {}
@@ -253,7 +229,9 @@ def build_document(
         groups.setdefault((run.scenario, run.variant), []).append(run)
     orders = {s: _variant_order([r for r in runs if r.scenario == s]) for s, _ in groups}
     keys = sorted(groups, key=lambda k: (k[0], orders[k[0]].get(k[1], len(orders[k[0]])), k[1]))
-    cases = [_case(sorted(groups[k], key=lambda r: rank[r.backend]), reference, limits, max_divergence) for k in keys]
+    truths = list(references)
+    cases = [_case(sorted(groups[k], key=lambda r: rank[r.backend]), reference, limits, max_divergence, truths)
+             for k in keys]  # fmt: skip
     all_runs = [r for c in cases for r in c["runs"]]
     return {
         "report_format": REPORT_FORMAT,
@@ -261,8 +239,10 @@ def build_document(
         "reference": reference,
         "backends": backends,
         "thresholds": {k: round9(v) for k, v in limits.items()},
+        "units": dict(UNITS),
         "max_divergence": max_divergence,
         "passed": all(r["ok"] for r in all_runs),
+        "headline": merge([c["headline"] for c in cases]),
         "summary": {
             "cases": len(cases),
             "runs": len(all_runs),

@@ -13,11 +13,9 @@ from __future__ import annotations
 from collections.abc import Sequence
 from typing import Any
 
-import numpy as np
-
 from reports.runs import Run
 
-__all__ = ["MATCH_WINDOW", "compare_events", "event_times", "key_moments", "match_times"]
+__all__ = ["MATCH_WINDOW", "compare_events", "event_times", "match_times"]
 
 #: seconds: occurrences further apart than this are not the same occurrence
 MATCH_WINDOW = 0.5
@@ -119,22 +117,3 @@ def compare_events(runs: Sequence[Run], reference: str) -> dict[str, Any]:
             )
         comparison[run.backend] = rows
     return {"names": names, "timelines": timelines, "comparison": comparison}
-
-
-def key_moments(run: Run) -> list[dict[str, Any]] | None:
-    """The moments a report pictures: the start, the first event and the end.
-
-    The first event is the first one the run raised itself (a collision, a handler's event), where
-    backends can differ; timed inputs, the same everywhere, count only when nothing else happened.
-    """
-    if run.trace is None or not run.trace.times.size:
-        return None
-    times = run.trace.times
-    later = [e for e in run.trace.events if e.source != "start"]
-    first = next((e for e in later if e.source != "input"), later[0] if later else None)
-    moments = [{"label": "start", "t": _r(times[0])}]
-    if first is not None:
-        k = int(np.clip(np.searchsorted(times, first.t - 1e-9), 0, times.size - 1))
-        moments.append({"label": f"first event: {first.name}", "t": _r(times[k])})
-    moments.append({"label": "end", "t": _r(times[-1])})
-    return moments

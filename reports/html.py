@@ -1,220 +1,198 @@
-"""report.html: one self-contained page (inline CSS, SVG and data: URIs; no script runs, no network).
+"""report.html: one self-contained page that works offline and makes no request.
 
-The comparison document is embedded whole as ``<script type="application/json" id="report-data">`` so
-the page carries its data. Per case: runs and cost, the verdict matrix, trajectories, divergence from
-the reference, events, sounds (with an audio track per backend), pictures at key moments and the
-side-by-side animation.
+At the top, the verdict in words (assertions and agreement apart, reports.headline) and a matrix of
+variants x backends; per case, a section of about two screens: runs, how every engine compares with the
+truth (stated values, analytic references, joint constraints; the reference engine's own deviation
+beside the others'), then with the reference engine where no truth is known, pictures of the moments
+that matter, and, collapsed, the side-by-side 3D replay, the charts, trajectories, events and sounds,
+every verdict, engines and cost.
+
+Pictures are PNG (static: they show without JavaScript, in mail too). Charts are Vega-Lite specs drawn by
+Vega-Embed when they come into view; the Vega bundle and the specs are inlined gzipped and inflated by
+the page itself (reports/assets/report.js). Links to the traces and the Foxglove layout are relative.
 """
 
 from __future__ import annotations
 
+import base64
+import gzip
 import json
+import math
 from html import escape
+from importlib.resources import files
 from typing import Any
 
-from reports import html_figures as fig
-from reports.plots import color_for
+from reports import html_case as hc
+from reports.audio import trace_audio
+from reports.charts import render
+from reports.charts.style import looks as make_looks
+from reports.html_charts import deviation_charts, event_charts, trajectory_charts
 from reports.runs import Run
+from reports.scene_pictures import CasePictures
 
 __all__ = ["render_html"]
 
-_CSS = """
-body{font-family:system-ui,-apple-system,"Segoe UI",sans-serif;margin:0 auto;max-width:1500px;padding:0 24px 48px;
-color:#1d232b;background:#fff}
-h1{font-size:24px;margin:22px 0 6px}h2{font-size:20px;margin:36px 0 8px;border-bottom:2px solid #dde3ea;
-padding-bottom:4px}h3{font-size:16px;margin:22px 0 8px}
-table{border-collapse:collapse;margin:6px 0 12px;font-size:13px}th,td{border:1px solid #d5dbe2;padding:4px 8px;
-text-align:left;vertical-align:top}th{background:#f1f4f7}td.num{text-align:right;font-variant-numeric:tabular-nums}
-.ok{color:#156c2f;font-weight:600}.bad{color:#b3261e;font-weight:600}.muted{color:#6a737d}
-.badge{display:inline-block;border-radius:10px;padding:1px 9px;font-size:12px;font-weight:600;color:#fff}
-.badge.ok{background:#2e8b47;color:#fff}.badge.bad{background:#c0392b;color:#fff}
-.swatch{display:inline-block;width:10px;height:10px;border-radius:2px;margin-right:6px}
-.charts{display:flex;flex-wrap:wrap;gap:10px}.charts svg{border:1px solid #e3e7ec}
-table.pictures td{padding:2px}table.pictures svg{display:block}
-div.animation .labels{display:flex;font-size:12px;font-weight:600}div.animation img{display:block;
-border:1px solid #d5dbe2}div.audio{display:flex;flex-wrap:wrap;gap:16px}figure{margin:4px 0}
-nav a{margin-right:14px}details pre{font-size:11px;background:#f6f8fa;padding:6px;max-width:900px;overflow:auto}
-"""
+LAYOUT_NAME = "foxglove-layout.json"
 
 
-def _num(v: float | None, digits: int = 4) -> str:
-    return "–" if v is None else f"{v:.{digits}g}"
+def _asset(name: str) -> str:
+    return files("reports").joinpath("assets", name).read_text(encoding="utf-8")
 
 
-def _badge(ok: bool, text: str) -> str:
-    return f'<span class="badge {"ok" if ok else "bad"}">{escape(text)}</span>'
+def _gz(text: str) -> str:
+    return base64.b64encode(gzip.compress(text.encode("utf-8"), compresslevel=9, mtime=0)).decode("ascii")
 
 
-def _runs_table(doc: dict[str, Any], case: dict[str, Any]) -> str:
-    colors = {b: color_for(i) for i, b in enumerate(doc["backends"])}
-    head = ("backend", "status", "assertions", "max position error (m)", "max angle error (rad)",
-            "max joint error", "wall time (s)", "steps/s", "real-time factor", "engine")  # fmt: skip
-    out = ["<table><tr>", *(f"<th>{h}</th>" for h in head), "</tr>"]
-    for r in case["runs"]:
-        b = r["backend"]
-        div = case["divergence"].get(b)
-        is_ref = b == case["reference"]
-        if is_ref:
-            errs = ['<td colspan="3" class="muted">reference</td>']
-        elif div and div.get("available"):
-            errs = [f'<td class="num">{_num(div["max"][k])}</td>' for k in ("position", "angle", "joint")]
-        else:
-            reason = div.get("reason", "") if div else ""
-            errs = [f'<td colspan="3" class="muted">{escape(reason)}</td>']
-        a = r["assertions"]
-        label = r["label"] + ("" if r["within_max_divergence"] is not False else " · diverged")
-        status = _badge(r["ok"], label)
-        if r["detail"]:
-            status += f'<div class="muted">{escape(r["detail"][:300])}</div>'
-        c = r["cost"]
-        out.append(
-            f'<tr><td><span class="swatch" style="background:{colors[b]}"></span>{escape(b)}</td><td>{status}</td>'
-            f'<td class="num">{a["passed"]}/{a["total"]}</td>{"".join(errs)}'
-            f'<td class="num">{_num(c["wall_seconds"])}</td><td class="num">{_num(c["steps_per_second"])}</td>'
-            f'<td class="num">{_num(c["real_time_factor"])}</td><td>{escape(r["engine_version"])}</td></tr>'
-        )
-    out.append("</table>")
-    settings = "".join(
-        f"<details><summary>{escape(r['backend'])} {escape(r['engine_version'])}: engine settings"
-        f"{' · trace ' + escape(r['trace']) if r['trace'] else ''}</summary>"
-        f"<pre>{escape(json.dumps(r['engine_settings'], indent=2, sort_keys=True))}</pre></details>"
-        for r in case["runs"]
-    )
-    return "".join(out) + settings
-
-
-def _verdict_matrix(case: dict[str, Any]) -> str:
-    matrix = case["verdicts"]
-    if not matrix["assertions"]:
-        return "<p>No verdicts were recorded.</p>"
-    backends = [r["backend"] for r in case["runs"]]
-    out = ['<table class="verdicts"><tr><th>assertion</th>', *(f"<th>{escape(b)}</th>" for b in backends), "</tr>"]
-    for name in matrix["assertions"]:
-        out.append(f"<tr><th>{escape(name)}</th>")
+def _overview(doc: dict[str, Any]) -> str:
+    backends = doc["backends"]
+    out = ['<table class="overview"><tr><th>variant</th><th>verdict</th>',
+           *(f"<th>{escape(b)}</th>" for b in backends), "</tr>"]  # fmt: skip
+    for i, case in enumerate(doc["cases"]):
+        h = case["headline"]
+        runs = {r["backend"]: r for r in case["runs"]}
+        out.append(f'<tr><th><a href="#case-{i}">{escape(case["variant"])}</a></th>'
+                   f'<td>{hc.badge(h["badge"] == "PASS", h["badge"])} {escape(h["text"])}</td>')  # fmt: skip
         for b in backends:
-            cell = matrix["cells"][name].get(b)
-            if cell is None:
-                out.append('<td class="muted">not run</td>')
+            r = runs.get(b)
+            if r is None:
+                out.append('<td class="muted">–</td>')
                 continue
-            ok = cell["passed"] is True
-            tip = f"expected {cell['expected']}" + (f"; {cell['message']}" if cell["message"] else "")
-            mark = "✓ pass" if ok else "✗ FAIL"
-            out.append(f'<td title="{escape(tip)}"><span class="{"ok" if ok else "bad"}">{mark}</span> '
-                       f"{escape(str(cell['measured']))}</td>")  # fmt: skip
+            a = r["assertions"]
+            ok = r["status"] == "passed"
+            first = r["agreement"]["first_over"]
+            agree = "agrees" if not r["agreement"]["diverging"] else f"diverges from {first:g} s"
+            label = f"{a['passed']}/{a['total']}" if ok else r["label"]
+            out.append(f'<td><span class="{"ok" if ok else "bad"}">{"✓" if ok else "✗"} {escape(label)}</span> · '
+                       f'<span class="{"ok" if not r["agreement"]["diverging"] else "bad"}">{agree}</span></td>')
         out.append("</tr>")
     out.append("</table>")
     return "".join(out)
 
 
-def _divergence_table(case: dict[str, Any]) -> str:
-    rows = []
-    for backend, d in case["divergence"].items():
-        if not d.get("available"):
-            rows.append(f'<tr><td>{escape(backend)}</td><td colspan="6" class="muted">{escape(d["reason"])}</td></tr>')
+def _thresholds(doc: dict[str, Any]) -> str:
+    t, u = doc["thresholds"], doc["units"]
+    angle = f"{t['angle']:g} {u['angle']} ({math.degrees(t['angle']):.3g}°)"
+    limit = (f" · <b>--max-divergence {doc['max_divergence']:g} m</b> (positions; a run beyond it fails)"
+             if doc["max_divergence"] is not None else "")  # fmt: skip
+    return f"thresholds: positions {t['position']:g} {u['position']}, angles {angle}{limit}"
+
+
+def _case(doc: dict[str, Any], case: dict[str, Any], index: int, runs: dict[str, Run], pictures: CasePictures,
+          links: dict[str, str | None], charts: dict[str, Any]) -> str:  # fmt: skip
+    backends = [r["backend"] for r in case["runs"]]
+    looks = make_looks(doc["backends"])
+    h = case["headline"]
+    prefix = f"c{index}"
+    end = max([r["end_time"] or 0.0 for r in case["runs"]] + [case["duration"] or 0.0])
+    dev = deviation_charts(case, looks, prefix)
+    traj = trajectory_charts(case, looks, prefix, _joint_kinds(runs))
+    ev = event_charts(case, looks, prefix, end)
+    charts.update(dev)
+    charts.update(traj)
+    charts.update(ev)
+    known, against_ref = hc.quantity_tables(case, backends)
+    stated = hc.stated_table(case, backends)
+    meta = (f"{escape(case['scenario'])} · {escape(str(case['scenario_file']))} · dt {case['dt']:g} s · "
+            f"{end:g} s simulated · reference <b>{escape(str(case['reference']))}</b>")  # fmt: skip
+    parts = [
+        f'<section class="case" id="case-{index}"><h2>{escape(case["variant"])} '
+        f'{hc.badge(h["badge"] == "PASS", h["badge"])}<span class="headline">{escape(h["text"])}</span></h2>',
+        f'<p class="meta">{meta}</p>',
+        hc.runs_table(case, looks, links),
+        "<h3>Against the truth: values the scenario states and what the joints allow (every engine, the "
+        "reference included)</h3>" if stated or known else "",
+        stated, known,
+        f"<h3>Against {escape(str(case['reference']))}'s run, where no truth is known</h3>" if against_ref else "",
+        against_ref,
+        "<h3>Moments</h3>",
+        hc.moments_html(case, pictures),
+    ]  # fmt: skip
+    if pictures.replay is not None:
+        parts.append(f"<details class='replay'><summary>3D replay: {escape(', '.join(pictures.replay.backends))} "
+                     f"side by side (time slider, play)</summary>{hc.replay_html(case, pictures, index)}</details>")
+    parts.append(_charts_details("Deviation over time", dev, open_=any(q["diverging"] for q in case["quantities"])))
+    parts.append(_charts_details("Trajectories", traj))
+    parts.append(f"<details><summary>Events and sounds</summary>{_divs(ev)}{hc.events_table(case)}"
+                 f"{_audio(runs)}</details>")  # fmt: skip
+    parts.append(f"<details><summary>Every verdict</summary>{hc.verdict_matrix(case, backends)}</details>")
+    parts.append(f"<details><summary>Engines and cost</summary>{hc.engines_table(case)}</details>")
+    parts.append("</section>")
+    return "".join(parts)
+
+
+def _joint_kinds(runs: dict[str, Run]) -> dict[str, str]:
+    from reports import trace_format as tf
+
+    for run in runs.values():
+        if run.trace is not None:
+            try:
+                specs = json.loads(run.trace.scenario.get(tf.KEY_JOINT_SPECS, "[]"))
+            except json.JSONDecodeError:
+                return {}
+            return {str(s.get("name")): str(s.get("kind")) for s in specs if isinstance(s, dict)}
+    return {}
+
+
+def _divs(charts: dict[str, Any]) -> str:
+    return "".join(f'<div class="chart" data-spec="{escape(k)}"></div>' for k in charts)
+
+
+def _charts_details(title: str, charts: dict[str, Any], open_: bool = False) -> str:
+    if not charts:
+        return ""
+    hint = "drag to pan, wheel to zoom, double-click to reset; click a legend entry to show one backend"
+    return (f"<details{' open' if open_ else ''}><summary>{title} ({len(charts)} charts)</summary>"
+            f'<p class="muted">{hint}</p><div class="charts">{_divs(charts)}</div>'
+            '<noscript>The charts need JavaScript; report.md and its images are the static version.</noscript>'
+            "</details>")  # fmt: skip
+
+
+def _audio(runs: dict[str, Run]) -> str:
+    out = []
+    for backend, run in runs.items():
+        wav = trace_audio(run.trace) if run.trace is not None else None
+        if wav is None:
             continue
-        items = [(f"{b} position (m)", s["position"]) for b, s in d["bodies"].items()]
-        items += [(f"{b} angle (rad)", s["angle"]) for b, s in d["bodies"].items()]
-        items += [(f"{j} position", s) for j, s in d["joints"].items()]
-        for what, s in items:
-            over = s["first_over"]
-            over_txt = "never" if over is None else f'<span class="bad">{over:g} s</span>'
-            rows.append(
-                f"<tr><td>{escape(backend)}</td><td>{escape(what)}</td><td class='num'>{_num(s['max'])}</td>"
-                f"<td class='num'>{_num(s['max_time'])}</td><td class='num'>{_num(s['rms'])}</td>"
-                f"<td class='num'>{s['threshold']:g}</td><td>{over_txt}</td></tr>"
-            )
-    if not rows:
-        return ""
-    head = "<tr><th>backend</th><th>value</th><th>max</th><th>at (s)</th><th>RMS</th><th>threshold</th>" \
-           "<th>first over</th></tr>"  # fmt: skip
-    return f"<table>{head}{''.join(rows)}</table>"
+        data = base64.b64encode(wav).decode()
+        out.append(f'<figure><figcaption>{escape(backend)}</figcaption><audio controls preload="metadata" '
+                   f'src="data:audio/wav;base64,{data}"></audio></figure>')  # fmt: skip
+    return f'<div class="audio">{"".join(out)}</div>' if out else '<p class="muted">No sound played.</p>'
 
 
-def _events_table(case: dict[str, Any]) -> str:
-    rows = []
-    for backend, items in case["events"]["comparison"].items():
-        for e in items:
-            ok = e["status"] == "match"
-            flags = []
-            if e["extra"]:
-                flags.append("extra at " + ", ".join(f"{t:g}" for t in e["extra"]))
-            if e["missing"]:
-                flags.append("missing at " + ", ".join(f"{t:g}" for t in e["missing"]))
-            delta = e["first_delta"]
-            rows.append(
-                f"<tr><td>{escape(backend)}</td><td>{escape(e['name'])}</td>"
-                f"<td class='num'>{e['count']}</td><td class='num'>{e['reference_count']}</td>"
-                f"<td class='num'>{_num(e['first'])}</td><td class='num'>{_num(e['reference_first'])}</td>"
-                f"<td class='num'>{'–' if delta is None else f'{delta:+.4g}'}</td>"
-                f"<td class='{'ok' if ok else 'bad'}'>{escape(e['status'])}</td>"
-                f"<td>{escape('; '.join(flags))}</td></tr>"
-            )
-    if not rows:
-        return ""
-    head = ("backend", "event", "count", "reference count", "first (s)", "reference first (s)", "Δ first (s)",
-            "status", "flags")  # fmt: skip
-    return "<table><tr>" + "".join(f"<th>{h}</th>" for h in head) + "</tr>" + "".join(rows) + "</table>"
-
-
-def _case(doc: dict[str, Any], case: dict[str, Any], index: int, runs: dict[str, Run]) -> str:
-    ok = all(r["ok"] for r in case["runs"])
-    meta = (f"reference <b>{escape(str(case['reference']))}</b> · dt {case['dt']} s · duration "
-            f"{case['duration']} s · file {escape(str(case['scenario_file']))}")  # fmt: skip
-    return "".join(
-        [
-            f'<section id="case-{index}"><h2>{escape(case["scenario"])} · {escape(case["variant"])} ',
-            _badge(ok, "all pass" if ok else "not all pass"),
-            f'</h2><p class="muted">{meta}</p>',
-            "<h3>Runs and cost</h3>",
-            _runs_table(doc, case),
-            "<h3>Verdicts</h3>",
-            _verdict_matrix(case),
-            "<h3>Trajectories</h3>",
-            f'<div class="charts">{fig.trajectory_charts(doc, case)}</div>',
-            f"<h3>Divergence from {escape(str(case['reference']))}</h3>",
-            _divergence_table(case) or "<p>Only the reference ran.</p>",
-            f'<div class="charts">{fig.divergence_charts(doc, case)}</div>',
-            "<h3>Events</h3>",
-            fig.event_timeline(doc, case),
-            _events_table(case),
-            "<h3>Sounds</h3>",
-            fig.sound_section(doc, case, runs),
-            "<h3>Pictures</h3>",
-            fig.pictures_html(case, runs),
-            "<h3>Animation</h3>",
-            fig.animation_html(case, runs),
-            "</section>",
-        ]
-    )
-
-
-def render_html(doc: dict[str, Any], runs: list[Run]) -> str:
-    """The page for ``doc``, with pictures and audio drawn from ``runs`` (the runs it was built from)."""
+def render_html(doc: dict[str, Any], runs: list[Run], pictures: list[CasePictures],
+                links: list[dict[str, str | None]], layout: str | None) -> str:  # fmt: skip
+    """The page for ``doc``; ``pictures`` and ``links`` (backend -> relative trace path) per case, ``layout``
+    the relative path of the Foxglove layout beside the traces (None if there is none)."""
     by_key = {r.key: r for r in runs}
     title = "Backend comparison: " + ", ".join(dict.fromkeys(c["scenario"] for c in doc["cases"]))
-    nav = "".join(
-        f'<a href="#case-{i}">{escape(c["variant"])} {"✓" if all(r["ok"] for r in c["runs"]) else "✗"}</a>'
-        for i, c in enumerate(doc["cases"])
-    )
-    s = doc["summary"]
-    limit = "" if doc["max_divergence"] is None else f" · max divergence {doc['max_divergence']:g}"
+    charts: dict[str, Any] = {}
     sections = []
     for i, case in enumerate(doc["cases"]):
-        case_runs = {
-            r["backend"]: by_key[(case["scenario"], case["variant"], r["backend"])]
-            for r in case["runs"]
-            if (case["scenario"], case["variant"], r["backend"]) in by_key
-        }
-        sections.append(_case(doc, case, i, case_runs))
-    data = json.dumps(doc, separators=(",", ":"), allow_nan=False, ensure_ascii=False).replace("<", "\\u003c")
+        case_runs = {r["backend"]: by_key[(case["scenario"], case["variant"], r["backend"])]
+                     for r in case["runs"] if (case["scenario"], case["variant"], r["backend"]) in by_key}  # fmt: skip
+        sections.append(_case(doc, case, i, case_runs, pictures[i], links[i], charts))
+    h = doc["headline"]
+    s = doc["summary"]
+    truth = ("each engine is measured against the truth where one is known (stated values, joint constraints, "
+             f"analytic references) and against <b>{escape(doc['reference'])}</b>'s run elsewhere")  # fmt: skip
+    layout_link = (f' · <a href="{escape(layout)}">Foxglove layout</a> (open a trace in Foxglove, then import it)'
+                   if layout else "")  # fmt: skip
+    specs = json.dumps(charts, separators=(",", ":"), sort_keys=True, allow_nan=False)
+    gate = " and --max-divergence" if doc["max_divergence"] is not None else ""
     return (
         '<!DOCTYPE html>\n<html lang="en"><head><meta charset="utf-8">'
         '<meta name="viewport" content="width=device-width, initial-scale=1">'
-        f'<link rel="icon" href="data:,"><title>{escape(title)}</title><style>{_CSS}</style></head><body>'
-        f"<h1>{escape(title)}</h1>"
-        f"<p>{_badge(doc['passed'], 'PASS' if doc['passed'] else 'FAIL')} {s['ok']}/{s['runs']} runs pass · "
-        f"reference <b>{escape(doc['reference'])}</b> · backends {escape(', '.join(doc['backends']))}{limit} · "
-        f'<span class="muted">{escape(doc["generator"])}, report format {doc["report_format"]}</span></p>'
-        f"<nav>{nav}</nav>{''.join(sections)}"
-        f'<script type="application/json" id="report-data">{data}</script></body></html>\n'
+        f'<link rel="icon" href="data:,"><title>{escape(title)}</title><style>{_asset("report.css")}</style></head>'
+        f"<body><h1>{escape(title)}</h1>"
+        f'<p class="verdict">{hc.badge(h["badge"] == "PASS", h["badge"])}<span class="headline" id="headline">'
+        f'{escape(h["text"])}</span></p>'
+        f'<p class="meta">{s["ok"]}/{s["runs"]} runs pass their assertions{gate} · '
+        f"{h['agreement']['quantities']} quantities compared, {h['agreement']['diverging']} beyond their threshold · "
+        f"{truth} · {_thresholds(doc)}{layout_link} · "
+        f'<span class="muted">{escape(doc["generator"])}, report format {doc["report_format"]}, '
+        f"charts by Vega {escape(render.versions()['vega'])}</span></p>"
+        f"{_overview(doc)}{''.join(sections)}"
+        f'<script type="application/octet-stream" id="vega-runtime">{render.runtime_gzip_base64()}</script>'
+        f'<script type="application/octet-stream" id="chart-specs">{_gz(specs)}</script>'
+        f"<script>{_asset('report.js')}</script></body></html>\n"
     )

@@ -1,39 +1,100 @@
-"""report.md: the short form, for a pull-request comment (GitHub-flavoured markdown tables)."""
+"""report.md: the short form, for a pull-request comment or an e-mail (GitHub-flavoured markdown), with
+the static pictures it shows written beside it in ``report-images/`` (PNG: the scene at the moments that
+matter, and a chart of each case's most diverging quantity)."""
 
 from __future__ import annotations
 
+import math
+import re
 from typing import Any
 
-__all__ = ["render_markdown"]
+from reports.charts import render
+from reports.charts.specs import Rule, Series, line_chart
+from reports.charts.style import looks as make_looks
+from reports.html_charts import quantity_axis, truth_name
+from reports.scene_pictures import CasePictures
 
-MAX_FAILURES = 20
+__all__ = ["IMAGES_DIR", "MAX_LINES", "markdown_images", "render_markdown"]
+
+IMAGES_DIR = "report-images"
+MAX_LINES = 20
+PICTURES_PER_CASE = 4
 
 
 def _cell(text: str) -> str:
     return text.replace("|", "\\|").replace("\n", " ")
 
 
-def _num(v: float | None) -> str:
-    if v is None:
+def _num(v: float | None, unit: str = "") -> str:
+    if v is None or not math.isfinite(v):
         return "–"
-    return f"{v:.0f}" if abs(v) >= 100 else f"{v:.3g}"
+    text = f"{v:.0f}" if abs(v) >= 100 else f"{v:.3g}"
+    return f"{text} {unit}".strip()
 
 
-def render_markdown(doc: dict[str, Any]) -> str:
+def _slug(text: str) -> str:
+    return re.sub(r"[^A-Za-z0-9._-]+", "-", text).strip("-") or "case"
+
+
+def _worst(case: dict[str, Any]) -> dict[str, Any] | None:
+    ranked = [(max((d["max"] or 0.0) for d in q["deviation"].values()) / q["threshold"], k, q)
+              for k, q in enumerate(case["quantities"]) if q["deviation"] and q["threshold"]]  # fmt: skip
+    return max(ranked, key=lambda r: (r[0], -r[1]))[2] if ranked else None
+
+
+def markdown_images(doc: dict[str, Any], pictures: list[CasePictures]) -> dict[str, bytes]:
+    """File name -> PNG bytes of every image report.md shows."""
+    out: dict[str, bytes] = {}
+    looks = make_looks(doc["backends"])
+    for i, (case, pics) in enumerate(zip(doc["cases"], pictures, strict=True)):
+        stem = f"{i:02d}-{_slug(case['variant'])}"
+        for k, groups in enumerate(pics.pictures):
+            for p in groups:
+                out[f"{stem}-m{k}-{_slug('+'.join(p.backends))}.png"] = p.png
+        q = _worst(case)
+        if q is not None:
+            series = [Series(b, s["t"], s["deviation"], looks[b]) for b, s in q["series"].items()]
+            spec = line_chart(f"{case['variant']}: {q['label']}, deviation from {truth_name(q)}", series,
+                              y_title=quantity_axis(q), rules=[Rule(q["threshold"], f"threshold {q['threshold']:g}"
+                              f" {q['unit']}")], interactive=False, width=560, height=180)  # fmt: skip
+            out[f"{stem}-deviation.png"] = render.png(spec)
+    return out
+
+
+def _case_pictures(i: int, case: dict[str, Any], images: dict[str, bytes]) -> list[str]:
+    stem = f"{i:02d}-{_slug(case['variant'])}"
+    shots = []
+    moments = case["key_moments"]
+    chosen = [k for k, m in enumerate(moments) if 0 < k < len(moments) - 1][: PICTURES_PER_CASE - 1]
+    chosen = sorted(set(chosen + [len(moments) - 1])) if moments else []
+    for k in chosen:
+        names = sorted(n for n in images if n.startswith(f"{stem}-m{k}-"))
+        for name in names:
+            who = name[len(f"{stem}-m{k}-") : -4].replace("+", ", ")
+            shots.append(f"![{case['variant']}, t = {moments[k]['t']:g} s, {who}]({IMAGES_DIR}/{name})")
+    if f"{stem}-deviation.png" in images:
+        shots.append(f"![{case['variant']}: deviation over time]({IMAGES_DIR}/{stem}-deviation.png)")
+    return shots
+
+
+def render_markdown(doc: dict[str, Any], images: dict[str, bytes], links: list[dict[str, str | None]],
+                    layout: str | None) -> str:  # fmt: skip
     backends = doc["backends"]
-    s = doc["summary"]
-    limit = "" if doc["max_divergence"] is None else f", max divergence {doc['max_divergence']:g}"
+    h, s, t = doc["headline"], doc["summary"], doc["thresholds"]
     scenarios = ", ".join(dict.fromkeys(c["scenario"] for c in doc["cases"]))
+    limit = f"; `--max-divergence` {doc['max_divergence']:g} m" if doc["max_divergence"] is not None else ""
     out = [
-        f"## Backend comparison: {scenarios} — {'✅ PASS' if doc['passed'] else '❌ FAIL'}",
+        f"## Backend comparison: {scenarios} — {'✅ PASS' if h['badge'] == 'PASS' else '❌ FAIL'}: {h['text']}",
         "",
-        f"{s['ok']}/{s['runs']} runs pass. Reference: **{doc['reference']}**{limit}. "
-        "Cells: status, assertions passed, max position error from the reference.",
+        f"{s['ok']}/{s['runs']} runs pass their assertions. Each engine is measured against the truth where one is "
+        f"known (values the assertions state, joint constraints, analytic references) and against "
+        f"**{doc['reference']}**'s run elsewhere. Thresholds: positions {t['position']:g} m, angles "
+        f"{t['angle']:.3g} rad ({math.degrees(t['angle']):.3g}°){limit}.",
         "",
-        "| variant | " + " | ".join(backends) + " |",
-        "|---|" + "---|" * len(backends),
-    ]
-    failures: list[str] = []
+        "| variant | verdict | " + " | ".join(backends) + " |",
+        "|---|---|" + "---|" * len(backends),
+    ]  # fmt: skip
+    lines: list[str] = []
     for case in doc["cases"]:
         runs = {r["backend"]: r for r in case["runs"]}
         cells = []
@@ -42,42 +103,52 @@ def render_markdown(doc: dict[str, Any]) -> str:
             if r is None:
                 cells.append("–")
                 continue
-            mark = "✅" if r["ok"] else "❌"
             a = r["assertions"]
-            text = f"{mark} {r['label']} {a['passed']}/{a['total']}"
-            div = case["divergence"].get(b)
-            if div and div.get("available"):
-                text += f", {_num(div['max']['position'])} m"
-            if r["within_max_divergence"] is False:
-                text += " (diverged)"
-            cells.append(_cell(text))
+            ok = r["status"] == "passed"
+            agree = "agrees" if not r["agreement"]["diverging"] else f"diverges from {r['agreement']['first_over']:g} s"
+            cells.append(_cell(f"{'✅' if ok else '❌'} {a['passed']}/{a['total']}{'' if ok else ' ' + r['label']}"
+                               f" · {agree}"))  # fmt: skip
             for name in case["verdicts"]["assertions"]:
                 v = case["verdicts"]["cells"][name].get(b)
                 if v is not None and v["passed"] is not True:
-                    failures.append(
-                        f"- `{case['variant']}` · {b}: **{name}** measured {v['measured']}, expected {v['expected']}"
-                    )
+                    lines.append(f"- `{case['variant']}` · {b}: **{name}** measured {v['measured']}, "
+                                 f"expected {v['expected']}")  # fmt: skip
             if r["outcome"] is not None or r["status"] not in ("passed", "failed"):
                 detail = f": {r['detail'][:200]}" if r["detail"] else ""
-                failures.append(f"- `{case['variant']}` · {b}: {r['label']}{_cell(detail)}")
-        out.append(f"| {_cell(case['variant'])} | " + " | ".join(cells) + " |")
-    if failures:
-        out += ["", "### Problems", ""]
-        out += failures[:MAX_FAILURES]
-        if len(failures) > MAX_FAILURES:
-            out.append(f"- … and {len(failures) - MAX_FAILURES} more (see report.html)")
+                lines.append(f"- `{case['variant']}` · {b}: {r['label']}{_cell(detail)}")
+        ch = case["headline"]
+        mark = "✅" if ch["badge"] == "PASS" else "❌"
+        out.append(f"| {_cell(case['variant'])} | {mark} {_cell(ch['text'])} | " + " | ".join(cells) + " |")
+        for q in case["quantities"]:
+            if q["diverging"]:
+                who = ", ".join(f"{b} {_num(q['deviation'][b]['max'], q['unit'])}" for b in q["diverging"])
+                lines.append(f"- `{case['variant']}` · **{q['label']}** (against {truth_name(q)}, threshold "
+                             f"{q['threshold']:g} {q['unit']}): {who}, from {q['first_over']:g} s")  # fmt: skip
+    if lines:
+        out += ["", "### Problems and divergences", ""]
+        out += lines[:MAX_LINES]
+        if len(lines) > MAX_LINES:
+            out.append(f"- … and {len(lines) - MAX_LINES} more (see report.html)")
+    pics = [(case, _case_pictures(i, case, images)) for i, case in enumerate(doc["cases"])]
+    if any(shots for _, shots in pics):
+        out += ["", "### Pictures", ""]
+        for case, shots in pics:
+            if shots:
+                out += [f"**{case['variant']}**", "", " ".join(shots), ""]
     out += ["", "### Cost (sum over cases)", "", "| backend | engine | wall time (s) | steps/s | real-time factor |",
             "|---|---|---|---|---|"]  # fmt: skip
     for b in backends:
         of_b = [r for c in doc["cases"] for r in c["runs"] if r["backend"] == b]
-        walls = [r["cost"]["wall_seconds"] for r in of_b]
-        known = [r for r, w in zip(of_b, walls, strict=True) if w]
+        known = [r for r in of_b if r["cost"]["wall_seconds"]]
         wall = sum(r["cost"]["wall_seconds"] for r in known) if known else None
         steps = sum(r["cost"]["steps"] for r in known)
         sim = sum(r["cost"]["simulated_seconds"] or 0.0 for r in known)
         version = of_b[0]["engine_version"] if of_b else ""
-        sps = steps / wall if wall else None
-        rtf = sim / wall if wall else None
-        out.append(f"| {b} | {_cell(version)} | {_num(wall)} | {_num(sps)} | {_num(rtf)} |")
-    out += ["", "Full report with plots, pictures, animation and sounds: `report.html`; data: `report.json`.", ""]
+        out.append(f"| {b} | {_cell(version)} | {_num(wall)} | {_num(steps / wall if wall else None)} | "
+                   f"{_num(sim / wall if wall else None)} |")  # fmt: skip
+    traces = sorted({v for case_links in links for v in case_links.values() if v})
+    out += ["", f"Traces ({len(traces)}): " + ", ".join(f"[{p.rsplit('/', 1)[-1]}]({p})" for p in traces[:8])
+            + (" …" if len(traces) > 8 else "") + (f" · [Foxglove layout]({layout})" if layout else ""),
+            "", "Full report with interactive charts, the 3D replay and sounds: `report.html`; data: `report.json`.",
+            ""]  # fmt: skip
     return "\n".join(out)

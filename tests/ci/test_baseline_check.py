@@ -57,7 +57,13 @@ def test_changed_surface_fails_at_the_first_contact(
     assert "note: the scenario file differs" in output
     svg = out / GOLDEN.replace(".golden", ".divergence.svg")
     root = ET.parse(svg).getroot()
-    assert root.tag.endswith("svg") and len(root.findall("{http://www.w3.org/2000/svg}path")) == 2
+    ns = "{http://www.w3.org/2000/svg}"
+    marks = [g.get("class", "") for g in root.iter(f"{ns}g")]
+    assert root.tag == f"{ns}svg" and marks.count("mark-line role-mark layer_1_marks") == 2  # baseline and run
+    assert any(c.startswith("mark-area role-mark") for c in marks)  # the tolerance band
+    texts = {t.text for t in root.iter(f"{ns}text")}
+    assert {f"first divergence {contact:g} s", "this run", "t (s)"} <= texts
+    assert any(t and t.startswith("box.") and t.endswith(("(m)", "(m/s)")) for t in texts)  # the axis names its unit
     assert f"plot: {svg}" in output
 
     outcome = check_case(load_scenario(copy, "door-stays-closed"), "pybullet", factory_goldens, None)

@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import csv
 import json
+import re
 import xml.etree.ElementTree as ET
 from pathlib import Path
 
@@ -65,9 +66,13 @@ def test_sweep_writes_the_cross_product_table_and_plot(tmp_path: Path) -> None:
     assert [r["pile-settles"] for r in rows] == ["FAIL", "FAIL"]
     assert float(rows[1]["max(crate.pos.z)"]) == table["rows"][1]["metrics"]["max(crate.pos.z)"]
     svg = ET.fromstring((tmp_path / "sweep.svg").read_text())
-    lines = [e for e in svg.iter() if e.tag.endswith("polyline")]
+    ns = "{http://www.w3.org/2000/svg}"
+    lines = [g for g in svg.iter(f"{ns}g") if g.get("class", "").startswith("mark-line role-mark")]
     assert len(lines) == 2  # one per numeric metric, one series (one backend, one variant)
-    assert all(len(e.get("points", "").split()) == 2 for e in lines)
+    paths = [p.get("d", "") for g in lines for p in g.iter(f"{ns}path")]
+    assert len(paths) == 2 and all(d.count("L") == 1 for d in paths)  # two points each: count 2 and 4
+    texts = {t.text for t in svg.iter(f"{ns}text")}
+    assert {"count", "max(crate.pos.z)", "box_pile.yaml: sweep over count"} <= texts
 
 
 def test_variants_and_backends_multiply_and_a_text_parameter_has_no_plot(tmp_path: Path) -> None:
@@ -124,9 +129,11 @@ def test_plot_draws_one_line_per_series_against_the_first_numeric_parameter() ->
     ]  # fmt: skip
     svg = plot({"file": "x.yaml", "parameters": ["params.count", "surface.mu"], "metrics": ["top"], "rows": rows})
     root = ET.fromstring(svg)
-    lines = [e for e in root.iter() if e.tag.endswith("polyline")]
+    ns = "{http://www.w3.org/2000/svg}"
+    groups = [g for g in root.iter(f"{ns}g") if g.get("class", "").startswith("mark-line role-mark")]
+    lines = [p.get("d", "") for g in groups for p in g.iter(f"{ns}path")]
     assert len(lines) == 2  # mu=0.5 and mu=1.0
-    first = [tuple(map(float, p.split(","))) for p in lines[0].get("points", "").split()]
+    first = [(float(a), float(b)) for a, b in re.findall(r"([-0-9.e]+),([-0-9.e]+)", lines[0])]
     assert [x for x, _ in first] == sorted(x for x, _ in first) and len(first) == 3
     assert first[0][1] > first[-1][1]  # higher values are drawn higher (smaller y)
     assert "mu=0.5" in svg and "mu=1.0" in svg

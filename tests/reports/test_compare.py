@@ -7,6 +7,7 @@ and crash); the extra runs here take about 4 s more.
 from __future__ import annotations
 
 import json
+import os
 import shutil
 from pathlib import Path
 
@@ -47,15 +48,41 @@ def test_crashing_backend_is_marked_and_the_others_are_complete(compare_run: Com
         "factory-physics__door-stays-closed__pybullet.cost.json",
     }
     md = (compare_run.out / "report.md").read_text()
-    assert "| door-stays-closed | ✅ passed 9/9 | ❌ crashed (signal 11) 0/0" in md
+    row = next(line for line in md.splitlines() if line.startswith("| door-stays-closed |"))
+    cells = [c.strip() for c in row.strip("|").split("|")]
+    assert cells[1].startswith("❌ 1 run crashed (signal 11)")  # the case's verdict names the crash
+    assert cells[2] == "✅ 9/9 · agrees"  # ode, the reference: its own deviations are within the thresholds
+    assert cells[3].startswith("❌ 0/0 crashed (signal 11)")
+    assert cells[4].startswith("✅ 9/9 · diverges from")  # pybullet: the box bounces differently on landing
+    h = compare_run.doc["headline"]
+    assert h["badge"] == "FAIL" and h["text"].startswith("1 run crashed (signal 11) · ")
+    assert h["assertions"] == {"passed": False, "failed": 0, "total": 18, "runs_not_finished": 1,
+                               "not_finished": ["crashed (signal 11)"]}  # fmt: skip
 
 
-def test_report_from_the_traces_reproduces_report_json_exactly(compare_run: CompareRun, tmp_path: Path) -> None:
-    again = scenario("report", str(compare_run.traces), "--out", str(tmp_path / "dir"))
+def _outputs(folder: Path) -> dict[str, bytes]:
+    return {p.relative_to(folder).as_posix(): p.read_bytes() for p in sorted(folder.rglob("*"))
+            if p.is_file() and "traces" not in p.relative_to(folder).parts}  # fmt: skip
+
+
+def test_report_from_the_traces_reproduces_every_file_exactly(compare_run: CompareRun, tmp_path: Path) -> None:
+    """`scenario report` on a comparison's traces, into the comparison's folder (a new process), rebuilds the same
+    bytes: report.json, report.html, report.md and every picture. Elsewhere, report.json is the same too (the
+    page's links to the traces are relative, so they follow the folder)."""
+    before = _outputs(compare_run.out)
+    assert {"report.json", "report.html", "report.md"} <= set(before)
+    assert any(name.startswith("report-images/") and name.endswith(".png") for name in before)
+    again = scenario("report", str(compare_run.traces), "--out", str(compare_run.out))
     assert again.returncode == 1, again.stderr
-    original = (compare_run.out / "report.json").read_bytes()
+    assert _outputs(compare_run.out) == before
+    original = before["report.json"]
+    elsewhere = scenario("report", str(compare_run.traces), "--out", str(tmp_path / "dir"))
+    assert elsewhere.returncode == 1, elsewhere.stderr
     assert (tmp_path / "dir" / "report.json").read_bytes() == original
-    assert (tmp_path / "dir" / "report.html").read_bytes() == (compare_run.out / "report.html").read_bytes()
+    html = (tmp_path / "dir" / "report.html").read_text(encoding="utf-8")
+    ode = compare_run.traces / "factory-physics__door-stays-closed__ode.mcap"
+    assert f'href="{Path(os.path.relpath(ode, tmp_path / "dir")).as_posix()}"' in html  # links follow the folder
+    assert 'href="traces/factory-physics__door-stays-closed__ode.mcap"' in before["report.html"].decode()
     # the same from a copy of the files elsewhere, traces named one by one (outcome and cost files are
     # found beside them), through the function the command calls
     copy = tmp_path / "copy"
@@ -88,24 +115,50 @@ def test_verdict_matrix_and_events_match_the_traces(compare_run: CompareRun) -> 
     assert crash["status"] == "missing" and crash["missing"] == pytest.approx(ode_lands)
 
 
-def test_divergence_measures_odes_soft_slider_and_free_flight(compare_run: CompareRun) -> None:
+def _quantity(case: dict, qid: str) -> dict:
+    return next(q for q in case["quantities"] if q["id"] == qid)
+
+
+def test_odes_soft_slider_is_odes_own_deviation_from_the_joint(compare_run: CompareRun) -> None:
+    """The door hangs on a slider to the environment, so it may only move along x: that is the truth, and ODE's
+    soft joint sagging under the door is ODE's deviation from it (not the others' from ODE)."""
     case = compare_run.doc["cases"][0]
-    pb = case["divergence"]["pybullet"]
-    # PyBullet holds the door rigidly at z = 0; ODE's slider lets it sink until the spring carries the door
-    # (overdamped, time constant about c/k = (1 - ERP) h / ERP = 0.16 s), then door + box once the box rests
-    errors = dict(zip(pb["series"]["t"], pb["series"]["bodies"]["door"]["position"], strict=True))
+    door = _quantity(case, "door:joint-distance")
+    assert door["truth"]["kind"] == "constraint" and door["unit"] == "m" and door["threshold"] == 0.01
+    ode = door["series"]["ode"]
+    errors = dict(zip(ode["t"], ode["deviation"], strict=True))
+    # the soft joint is a spring k = ERP / (h CFM); overdamped, it settles within about (1 - ERP) h / ERP = 0.16 s
     assert errors[0.92] == pytest.approx(DOOR_MASS * G / ODE_JOINT_STIFFNESS, rel=0.01)
     assert errors[6.0] == pytest.approx((DOOR_MASS + BOX_MASS) * G / ODE_JOINT_STIFFNESS, rel=0.01)
-    door = pb["bodies"]["door"]["position"]
-    assert door["max"] == max(errors.values()) and door["max_time"] == pytest.approx(1.0)  # the box's impact
+    assert door["deviation"]["ode"]["max"] == max(errors.values()) and door["deviation"]["ode"]["first_over"] is None
+    assert door["deviation"]["pybullet"]["max"] == 0.0  # PyBullet's slider holds the door exactly on its line
+    assert not any(q["id"] == "door:position" for q in case["quantities"])  # no longer blamed on the others
+    slider = _quantity(case, "slider:position")  # the door's free motion: against ODE's run
+    assert slider["truth"] == {"kind": "reference", "backend": "ode"} and "ode" not in slider["deviation"]
+    assert slider["deviation"]["pybullet"]["max"] < 1e-4
+
+
+def test_free_flight_agrees_with_the_reference_until_the_crash(compare_run: CompareRun) -> None:
+    case = compare_run.doc["cases"][0]
+    box = _quantity(case, "box:position")
+    crash = box["series"]["crash"]
     # the crash backend integrates free flight exactly like ODE (semi-implicit Euler): until the box
     # reaches the door (z below 0.2 m at t = 0.96 s) they agree to single precision
-    crash = case["divergence"]["crash"]
-    t = crash["series"]["t"]
-    flight = [e for ti, e in zip(t, crash["series"]["bodies"]["box"]["position"], strict=True) if ti < 0.95]
+    flight = [e for ti, e in zip(crash["t"], crash["deviation"], strict=True) if ti < 0.95]
     assert len(flight) == 24 and max(flight) < 1e-5
-    assert crash["compared_until"] == pytest.approx(1.0)
-    assert crash["bodies"]["box"]["position"]["first_over"] == pytest.approx(1.0)  # the box falls through
+    assert crash["t"][-1] == pytest.approx(1.0)
+    assert box["deviation"]["crash"]["first_over"] == pytest.approx(1.0)  # the box falls through
+
+
+def test_stated_values_show_every_engine_against_the_scenario(compare_run: CompareRun) -> None:
+    case = compare_run.doc["cases"][0]
+    rests = next(r for r in case["stated"] if r["name"] == "box-rests-on-the-door")
+    ode = rests["cells"]["ode"]
+    # the box rests 0.2 m up on a rigid door; ODE's door sags, and the box with it (see the slider test)
+    assert ode["target"] == 0.2 and ode["tolerance"] == 0.01
+    assert ode["deviation"] == pytest.approx(-(DOOR_MASS + BOX_MASS) * G / ODE_JOINT_STIFFNESS, rel=0.02)
+    assert abs(rests["cells"]["pybullet"]["deviation"]) < 1e-3
+    assert [m["t"] for m in case["key_moments"]][0] == 0.0 and case["key_moments"][-1]["t"] == 6.0
 
 
 def test_cost_comes_from_the_cost_files(compare_run: CompareRun) -> None:
@@ -148,3 +201,13 @@ def test_bad_input_exits_two(tmp_path: Path) -> None:
     not_a_trace.write_text("hello")
     refused = scenario("report", str(not_a_trace), "--out", str(tmp_path / "r"))
     assert refused.returncode == 2 and "is not a trace" in refused.stderr and "Traceback" not in refused.stderr
+
+
+def test_the_report_links_the_foxglove_layout_beside_the_traces(compare_run: CompareRun, tmp_path: Path) -> None:
+    traces = tmp_path / "traces"
+    shutil.copytree(compare_run.traces, traces)
+    assert "foxglove-layout.json" not in (compare_run.out / "report.html").read_text(encoding="utf-8")
+    (traces / "foxglove-layout.json").write_text("{}", encoding="utf-8")  # what `compare` leaves with its traces
+    write_report([traces], tmp_path)
+    assert '<a href="traces/foxglove-layout.json">Foxglove layout</a>' in (tmp_path / "report.html").read_text()
+    assert "[Foxglove layout](traces/foxglove-layout.json)" in (tmp_path / "report.md").read_text()

@@ -34,5 +34,11 @@ def test_the_schema_refuses_a_wrong_report(compare_run: CompareRun) -> None:
     doc["cases"][0]["runs"][0]["status"] = "fine"
     assert not validator.is_valid(doc)
     doc = copy.deepcopy(compare_run.doc)
-    del doc["cases"][0]["divergence"]["pybullet"]["max"]
+    del doc["cases"][0]["quantities"][0]["deviation"]["ode"]["max"]
+    assert not validator.is_valid(doc)
+    doc = copy.deepcopy(compare_run.doc)
+    doc["headline"]["badge"] = "OK"
+    assert not validator.is_valid(doc)
+    doc = copy.deepcopy(compare_run.doc)
+    doc["cases"][0]["quantities"][0]["truth"] = {"kind": "reference"}
     assert not validator.is_valid(doc)

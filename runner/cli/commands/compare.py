@@ -47,7 +47,8 @@ def configure(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument(
         "--max-divergence", type=float, metavar="VALUE",
-        help="fail a backend whose body positions (m) or joint positions drift further than VALUE from the reference",
+        help="fail a backend whose positions (m: bodies, sliders, joint drift) stray further than VALUE from their "
+        "truth (the reference backend where no truth is known); also the report's position threshold",
     )  # fmt: skip
     parser.add_argument(
         "--timeout", type=float, default=DEFAULT_TIMEOUT, metavar="S",
@@ -119,9 +120,10 @@ def execute(args: argparse.Namespace, out: Console, err: Console) -> int:
         return ExitCode.BAD_INPUT
     if args.junit is not None:
         _write_junit(args.junit, runs, cases)
-    s = files.document["summary"]
+    s, h = files.document["summary"], files.document["headline"]
     colour = "green" if files.passed else "red"
-    out.print(f"[bold {colour}]{s['ok']}/{s['runs']} runs pass[/] (reference {files.document['reference']})")
+    out.print(f"[bold {colour}]{s['ok']}/{s['runs']} runs pass[/] (reference {files.document['reference']}): "
+              f"{h['badge']}, {h['text']}")  # fmt: skip
     out.print(f"report: {files.html}  (also {files.markdown.name}, {files.json.name}; traces in {args.out / 'traces'})")
     return ExitCode.OK if files.passed else ExitCode.ASSERTION_FAILED
 

@@ -31,7 +31,6 @@ from runner.errors import UsageError
 NAME = "sweep"
 HELP = "run a scenario over a grid of parameter values (x variants x backends) and tabulate the results"
 DEFAULT_OUT = Path("traces/sweep")
-_PALETTE = ("#1f77b4", "#d62728", "#2ca02c", "#ff7f0e", "#9467bd", "#8c564b", "#e377c2", "#17becf")
 
 
 def configure(p: argparse.ArgumentParser) -> None:
@@ -291,8 +290,13 @@ def _numeric(v: Any) -> bool:
 
 
 def plot(table: dict[str, Any]) -> str:
-    """An SVG: one panel per numeric metric (or the share of assertions passed) against the first numeric
-    parameter, one line per combination of the other parameters, variant and backend. '' if none is numeric."""
+    """An SVG (reports.charts): one panel per numeric metric (or the share of assertions passed) against the first
+    numeric parameter, one line per combination of the other parameters, variant and backend. '' if none is
+    numeric."""
+    from reports.charts import render
+    from reports.charts.specs import Series, line_chart, stack
+    from reports.charts.style import look
+
     rows = table["rows"]
     xs = [n for n in table["parameters"] if all(_numeric(r["params"][n]) for r in rows)]
     if not xs or not rows:
@@ -303,14 +307,9 @@ def plot(table: dict[str, Any]) -> str:
     for r in rows:
         rest = ", ".join(f"{n.removeprefix('params.')}={r['params'][n]}" for n in table["parameters"] if n != x)
         key = " · ".join(s for s in (rest, r["variant"], r["backend"]) if s)
-        series.setdefault(key, []).append((float(r["params"][x]), r))
-    width, panel_h, left, top = 640, 220, 70, 30
-    height = top + len(panels) * (panel_h + 40) + 18 * len(series) + 10
-    parts = [f'<svg xmlns="http://www.w3.org/2000/svg" width="{width}" height="{height}" font-family="sans-serif" '
-             f'font-size="11"><rect width="100%" height="100%" fill="white"/>',
-             f'<text x="{left}" y="18" font-size="13">{_esc(table["file"])}: sweep over {_esc(x)}</text>']  # fmt: skip
-    for k, name in enumerate(panels):
-        y0 = top + k * (panel_h + 40)
+        series.setdefault(key or "all", []).append((float(r["params"][x]), r))
+    charts = []
+    for name in panels:
 
         def value(r: dict[str, Any], name: str = name) -> float | None:
             if name == "assertions passed":
@@ -319,47 +318,11 @@ def plot(table: dict[str, Any]) -> str:
             v = r["metrics"][name]
             return float(v) if _numeric(v) else None
 
-        points = [(px, value(r)) for pts in series.values() for px, r in pts]
-        ys = [v for _, v in points if v is not None]
-        x_lo, x_hi = _span([px for px, _ in points])
-        y_lo, y_hi = _span(ys or [0.0])
-        plot_w = width - left - 20
-
-        def sx(v: float, lo: float = x_lo, hi: float = x_hi, w: int = plot_w) -> float:
-            return left + (v - lo) / (hi - lo) * w
-
-        def sy(v: float, lo: float = y_lo, hi: float = y_hi, y0: int = y0) -> float:
-            return y0 + panel_h - (v - lo) / (hi - lo) * panel_h
-
-        parts.append(f'<rect x="{left}" y="{y0}" width="{plot_w}" height="{panel_h}" fill="none" stroke="#888"/>')
-        parts.append(f'<text x="{left}" y="{y0 - 6}">{_esc(name)}</text>')
-        for t in (x_lo, (x_lo + x_hi) / 2, x_hi):
-            parts.append(f'<text x="{sx(t):.1f}" y="{y0 + panel_h + 14}" text-anchor="middle">{t:.4g}</text>')
-        for t in (y_lo, (y_lo + y_hi) / 2, y_hi):
-            parts.append(f'<text x="{left - 6}" y="{sy(t) + 4:.1f}" text-anchor="end">{t:.4g}</text>')
-        for c, pts in enumerate(series.values()):
-            colour = _PALETTE[c % len(_PALETTE)]
-            coords = [(sx(px), sy(v)) for px, r in sorted(pts, key=lambda p: p[0]) if (v := value(r)) is not None]
-            if len(coords) > 1:
-                line = " ".join(f"{a:.1f},{b:.1f}" for a, b in coords)
-                parts.append(f'<polyline points="{line}" fill="none" stroke="{colour}" stroke-width="1.5"/>')
-            parts += [f'<circle cx="{a:.1f}" cy="{b:.1f}" r="3" fill="{colour}"/>' for a, b in coords]
-    y = top + len(panels) * (panel_h + 40)
-    for c, key in enumerate(series):
-        colour = _PALETTE[c % len(_PALETTE)]
-        parts.append(f'<rect x="{left}" y="{y + 18 * c}" width="10" height="10" fill="{colour}"/>'
-                     f'<text x="{left + 16}" y="{y + 18 * c + 9}">{_esc(key or "all")}</text>')  # fmt: skip
-    parts.append("</svg>")
-    return "\n".join(parts) + "\n"
-
-
-def _span(values: list[float]) -> tuple[float, float]:
-    lo, hi = min(values), max(values)
-    if hi - lo < 1e-12 * max(1.0, abs(hi)):
-        pad = max(abs(hi) * 0.05, 0.5)
-        return lo - pad, hi + pad
-    return lo, hi
-
-
-def _esc(text: str) -> str:
-    return str(text).replace("&", "&amp;").replace("<", "&lt;").replace(">", "&gt;")
+        lines = []
+        for c, (key, pts) in enumerate(series.items()):
+            ordered = sorted(pts, key=lambda p: p[0])
+            lines.append(Series(key, [p for p, _ in ordered], [value(r) for _, r in ordered], look(c)))
+        y_title = "share of assertions passed (0 to 1)" if name == "assertions passed" else f"{name} (metric value)"
+        charts.append(line_chart(name, lines, x_title=x.removeprefix("params."), y_title=y_title, interactive=False,
+                                 legend_title="case", height=200))  # fmt: skip
+    return render.svg(stack(f"{table['file']}: sweep over {x.removeprefix('params.')}", charts))
