@@ -136,19 +136,15 @@ def get_backend(name: str) -> type[Backend]:
 
 
 def check_capabilities(cls: type[Backend], world: CompiledWorld) -> None:
-    """Refuse a world that needs what the backend cannot do, before anything is built."""
+    """Refuse a world that needs what the backend cannot do, or options it does not take, before anything
+    is built (UnsupportedFeature, exit 2)."""
     missing = sorted(c.value for c in world.required_capabilities() - cls.capabilities)
     if missing:
         raise UnsupportedFeature(
             f"Scenario `{world.name}` needs {', '.join(missing)}, which backend `{cls.name}` does not "
             f"support. Supported: {', '.join(sorted(c.value for c in cls.capabilities))}."
         )
-    unknown = sorted(set(world.options_for(cls.name)) - set(cls.option_keys))
-    if unknown:
-        raise UnsupportedFeature(
-            f"Unknown option(s) {', '.join(unknown)} in backend_options.{cls.name}. "
-            f"Accepted: {', '.join(sorted(cls.option_keys)) or 'none'}."
-        )
+    cls.Options.parse(world.options_for(cls.name), cls.name)  # unknown keys and bad values, before building
 
 
 def create_backend(name: str, world: CompiledWorld) -> Backend:

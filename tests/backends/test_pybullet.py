@@ -12,7 +12,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 import pytest
 
-from backends.errors import EngineFailure, UnsupportedFeature
+from backends.errors import UnsupportedFeature
 from backends.registry import create_backend, is_installed
 from backends.types import (
     CompiledWorld,
@@ -247,29 +247,6 @@ def test_bad_option_values_are_refused(options: dict[str, object]) -> None:
     world = CompiledWorld(**{**base.__dict__, "backend_options": {"pybullet": options}})
     with pytest.raises(UnsupportedFeature, match="Invalid `backend_options.pybullet"):
         create_backend("pybullet", world)
-
-
-def test_reset_of_a_jointed_body_is_refused() -> None:
-    with create_backend("pybullet", w.lab_door()) as sim, pytest.raises(UnsupportedFeature, match="door"):
-        sim.reset_body(0, (0.0, 0.0, 0.0), w.IDENTITY, ZERO, ZERO)
-
-
-def test_blow_up_names_the_body() -> None:
-    with create_backend("pybullet", w.free_fall()) as sim:
-        sim.apply_force(0, (0.0, 0.0, math.inf), ZERO)
-        sim.step()
-        sim.step()
-        with pytest.raises(EngineFailure, match="`box`") as info:
-            sim.body_states()
-    assert info.value.body == "box" and info.value.backend == "pybullet"
-
-
-def test_close_is_idempotent_and_final() -> None:
-    sim = create_backend("pybullet", w.free_fall())
-    sim.close()
-    sim.close()
-    with pytest.raises(EngineFailure, match="pybullet: step 1 failed"):
-        sim.step()
 
 
 def test_initial_velocity_of_a_link_becomes_its_joint_rate() -> None:
