@@ -61,7 +61,7 @@ class PyBulletBackend(Backend):
 
     @classmethod
     def engine_label(cls) -> str:
-        return f"pybullet {cls.engine_version()} (Bullet, released with it; API {p.getAPIVersion()})"
+        return f"Bullet (pybullet {cls.engine_version()})"  # Bullet exposes no version of its own here
 
     def _build(self) -> None:
         self._c = int(p.connect(p.DIRECT))

@@ -18,7 +18,7 @@ pytest.importorskip("panda3d.ode")
 
 from panda3d.ode import OdeMass  # noqa: E402 - after the skip guard
 
-from backends.errors import UnsupportedFeature  # noqa: E402
+from backends.errors import EngineFailure, UnsupportedFeature  # noqa: E402
 from backends.geometry import quat_from_axis_angle  # noqa: E402
 from backends.ode import OdeBackend  # noqa: E402
 from backends.types import (  # noqa: E402
@@ -379,3 +379,34 @@ def test_capsule_against_cylinder_is_refused() -> None:
     cyl = w.body("cyl", Shape(ShapeKind.CYLINDER, radius=0.1, length=0.2), (0.0, 0.0, 0.5), motion=Motion.STATIC)
     with pytest.raises(UnsupportedFeature, match="capsule-cylinder"):
         make_backend("ode", w.world("capcyl", [cap, cyl]))
+
+
+def test_panda3d_assertion_is_an_engine_failure() -> None:
+    """A failed panda3d assertion (nassert) inside the step raises AssertionError: it leaves as EngineFailure."""
+    with make_backend("ode", w.free_fall()) as sim:
+        body = sim._scene.bodies[0]  # type: ignore[attr-defined]
+        sim._stepper = lambda h: body.getJoint(99)  # type: ignore[attr-defined]  # index < get_num_joints()
+        with pytest.raises(EngineFailure, match=r"^ode: step 1 failed: AssertionError: index < get_num_joints") as info:
+            sim.step()
+        assert isinstance(info.value.__cause__, AssertionError)
+
+
+def test_odes_messages_are_drained_not_printed(capfd: pytest.CaptureFixture[str]) -> None:
+    """CFM 1e-10 (double-precision ODE's default, refused as an option) makes this build's LCP fail on the
+    lab's door and box: ODE says "LCP internal error" through dMessage. The adapter keeps the lines for
+    drain_messages(), each once, and nothing reaches the process's stderr (fd 2)."""
+    with make_backend("ode", lab_scene()) as sim:
+        sim._scene.world.setCfm(1e-10)  # type: ignore[attr-defined]
+        lines: list[str] = []
+        for _ in range(50):
+            sim.step()
+            lines += sim.drain_messages()
+        assert sim.drain_messages() == []
+    assert lines and all(line.startswith("ODE Message 3: LCP internal error, s <= 0 (s=") for line in lines)
+    assert "ODE Message" not in capfd.readouterr().err
+
+
+def test_engine_label_names_ode_and_panda3d() -> None:
+    from importlib.metadata import version
+
+    assert OdeBackend.engine_label() == f"ODE 0.13.1, single precision (panda3d {version('panda3d')})"

@@ -12,7 +12,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 import pytest
 
-from backends.errors import UnsupportedFeature
+from backends.errors import EngineFailure, UnsupportedFeature
 from backends.registry import create_backend, is_installed
 from backends.types import (
     CompiledWorld,
@@ -295,3 +295,14 @@ def test_non_neighbours_in_a_tree_collide() -> None:
         sim.step()
         pairs = [(k.a, k.b) for k in sim.contacts()]
     assert pairs == [(0, 2)]
+
+
+def test_pybullets_own_error_is_an_engine_failure() -> None:
+    """The client lost behind the adapter's back: pybullet raises pybullet.error, which leaves as EngineFailure."""
+    import pybullet as p
+
+    with create_backend("pybullet", w.free_fall()) as sim:
+        p.disconnect(physicsClientId=sim._c)  # type: ignore[attr-defined]
+        with pytest.raises(EngineFailure, match=r"^pybullet: step 1 failed: error: Not connected") as info:
+            sim.step()
+        assert isinstance(info.value.__cause__, p.error)
