@@ -15,28 +15,66 @@ contact transmitted over the step divided by ``dt``.
 from __future__ import annotations
 
 from collections.abc import Sequence
+from typing import Any
 
 import numpy as np
 
 from ..types import Contact, new_contact
 
+#: Up to this many points the grouping is a Python loop; beyond it numpy's sort and columns are faster
+#: (both give the same numbers: the same sums in the same order, the same depth fold).
+NUMPY_FROM = 64
 
-def group_by_pair(n_bodies: int, first: np.ndarray, second: np.ndarray, depth: np.ndarray,
-                  force: np.ndarray) -> list[Contact]:  # fmt: skip
+
+#: A per-point column: a list from Python reads, or an array from numpy ones.
+Column = Sequence[Any] | np.ndarray
+
+
+def group_by_pair(n_bodies: int, first: Column, second: Column, depth: Column, force: Column) -> list[Contact]:
     """One Contact per body pair of the points (``first[i]``, ``second[i]`` in either order), sorted.
 
-    ``depth`` is each point's penetration (>= 0 when touching; NaN is ignored unless all are NaN),
-    ``force`` its normal force (NaN when the engine cannot say).
+    ``depth`` is each point's penetration (>= 0 when touching; NaN is ignored), ``force`` its normal force
+    (NaN when the engine cannot say).
     """
-    if len(first) == 0:
+    count = len(first)
+    if count == 0:
         return []
+    if count < NUMPY_FROM:
+        return _grouped_in_python(n_bodies, _as_list(first), _as_list(second), _as_list(depth), _as_list(force))
+    return _grouped_with_numpy(n_bodies, np.asarray(first), np.asarray(second), np.asarray(depth, float),
+                               np.asarray(force, float))  # fmt: skip
+
+
+def _as_list(values: Column) -> list[Any]:
+    return values.tolist() if isinstance(values, np.ndarray) else list(values)
+
+
+def _grouped_in_python(n: int, first: list[int], second: list[int], depth: list[float],
+                       force: list[float]) -> list[Contact]:  # fmt: skip
+    rows: dict[int, list[Any]] = {}
+    for a, b, d, f in zip(first, second, depth, force, strict=True):
+        if a > b:
+            a, b = b, a
+        row = rows.get(a * n + b)
+        if row is None:
+            rows[a * n + b] = [int(a), int(b), 1, d if d > 0.0 else 0.0, f]  # NaN and -0.0 fold to 0.0
+        else:
+            row[2] += 1
+            if d > row[3]:
+                row[3] = d
+            row[4] += f
+    return [new_contact((r[0], r[1], r[2], float(r[3]), float(r[4]))) for _, r in sorted(rows.items())]
+
+
+def _grouped_with_numpy(n_bodies: int, first: np.ndarray, second: np.ndarray, depth: np.ndarray,
+                        force: np.ndarray) -> list[Contact]:  # fmt: skip
     lo, hi = np.minimum(first, second), np.maximum(first, second)
     key = lo.astype(np.int64) * n_bodies + hi
     order = np.argsort(key, kind="stable")  # a pair's points keep the engine's order
-    key, depth, force = key[order], np.asarray(depth, float)[order], np.asarray(force, float)[order]
+    key, depth, force = key[order], depth[order], force[order]
     start = np.flatnonzero(np.concatenate(([True], key[1:] != key[:-1])))
     count = np.diff(np.append(start, len(key)))
-    if np.isnan(depth).any():  # NaN spreads through np.maximum; Python's max() fold skips it
+    if np.isnan(depth).any():  # NaN spreads through np.maximum; the fold from 0.0 skips it
         values = depth.tolist()
         deepest = [max(0.0, *values[s : s + c]) for s, c in zip(start.tolist(), count.tolist(), strict=True)]
     else:

@@ -25,7 +25,6 @@ from __future__ import annotations
 import math
 from typing import Any
 
-import numpy as np
 from panda3d.core import EventQueue
 from panda3d.ode import (
     OdeContact,
@@ -234,7 +233,7 @@ def _summaries(records: list[_Record], pool: list[OdeJointFeedback], n_bodies: i
             # A contact row's force is along its normal and the friction rows are orthogonal to it, so
             # |F1 . n| is that contact's normal force whichever body is the joint's first.
             force += [abs(fb.getForce1().dot(geom.getNormal())) for fb, geom in zip(pool[slot:], geoms, strict=False)]
-    return group_by_pair(n_bodies, np.array(first), np.array(second), np.array(depth), np.array(force))
+    return group_by_pair(n_bodies, first, second, depth, force)
 
 
 def _mu(surface: Surface) -> float:

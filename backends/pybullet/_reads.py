@@ -4,8 +4,9 @@ PyBullet has no batched state call for separate multibodies: every base costs
 ``getBasePositionAndOrientation`` and ``getBaseVelocity`` (about 1 us each, 0.21 ms for the 100-box
 pile [checked]). What is left to trim is the Python around them: the calls are driven by ``map`` and the
 floats go straight into one array (0.04 ms for the pile, against 0.08 ms for a loop that concatenates
-tuples). ``getContactPoints`` costs about 0.45 us per point itself; the six fields a contact needs are
-taken from each point by one ``itemgetter`` into one array, and the kit groups them per body pair.
+tuples). ``getContactPoints`` costs about 0.45 us per point itself; for many points the six fields a
+contact needs are taken from each point by one ``itemgetter`` into one array, for a few they go into
+plain lists, and the kit groups them per body pair.
 """
 
 from __future__ import annotations
@@ -18,7 +19,7 @@ from typing import Any
 import numpy as np
 import pybullet as p
 
-from .._kit import group_by_pair
+from .._kit.contacts import NUMPY_FROM, group_by_pair
 from ..types import Contact
 
 #: One base's row: position (3), orientation x y z w (4), linear (3) and angular (3) velocity.
@@ -43,16 +44,27 @@ class ContactReader:
     PyBullet also reports near points)."""
 
     def __init__(self, lut: list[list[int]], n_bodies: int) -> None:
-        self._lut = np.array(lut, dtype=np.int64)  # (multibody, link + 1) -> body index
+        self._lut = lut  # (multibody, link + 1) -> body index
+        self._lut_array = np.array(lut, dtype=np.int64)
         self._n = n_bodies
 
     def __call__(self, points: Sequence[Any]) -> list[Contact]:
         if not points:
             return []
+        if len(points) < NUMPY_FROM:  # a few points: plain lists, no array to build
+            return self._few(points)
         rows = np.array(list(map(_FIELDS, points)), dtype=np.float64)
         touching = rows[:, 4] <= 0.0
         if not touching.all():
             rows = rows[touching]
         ids = rows[:, :4].astype(np.int64)
-        first, second = self._lut[ids[:, 0], ids[:, 2] + 1], self._lut[ids[:, 1], ids[:, 3] + 1]
+        lut = self._lut_array
+        first, second = lut[ids[:, 0], ids[:, 2] + 1], lut[ids[:, 1], ids[:, 3] + 1]
         return group_by_pair(self._n, first, second, -rows[:, 4], rows[:, 5])
+
+    def _few(self, points: Sequence[Any]) -> list[Contact]:
+        lut = self._lut
+        kept = [cp for cp in points if cp[8] <= 0.0]
+        first = [lut[cp[1]][cp[3] + 1] for cp in kept]
+        second = [lut[cp[2]][cp[4] + 1] for cp in kept]
+        return group_by_pair(self._n, first, second, [-cp[8] for cp in kept], [cp[9] for cp in kept])

@@ -175,3 +175,26 @@ def test_the_registry_checks_options_without_the_engine() -> None:
     ) + "print(sorted({'pybullet', 'mujoco', 'dartpy', 'panda3d'} & set(sys.modules)))\n"
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
     assert out.strip() == "[]"
+
+
+def test_python_and_numpy_grouping_give_the_same_numbers() -> None:
+    """Few points are grouped in a Python loop, many with numpy: the same counts, depths and sums, bit for bit."""
+    from backends._kit import contacts as kit
+
+    def same(x: list[Contact], y: list[Contact]) -> bool:
+        return len(x) == len(y) and all(
+            a[:4] == b[:4] and math.copysign(1.0, a.depth) == math.copysign(1.0, b.depth) == 1.0
+            and (a.normal_force == b.normal_force or (math.isnan(a.normal_force) and math.isnan(b.normal_force)))
+            for a, b in zip(x, y, strict=True)
+        )
+
+    rng = np.random.default_rng(7)
+    for size in (1, 5, kit.NUMPY_FROM - 1, kit.NUMPY_FROM, 300):
+        first, second = rng.integers(0, 6, size), rng.integers(0, 6, size)
+        depth = np.where(rng.random(size) < 0.2, -0.0, rng.random(size) * 1e-3)
+        force = rng.random(size) * 100.0
+        force[rng.random(size) < 0.1] = math.nan if size % 2 else 0.0
+        python = kit._grouped_in_python(6, first.tolist(), second.tolist(), depth.tolist(), force.tolist())
+        numpy = kit._grouped_with_numpy(6, first, second, depth, force)
+        assert same(python, numpy), size
+        assert same(group_by_pair(6, first, second, depth, force), python), size
