@@ -46,9 +46,18 @@ class OdeBackend(Backend):
         return _native.label()
 
     def _build(self) -> None:
-        world = self.world
         _native.install()
         self._messages: list[str] = []
+        _native.attach()
+        try:
+            self._build_scene()
+        except BaseException:
+            _native.detach()
+            raise
+        self._messages.extend(_native.take())
+
+    def _build_scene(self) -> None:
+        world = self.world
         self._scene = build_scene(world, self.options)
         self._collider = Collider(
             self._scene, self.options.collide, self.options.contact_forces, f"ode-contacts-{id(self):x}"
@@ -67,7 +76,6 @@ class OdeBackend(Backend):
         self._motor_mean = SubstepMean(len(world.joints))
         self._substep_contacts = SubstepContacts(world.substeps)
         self._states: BodyStates | None = None  # fresh states, dropped by anything that moves a body
-        self._messages.extend(_native.take())
 
     def _settings(self) -> dict[str, Any]:
         o = self.options
@@ -247,4 +255,5 @@ class OdeBackend(Backend):
     # --- lifetime ------------------------------------------------------------------------------------
 
     def _close(self) -> None:
+        _native.detach()
         destroy_scene(self._scene)

@@ -3,7 +3,9 @@
 * **Messages.** ODE reports recoverable trouble with ``dMessage`` (e.g. ``LCP internal error, s <= 0``
   from ``dWorldStep`` on big piles), whose default handler prints to the process's stderr. ``install()``
   sets ODE's message handler (``dSetMessageHandler``, process-wide) to one that keeps each message as a
-  line; the adapter hands them to the runner through ``Backend.drain_messages()``. Only messages: ODE's
+  line while an adapter is open (``attach``/``detach``; otherwise it prints the line as ODE would); the
+  adapter takes the lines after each of its steps and hands them to the runner through
+  ``Backend.drain_messages()``. Only messages: ODE's
   error and debug handlers (``dError``, ``dDebug``, which abort the process) keep printing to stderr, so
   an abort still says why. A message's printf arguments are formatted with the C library's
   ``vsnprintf`` where a ``va_list`` travels as a pointer (x86-64, Windows, macOS); elsewhere the line
@@ -28,6 +30,7 @@ _BUFFER = 1024
 _Handler = ctypes.CFUNCTYPE(None, ctypes.c_int, ctypes.c_char_p, ctypes.c_void_p)
 _lines: list[str] = []
 _state: dict[str, object] = {}  # "library", "handler": kept alive for the process's lifetime
+_open = [0]  # adapters attached: while none is, a message is printed to stderr as ODE's default handler does
 
 
 def _library() -> ctypes.CDLL | None:
@@ -65,13 +68,17 @@ def _make_handler() -> object:
     def handler(number: int, text: bytes | None, args: int | None) -> None:
         message = (text or b"").decode("utf-8", "replace")
         try:
-            if vsnprintf is not None and text:
+            if vsnprintf is not None and text and b"%" in text:  # arguments to format
                 buffer = ctypes.create_string_buffer(_BUFFER)
                 vsnprintf(buffer, _BUFFER, text, args)
                 message = buffer.value.decode("utf-8", "replace")
         except Exception:  # noqa: BLE001 - a C callback must not raise; keep the unformatted text
             pass
-        _lines.append(f"ODE Message {number}: {message.strip()}")
+        line = f"ODE Message {number}: {message.strip()}"
+        if _open[0]:
+            _lines.append(line)
+        else:  # no adapter to hand it to (panda3d.ode used directly): where ODE would have put it
+            sys.stderr.write(f"\n{line}\n")
 
     return _Handler(handler)
 
@@ -89,6 +96,16 @@ def install() -> bool:
     lib.dSetMessageHandler(handler)
     _state["handler"] = handler
     return True
+
+
+def attach() -> None:
+    """An adapter opened: keep ODE's messages for it."""
+    _open[0] += 1
+
+
+def detach() -> None:
+    """An adapter closed."""
+    _open[0] = max(0, _open[0] - 1)
 
 
 def take() -> list[str]:

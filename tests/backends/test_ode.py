@@ -410,3 +410,19 @@ def test_engine_label_names_ode_and_panda3d() -> None:
     from importlib.metadata import version
 
     assert OdeBackend.engine_label() == f"ODE 0.13.1, single precision (panda3d {version('panda3d')})"
+
+
+def test_odes_messages_outside_an_open_backend_are_printed_as_ode_would(capfd: pytest.CaptureFixture[str]) -> None:
+    """While a backend is open its ODE messages are kept for it; with none open (panda3d.ode used directly)
+    they reach stderr as ODE's own handler would print them. ODE's handler is called here as ODE calls it
+    (a message without printf arguments)."""
+    from backends.ode import _native
+
+    with make_backend("ode", w.free_fall()) as sim:
+        handler = _native._state["handler"]
+        handler(3, b"kept for the backend", None)  # type: ignore[operator]
+        assert sim.drain_messages() == ["ODE Message 3: kept for the backend"]
+    capfd.readouterr()
+    handler(3, b"no backend open", None)  # type: ignore[operator]
+    assert "ODE Message 3: no backend open" in capfd.readouterr().err
+    assert _native.take() == []
