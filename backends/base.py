@@ -1,11 +1,11 @@
-"""The backend contract: one small abstract class that every engine adapter implements.
+"""The backend contract: one abstract class that every engine adapter implements.
 
 A backend is built from a :class:`~backends.types.CompiledWorld` and then driven by the runner, once
 per scenario step, in this order (docs/semantics.md, "Step order")::
 
     set_kinematic(...) / set_motor(...) / apply_force(...) / reset_body(...)   # inputs for this step
     step()                                                                     # advance by world.dt
-    body_states(), joint_states(), contacts()                                  # read the result
+    body_states(), joint_states(), contacts(), drain_messages()                # read the result
 
 Semantics every backend must honour (ODE's):
 
@@ -13,32 +13,71 @@ Semantics every backend must honour (ODE's):
   ``dt / substeps``; no damping the scenario did not ask for; gravity as given.
 * ``apply_force`` accumulates a force and torque at the body's centre of mass (world frame) that act
   during the **next** ``step()`` only, over all its substeps, and are then cleared (ODE's dBodyAddForce).
+  On a static or kinematic body it has no effect.
 * ``set_motor`` sets a joint's velocity motor: target rate ``vel`` with force bounded by ``fmax``;
   ``fmax == 0`` switches it off. It persists until changed.
 * ``set_kinematic`` places a kinematic body at a pose *now* and gives it the velocity it moves with
-  during the next ``step()``; after that step the body is exactly at
-  ``pos + lin_vel*dt`` with ``quat`` rotated by ``ang_vel*dt``, and bodies resting on it were
-  carried by friction. A kinematic body not set again keeps its last velocity for the next step
-  (the runner always sets it, to zero when it stops).
-* ``reset_body`` teleports a dynamic body and sets its velocities (the lab's reset on ``mouse1``). Bodies held by
-  joints are not reset (the runner refuses such a scenario before it runs).
-* ``contacts()`` lists body pairs touching (distance <= 0) during the last ``step()`` (in any of its substeps);
-  ``normal_force`` is the step's mean. Pairs of static and kinematic bodies never collide with each other.
-* ``JointStates.motor_force`` is the mean over the step's substeps.
-* A quaternion and its negation are the same orientation; callers must not rely on the sign.
+  during the next ``step()`` (linear and angular: what rests on it is carried by friction, also when it
+  turns); after that step the body is exactly at ``pos + lin_vel*dt`` with ``quat`` rotated by
+  ``ang_vel*dt``. A kinematic body not set again keeps its last velocity for the next step (the runner
+  always sets it, to zero when it stops).
+* ``reset_body`` teleports a dynamic body that no joint holds and sets its velocities (the lab's reset).
+* ``contacts()`` lists the body pairs whose contacts the engine **used during the last step**: found at
+  the start of each engine step (at the poses before it), touching (distance <= 0), in any of the step's
+  substeps. Per pair: the most points and the deepest penetration of any substep, and the mean normal
+  force over the substeps (the transmitted impulse / dt). Static and kinematic bodies never touch each
+  other. ``JointStates.motor_force`` is likewise the mean over the step's substeps.
 * States are read fresh after the step (never a stale cache), positions in metres, quaternions
-  (w, x, y, z), velocities in the world frame.
-* Engine exceptions leave the adapter as :class:`~backends.errors.EngineFailure`.
+  (w, x, y, z; a quaternion and its negation are the same orientation), velocities in the world frame.
+* ``drain_messages()`` returns what the engine printed about itself since the last call (lines).
+
+Edge cases, the same on every backend (checked here, before any engine call):
+
+* a body or joint index outside the world, ``set_kinematic`` on a body that is not kinematic,
+  ``reset_body`` on a body that is not dynamic or is held by a joint, ``set_motor`` on a joint without a
+  motor (ball, fixed) or with a non-finite ``vel`` or an ``fmax`` that is not a finite number >= 0, and
+  every call but ``close()`` after ``close()``: :class:`~backends.errors.ContractViolation`
+  (an ``InternalError``: the runner never does this for any scenario);
+* ``close()`` is idempotent;
+* the engine's own exceptions (``engine_errors``) leave every method as
+  :class:`~backends.errors.EngineFailure`; any other exception is a bug in the adapter and propagates as
+  it is.
+
+Blow-ups (NaN, inf, runaway speeds) are detected by the runner, once, for every engine
+(``runner.sim.session.MAX_SPEED``); an adapter reports only what its engine itself calls fatal.
+
+An adapter implements the underscored hooks (``_build``, ``_step``, ``_body_states``, ...); the public
+methods here validate, translate engine errors and keep the inputs every adapter needs (the kinematic
+track, the one-step forces: see :mod:`backends._kit`).
 """
 
 from __future__ import annotations
 
 import abc
-from collections.abc import Mapping
+import math
 from types import TracebackType
-from typing import Any, ClassVar
+from typing import Any, ClassVar, NoReturn
 
-from .types import BodyStates, Capability, CompiledWorld, Contact, JointStates, Quat, Vec3
+import numpy as np
+
+from ._kit.motion import KinematicPose, KinematicTrack, OneStepForces
+from ._kit.options import BackendOptions
+from .errors import ContractViolation, engine_failure
+from .types import (
+    BodyStates,
+    Capability,
+    CompiledWorld,
+    Contact,
+    JointKind,
+    JointSpec,
+    JointStates,
+    Motion,
+    Quat,
+    Vec3,
+)
+
+#: Joint kinds that have a coordinate and so a velocity motor (a universal joint's first axis).
+MOTORISED = frozenset({JointKind.SLIDER, JointKind.HINGE, JointKind.UNIVERSAL})
 
 
 class Backend(abc.ABC):
@@ -50,11 +89,27 @@ class Backend(abc.ABC):
     engine_distribution: ClassVar[str]
     #: What this backend can simulate; checked before a run starts.
     capabilities: ClassVar[frozenset[Capability]]
-    #: Keys accepted in the scenario's ``backend_options.<name>`` block, with a one-line meaning each.
-    option_keys: ClassVar[Mapping[str, str]] = {}
+    #: The scenario's ``backend_options.<name>`` block, typed (backends._kit.options).
+    Options: ClassVar[type[BackendOptions]] = BackendOptions
+    #: The exception types the engine itself raises; only these become EngineFailure.
+    engine_errors: ClassVar[tuple[type[BaseException], ...]] = ()
 
     def __init__(self, world: CompiledWorld) -> None:
         self.world = world
+        self.options = self.Options.parse(world.options_for(self.name), self.name)
+        self.kinematic = KinematicTrack(world)
+        self.forces = OneStepForces()
+        self.steps = 0  # scenario steps taken
+        self._motion = [b.motion for b in world.bodies]
+        self._held = _held_by_joints(world)
+        self._closed = True  # until built
+        try:
+            self._build()
+        except self.engine_errors as exc:
+            raise engine_failure(self.name, "building the world", exc) from exc
+        self._closed = False
+
+    # --- versions ----------------------------------------------------------------------------------
 
     @classmethod
     def engine_version(cls) -> str:
@@ -66,44 +121,122 @@ class Backend(abc.ABC):
         except PackageNotFoundError:
             return "not installed"
 
+    @classmethod
+    def engine_label(cls) -> str:
+        """The engine's own name and version, and its wrapper's where they differ (``scenario backends``)."""
+        return f"{cls.engine_distribution} {cls.engine_version()}"
+
+    # --- the contract ------------------------------------------------------------------------------
+
     def settings(self) -> dict[str, Any]:
         """Effective engine settings worth recording in a trace (solver, tolerances, options)."""
-        return {}
+        self._open("settings")
+        try:
+            return self._settings()
+        except self.engine_errors as exc:
+            raise engine_failure(self.name, "reading settings", exc) from exc
 
-    @abc.abstractmethod
     def step(self) -> None:
         """Advance the world by ``world.dt``."""
+        self._open("step")
+        try:
+            self._step()
+        except self.engine_errors as exc:
+            raise engine_failure(self.name, f"step {self.steps + 1}", exc) from exc
+        self.forces.clear()
+        self.kinematic.advance(self.world.dt)
+        self.steps += 1
 
-    @abc.abstractmethod
     def body_states(self) -> BodyStates:
         """Fresh states of all bodies, in ``world.bodies`` order."""
+        self._open("body_states")
+        try:
+            return self._body_states()
+        except self.engine_errors as exc:
+            raise engine_failure(self.name, "reading body states", exc) from exc
 
-    @abc.abstractmethod
     def joint_states(self) -> JointStates:
         """Fresh states of all joints, in ``world.joints`` order."""
+        self._open("joint_states")
+        try:
+            return self._joint_states()
+        except self.engine_errors as exc:
+            raise engine_failure(self.name, "reading joint states", exc) from exc
 
-    @abc.abstractmethod
     def contacts(self) -> list[Contact]:
-        """Touching body pairs after the last step, sorted by (a, b)."""
+        """The pairs in contact during the last step, sorted by (a, b)."""
+        self._open("contacts")
+        try:
+            return self._contacts()
+        except self.engine_errors as exc:
+            raise engine_failure(self.name, "reading contacts", exc) from exc
 
-    @abc.abstractmethod
     def set_kinematic(self, body: int, pos: Vec3, quat: Quat, lin_vel: Vec3, ang_vel: Vec3) -> None:
         """Place kinematic body ``body`` now and set the velocity it moves with during the next step."""
+        self._open("set_kinematic")
+        if self._motion_of(body, "set_kinematic") is not Motion.KINEMATIC:
+            self._refuse(f"set_kinematic: body `{self.world.bodies[body].name}` is {self._motion[body].value}, "
+                         f"not kinematic")  # fmt: skip
+        pose = self.kinematic.set(body, pos, quat, lin_vel, ang_vel)
+        try:
+            self._place_kinematic(body, pose)
+        except self.engine_errors as exc:
+            raise engine_failure(self.name, f"placing kinematic body `{self.world.bodies[body].name}`", exc) from exc
 
-    @abc.abstractmethod
     def set_motor(self, joint: int, vel: float, fmax: float) -> None:
         """Set the velocity motor of ``joint`` (``fmax == 0``: off)."""
+        self._open("set_motor")
+        spec = self._joint(joint, "set_motor")
+        if spec.kind not in MOTORISED:
+            self._refuse(f"set_motor: joint `{spec.name}` is a {spec.kind.value} joint, which has no motor")
+        if not (math.isfinite(vel) and math.isfinite(fmax) and fmax >= 0.0):
+            self._refuse(f"set_motor: joint `{spec.name}` needs a finite vel and a finite fmax >= 0; "
+                         f"got vel={vel!r}, fmax={fmax!r}")  # fmt: skip
+        try:
+            self._set_motor(joint, float(vel), float(fmax))
+        except self.engine_errors as exc:
+            raise engine_failure(self.name, f"setting the motor of `{spec.name}`", exc) from exc
 
-    @abc.abstractmethod
     def apply_force(self, body: int, force: Vec3, torque: Vec3) -> None:
-        """Add a force and torque (world frame, at the COM) for the next step only."""
+        """Add a force and torque (world frame, at the COM) for the next step only (none on a body that
+        is not dynamic)."""
+        self._open("apply_force")
+        if self._motion_of(body, "apply_force") is Motion.DYNAMIC:
+            self.forces.add(body, force, torque)
 
-    @abc.abstractmethod
     def reset_body(self, body: int, pos: Vec3, quat: Quat, lin_vel: Vec3, ang_vel: Vec3) -> None:
-        """Teleport a dynamic body and set its velocities."""
+        """Teleport a dynamic body that no joint holds and set its velocities."""
+        self._open("reset_body")
+        motion = self._motion_of(body, "reset_body")
+        name = self.world.bodies[body].name
+        if motion is not Motion.DYNAMIC:
+            self._refuse(f"reset_body: body `{name}` is {motion.value}; only dynamic bodies are reset")
+        if body in self._held:
+            self._refuse(f"reset_body: body `{name}` is held by joint `{self._held[body]}`; jointed bodies are "
+                         f"not reset")  # fmt: skip
+        try:
+            self._reset_body(body, pos, quat, lin_vel, ang_vel)
+        except self.engine_errors as exc:
+            raise engine_failure(self.name, f"resetting `{name}`", exc) from exc
 
-    def close(self) -> None:  # noqa: B027 - optional hook
-        """Release the engine (idempotent)."""
+    def drain_messages(self) -> list[str]:
+        """What the engine printed about itself since the last call, one line each (default: nothing)."""
+        self._open("drain_messages")
+        return self._drain_messages()
+
+    def close(self) -> None:
+        """Release the engine. Idempotent; every other method refuses afterwards."""
+        if self._closed:
+            return
+        self._closed = True
+        try:
+            self._close()
+        except self.engine_errors as exc:
+            raise engine_failure(self.name, "closing", exc) from exc
+
+    @property
+    def closed(self) -> bool:
+        return self._closed
 
     def __enter__(self) -> Backend:
         return self
@@ -115,3 +248,78 @@ class Backend(abc.ABC):
         tb: TracebackType | None,
     ) -> None:
         self.close()
+
+    # --- what an adapter implements ----------------------------------------------------------------
+
+    @abc.abstractmethod
+    def _build(self) -> None:
+        """Create the engine's world from ``self.world`` (options already in ``self.options``)."""
+
+    @abc.abstractmethod
+    def _step(self) -> None:
+        """Advance by ``world.dt``: apply ``self.forces`` for every substep, move the kinematic bodies along
+        ``self.kinematic`` (ending each at ``pose.at(dt)``). The base then clears the forces and advances
+        the track."""
+
+    @abc.abstractmethod
+    def _body_states(self) -> BodyStates: ...
+
+    @abc.abstractmethod
+    def _joint_states(self) -> JointStates: ...
+
+    @abc.abstractmethod
+    def _contacts(self) -> list[Contact]: ...
+
+    @abc.abstractmethod
+    def _set_motor(self, joint: int, vel: float, fmax: float) -> None: ...
+
+    @abc.abstractmethod
+    def _reset_body(self, body: int, pos: Vec3, quat: Quat, lin_vel: Vec3, ang_vel: Vec3) -> None: ...
+
+    def _place_kinematic(self, body: int, pose: KinematicPose) -> None:  # noqa: B027 - optional hook
+        """A kinematic body was given a new pose and velocity (``self.kinematic[body]``): impose it now."""
+
+    def _settings(self) -> dict[str, Any]:
+        return {"options": self.options.as_dict()} if self.Options.keys() else {}
+
+    def _drain_messages(self) -> list[str]:
+        return []
+
+    def _close(self) -> None:  # noqa: B027 - optional hook
+        """Release the engine's resources (called once)."""
+
+    # --- checks ------------------------------------------------------------------------------------
+
+    def _open(self, method: str) -> None:
+        if self._closed:
+            self._refuse(f"{method}() called after close()")
+
+    def _refuse(self, what: str) -> NoReturn:
+        raise ContractViolation(f"{self.name}: {what} (backends/base.py, the contract)")
+
+    def _motion_of(self, body: int, method: str) -> Motion:
+        if not (_is_index(body) and 0 <= body < len(self._motion)):
+            self._refuse(f"{method}: no body {body!r} (the world has {len(self._motion)})")
+        return self._motion[body]
+
+    def _joint(self, joint: int, method: str) -> JointSpec:
+        joints = self.world.joints
+        if not (_is_index(joint) and 0 <= joint < len(joints)):
+            self._refuse(f"{method}: no joint {joint!r} (the world has {len(joints)})")
+        return joints[joint]
+
+
+def _is_index(value: object) -> bool:
+    """A Python or numpy integer (not a bool, not a float that happens to be whole)."""
+    return (type(value) is int) or isinstance(value, np.integer)
+
+
+def _held_by_joints(world: CompiledWorld) -> dict[int, str]:
+    """Body index -> the name of a joint that holds it (either end, the environment excluded)."""
+    index = {b.name: i for i, b in enumerate(world.bodies)}
+    held: dict[int, str] = {}
+    for joint in world.joints:
+        for name in (joint.body, joint.other):
+            if name is not None and name in index:
+                held.setdefault(index[name], joint.name)
+    return held

@@ -10,12 +10,14 @@ The tree lives at the bottom layer so that backends can raise it without importi
     │   ├── BackendNotInstalled           engine missing; carries an install hint
     │   ├── UnknownBackend                name not in the registry (exit 2)
     │   ├── UnsupportedFeature            the scenario needs a capability the backend lacks (exit 2)
-    │   └── EngineFailure                 the engine raised, crashed or blew up (NaN, inf, runaway)
+    │   └── EngineFailure                 the engine raised its own error, reported a fatal state, or blew up
     ├── TraceError                        (runner.errors) a trace cannot be written or read
     └── InternalError                     a bug in this tool, not in the input or the engine: exit code 70
-        └── ContractViolation             a backend's contract misused (docs/architecture.md, the contract)
+        └── ContractViolation             a backend's contract misused (backends/base.py, "Edge cases")
 
-Engine exceptions are translated at the adapter boundary with :func:`map_engine_errors`.
+Engine exceptions are translated at the adapter boundary (backends/base.py, every contract method): only the
+types the engine itself raises (``Backend.engine_errors``) become :class:`EngineFailure`; a bug in an adapter
+stays the exception it is.
 """
 
 from __future__ import annotations
@@ -74,14 +76,28 @@ class ContractViolation(InternalError):
     """A backend method called in a way its contract forbids (see backends/base.py)."""
 
 
+#: Python's own subclasses of exception types an engine may also raise (dartpy: RuntimeError): never the
+#: engine's doing, so never translated.
+_PYTHON_ONLY: tuple[type[BaseException], ...] = (RecursionError, NotImplementedError)
+
+
+def engine_failure(backend: str, doing: str, exc: BaseException) -> EngineFailure:
+    """The EngineFailure for ``exc``, an exception of the engine's own types caught at the adapter boundary.
+
+    An exception of those types that Python itself raises (``_PYTHON_ONLY``) is re-raised as it is.
+    """
+    if isinstance(exc, _PYTHON_ONLY):
+        raise exc
+    return EngineFailure(f"{backend}: {doing} failed: {type(exc).__name__}: {exc}", backend=backend)
+
+
 @contextmanager
-def map_engine_errors(backend: str, doing: str) -> Iterator[None]:
-    """Translate any non-project exception raised inside into :class:`EngineFailure`."""
+def map_engine_errors(backend: str, doing: str, catch: tuple[type[BaseException], ...]) -> Iterator[None]:
+    """Translate the engine's own exceptions (``catch``) raised inside into :class:`EngineFailure`.
+
+    Anything else (a TypeError from a bug in an adapter, a KeyboardInterrupt) passes through unchanged.
+    """
     try:
         yield
-    except PhysicsScenariosError:
-        raise
-    except (KeyboardInterrupt, SystemExit, MemoryError):
-        raise
-    except Exception as exc:  # noqa: BLE001 - the boundary: every engine error is translated
-        raise EngineFailure(f"{backend}: {doing} failed: {type(exc).__name__}: {exc}", backend=backend) from exc
+    except catch as exc:
+        raise engine_failure(backend, doing, exc) from exc

@@ -2,7 +2,7 @@
 
 Dynamic bodies move by semi-implicit Euler (v += (g + F/m) dt; x += v dt) with orientation integrated from
 the angular velocity (no gyroscopic term); sliders to the environment carry a velocity motor bounded by
-fmax (and stops); kinematic bodies follow the runner. There are no contacts, so no collisions.
+fmax; kinematic bodies follow the kit's track exactly. There are no contacts, so no collisions.
 """
 
 from __future__ import annotations
@@ -11,13 +11,13 @@ from typing import ClassVar
 
 import numpy as np
 
+from ._kit import KinematicPose, SubstepMean, substep_times
 from .base import Backend
 from .geometry import integrate_quat
 from .types import (
     ALL_SHAPES,
     BodyStates,
     Capability,
-    CompiledWorld,
     Contact,
     JointKind,
     JointStates,
@@ -38,8 +38,8 @@ class FakeBackend(Backend):
         Capability.SUBSTEPS,
     }
 
-    def __init__(self, world: CompiledWorld) -> None:
-        super().__init__(world)
+    def _build(self) -> None:
+        world = self.world
         n = len(world.bodies)
         self.pos = np.array([b.pos for b in world.bodies], float).reshape(n, 3)
         self.quat = np.array([b.quat for b in world.bodies], float).reshape(n, 4)
@@ -48,20 +48,25 @@ class FakeBackend(Backend):
         self.mass = np.array([b.mass for b in world.bodies], float)
         self.inertia = np.array([b.inertia for b in world.bodies], float).reshape(n, 3)
         self.moves = np.array([b.motion is Motion.DYNAMIC for b in world.bodies])
-        self.force = np.zeros((n, 6))
         index = {b.name: i for i, b in enumerate(world.bodies)}
         self.sliders = [(index[j.body], np.asarray(j.axis), j) for j in world.joints if j.kind is JointKind.SLIDER]
         self.start = {i: self.pos[i].copy() for i, _, _ in self.sliders}
         self.motor = {j.name: (j.motor.vel, j.motor.fmax) if j.motor else (0.0, 0.0) for _, _, j in self.sliders}
-        self.applied = np.zeros(len(world.joints))
+        self.applied = SubstepMean(len(world.joints))
 
-    def step(self) -> None:
-        h = self.world.dt / self.world.substeps
+    def _step(self) -> None:
+        n = self.world.substeps
+        h = self.world.dt / n
         g = np.asarray(self.world.gravity)
-        for _ in range(self.world.substeps):
+        force = np.zeros((len(self.world.bodies), 6))
+        for i, acc in self.forces.items():
+            force[i] = acc
+        self.applied.start()
+        for t in substep_times(self.world.dt, n):
             for d in np.flatnonzero(self.moves):
-                self.vel[d] += (g + self.force[d, :3] / self.mass[d]) * h
-                self.ang[d] += self.force[d, 3:] / self.inertia[d].mean() * h
+                self.vel[d] += (g + force[d, :3] / self.mass[d]) * h
+                self.ang[d] += force[d, 3:] / self.inertia[d].mean() * h
+            applied = np.zeros(len(self.world.joints))
             for k, (i, axis, joint) in enumerate(self.sliders):
                 vel, fmax = self.motor[joint.name]
                 along = float(self.vel[i] @ axis)
@@ -70,38 +75,35 @@ class FakeBackend(Backend):
                 self.ang[i] = 0.0
                 dv = np.clip(vel - along, -fmax * h / self.mass[i], fmax * h / self.mass[i]) if fmax > 0 else 0.0
                 self.vel[i] += dv * axis
-                self.applied[k] = dv * self.mass[i] / h
+                applied[k] = dv * self.mass[i] / h
+            self.applied.add(applied)
             for d in np.flatnonzero(self.moves):
                 self.pos[d] += self.vel[d] * h
                 self.quat[d] = integrate_quat(self.quat[d], self.ang[d], h)
-            for d in np.flatnonzero(~self.moves):
-                self.pos[d] += self.vel[d] * h
-                self.quat[d] = integrate_quat(self.quat[d], self.ang[d], h)
-        self.force[:] = 0.0
+            for i, pose in self.kinematic.items():
+                self.pos[i], self.quat[i] = pose.at(t)
+        self.applied.finish()
 
-    def body_states(self) -> BodyStates:
+    def _body_states(self) -> BodyStates:
         return BodyStates(self.pos.copy(), self.quat.copy(), self.vel.copy(), self.ang.copy())
 
-    def joint_states(self) -> JointStates:
+    def _joint_states(self) -> JointStates:
         m = len(self.world.joints)
         position, velocity = np.full(m, np.nan), np.full(m, np.nan)
         for k, (i, axis, _) in enumerate(self.sliders):
             position[k] = float((self.pos[i] - self.start[i]) @ axis)
             velocity[k] = float(self.vel[i] @ axis)
-        return JointStates(position, velocity, self.applied.copy())
+        return JointStates(position, velocity, self.applied.mean.copy())
 
-    def contacts(self) -> list[Contact]:
+    def _contacts(self) -> list[Contact]:
         return []
 
-    def set_kinematic(self, body: int, pos: Vec3, quat: Quat, lin_vel: Vec3, ang_vel: Vec3) -> None:
-        self.pos[body], self.quat[body], self.vel[body], self.ang[body] = pos, quat, lin_vel, ang_vel
+    def _place_kinematic(self, body: int, pose: KinematicPose) -> None:
+        self.pos[body], self.quat[body] = pose.pos, pose.quat
+        self.vel[body], self.ang[body] = pose.lin_vel, pose.ang_vel
 
-    def set_motor(self, joint: int, vel: float, fmax: float) -> None:
+    def _set_motor(self, joint: int, vel: float, fmax: float) -> None:
         self.motor[self.world.joints[joint].name] = (vel, fmax)
 
-    def apply_force(self, body: int, force: Vec3, torque: Vec3) -> None:
-        self.force[body, :3] += force
-        self.force[body, 3:] += torque
-
-    def reset_body(self, body: int, pos: Vec3, quat: Quat, lin_vel: Vec3, ang_vel: Vec3) -> None:
+    def _reset_body(self, body: int, pos: Vec3, quat: Quat, lin_vel: Vec3, ang_vel: Vec3) -> None:
         self.pos[body], self.quat[body], self.vel[body], self.ang[body] = pos, quat, lin_vel, ang_vel

@@ -1,7 +1,9 @@
 """The backend registry: names -> adapter classes, imported lazily, with install hints.
 
 ``list_backends()`` never imports an engine; ``get_backend(name)`` imports the adapter on first use and
-turns a missing engine into :class:`BackendNotInstalled` with the pip command that fixes it.
+turns a missing engine into :class:`BackendNotInstalled` with the pip command that fixes it;
+``check_options(name, raw)`` checks a ``backend_options`` block without the engine. Engine names are written
+here and in the adapters only (tests/architecture checks the runner, tests/perf the benchmarks).
 """
 
 from __future__ import annotations
@@ -9,10 +11,13 @@ from __future__ import annotations
 import difflib
 import importlib
 import importlib.util
+from collections.abc import Mapping
 from dataclasses import dataclass
 from importlib.metadata import PackageNotFoundError, version
 from types import MappingProxyType
+from typing import Any
 
+from ._kit.options import BackendOptions
 from .base import Backend
 from .errors import BackendNotInstalled, UnknownBackend, UnsupportedFeature
 from .types import CompiledWorld
@@ -27,6 +32,7 @@ class BackendEntry:
     extra: str  # the extra of physics-scenarios that installs it
     description: str
     hidden: bool = False  # test-only backends are not listed by `scenario backends`
+    options: str = "backends._kit.options:BackendOptions"  # "module:Class" of its backend_options, engine-free
 
     @property
     def hint(self) -> str:
@@ -36,7 +42,8 @@ class BackendEntry:
 # Kept sorted by name.
 _KNOWN: dict[str, BackendEntry] = {
     "crash": BackendEntry("crash", "backends.crash:CrashBackend", "numpy", "numpy", "",
-                          "test-only: kills its own process mid-run (SIGKILL/SIGSEGV) to test isolation", hidden=True),
+                          "test-only: kills its own process mid-run (SIGKILL/SIGSEGV) to test isolation", hidden=True,
+                          options="backends.crash:CrashOptions"),
     "dart": BackendEntry(
         "dart",
         "backends.dart:DartBackend",
@@ -44,6 +51,7 @@ _KNOWN: dict[str, BackendEntry] = {
         "dartpy",
         "dart",
         "DART (dartpy), ODE collision detector by default",
+        options="backends.dart._options:DartOptions",
     ),
     "fake": BackendEntry(
         "fake",
@@ -55,7 +63,8 @@ _KNOWN: dict[str, BackendEntry] = {
         hidden=True,
     ),
     "mujoco": BackendEntry(
-        "mujoco", "backends.mujoco:MujocoBackend", "mujoco", "mujoco", "mujoco", "MuJoCo, built through MjSpec"
+        "mujoco", "backends.mujoco:MujocoBackend", "mujoco", "mujoco", "mujoco", "MuJoCo, built through MjSpec",
+        options="backends.mujoco._options:MujocoOptions",
     ),
     "ode": BackendEntry(
         "ode",
@@ -64,6 +73,7 @@ _KNOWN: dict[str, BackendEntry] = {
         "panda3d",
         "ode",
         "the Open Dynamics Engine through panda3d.ode: the reference",
+        options="backends.ode._options:OdeOptions",
     ),
     "pybullet": BackendEntry(
         "pybullet",
@@ -72,6 +82,7 @@ _KNOWN: dict[str, BackendEntry] = {
         "pybullet",
         "",
         "PyBullet in DIRECT mode (the default backend)",
+        options="backends.pybullet._options:PyBulletOptions",
     ),
 }
 if list(_KNOWN) != sorted(_KNOWN):  # pragma: no cover - a guard for whoever edits the table
@@ -135,20 +146,29 @@ def get_backend(name: str) -> type[Backend]:
     return cls
 
 
+def options_of(name: str) -> type[BackendOptions]:
+    """The class of backend ``name``'s ``backend_options`` block, imported without the engine."""
+    module_name, _, class_name = entry(name).options.partition(":")
+    cls: type[BackendOptions] = getattr(importlib.import_module(module_name), class_name)
+    return cls
+
+
+def check_options(name: str, raw: Mapping[str, Any]) -> BackendOptions:
+    """A scenario's ``backend_options.<name>`` block checked as ``run`` checks it, without the engine (for
+    ``validate``): UnsupportedFeature names the key, what was expected and what was received."""
+    return options_of(name).parse(raw, name)
+
+
 def check_capabilities(cls: type[Backend], world: CompiledWorld) -> None:
-    """Refuse a world that needs what the backend cannot do, before anything is built."""
+    """Refuse a world that needs what the backend cannot do, or options it does not take, before anything
+    is built (UnsupportedFeature, exit 2)."""
     missing = sorted(c.value for c in world.required_capabilities() - cls.capabilities)
     if missing:
         raise UnsupportedFeature(
             f"Scenario `{world.name}` needs {', '.join(missing)}, which backend `{cls.name}` does not "
             f"support. Supported: {', '.join(sorted(c.value for c in cls.capabilities))}."
         )
-    unknown = sorted(set(world.options_for(cls.name)) - set(cls.option_keys))
-    if unknown:
-        raise UnsupportedFeature(
-            f"Unknown option(s) {', '.join(unknown)} in backend_options.{cls.name}. "
-            f"Accepted: {', '.join(sorted(cls.option_keys)) or 'none'}."
-        )
+    cls.Options.parse(world.options_for(cls.name), cls.name)  # unknown keys and bad values, before building
 
 
 def create_backend(name: str, world: CompiledWorld) -> Backend:

@@ -9,13 +9,14 @@ import sys
 import time
 from pathlib import Path
 
-from backends.registry import is_installed
+from backends.registry import DEFAULT_BACKEND, is_installed, list_backends
 
 from . import batch, memory, overhead, scaling
 from .instrument import wrapper_cost
 from .report import Results, append_notes, render
 
-ENGINES = ("pybullet", "mujoco", "dart", "ode")
+#: Every engine the registry lists (a fifth engine joins the benchmarks by its registry line).
+ENGINES = tuple(e.name for e in list_backends())
 SECTIONS = ("overhead", "scaling", "memory", "batch")
 
 
@@ -40,13 +41,13 @@ def parser() -> argparse.ArgumentParser:
     p.add_argument("--reps", type=int, default=5, help="overhead: interleaved repetitions (median)")
     p.add_argument("--duration", type=float, default=10.0, help="overhead: simulated seconds")
     p.add_argument("--pile", type=_ints, default=[5, 5, 4], help="overhead: nx,ny,nz boxes (default 100)")
-    p.add_argument("--scaling-backends", type=_names, default=["pybullet", "mujoco"])
+    p.add_argument("--scaling-backends", type=_names, default=None, help="scaling: engines (default: all installed)")
     p.add_argument("--scaling-sizes", type=_ints, default=[10, 100, 1000])
     p.add_argument("--scaling-duration", type=float, default=1.0, help="simulated seconds per scaling run")
-    p.add_argument("--memory-backends", type=_names, default=["pybullet", "mujoco"])
+    p.add_argument("--memory-backends", type=_names, default=None, help="memory: engines (default: all installed)")
     p.add_argument("--memory-durations", type=_floats, default=[10.0, 100.0])
     p.add_argument("--memory-pile", type=_ints, default=[5, 2, 1], help="nx,ny,nz boxes for the memory runs")
-    p.add_argument("--batch-backend", default="pybullet")
+    p.add_argument("--batch-backend", default=DEFAULT_BACKEND)
     p.add_argument("--batch-jobs", type=_ints, default=[1, 2])
     p.add_argument("--batch-reps", type=int, default=3)
     return p
@@ -70,6 +71,8 @@ def main(argv: list[str] | None = None) -> int:
 
     installed = [b for b in ENGINES if is_installed(b)]
     backends = [b for b in (args.backends or installed) if b in installed]
+    args.scaling_backends = args.scaling_backends or installed
+    args.memory_backends = args.memory_backends or installed
     sizes = {
         "overhead": f"{'x'.join(map(str, args.pile))} boxes, {args.duration:g} s at dt 0.004, {args.reps} reps, "
         f"{','.join(backends)}",

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import gc
 import importlib
+import importlib.util
 import inspect
 import os
 import time
@@ -13,7 +14,7 @@ from typing import Any
 
 import numpy as np
 
-from backends.registry import create_backend, get_backend
+from backends.registry import create_backend, get_backend, list_backends
 from backends.types import CompiledWorld
 from runner.compile.program import build_program
 from runner.language.load import LoadedScenario, load_scenario
@@ -26,12 +27,16 @@ from . import instrument as ins
 from .raw_common import RawTiming, time_loop
 
 PILE = Path(__file__).parent / "scenarios" / "pile.yaml"
-RAW_LOOPS = {
-    "dart": ("bench.raw_dart", "DartLoop"),
-    "mujoco": ("bench.raw_mujoco", "MujocoLoop"),
-    "ode": ("bench.raw_ode", "OdeLoop"),
-    "pybullet": ("bench.raw_pybullet", "PyBulletLoop"),
-}
+
+
+def _raw_loops() -> dict[str, str]:
+    """Each registered engine's hand-written loop: the module bench/raw_<name>.py (its ``LOOP``), when it exists."""
+    names = (e.name for e in list_backends())
+    return {name: f"bench.raw_{name}" for name in names if importlib.util.find_spec(f"bench.raw_{name}") is not None}
+
+
+#: Registry name -> the module of its hand-written loop (imported, with its engine, only when run).
+RAW_LOOPS = _raw_loops()
 
 
 def pile(counts: tuple[int, int, int], duration: float, dt: float = 0.004) -> LoadedScenario:
@@ -112,8 +117,7 @@ def adapter_settings(backend: str, world: CompiledWorld) -> dict[str, Any]:
 
 
 def run_raw(backend: str, world: CompiledWorld, settings: dict[str, Any], steps: int, read: bool) -> RawTiming:
-    module, name = RAW_LOOPS[backend]
-    make = getattr(importlib.import_module(module), name)
+    make = importlib.import_module(RAW_LOOPS[backend]).LOOP
     gc.collect()
     return time_loop(make, world, settings, steps, read)
 

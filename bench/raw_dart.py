@@ -92,3 +92,7 @@ class DartLoop:
 
     def close(self) -> None:
         self.w.removeAllSkeletons()
+
+
+#: The loop bench/measure.py runs for this engine (found by the file name, bench/raw_<registry name>.py).
+LOOP = DartLoop

@@ -102,3 +102,7 @@ class MujocoLoop:
 
     def close(self) -> None:
         del self.d, self.m
+
+
+#: The loop bench/measure.py runs for this engine (found by the file name, bench/raw_<registry name>.py).
+LOOP = MujocoLoop

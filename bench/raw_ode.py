@@ -99,3 +99,7 @@ class OdeLoop:
                 body.destroy()
         self.space.destroy()
         self.w.destroy()
+
+
+#: The loop bench/measure.py runs for this engine (found by the file name, bench/raw_<registry name>.py).
+LOOP = OdeLoop

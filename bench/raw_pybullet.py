@@ -79,3 +79,7 @@ class PyBulletLoop:
 
     def close(self) -> None:
         p.disconnect(physicsClientId=self.c)
+
+
+#: The loop bench/measure.py runs for this engine (found by the file name, bench/raw_<registry name>.py).
+LOOP = PyBulletLoop

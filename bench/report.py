@@ -12,6 +12,8 @@ from importlib.metadata import PackageNotFoundError, version
 from pathlib import Path
 from typing import Any
 
+from backends.registry import list_backends
+
 from .batch import BatchFigures
 from .memory import MemoryFigures
 from .overhead import PROCESS, BackendFigures
@@ -46,7 +48,7 @@ def _machine() -> list[str]:
     except OSError:
         pass
     versions = []
-    for dist in ("pybullet", "mujoco", "dartpy", "panda3d", "numpy", "mcap", "ray"):
+    for dist in (*(e.distribution for e in list_backends()), "numpy", "mcap", "ray"):
         try:
             versions.append(f"{dist} {version(dist)}")
         except PackageNotFoundError:

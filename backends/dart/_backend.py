@@ -16,14 +16,13 @@ from typing import Any, ClassVar
 import dartpy as dart
 import numpy as np
 
+from .._kit import BackendOptions, KinematicPose, SubstepContacts, SubstepMean
 from ..base import Backend
-from ..errors import EngineFailure, UnsupportedFeature, map_engine_errors
-from ..geometry import integrate_quat
+from ..errors import UnsupportedFeature
 from ..types import (
     RIGID_BODY_CAPABILITIES,
     BodyStates,
     Capability,
-    CompiledWorld,
     Contact,
     JointKind,
     JointStates,
@@ -32,7 +31,8 @@ from ..types import (
     Vec3,
 )
 from . import _contacts, _surfaces
-from ._build import DETECTORS, BodyHandle, JointHandle, build, place_free
+from ._build import BodyHandle, JointHandle, build, place_free
+from ._options import DartOptions
 
 _NAME = "dart"
 
@@ -41,29 +41,26 @@ class DartBackend(Backend):
     name: ClassVar[str] = _NAME
     engine_distribution: ClassVar[str] = "dartpy"
     capabilities: ClassVar[frozenset[Capability]] = RIGID_BODY_CAPABILITIES
-    option_keys: ClassVar[dict[str, str]] = {
-        "collision_detector": "ode | fcl | bullet | dart: DART's collision detector (default ode: ODE-like "
-        "contact sets, 4 points for a box on a plane)",
-        "max_engine_dt": "longest DART step in seconds (default: dt / substeps); shorter engine steps make "
-        "deep landings penetrate less, since DART corrects penetration at 1 mm/s at most",
-    }
+    Options: ClassVar[type[BackendOptions]] = DartOptions
+    #: pybind11 turns the C++ exceptions of DART into RuntimeError (DART 6 itself mostly prints its errors,
+    #: dterr, and carries on); Python's own RuntimeError subclasses are never translated (backends.errors).
+    engine_errors: ClassVar[tuple[type[BaseException], ...]] = (RuntimeError,)
+    options: DartOptions
 
-    def __init__(self, world: CompiledWorld) -> None:
-        super().__init__(world)
-        options = world.options_for(_NAME)
-        self._detector = str(options.get("collision_detector", "ode"))
-        if self._detector not in DETECTORS:
-            raise UnsupportedFeature(
-                f"Invalid `backend_options.dart.collision_detector`. Expected one of "
-                f"{', '.join(sorted(DETECTORS))}. Received: collision_detector={self._detector!r}."
-            )
-        self._engine_steps = world.substeps * _split(world.dt / world.substeps, options.get("max_engine_dt"))
+    @classmethod
+    def engine_label(cls) -> str:
+        engine, wrapper = str(dart.__version__), cls.engine_version()
+        return f"DART {engine}" + ("" if wrapper == engine else f" (dartpy {wrapper})")
+
+    def _build(self) -> None:
+        world = self.world
+        self._detector = self.options.collision_detector
+        self._engine_steps = world.substeps * _split(world.dt / world.substeps, self.options.max_engine_dt)
         try:
             coefficients, self._surface_conflict = _surfaces.solve(world), ""
         except UnsupportedFeature as exc:  # no fixed values exist: solve for the touching pairs each step
             coefficients, self._surface_conflict = _surfaces.solve(world, []), str(exc)
-        with map_engine_errors(_NAME, "building the world"):
-            built = build(world, self._detector, coefficients, self._engine_steps)
+        built = build(world, self._detector, coefficients, self._engine_steps)
         self._dart: Any = built.world
         self._bodies: list[BodyHandle] = built.bodies
         self._joints: list[JointHandle] = built.joints
@@ -82,20 +79,15 @@ class DartBackend(Backend):
         self._static_pos = np.array([world.bodies[i].pos for i in self._static], dtype=float).reshape(-1, 3)
         self._static_quat = np.array([world.bodies[i].quat for i in self._static], dtype=float).reshape(-1, 4)
         self._prev_quat = np.array([b.quat for b in world.bodies], dtype=float).reshape(-1, 4)
-        self._kinematic: dict[int, list[Any]] = {
-            i: [b.pos, b.quat, b.lin_vel, b.ang_vel] for i, b in enumerate(world.bodies) if b.motion is Motion.KINEMATIC
-        }
-        self._forces: dict[int, tuple[np.ndarray, np.ndarray]] = {}
-        self._motor_force = np.zeros(len(self._joints))
-        self._steps = 0
-        self._closed = False
+        self._motor_mean = SubstepMean(len(self._joints))
+        self._substep_contacts = SubstepContacts(self._engine_steps)
         self._relevant = set(_surfaces.touching_pairs(world))
         self._touching: list[tuple[int, int]] | None = None
         for j, handle in enumerate(self._joints):
             if handle.spec.motor is not None:
-                self.set_motor(j, handle.spec.motor.vel, handle.spec.motor.fmax)
+                self._set_motor(j, handle.spec.motor.vel, handle.spec.motor.fmax)
 
-    def settings(self) -> dict[str, Any]:
+    def _settings(self) -> dict[str, Any]:
         names = [b.name for b in self.world.bodies]
         return {
             "collision_detector": self._detector,
@@ -111,96 +103,73 @@ class DartBackend(Backend):
 
     # --- inputs ---------------------------------------------------------------------------------------
 
-    def set_motor(self, joint: int, vel: float, fmax: float) -> None:
+    def _set_motor(self, joint: int, vel: float, fmax: float) -> None:
         handle = self._joints[joint]
-        if handle.spec.kind not in (JointKind.SLIDER, JointKind.HINGE):
-            raise UnsupportedFeature(f"Joint `{handle.spec.name}` is a {handle.spec.kind.value}: it has no motor.")
         handle.vel, handle.fmax = float(vel), max(0.0, float(fmax))
-        with map_engine_errors(_NAME, f"setting the motor of `{handle.spec.name}`"):
-            if handle.fmax > 0.0:
-                handle.joint.setActuatorType(dart.dynamics.ActuatorType.SERVO)
-                handle.joint.setForceLowerLimit(0, -handle.fmax)
-                handle.joint.setForceUpperLimit(0, handle.fmax)
-            else:
-                handle.joint.setActuatorType(dart.dynamics.ActuatorType.PASSIVE)
-        if handle.fmax == 0.0:
-            self._motor_force[joint] = 0.0
+        if handle.fmax > 0.0:
+            handle.joint.setActuatorType(dart.dynamics.ActuatorType.SERVO)
+            handle.joint.setForceLowerLimit(0, -handle.fmax)
+            handle.joint.setForceUpperLimit(0, handle.fmax)
+        else:
+            handle.joint.setActuatorType(dart.dynamics.ActuatorType.PASSIVE)
         self._servos = [(j, h) for j, h in enumerate(self._joints) if h.fmax > 0.0]
 
-    def apply_force(self, body: int, force: Vec3, torque: Vec3) -> None:
-        if self.world.bodies[body].motion is not Motion.DYNAMIC:
-            return  # static and kinematic bodies are unaffected by forces
-        f, t = self._forces.get(body, (np.zeros(3), np.zeros(3)))
-        self._forces[body] = (f + np.asarray(force, float), t + np.asarray(torque, float))
+    def _place_kinematic(self, body: int, pose: KinematicPose) -> None:
+        place_free(self._bodies[body].root, pose.pos, pose.quat, pose.lin_vel, pose.ang_vel)
+        self._prev_quat[body] = pose.quat
 
-    def set_kinematic(self, body: int, pos: Vec3, quat: Quat, lin_vel: Vec3, ang_vel: Vec3) -> None:
-        if body not in self._kinematic:
-            raise ValueError(f"body `{self.world.bodies[body].name}` is not kinematic")
-        self._kinematic[body] = [tuple(pos), tuple(quat), tuple(lin_vel), tuple(ang_vel)]
-        with map_engine_errors(_NAME, "placing a kinematic body"):
-            place_free(self._bodies[body].root, pos, quat, lin_vel, ang_vel)
-        self._prev_quat[body] = quat
-
-    def reset_body(self, body: int, pos: Vec3, quat: Quat, lin_vel: Vec3, ang_vel: Vec3) -> None:
-        handle = self._bodies[body]
-        if handle.spec.motion is not Motion.DYNAMIC or not handle.free:
-            raise UnsupportedFeature(
-                f"Backend `dart` can reset only free dynamic bodies; `{handle.spec.name}` is "
-                f"{handle.spec.motion.value}{'' if handle.free else ' and jointed'}."
-            )
-        with map_engine_errors(_NAME, f"resetting `{handle.spec.name}`"):
-            place_free(handle.root, pos, quat, lin_vel, ang_vel)
+    def _reset_body(self, body: int, pos: Vec3, quat: Quat, lin_vel: Vec3, ang_vel: Vec3) -> None:
+        place_free(self._bodies[body].root, pos, quat, lin_vel, ang_vel)
         self._prev_quat[body] = quat
 
     # --- stepping -------------------------------------------------------------------------------------
 
-    def step(self) -> None:
-        servos = self._servos
-        impulse = [0.0] * len(servos)
-        with map_engine_errors(_NAME, f"step {self._steps + 1}"):
-            for _ in range(self._engine_steps):
-                # World.step() clears commands and external forces: re-issue them for every engine step.
-                for _, h in servos:
-                    h.joint.setCommand(0, h.sign * h.vel)
-                for i, (_, _, lin, ang) in self._kinematic.items():
-                    self._bodies[i].root.setCommands(np.concatenate([ang, lin]))
-                for i, (force, torque) in self._forces.items():
-                    self._bodies[i].node.addExtForce(force)
-                    self._bodies[i].node.addExtTorque(torque)
-                if self._surface_conflict:
-                    self._match_touching_pairs()
-                self._dart.step()
-                for n, (_, h) in enumerate(servos):
-                    impulse[n] += h.joint.getConstraintImpulse(0)
-            for n, (j, h) in enumerate(servos):
-                self._motor_force[j] = h.sign * impulse[n] / self.world.dt  # mean force over the step
-            self._forces.clear()
-            dt = self.world.dt
-            for i, state in self._kinematic.items():
-                pos, quat, lin, ang = state
-                state[0] = tuple(p + v * dt for p, v in zip(pos, lin, strict=True))
-                state[1] = integrate_quat(quat, ang, dt)
-                place_free(self._bodies[i].root, state[0], state[1], lin, ang)
-        self._steps += 1
+    def _step(self) -> None:
+        servos, n = self._servos, self._engine_steps
+        h = self.world.dt / n
+        self._motor_mean.start()
+        self._substep_contacts.start()
+        for _ in range(n):
+            # World.step() clears commands and external forces: re-issue them for every engine step.
+            for _, handle in servos:
+                handle.joint.setCommand(0, handle.sign * handle.vel)
+            for i, pose in self.kinematic.items():
+                self._bodies[i].root.setCommands(np.concatenate([pose.ang_vel, pose.lin_vel]))
+            for i, acc in self.forces.items():
+                self._bodies[i].node.addExtForce(acc[:3])
+                self._bodies[i].node.addExtTorque(acc[3:])
+            if self._surface_conflict:
+                self._match_touching_pairs()
+            self._dart.step()
+            applied = np.zeros(len(self._joints))
+            for j, handle in servos:
+                applied[j] = handle.sign * handle.joint.getConstraintImpulse(0) / h
+            self._motor_mean.add(applied)
+            if n > 1:
+                self._substep_contacts.add(self._reader.contacts(self._dart.getLastCollisionResult().getContacts()))
+        self._motor_mean.finish()
+        dt = self.world.dt
+        for i, pose in self.kinematic.items():
+            pos, quat = pose.at(dt)
+            place_free(self._bodies[i].root, pos, quat, pose.lin_vel, pose.ang_vel)
 
     # --- outputs --------------------------------------------------------------------------------------
 
-    def body_states(self) -> BodyStates:
+    def _body_states(self) -> BodyStates:
         n = len(self._bodies)
         pos, quat = np.empty((n, 3)), np.empty((n, 4))
         lin, ang = np.zeros((n, 3)), np.zeros((n, 3))
-        with map_engine_errors(_NAME, "reading body states"):
-            if self._free:
-                q = np.concatenate([read() for read in self._read_q]).reshape(-1, 6)
-                v = np.concatenate([read() for read in self._read_v]).reshape(-1, 6)
-                free = self._free_at
-                pos[free], quat[free] = q[:, 3:], rotvec_to_quat(q[:, :3])
-                ang[free], lin[free] = v[:, :3], v[:, 3:]
-            for i in self._linked:
-                node = self._bodies[i].node
-                transform = node.getWorldTransform()
-                pos[i], quat[i] = transform.translation(), transform.quaternion().wxyz()
-                lin[i], ang[i] = node.getLinearVelocity(), node.getAngularVelocity()
+        if self._free:
+            q = np.concatenate([read() for read in self._read_q]).reshape(-1, 6)
+            v = np.concatenate([read() for read in self._read_v]).reshape(-1, 6)
+            free = self._free_at
+            pos[free], quat[free] = q[:, 3:], rotvec_to_quat(q[:, :3])
+            ang[free], lin[free] = v[:, :3], v[:, 3:]
+        for i in self._linked:
+            node = self._bodies[i].node
+            transform = node.getWorldTransform()
+            pos[i], quat[i] = transform.translation(), transform.quaternion().wxyz()
+            lin[i], ang[i] = node.getLinearVelocity(), node.getAngularVelocity()
         if self._static:
             pos[self._static_at], quat[self._static_at] = self._static_pos, self._static_quat
         # q and -q are one rotation: keep the sign continuous, as ODE's integrated quaternion is.
@@ -208,29 +177,20 @@ class DartBackend(Backend):
         if flip.any():
             quat[flip] *= -1.0
         self._prev_quat = quat.copy()
-        finite = np.isfinite
-        if not (finite(pos).all() and finite(quat).all() and finite(lin).all() and finite(ang).all()):
-            body = self.world.bodies[int(np.argmax(~finite(np.hstack([pos, quat, lin, ang])).all(axis=1)))].name
-            raise EngineFailure(
-                f"dart: body `{body}` has a non-finite state after step {self._steps}",
-                backend=_NAME,
-                body=body,
-                time=self._steps * self.world.dt,
-            )
         return BodyStates(pos, quat, lin, ang)
 
-    def joint_states(self) -> JointStates:
+    def _joint_states(self) -> JointStates:
         m = len(self._joints)
         position, velocity = np.full(m, math.nan), np.full(m, math.nan)
-        with map_engine_errors(_NAME, "reading joint states"):
-            for j, joint, sign in self._coordinates:
-                position[j] = sign * joint.getPosition(0)
-                velocity[j] = sign * joint.getVelocity(0)
-        return JointStates(position, velocity, self._motor_force.copy())
+        for j, joint, sign in self._coordinates:
+            position[j] = sign * joint.getPosition(0)
+            velocity[j] = sign * joint.getVelocity(0)
+        return JointStates(position, velocity, self._motor_mean.mean.copy())
 
-    def contacts(self) -> list[Contact]:
-        with map_engine_errors(_NAME, "reading contacts"):
-            return self._reader.contacts(self._dart.getLastCollisionResult().getContacts())
+    def _contacts(self) -> list[Contact]:
+        if self._engine_steps > 1:
+            return self._substep_contacts.merged() if self.steps else []
+        return self._reader.contacts(self._dart.getLastCollisionResult().getContacts())
 
     def _match_touching_pairs(self) -> None:
         """Give the pairs about to touch their surfaces (worlds whose pairs have no fixed solution).
@@ -247,27 +207,20 @@ class DartBackend(Backend):
         try:
             coefficients = _surfaces.solve(self.world, touching)
         except UnsupportedFeature as exc:
-            raise UnsupportedFeature(f"{exc} (at t = {self._steps * self.world.dt:.3f} s)") from None
+            raise UnsupportedFeature(f"{exc} (at t = {self.steps * self.world.dt:.3f} s)") from None
         for handle, f, r in zip(self._bodies, coefficients.friction, coefficients.restitution, strict=True):
             handle.aspect.setFrictionCoeff(f)
             handle.aspect.setRestitutionCoeff(r)
         self._touching = touching
 
-    def close(self) -> None:
-        if not self._closed:
-            self._closed = True
-            self._dart.removeAllSkeletons()
+    def _close(self) -> None:
+        self._dart.removeAllSkeletons()
 
 
-def _split(step: float, longest: Any) -> int:
+def _split(step: float, longest: float | None) -> int:
     """How many DART steps make one ``step`` no longer than ``backend_options.dart.max_engine_dt``."""
     if longest is None:
         return 1
-    if isinstance(longest, bool) or not isinstance(longest, (int, float)) or not 0.0 < longest < math.inf:
-        raise UnsupportedFeature(
-            f"Invalid `backend_options.dart.max_engine_dt`. Expected a positive number of seconds. "
-            f"Received: max_engine_dt={longest!r}."
-        )
     return max(1, math.ceil(step / longest - 1e-9))
 
 

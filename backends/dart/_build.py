@@ -22,6 +22,7 @@ from ..errors import BackendNotInstalled, UnsupportedFeature
 from ..types import BodySpec, CompiledWorld, JointKind, JointSpec, Motion, Shape, ShapeKind
 from . import _surfaces, _trees
 
+#: The detector of each ``collision_detector`` option value (``_options.DETECTOR_NAMES``, in that order).
 DETECTORS: dict[str, Any] = {
     "ode": dart.collision.OdeCollisionDetector,
     "fcl": dart.collision.FCLCollisionDetector,

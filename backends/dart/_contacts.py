@@ -3,11 +3,9 @@
 ``CollisionResult.getContacts()`` lists contact points, each naming two collision objects. Reading a
 field of a point through dartpy costs 0.1-0.3 us (a numpy view for a vector), so each field is read
 once, one field at a time over all points, and the rest is done on arrays: body pairs from a cache
-of the collision objects, normal forces as one ``einsum``, and the per-pair count, deepest depth and
-summed normal force after a stable sort by pair, which keeps each pair's points in DART's order. The
-sums are added column by column, each pair's points in that order, so that every total is the same
-double as a point-by-point sum from 0.0, and the depths fold from 0.0 as Python's ``max`` does. This
-module does not import the engine.
+of the collision objects, normal forces as one ``einsum``; the kit's ``group_by_pair`` then gives each
+pair's count, deepest depth and summed normal force, the points in DART's order. This module does not
+import the engine.
 """
 
 from __future__ import annotations
@@ -18,7 +16,8 @@ from typing import Any
 
 import numpy as np
 
-from ..types import Contact, new_contact
+from .._kit import group_by_pair
+from ..types import Contact
 
 _FIRST, _SECOND = attrgetter("collisionObject1"), attrgetter("collisionObject2")
 _DEPTH, _FORCE, _NORMAL = attrgetter("penetrationDepth"), attrgetter("force"), attrgetter("normal")
@@ -42,7 +41,6 @@ class ContactReader:
         if not points:
             return []
         lo, hi = self._pair_of_points(tuple(map(_FIRST, points)), tuple(map(_SECOND, points)))
-        key = lo * self._n + hi
         depths = np.array(tuple(map(_DEPTH, points)))
         vectors = np.frombuffer(b"".join((*map(_FORCE, points), *map(_NORMAL, points)))).reshape(2, -1, 3)
         both_static = self._static[lo] & self._static[hi]
@@ -50,9 +48,9 @@ class ContactReader:
             kept = ~both_static
             if not kept.any():
                 return []
-            key, depths, vectors = key[kept], depths[kept], vectors[:, kept]
+            lo, hi, depths, vectors = lo[kept], hi[kept], depths[kept], vectors[:, kept]
         normal_force = np.abs(np.einsum("ij,ij->i", vectors[0], vectors[1]))
-        return _by_pair(self._n, key, depths, normal_force)
+        return group_by_pair(self._n, lo, hi, depths, normal_force)
 
     def pairs(self, points: Sequence[Any]) -> set[tuple[int, int]]:
         """The (a < b) body pairs of ``points``, static pairs included."""
@@ -80,24 +78,3 @@ class ContactReader:
                 if obj not in known:
                     known[obj] = int(obj.getShapeFrame().getName())
             return np.fromiter(map(known.__getitem__, objects), dtype=np.intp, count=len(objects))
-
-
-def _by_pair(n: int, key: np.ndarray, depth: np.ndarray, normal_force: np.ndarray) -> list[Contact]:
-    """One Contact per distinct ``key`` (a * n + b), in key order; points of a key kept in their order."""
-    order = np.argsort(key, kind="stable")
-    key, depth, normal_force = key[order], depth[order], normal_force[order]
-    start = np.flatnonzero(np.concatenate(([True], key[1:] != key[:-1])))
-    count = np.diff(np.append(start, len(key)))
-    if np.isnan(depth).any():  # NaN is skipped by Python's max fold but spreads through np.maximum
-        values = depth.tolist()
-        deepest = [max(0.0, *values[s : s + c]) for s, c in zip(start.tolist(), count.tolist(), strict=True)]
-    else:
-        top = np.maximum.reduceat(depth, start)
-        deepest = np.where(top > 0.0, top, 0.0).tolist()
-    total = normal_force[start]  # 0.0 + f == f, as every f = |F.n| >= +0.0
-    for j in range(1, int(count.max())):
-        more = count > j
-        total[more] += normal_force[start[more] + j]
-    pair = key[start]
-    rows = zip((pair // n).tolist(), (pair % n).tolist(), count.tolist(), deepest, total.tolist(), strict=True)
-    return list(map(new_contact, rows))

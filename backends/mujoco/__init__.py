@@ -1,10 +1,22 @@
-"""The MuJoCo backend: a CompiledWorld built through ``mujoco.MjSpec`` and stepped with ODE semantics.
+"""The MuJoCo backend: a CompiledWorld built through ``mujoco.MjSpec``, stepped with ODE semantics.
 
-The mapping and its measured deviations from ODE are in docs/backends/mujoco.md.
+The adapter (and with it the engine) is imported on first use of ``MujocoBackend``, so that the engine-free
+parts (``_options``) can be read without the engine.
 """
 
 from __future__ import annotations
 
-from ._backend import MujocoBackend
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from ._backend import MujocoBackend
 
 __all__ = ["MujocoBackend"]
+
+
+def __getattr__(name: str) -> Any:
+    if name == "MujocoBackend":
+        from ._backend import MujocoBackend
+
+        return MujocoBackend
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -2,30 +2,29 @@
 
 from __future__ import annotations
 
-from collections.abc import Mapping
 from typing import Any, ClassVar
 
 import mujoco
 import numpy as np
 
+from .._kit import BackendOptions, KinematicPose, SubstepContacts, SubstepMean, group_by_pair, substep_times
 from ..base import Backend
-from ..errors import EngineFailure, UnsupportedFeature, map_engine_errors
-from ..geometry import integrate_quat, quat_conj, quat_rotate
+from ..errors import EngineFailure
+from ..geometry import quat_conj, quat_rotate
 from ..types import (
     RIGID_BODY_CAPABILITIES,
     BodyStates,
     Capability,
-    CompiledWorld,
     Contact,
     JointKind,
     JointStates,
     Motion,
     Quat,
     Vec3,
-    new_contact,
 )
 from . import _coulomb
-from ._model import IMPEDANCE, KINEMATIC_MASS_RATIO, MU_MAX, Options, build
+from ._model import IMPEDANCE, KINEMATIC_MASS_RATIO, MU_MAX, build
+from ._options import MujocoOptions
 
 
 def _no_log_file() -> None:
@@ -40,8 +39,8 @@ def _no_log_file() -> None:
 
 
 _no_log_file()
-_Pairs = tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]  # pair code a*N+b, points, depth, force
-_NO_PAIRS: _Pairs = (np.zeros(0, np.int64), np.zeros(0, np.int64), np.zeros(0), np.zeros(0))
+#: MuJoCo's own verdicts on its state: positions, velocities or accelerations it calls invalid (NaN or
+#: beyond mjMAXVAL). With auto-reset disabled it only counts them; the adapter reports them.
 _BAD_STATE = (mujoco.mjtWarning.mjWARN_BADQPOS, mujoco.mjtWarning.mjWARN_BADQVEL, mujoco.mjtWarning.mjWARN_BADQACC)
 _BAD = slice(int(_BAD_STATE[0]), int(_BAD_STATE[-1]) + 1)  # their counters in MjData.warning.number
 _RATED = (JointKind.SLIDER, JointKind.HINGE)
@@ -54,21 +53,24 @@ class MujocoBackend(Backend):
     name: ClassVar[str] = "mujoco"
     engine_distribution: ClassVar[str] = "mujoco"
     capabilities: ClassVar[frozenset[Capability]] = RIGID_BODY_CAPABILITIES
-    option_keys: ClassVar[Mapping[str, str]] = {
-        "erp": "ODE-style error reduction per engine step of contacts and joint stops (default 0.2)",
-        "bounce_erp": "error reduction of contacts that bounce; adds up to this to the rebound (default 0.05)",
-        "engine_substeps": "MuJoCo steps per world substep (default 1)",
-    }
+    Options: ClassVar[type[BackendOptions]] = MujocoOptions
+    #: mju_error and the bindings' own failures; MjSpec.compile's ValueError is translated where it is called.
+    engine_errors: ClassVar[tuple[type[BaseException], ...]] = (mujoco.FatalError, mujoco.UnexpectedError)
+    options: MujocoOptions
 
-    def __init__(self, world: CompiledWorld) -> None:
-        super().__init__(world)
-        self._opts = Options.parse(world.options_for(self.name))
-        self._nsteps = world.substeps * self._opts.engine_substeps
+    @classmethod
+    def engine_label(cls) -> str:
+        engine, wrapper = mujoco.mj_versionString(), cls.engine_version()
+        return f"MuJoCo {engine}" + ("" if wrapper == engine else f" (mujoco {wrapper})")
+
+    def _build(self) -> None:
+        world = self.world
+        self._nsteps = world.substeps * self.options.engine_substeps
         self._h = world.dt / self._nsteps
-        with map_engine_errors(self.name, "building the model"):
-            self._layout = build(world, self._opts, self._h)
-            self._m = self._layout.model
-            self._d = mujoco.MjData(self._m)
+        self._times = substep_times(world.dt, self._nsteps)
+        self._layout = build(world, self.options, self._h)
+        self._m = self._layout.model
+        self._d = mujoco.MjData(self._m)
         m, lay = self._m, self._layout
         ids = lay.body_id
         self._root = m.body_rootid[ids]
@@ -81,69 +83,45 @@ class MujocoBackend(Backend):
         for edge in lay.edges.values():
             if edge.joint is not None:
                 self._sign[edge.joint] = edge.sign
-        self._kinematic: dict[int, tuple[Vec3, Quat, Vec3, Vec3]] = {}
-        self._xfrc = np.zeros((m.nbody, 6))
-        self._forced = False
         motors = np.flatnonzero(lay.motor_id >= 0)
         self._motor_of = np.full(len(world.joints), -1)  # world joint -> slot = tendon id (one per motor)
         self._motor_of[motors] = lay.motor_id[motors]
         self._helper_dof = lay.helper_dof[motors][np.argsort(lay.motor_id[motors])]
         self._target = np.zeros(motors.size)  # per slot, in the MuJoCo joint's coordinate
-        self._motor_sum = np.zeros(motors.size)
-        self._earlier: list[_Pairs] = []  # grouped contacts of the step's engine steps but the last
+        self._motor_mean = SubstepMean(motors.size)
+        self._substep_contacts = SubstepContacts(self._nsteps)  # the step's engine steps but the last
         self._listed: list[Contact] | None = []  # None: the last engine step's contacts are still in MjData
         self._warnings = self._d.warning.number  # live views into MjData
         self._qpos, self._qvel = self._d.qpos, self._d.qvel
-        owner = lay.geom_body
-        n = len(world.bodies)  # geom pair -> code a*N+b of its bodies (a < b), for _touching
-        self._pair_code = np.minimum.outer(owner, owner) * n + np.maximum.outer(owner, owner)
+        self._geom_body = lay.geom_body  # MuJoCo geom -> world body, for _touching
         rated = np.array([j for j, joint in enumerate(world.joints) if joint.kind in _RATED], dtype=np.int64)
         self._rated = rated  # the joints with a coordinate: slider, hinge
         self._rated_qpos, self._rated_dof = m.jnt_qposadr[lay.joint_id[rated]], m.jnt_dofadr[lay.joint_id[rated]]
         self._motored = motors  # world joints with a motor, their slots, signs
         self._motored_slot, self._motored_sign = self._motor_of[motors], self._sign[motors]
-        self._steps = 0
         self._stale = True
         for i, body in enumerate(world.bodies):
-            if body.motion is Motion.KINEMATIC:
-                self._kinematic[i] = (body.pos, body.quat, body.lin_vel, body.ang_vel)
-            elif body.motion is Motion.DYNAMIC:
+            if body.motion is Motion.DYNAMIC:
                 self._set_velocity(i, body.lin_vel, body.ang_vel)
         self._initial_joint_rates()
         for j, joint in enumerate(world.joints):
             if self._motor_of[j] >= 0:
                 motor = joint.motor
-                self.set_motor(j, motor.vel if motor else 0.0, motor.fmax if motor else 0.0)
-        self._place_kinematic(0.0)
+                self._set_motor(j, motor.vel if motor else 0.0, motor.fmax if motor else 0.0)
+        for i, pose in self.kinematic.items():
+            self._put(i, pose, 0.0)
 
     # --- inputs ---------------------------------------------------------------------------------
 
-    def set_kinematic(self, body: int, pos: Vec3, quat: Quat, lin_vel: Vec3, ang_vel: Vec3) -> None:
-        if body not in self._kinematic:
-            raise UnsupportedFeature(f"mujoco: body `{self.world.bodies[body].name}` is not kinematic")
-        self._kinematic[body] = (tuple(pos), tuple(quat), tuple(lin_vel), tuple(ang_vel))  # type: ignore[assignment]
-        self._place_kinematic(0.0)
+    def _place_kinematic(self, body: int, pose: KinematicPose) -> None:
+        self._put(body, pose, 0.0)
 
-    def set_motor(self, joint: int, vel: float, fmax: float) -> None:
+    def _set_motor(self, joint: int, vel: float, fmax: float) -> None:
         slot = int(self._motor_of[joint])
-        if slot < 0:
-            spec = self.world.joints[joint]
-            raise UnsupportedFeature(f"mujoco: joint `{spec.name}` ({spec.kind.value}) has no motor")
         self._m.tendon_frictionloss[slot] = fmax  # 0: no row, the motor is off
         self._target[slot] = self._sign[joint] * vel
 
-    def apply_force(self, body: int, force: Vec3, torque: Vec3) -> None:
-        if self.world.bodies[body].motion is not Motion.DYNAMIC:
-            return  # static and kinematic bodies are unaffected by forces
-        row = self._xfrc[self._layout.body_id[body]]
-        row[:3] += force
-        row[3:] += torque
-        self._forced = True
-
-    def reset_body(self, body: int, pos: Vec3, quat: Quat, lin_vel: Vec3, ang_vel: Vec3) -> None:
-        if body not in self._free or self.world.bodies[body].motion is not Motion.DYNAMIC:
-            name = self.world.bodies[body].name
-            raise UnsupportedFeature(f"mujoco: reset_body needs a free dynamic body; `{name}` is jointed")
+    def _reset_body(self, body: int, pos: Vec3, quat: Quat, lin_vel: Vec3, ang_vel: Vec3) -> None:
         qadr, _ = self._free[body]
         self._d.qpos[qadr : qadr + 3] = pos
         self._d.qpos[qadr + 3 : qadr + 7] = quat
@@ -152,48 +130,45 @@ class MujocoBackend(Backend):
 
     # --- stepping -------------------------------------------------------------------------------
 
-    def step(self) -> None:
+    def _step(self) -> None:
         m, d, nsteps, motors = self._m, self._d, self._nsteps, self._helper_dof.size > 0
-        earlier: list[_Pairs] = []
-        with map_engine_errors(self.name, "mj_step"):
-            if self._forced:
-                d.xfrc_applied[:] = self._xfrc  # held for every substep of this step, then cleared
+        forced = bool(self.forces)
+        if forced:  # held for every engine step of this step, then cleared
+            for i, acc in self.forces.items():
+                d.xfrc_applied[self._layout.body_id[i]] = acc
+        if motors:
+            self._motor_mean.start()
+        self._substep_contacts.start()
+        for k in range(nsteps):
+            if k:
+                for i, pose in self.kinematic.items():
+                    self._put(i, pose, self._times[k - 1])
             if motors:
-                self._motor_sum[:] = 0.0
-            for k in range(nsteps):
-                if k:
-                    self._place_kinematic(k * self._h)
-                if motors:
-                    d.qvel[self._helper_dof] = self._target
-                _coulomb.step(m, d)
-                if motors:
-                    self._motor_sum -= d.qfrc_constraint[self._helper_dof]  # the helper feels -(motor force)
-                if k + 1 < nsteps:  # the last engine step's contacts stay in MjData until contacts() asks
-                    earlier.append(self._touching())
-            if self._forced:
-                d.xfrc_applied[:] = 0.0
-                self._xfrc[:] = 0.0
-                self._forced = False
-            self._steps += 1
-            if self._kinematic:
-                dt = self.world.dt
-                for i, (pos, quat, lin, ang) in self._kinematic.items():  # now exactly where the velocity says
-                    end = (pos[0] + lin[0] * dt, pos[1] + lin[1] * dt, pos[2] + lin[2] * dt)
-                    self._kinematic[i] = (end, integrate_quat(quat, ang, dt), lin, ang)
-                self._place_kinematic(0.0)
-        self._earlier = earlier
+                d.qvel[self._helper_dof] = self._target
+            _coulomb.step(m, d)
+            if motors:
+                self._motor_mean.add(-d.qfrc_constraint[self._helper_dof])  # the helper feels -(motor force)
+            if k + 1 < nsteps:  # the last engine step's contacts stay in MjData until contacts() asks
+                self._substep_contacts.add(self._touching())
+        if motors:
+            self._motor_mean.finish()
+        if forced:
+            d.xfrc_applied[:] = 0.0
+        dt = self.world.dt
+        for i, pose in self.kinematic.items():  # now exactly where the velocity says, as the next step begins
+            pos, quat = pose.at(dt)
+            self._put(i, KinematicPose(pos, quat, pose.lin_vel, pose.ang_vel), 0.0)
         self._listed = None  # contacts() groups the last engine step's contacts when first asked
         self._stale = True
         self._check()
 
-    def _place_kinematic(self, t: float) -> None:
-        """Impose every kinematic body's pose at time ``t`` into the step, and its velocity."""
-        for i, (pos, quat, lin, ang) in self._kinematic.items():
-            qadr, _ = self._free[i]
-            q = integrate_quat(quat, ang, t)
-            self._d.qpos[qadr : qadr + 3] = (pos[0] + lin[0] * t, pos[1] + lin[1] * t, pos[2] + lin[2] * t)
-            self._d.qpos[qadr + 3 : qadr + 7] = q
-            self._set_velocity(i, lin, ang, q)
+    def _put(self, body: int, pose: KinematicPose, t: float) -> None:
+        """Impose a kinematic body's pose ``t`` into the step, and its velocity."""
+        qadr, _ = self._free[body]
+        pos, q = pose.at(t)
+        self._d.qpos[qadr : qadr + 3] = pos
+        self._d.qpos[qadr + 3 : qadr + 7] = q
+        self._set_velocity(body, pose.lin_vel, pose.ang_vel, q)
         self._stale = True
 
     def _set_velocity(self, body: int, lin: Vec3, ang: Vec3, quat: Quat | None = None) -> None:
@@ -225,17 +200,19 @@ class MujocoBackend(Backend):
                 self._d.qvel[dof : dof + 3] = quat_rotate(quat_conj(child.quat), ang)
 
     def _check(self) -> None:
-        if not self._warnings[_BAD].any() and np.isfinite(self._qpos).all() and np.isfinite(self._qvel).all():
+        """MuJoCo's own verdict: a state it counted as invalid (its warnings) is an EngineFailure. Blow-ups it
+        does not call invalid are the runner's to find (runner.sim.session)."""
+        if not self._warnings[_BAD].any():
             return
         d = self._d
-        dofs = set(np.flatnonzero(~np.isfinite(d.qvel)))
-        dofs |= {d.warning[w].lastinfo for w in _BAD_STATE[1:] if d.warning[w].number}  # lastinfo: the dof
+        dofs = {d.warning[w].lastinfo for w in _BAD_STATE[1:] if d.warning[w].number}  # lastinfo: the dof
         bad_bodies = {self._m.dof_bodyid[i] for i in dofs if 0 <= i < self._m.nv}
         named = [b.name for b, mj in zip(self.world.bodies, self._layout.body_id, strict=True) if mj in bad_bodies]
         body = named[0] if named else None
-        time = self._steps * self.world.dt
+        time = (self.steps + 1) * self.world.dt
         raise EngineFailure(
-            f"mujoco: the simulation became invalid (NaN, inf or a huge acceleration) by t={time:g} s",
+            f"mujoco: the engine reported an invalid state (NaN, inf or a huge value in qpos, qvel or qacc) "
+            f"by t={time:g} s",
             backend=self.name,
             body=body,
             time=time,
@@ -243,37 +220,25 @@ class MujocoBackend(Backend):
 
     # --- contacts -------------------------------------------------------------------------------
 
-    def _touching(self) -> _Pairs:
+    def _touching(self) -> list[Contact]:
         """Body pairs touching (distance <= 0) in the last engine step (MjData keeps them until the next)."""
         d, n = self._d, self._d.ncon
         if n == 0:
-            return _NO_PAIRS
+            return []
         c = d.contact
         dist, geom, rows = c.dist[:n], c.geom[:n], c.efc_address[:n]
         keep = dist <= 0.0
         if not keep.all():
             dist, geom, rows = dist[keep], geom[keep], rows[keep]
-        code = self._pair_code[geom[:, 0], geom[:, 1]]
         # elliptic cone: a contact's first row is its normal; a contact at distance 0 is "in the gap":
         # touching, with no row (address -1, 0 N; efc_force[-1] is only read, then dropped, when nefc > 0)
         force = np.where(rows >= 0, d.efc_force[rows], 0.0) if d.nefc else np.zeros(rows.size)
-        return _by_pair(code, -dist, force)
+        owner = self._geom_body
+        return group_by_pair(len(self.world.bodies), owner[geom[:, 0]], owner[geom[:, 1]], -dist, force)
 
-    def _merge(self, touching: list[_Pairs]) -> _Pairs:
-        """Pairs touching in any engine step of the scenario step: most points, deepest, summed force."""
-        if len(touching) == 1:
-            return touching[0]
-        code, points, depth, force = (np.concatenate(parts) for parts in zip(*touching, strict=True))
-        return _by_pair(code, depth, force, points)
-
-    def contacts(self) -> list[Contact]:
+    def _contacts(self) -> list[Contact]:
         if self._listed is None:  # first call since the step: group the last engine step's contacts now
-            code, points, depth, force = self._merge([*self._earlier, self._touching()])
-            n = len(self.world.bodies)
-            mean = force / self._nsteps if self._nsteps > 1 else force  # force: the step's mean
-            a, b = (code // n).tolist(), (code % n).tolist()
-            rows = zip(a, b, points.tolist(), depth.tolist(), mean.tolist(), strict=True)
-            self._listed = list(map(new_contact, rows))
+            self._listed = self._substep_contacts.merged(self._touching())
         return self._listed.copy()
 
     # --- reads ----------------------------------------------------------------------------------
@@ -281,13 +246,12 @@ class MujocoBackend(Backend):
     def _refresh(self) -> None:
         """Recompute poses and velocities from qpos/qvel (mj_step leaves xpos/xquat one step behind)."""
         if self._stale:
-            with map_engine_errors(self.name, "reading states"):
-                mujoco.mj_kinematics(self._m, self._d)
-                mujoco.mj_comPos(self._m, self._d)
-                mujoco.mj_comVel(self._m, self._d)
+            mujoco.mj_kinematics(self._m, self._d)
+            mujoco.mj_comPos(self._m, self._d)
+            mujoco.mj_comVel(self._m, self._d)
             self._stale = False
 
-    def body_states(self) -> BodyStates:
+    def _body_states(self) -> BodyStates:
         self._refresh()
         d, ids = self._d, self._layout.body_id
         pos = d.xpos[ids]
@@ -296,7 +260,7 @@ class MujocoBackend(Backend):
         lin = d.cvel[ids, 3:] + (ang[:, _YZX] * r[:, _ZXY] - ang[:, _ZXY] * r[:, _YZX])
         return BodyStates(pos=pos, quat=d.xquat[ids], lin_vel=lin, ang_vel=ang)
 
-    def joint_states(self) -> JointStates:
+    def _joint_states(self) -> JointStates:
         n, rated, motored = len(self.world.joints), self._rated, self._motored
         position, velocity, force = np.full(n, np.nan), np.full(n, np.nan), np.zeros(n)
         if rated.size:
@@ -304,11 +268,11 @@ class MujocoBackend(Backend):
             position[rated] = sign * self._qpos[self._rated_qpos]
             velocity[rated] = sign * self._qvel[self._rated_dof]
         if motored.size:
-            force[motored] = self._motored_sign * self._motor_sum[self._motored_slot] / self._nsteps
+            force[motored] = self._motored_sign * self._motor_mean.mean[self._motored_slot]
         return JointStates(position=position, velocity=velocity, motor_force=force)
 
-    def settings(self) -> dict[str, Any]:
-        o = self._opts
+    def _settings(self) -> dict[str, Any]:
+        o = self.options
         return {
             "engine": f"mujoco {mujoco.__version__}",
             "timestep": self._h,
@@ -330,18 +294,3 @@ class MujocoBackend(Backend):
         }
 
 
-def _by_pair(code: np.ndarray, depth: np.ndarray, force: np.ndarray, points: np.ndarray | None = None) -> _Pairs:
-    """Group rows by pair code: points (rows counted, or the largest given), deepest, summed force."""
-    if code.size == 0:
-        return _NO_PAIRS
-    order = np.lexsort((depth, code))  # by pair, deepest last
-    code, depth, force = code[order], depth[order], force[order]
-    starts = np.empty(code.size, dtype=bool)
-    starts[0] = True
-    np.not_equal(code[1:], code[:-1], out=starts[1:])
-    first = np.flatnonzero(starts)
-    last = np.empty_like(first)
-    last[:-1] = first[1:] - 1
-    last[-1] = code.size - 1
-    count = last - first + 1 if points is None else np.maximum.reduceat(points[order], first)
-    return code[first], count, depth[last], np.add.reduceat(force, first)

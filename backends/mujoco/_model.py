@@ -21,16 +21,16 @@ from __future__ import annotations
 
 import math
 from collections import deque
-from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
 
 import mujoco
 import numpy as np
 
-from ..errors import UnsupportedFeature
+from ..errors import EngineFailure, UnsupportedFeature
 from ..geometry import quat_conj, quat_mul, quat_rotate
 from ..types import BodySpec, CompiledWorld, JointKind, Motion, ShapeKind, Surface
+from ._options import MujocoOptions
 
 #: Constant constraint impedance (solimp dmin = dmax): how nearly a contact or stop reaches its
 #: reference acceleration. The rest, (1 - d) of the unconstrained acceleration, leaks through.
@@ -57,31 +57,6 @@ _JOINT = {
     JointKind.BALL: mujoco.mjtJoint.mjJNT_BALL,
 }
 _SOLIMP = [IMPEDANCE, IMPEDANCE, 0.001, 0.5, 2.0]
-
-
-@dataclass(frozen=True)
-class Options:
-    """The scenario's ``backend_options.mujoco`` block, validated."""
-
-    erp: float = 0.2  # ODE's default ERP, for contacts that do not bounce and for joint stops
-    bounce_erp: float = 0.05  # ERP of contacts that bounce (it adds to the rebound, see the docs)
-    engine_substeps: int = 1  # MuJoCo steps per world substep
-
-    @classmethod
-    def parse(cls, raw: Mapping[str, Any]) -> Options:
-        values = {**cls().__dict__, **raw}
-        for key, value in values.items():
-            ok = isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
-            if key == "engine_substeps":
-                ok, expected = ok and float(value).is_integer() and value >= 1, "an integer >= 1"
-            else:
-                ok, expected = ok and 0.0 < value <= 1.0, "a number in (0, 1]"
-            if not ok:
-                raise UnsupportedFeature(
-                    f"Invalid `backend_options.mujoco.{key}`. Expected {expected}. Received: {key}={value!r}."
-                )
-        values["engine_substeps"] = int(values["engine_substeps"])
-        return cls(**values)
 
 
 @dataclass(frozen=True)
@@ -161,7 +136,7 @@ def _rigid_groups(world: CompiledWorld, edges: dict[str, Edge]) -> dict[str, str
     return group
 
 
-def contact_solref(surface: Surface, h: float, opts: Options) -> tuple[list[float], list[float]]:
+def contact_solref(surface: Surface, h: float, opts: MujocoOptions) -> tuple[list[float], list[float]]:
     """(normal, friction) solref for a surface at engine step ``h`` (see the module docstring)."""
     e = surface.bounce
     erp = opts.erp if e == 0.0 else opts.bounce_erp
@@ -172,7 +147,7 @@ def _mu(surface: Surface) -> float:
     return min(surface.mu, MU_MAX)
 
 
-def build(world: CompiledWorld, opts: Options, h: float) -> Layout:
+def build(world: CompiledWorld, opts: MujocoOptions, h: float) -> Layout:
     """Compile ``world`` with engine step ``h``."""
     edges = plan_tree(world)
     spec = mujoco.MjSpec()
@@ -205,7 +180,10 @@ def build(world: CompiledWorld, opts: Options, h: float) -> Layout:
         _add_geom(mj, body)
     _add_motors(spec, world, heavy, h)
     _add_pairs(spec, world, edges, h, opts)
-    model = spec.compile()
+    try:
+        model = spec.compile()
+    except ValueError as exc:  # MjSpec reports a model it refuses as ValueError("Error: ...")
+        raise EngineFailure(f"mujoco: MjSpec.compile refused the model: {exc}", backend="mujoco") from exc
     _rescale_solver(model, [b.name for b in world.bodies if b.motion is Motion.DYNAMIC])
     return Layout(
         model=model,
@@ -256,7 +234,7 @@ def _relative_pose(body: BodySpec, parent: BodySpec | None) -> dict[str, list[fl
     return {"pos": list(quat_rotate(inv, delta)), "quat": list(quat_mul(inv, body.quat))}
 
 
-def _add_joint(mj: Any, body: BodySpec, world: CompiledWorld, edge: Edge, h: float, opts: Options) -> None:
+def _add_joint(mj: Any, body: BodySpec, world: CompiledWorld, edge: Edge, h: float, opts: MujocoOptions) -> None:
     joint = world.joints[edge.joint]  # type: ignore[index]
     if joint.kind is JointKind.FIXED:
         return  # no joint: welded to the parent
@@ -319,7 +297,7 @@ def _add_motors(spec: Any, world: CompiledWorld, heavy: float, h: float) -> None
         tendon.frictionloss = 0.0  # fmax; the backend sets it (0: off)
 
 
-def _add_pairs(spec: Any, world: CompiledWorld, edges: dict[str, Edge], h: float, opts: Options) -> None:
+def _add_pairs(spec: Any, world: CompiledWorld, edges: dict[str, Edge], h: float, opts: MujocoOptions) -> None:
     """One contact pair per pair of bodies that can touch, with that pair's surface.
 
     Bodies touch unless both are welded to the world or driven (static, kinematic), or they are joined

@@ -3,40 +3,27 @@
 Each engine step does what the lab's PyODE program does: collide, contact joints with the pair's surface,
 forces of this scenario step (re-added for every substep: ODE clears them after each ``dWorldStep``),
 ``world.step`` or ``world.quickStep``, empty the contact group. Kinematic bodies are then put back
-exactly on their commanded path and given their velocity again.
+exactly on their commanded path and given their velocity again. ODE's own messages (``dMessage``) are
+kept for ``drain_messages()`` instead of reaching stderr (``_native``).
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
-from typing import Any
+from typing import Any, ClassVar
 
 import numpy as np
 from panda3d.core import Datagram
 
+from .._kit import BackendOptions, KinematicPose, SubstepContacts, SubstepMean, substep_times
 from ..base import Backend
-from ..errors import BackendError, EngineFailure, map_engine_errors
-from ..geometry import integrate_quat
-from ..types import BodyStates, Capability, CompiledWorld, Contact, JointKind, JointStates, Motion, Quat, Vec3
+from ..types import BodyStates, Capability, Contact, JointKind, JointStates, Motion, Quat, Vec3
+from . import _native
 from ._build import JointHandle, axis_arg, build_scene, destroy_scene, panda_quat, set_motor
 from ._contacts import Collider
-from ._options import OPTION_KEYS, parse_options
+from ._options import OdeOptions
 
-#: A dynamic body beyond these is a blow-up, reported as EngineFailure (m, m/s).
-RUNAWAY_DISTANCE = 1e6
-RUNAWAY_SPEED = 1e6
 _ROTATIONAL = (JointKind.HINGE, JointKind.UNIVERSAL)
-
-
-@dataclass
-class _Kinematic:
-    """A kinematic body's commanded pose (exact, float64) and velocity."""
-
-    pos: np.ndarray
-    quat: Quat
-    lin: np.ndarray
-    ang: np.ndarray
 
 
 def _dot(a: Any, b: Any) -> float:
@@ -49,27 +36,34 @@ class OdeBackend(Backend):
     name = "ode"
     engine_distribution = "panda3d"
     capabilities = frozenset(Capability)
-    option_keys = OPTION_KEYS
+    Options: ClassVar[type[BackendOptions]] = OdeOptions
+    #: panda3d turns a failed C++ assertion (nassert) into AssertionError; ODE's own fatal errors abort.
+    engine_errors: ClassVar[tuple[type[BaseException], ...]] = (AssertionError,)
+    options: OdeOptions
 
-    def __init__(self, world: CompiledWorld) -> None:
-        super().__init__(world)
-        self.options = parse_options(world.options_for(self.name))
-        with map_engine_errors(self.name, "building the world"):
-            self._scene = build_scene(world, self.options)
-            self._collider = Collider(
-                self._scene, self.options.collide, self.options.contact_forces, f"ode-contacts-{id(self):x}"
-            )
-            self._fudge = [j.joint.getParamFudgeFactor(*axis_arg(j)) if j.feedback else 1.0 for j in self._scene.joints]
+    @classmethod
+    def engine_label(cls) -> str:
+        return _native.label()
+
+    def _build(self) -> None:
+        _native.install()
+        self._messages: list[str] = []
+        _native.attach()
+        try:
+            self._build_scene()
+        except BaseException:
+            _native.detach()
+            raise
+        self._messages.extend(_native.take())
+
+    def _build_scene(self) -> None:
+        world = self.world
+        self._scene = build_scene(world, self.options)
+        self._collider = Collider(
+            self._scene, self.options.collide, self.options.contact_forces, f"ode-contacts-{id(self):x}"
+        )
+        self._fudge = [j.joint.getParamFudgeFactor(*axis_arg(j)) if j.feedback else 1.0 for j in self._scene.joints]
         n = len(world.bodies)
-        self._force = np.zeros((n, 3))
-        self._torque = np.zeros((n, 3))
-        self._pushed: set[int] = set()
-        self._kinematic = {
-            i: _Kinematic(np.array(b.pos, dtype=float), b.quat, np.array(b.lin_vel, dtype=float),
-                          np.array(b.ang_vel, dtype=float))
-            for i, b in enumerate(world.bodies)
-            if b.motion is Motion.KINEMATIC
-        }
         self._dynamic = [i for i, b in enumerate(world.bodies) if b.motion is Motion.DYNAMIC]
         self._dynamic_bodies = [self._scene.bodies[i] for i in self._dynamic]
         # Each body's state row (pos, quat, lin_vel, ang_vel): static rows set here, the others per read.
@@ -78,13 +72,12 @@ class OdeBackend(Backend):
             if b.motion is Motion.STATIC:
                 self._fixed_rows[i, 0:3], self._fixed_rows[i, 3:7] = b.pos, b.quat
         self._stepper = self._scene.world.step if self.options.stepper == "step" else self._scene.world.quickStep
-        self._motor_force = np.zeros(len(world.joints))
-        self._steps = 0
+        self._times = substep_times(world.dt, world.substeps)
+        self._motor_mean = SubstepMean(len(world.joints))
+        self._substep_contacts = SubstepContacts(world.substeps)
         self._states: BodyStates | None = None  # fresh states, dropped by anything that moves a body
-        self._good: BodyStates | None = None  # the last states that passed the blow-up check
-        self._closed = False
 
-    def settings(self) -> dict[str, Any]:
+    def _settings(self) -> dict[str, Any]:
         o = self.options
         return {
             "engine": "ODE via panda3d.ode (single precision)",
@@ -101,52 +94,49 @@ class OdeBackend(Backend):
 
     # --- stepping ------------------------------------------------------------------------------------
 
-    def step(self) -> None:
-        self._require_open()
+    def _step(self) -> None:
         world, scene, collider, stepper = self.world, self._scene, self._collider, self._stepper
-        n, dt = world.substeps, world.dt
-        h = dt / n
-        joints, pushed, kinematic = scene.joints, self._pushed, self._kinematic
-        motor = np.zeros(len(joints)) if joints else None
-        with map_engine_errors(self.name, f"step at t={self._steps * dt:.6g} s"):
-            for sub in range(n):
-                last = sub == n - 1
-                collider.collide(report=last)
-                for i in pushed:
-                    body = scene.bodies[i]
-                    body.addForce(*self._force[i])  # type: ignore[union-attr]
-                    body.addTorque(*self._torque[i])  # type: ignore[union-attr]
-                if motor is None:
-                    stepper(h)
-                else:
-                    limits = [self._limit(j) for j in joints]
-                    stepper(h)
-                    for k, (joint, limit) in enumerate(zip(joints, limits, strict=True)):
-                        motor[k] += self._motor(k, joint, limit)
-                collider.after_step(report=last)
-                if kinematic:
-                    self._place_kinematic(dt if last else h * (sub + 1), advance=last)
-        if pushed:
-            self._force[:] = 0.0
-            self._torque[:] = 0.0
-            pushed.clear()
-        if motor is not None:
-            self._motor_force = motor / n
-        self._steps += 1
-        self._states = self._good = self._check(self._read_rows())
+        n = world.substeps
+        h = world.dt / n
+        joints = scene.joints
+        forces = list(self.forces.items())
+        every = n > 1  # with substeps, every substep's contacts are kept (the kit merges them)
+        if joints:
+            self._motor_mean.start()
+        if every:
+            self._substep_contacts.start()
+        for sub, t in enumerate(self._times):
+            report = every or sub == n - 1
+            collider.collide(report=report)
+            for i, acc in forces:
+                body = scene.bodies[i]
+                body.addForce(*acc[:3])  # type: ignore[union-attr]
+                body.addTorque(*acc[3:])  # type: ignore[union-attr]
+            if not joints:
+                stepper(h)
+            else:
+                limits = [self._limit(j) for j in joints]
+                stepper(h)
+                self._motor_mean.add([self._motor(k, j, limits[k]) for k, j in enumerate(joints)])
+            collider.after_step(report=report)
+            if every:
+                self._substep_contacts.add(collider.contacts())
+            if self.kinematic:
+                self._follow_track(t)
+        if joints:
+            self._motor_mean.finish()
+        self._states = None
+        self._messages.extend(_native.take())
 
-    def _place_kinematic(self, t: float, *, advance: bool) -> None:
+    def _follow_track(self, t: float) -> None:
         """Put each kinematic body where its velocity takes it ``t`` after the step began."""
-        for i, k in self._kinematic.items():
-            pos = k.pos + k.lin * t
-            quat = integrate_quat(k.quat, k.ang, t)
+        for i, pose in self.kinematic.items():
+            pos, quat = pose.at(t)
             body = self._scene.bodies[i]
             body.setPosition(*pos)  # type: ignore[union-attr]
             body.setQuaternion(panda_quat(quat))  # type: ignore[union-attr]
-            body.setLinearVel(*k.lin)  # type: ignore[union-attr]
-            body.setAngularVel(*k.ang)  # type: ignore[union-attr]
-            if advance:
-                k.pos, k.quat = pos, quat
+            body.setLinearVel(*pose.lin_vel)  # type: ignore[union-attr]
+            body.setAngularVel(*pose.ang_vel)  # type: ignore[union-attr]
 
     # --- motors --------------------------------------------------------------------------------------
 
@@ -202,9 +192,9 @@ class OdeBackend(Backend):
     def _read_rows(self) -> np.ndarray:
         """All bodies' states, one (N, 13) array: each row pos, quat, lin_vel, ang_vel."""
         rows = self._fixed_rows.copy()
-        for i, k in self._kinematic.items():  # the commanded pose, exact (ODE stores float32)
+        for i, pose in self.kinematic.items():  # the commanded pose, exact (ODE stores float32)
             row = rows[i]
-            row[0:3], row[3:7], row[7:10], row[10:13] = k.pos, k.quat, k.lin, k.ang
+            row[0:3], row[3:7], row[7:10], row[10:13] = pose.pos, pose.quat, pose.lin_vel, pose.ang_vel
         if self._dynamic:
             # Each vector written as ODE's float32 values (little-endian), widened to float64 exactly.
             dg = Datagram()
@@ -216,108 +206,54 @@ class OdeBackend(Backend):
             rows[self._dynamic] = np.frombuffer(dg.getMessage(), dtype="<f4").reshape(-1, 13)
         return rows
 
-    def _check(self, rows: np.ndarray) -> BodyStates:
-        """The states of ``rows``, or EngineFailure when a body blew up (non-finite, or far or fast)."""
-        states = BodyStates.from_rows(rows)
-        # One look first: with no component above half the limits, every norm is below them (sqrt(3)/2 < 1).
-        if rows.size and np.abs(rows).max() < 0.5 * min(RUNAWAY_DISTANCE, RUNAWAY_SPEED):
-            return states
-        bad = ~np.isfinite(states.pos).all(axis=1) | ~np.isfinite(states.lin_vel).all(axis=1)
-        bad |= ~np.isfinite(states.quat).all(axis=1) | ~np.isfinite(states.ang_vel).all(axis=1)
-        with np.errstate(invalid="ignore"):
-            bad |= np.linalg.norm(states.pos, axis=1) > RUNAWAY_DISTANCE
-            bad |= np.linalg.norm(states.lin_vel, axis=1) > RUNAWAY_SPEED
-        if bad.any():
-            i = int(np.argmax(bad))
-            t = self._steps * self.world.dt
-            last = self._good
-            good = None if last is None else {"pos": last.pos[i].tolist(), "lin_vel": last.lin_vel[i].tolist()}
-            raise EngineFailure(
-                f"ode: body `{self.world.bodies[i].name}` blew up at t={t:.6g} s "
-                f"(pos {states.pos[i].tolist()}, lin_vel {states.lin_vel[i].tolist()})",
-                backend=self.name, body=self.world.bodies[i].name, time=t, last_good=good,
-            )
-        return states
-
-    def body_states(self) -> BodyStates:
-        self._require_open()
+    def _body_states(self) -> BodyStates:
         if self._states is None:
-            with map_engine_errors(self.name, "reading body states"):
-                self._states = BodyStates.from_rows(self._read_rows())
+            self._states = BodyStates.from_rows(self._read_rows())
         s = self._states
         return BodyStates(s.pos.copy(), s.quat.copy(), s.lin_vel.copy(), s.ang_vel.copy())
 
-    def joint_states(self) -> JointStates:
-        self._require_open()
+    def _joint_states(self) -> JointStates:
         if not self._scene.joints:
-            return JointStates(np.zeros(0), np.zeros(0), self._motor_force.copy())
-        with map_engine_errors(self.name, "reading joint states"):
-            read = [self._position(j) for j in self._scene.joints]
+            return JointStates(np.zeros(0), np.zeros(0), np.zeros(0))
+        read = [self._position(j) for j in self._scene.joints]
         m = len(read)
         pos = np.array([r[0] for r in read], dtype=float).reshape(m)
         vel = np.array([r[1] for r in read], dtype=float).reshape(m)
-        return JointStates(pos, vel, self._motor_force.copy())
+        return JointStates(pos, vel, self._motor_mean.mean.copy())
 
-    def contacts(self) -> list[Contact]:
-        self._require_open()
+    def _contacts(self) -> list[Contact]:
+        if self.world.substeps > 1:
+            return self._substep_contacts.merged() if self.steps else []
         return self._collider.contacts()
+
+    def _drain_messages(self) -> list[str]:
+        self._messages.extend(_native.take())
+        out, self._messages = self._messages, []
+        return out
 
     # --- inputs --------------------------------------------------------------------------------------
 
-    def _body(self, index: int, motion: Motion | None = None) -> Any:
-        spec = self.world.bodies[index]
-        if motion is not None and spec.motion is not motion:
-            raise BackendError(f"ode: body `{spec.name}` is {spec.motion.value}, not {motion.value}.")
-        return self._scene.bodies[index]
-
-    def set_kinematic(self, body: int, pos: Vec3, quat: Quat, lin_vel: Vec3, ang_vel: Vec3) -> None:
-        self._require_open()
-        ode_body = self._body(body, Motion.KINEMATIC)
-        k = _Kinematic(np.array(pos, dtype=float), tuple(quat), np.array(lin_vel, dtype=float),  # type: ignore[arg-type]
-                       np.array(ang_vel, dtype=float))
-        self._kinematic[body] = k
-        with map_engine_errors(self.name, "placing a kinematic body"):
-            ode_body.setPosition(*k.pos)
-            ode_body.setQuaternion(panda_quat(k.quat))
-            ode_body.setLinearVel(*k.lin)
-            ode_body.setAngularVel(*k.ang)
+    def _place_kinematic(self, body: int, pose: KinematicPose) -> None:
+        ode_body = self._scene.bodies[body]
+        ode_body.setPosition(*pose.pos)  # type: ignore[union-attr]
+        ode_body.setQuaternion(panda_quat(pose.quat))  # type: ignore[union-attr]
+        ode_body.setLinearVel(*pose.lin_vel)  # type: ignore[union-attr]
+        ode_body.setAngularVel(*pose.ang_vel)  # type: ignore[union-attr]
         self._states = None
 
-    def set_motor(self, joint: int, vel: float, fmax: float) -> None:
-        self._require_open()
-        with map_engine_errors(self.name, "setting a motor"):
-            set_motor(self._scene.joints[joint], vel, fmax)
+    def _set_motor(self, joint: int, vel: float, fmax: float) -> None:
+        set_motor(self._scene.joints[joint], vel, fmax)
 
-    def apply_force(self, body: int, force: Vec3, torque: Vec3) -> None:
-        """Accumulated for the next step; kinematic and static bodies are unaffected by forces."""
-        self._require_open()
-        if self.world.bodies[body].motion is not Motion.DYNAMIC:
-            return
-        self._force[body] += force
-        self._torque[body] += torque
-        self._pushed.add(body)
-
-    def reset_body(self, body: int, pos: Vec3, quat: Quat, lin_vel: Vec3, ang_vel: Vec3) -> None:
-        self._require_open()
-        if self.world.bodies[body].motion is Motion.KINEMATIC:
-            self.set_kinematic(body, pos, quat, lin_vel, ang_vel)
-            return
-        ode_body = self._body(body, Motion.DYNAMIC)
-        with map_engine_errors(self.name, "resetting a body"):
-            ode_body.setPosition(*pos)
-            ode_body.setQuaternion(panda_quat(quat))
-            ode_body.setLinearVel(*lin_vel)
-            ode_body.setAngularVel(*ang_vel)
+    def _reset_body(self, body: int, pos: Vec3, quat: Quat, lin_vel: Vec3, ang_vel: Vec3) -> None:
+        ode_body = self._scene.bodies[body]
+        ode_body.setPosition(*pos)  # type: ignore[union-attr]
+        ode_body.setQuaternion(panda_quat(quat))  # type: ignore[union-attr]
+        ode_body.setLinearVel(*lin_vel)  # type: ignore[union-attr]
+        ode_body.setAngularVel(*ang_vel)  # type: ignore[union-attr]
         self._states = None
 
     # --- lifetime ------------------------------------------------------------------------------------
 
-    def _require_open(self) -> None:
-        if self._closed:
-            raise BackendError("ode: the backend is closed.")
-
-    def close(self) -> None:
-        if not self._closed:
-            self._closed = True
-            with map_engine_errors(self.name, "closing"):
-                destroy_scene(self._scene)
+    def _close(self) -> None:
+        _native.detach()
+        destroy_scene(self._scene)

@@ -12,8 +12,9 @@ Two ways, selected by the ``collide`` option, that make the same contact joints:
   (150 contacts at most) and an ``OdeContactJoint`` per contact, mode ``dContactBounce | dContactApprox1``.
 
 ``dContactApprox1`` makes ODE bound friction by mu times the normal force (a Coulomb coefficient, the
-scenario language's meaning) instead of by mu newtons. The report (pairs, points, depth) comes from
-the last substep's collision; with ``contact_forces`` the normal force is read from joint feedback.
+scenario language's meaning) instead of by mu newtons. A reported collide's pairs (points, depth) are
+those its contact joints used in the step that follows; with ``contact_forces`` the normal force is read
+from joint feedback.
 
 Per step only what arming feedback needs is done (one tuple per touching pair); the contact geoms,
 depths and forces are read through panda3d only when ``contacts()`` is called.
@@ -22,7 +23,6 @@ depths and forces are read through panda3d only when ``contacts()`` is called.
 from __future__ import annotations
 
 import math
-from operator import itemgetter
 from typing import Any
 
 from panda3d.core import EventQueue
@@ -35,13 +35,13 @@ from panda3d.ode import (
     OdeUtil,
 )
 
+from .._kit import group_by_pair
 from ..types import Contact, Surface
 from ._build import MAX_SURFACE_CLASSES, Scene
 
 CALLBACK_MAX_CONTACTS = 150  # PyODE's ode.collide() default, as the lab calls it
 _MODE = OdeSurfaceParameters.MFContactBounce | OdeSurfaceParameters.MFContactApprox1
 _JT_CONTACT = OdeJoint.JTContact
-_BY_PAIR = itemgetter(0, 1)
 
 #: One touching pair of the reported substep: (a, b, entry, first) with a < b its bodies, entry its
 #: OdeCollisionEntry (contact geoms in ODE's order) and first the index of its first feedback slot in
@@ -109,7 +109,7 @@ class Collider:
 
     def contacts(self) -> list[Contact]:
         if self._report is None:
-            self._report = _summaries(sorted(self._reported, key=_BY_PAIR), self._pool)
+            self._report = _summaries(self._reported, self._pool, len(self._bodies))
         return list(self._report)
 
     # --- auto ----------------------------------------------------------------------------------------
@@ -216,27 +216,24 @@ def _record(i: int, j: int, entry: Any, first: int) -> _Record:
     return (i, j, entry, first) if i < j else (j, i, entry, first)
 
 
-def _summaries(records: list[_Record], pool: list[OdeJointFeedback]) -> list[Contact]:
-    """One Contact per pair, from its contact geoms and (when armed) its contacts' feedback."""
-    out: list[Contact] = []
-    append = out.append
-    for a, b, entry, first in records:
+def _summaries(records: list[_Record], pool: list[OdeJointFeedback], n_bodies: int) -> list[Contact]:
+    """One Contact per pair (the kit's grouping), from its contact geoms and, when armed, their feedback."""
+    first: list[int] = []
+    second: list[int] = []
+    depth: list[float] = []
+    force: list[float] = []
+    for a, b, entry, slot in records:
         geoms = entry.getContactGeoms()
-        if first < 0:
-            force = math.nan
-            depth = max([geom.getDepth() for geom in geoms])
+        first += [a] * len(geoms)
+        second += [b] * len(geoms)
+        depth += [geom.getDepth() for geom in geoms]
+        if slot < 0:
+            force += [math.nan] * len(geoms)
         else:
             # A contact row's force is along its normal and the friction rows are orthogonal to it, so
             # |F1 . n| is that contact's normal force whichever body is the joint's first.
-            force = 0.0
-            depth = geoms[0].getDepth()  # then the largest, as max() picks it
-            for fb, geom in zip(pool[first : first + len(geoms)], geoms, strict=False):  # one slot per contact
-                force += abs(fb.getForce1().dot(geom.getNormal()))
-                d = geom.getDepth()
-                if d > depth:
-                    depth = d
-        append(Contact(a, b, len(geoms), depth if depth > 0.0 else 0.0, force))
-    return out
+            force += [abs(fb.getForce1().dot(geom.getNormal())) for fb, geom in zip(pool[slot:], geoms, strict=False)]
+    return group_by_pair(n_bodies, first, second, depth, force)
 
 
 def _mu(surface: Surface) -> float:

@@ -4,26 +4,24 @@ One client per instance (several may coexist; every call passes ``physicsClientI
 step is ``world.substeps`` calls of ``stepSimulation()`` with ``fixedTimeStep = dt / substeps`` and
 ``numSubSteps = 0``; damping is 0 everywhere; one-step forces are re-applied before every substep of
 the next step (PyBullet clears them after each); kinematic bodies are mass-0 bases placed with their
-velocity and re-placed exactly after each substep.
+velocity and re-placed exactly after each substep. With substeps, every substep's contacts are grouped
+and the kit merges them (backends/base.py: the contacts used during the step).
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
 from typing import Any, ClassVar
 
 import numpy as np
 import pybullet as p
 
+from .._kit import BackendOptions, KinematicPose, SubstepContacts, SubstepMean, substep_times
 from ..base import Backend
-from ..errors import EngineFailure, UnsupportedFeature, map_engine_errors
-from ..geometry import integrate_quat
 from ..types import (
     RIGID_BODY_CAPABILITIES,
     BodyStates,
     Capability,
-    CompiledWorld,
     Contact,
     JointKind,
     JointStates,
@@ -31,7 +29,8 @@ from ..types import (
     Quat,
     Vec3,
 )
-from ._build import PLANE_HALF_SIZE, Layout, build, initial_rate, read_options, xyzw
+from ._build import PLANE_HALF_SIZE, Layout, build, initial_rate, xyzw
+from ._options import PyBulletOptions
 from ._reads import ROW, ContactReader, base_rows
 from ._surfaces import FRICTION_CLAMP, SurfaceFit, fit_surfaces
 
@@ -43,7 +42,7 @@ _MAX_JOINT_VELOCITY = 1e6
 #: rebounds to 0.0000 of its height at 0.02, 0.27 at 0.001]. ODE makes contacts only when touching.
 #: NB: Bullet keeps this in a process-wide global, so every instance sets the same value.
 CONTACT_BREAKING_THRESHOLD = 0.001
-#: restitutionVelocityThreshold = bounce_vel + this * |g| * h (see PyBulletBackend._build).
+#: restitutionVelocityThreshold = bounce_vel + this * |g| * h (see PyBulletBackend._build_world).
 _GRAVITY_MARGIN = 1.5
 #: The quaternion's columns in a state row, in (w, x, y, z) order.
 _WXYZ = np.array([6, 3, 4, 5])
@@ -55,26 +54,26 @@ class PyBulletBackend(Backend):
     name: ClassVar[str] = _NAME
     engine_distribution: ClassVar[str] = "pybullet"
     capabilities: ClassVar[frozenset[Capability]] = RIGID_BODY_CAPABILITIES
-    option_keys: ClassVar[Mapping[str, str]] = {
-        "solver_iterations": "numSolverIterations of the constraint solver (default 50)",
-        "deterministic_overlapping_pairs": "sort broadphase pairs for run-to-run determinism (default true)",
-    }
+    Options: ClassVar[type[BackendOptions]] = PyBulletOptions
+    #: pybullet raises only ``pybullet.error`` (a failed command, a lost client).
+    engine_errors: ClassVar[tuple[type[BaseException], ...]] = (p.error,)
+    options: PyBulletOptions
 
-    def __init__(self, world: CompiledWorld) -> None:
-        super().__init__(world)
-        self._c = -1
-        self._iterations, self._overlapping = read_options(world)
-        with map_engine_errors(_NAME, "building the world"):
-            self._c = int(p.connect(p.DIRECT))
-            try:
-                self._build()
-            except BaseException:
-                self.close()
-                raise
+    @classmethod
+    def engine_label(cls) -> str:
+        return f"Bullet (pybullet {cls.engine_version()})"  # Bullet exposes no version of its own here
+
+    def _build(self) -> None:
+        self._c = int(p.connect(p.DIRECT))
+        try:
+            self._build_world()
+        except BaseException:
+            p.disconnect(physicsClientId=self._c)
+            raise
 
     # --- construction ---------------------------------------------------------------------------
 
-    def _build(self) -> None:
+    def _build_world(self) -> None:
         world, c = self.world, self._c
         self._h = world.dt / world.substeps
         p.setGravity(*world.gravity, physicsClientId=c)
@@ -90,10 +89,10 @@ class PyBulletBackend(Backend):
         p.setPhysicsEngineParameter(
             fixedTimeStep=self._h,
             numSubSteps=0,
-            numSolverIterations=self._iterations,
+            numSolverIterations=self.options.solver_iterations,
             restitutionVelocityThreshold=self._threshold,
             contactBreakingThreshold=CONTACT_BREAKING_THRESHOLD,
-            deterministicOverlappingPairs=int(self._overlapping),
+            deterministicOverlappingPairs=int(self.options.deterministic_overlapping_pairs),
             physicsClientId=c,
         )
         layout = self._layout
@@ -135,7 +134,7 @@ class PyBulletBackend(Backend):
             if handle.dofs != 1:
                 continue
             motor = joint.motor
-            self.set_motor(k, motor.vel if motor else 0.0, motor.fmax if motor else 0.0)
+            self._set_motor(k, motor.vel if motor else 0.0, motor.fmax if motor else 0.0)
             if joint.lo is not None or joint.hi is not None:  # in its own call: never with damping
                 lo = joint.lo if joint.lo is not None else -math.inf
                 hi = joint.hi if joint.hi is not None else math.inf
@@ -150,70 +149,61 @@ class PyBulletBackend(Backend):
         bases = [i for i in range(len(world.bodies)) if layout.link[i] < 0]
         self._base_uids = [layout.uid[i] for i in bases]
         self._base_rows = None if bases == list(range(len(world.bodies))) else bases  # None: every body, in order
-        trees = {uid for uid, _, _ in layout.link_groups}
-        self._jointed = {i for i, uid in enumerate(layout.uid) if uid in trees}
-        self._kinematic: dict[int, tuple[Vec3, Quat, Vec3, Vec3]] = {
-            i: (b.pos, b.quat, b.lin_vel, b.ang_vel) for i, b in enumerate(world.bodies) if b.motion is Motion.KINEMATIC
-        }
-        self._forces: dict[int, np.ndarray] = {}
         self._motor_joints = [k for k, h in enumerate(layout.joints) if h.dofs == 1]
-        self._motor_sum = np.zeros(len(world.joints))
+        self._motor_mean = SubstepMean(len(world.joints))
+        self._times = substep_times(world.dt, world.substeps)
+        self._substep_contacts = SubstepContacts(world.substeps)
         lut = np.full((max(layout.uid) + 1, max(layout.link) + 2), -1, dtype=np.int64)
         for i in range(len(world.bodies)):
             lut[layout.uid[i], layout.link[i] + 1] = i
         self._contact_reader = ContactReader(lut.tolist(), len(world.bodies))  # (multibody, link + 1) -> body
         self._cache: np.ndarray | None = None
-        self._contacts: list[Contact] | None = None
-        self._steps = 0
+        self._listed: list[Contact] | None = None
 
     # --- stepping -------------------------------------------------------------------------------
 
-    def step(self) -> None:
-        with map_engine_errors(_NAME, f"step {self._steps + 1}"):
-            c, n = self._c, self.world.substeps
-            motors = n > 1 and bool(self._motor_joints)  # the substeps' motor torques, for their mean
-            if not (self._forces or self._kinematic or motors):  # nothing to do between the engine's steps
-                for _ in range(n):
-                    p.stepSimulation(c)
-            else:
-                self._step_with_inputs(c, n, motors)
-            self._steps += 1
-            self._cache = None
-            self._contacts = None
+    def _step(self) -> None:
+        c, n = self._c, self.world.substeps
+        motors = n > 1 and bool(self._motor_joints)  # the substeps' motor torques, for their mean
+        if n == 1 and not (self.forces or self.kinematic):  # nothing to do around the engine's step
+            p.stepSimulation(c)
+        else:
+            self._step_with_inputs(c, n, motors)
+        self._cache = None
+        self._listed = None
 
     def _step_with_inputs(self, c: int, n: int, motors: bool) -> None:
-        """The substeps with one-step forces, kinematic bodies or motor torques to sum."""
+        """The substeps with one-step forces, kinematic bodies, motor torques or contacts to collect."""
         if motors:
-            self._motor_sum[:] = 0.0
-        for s in range(1, n + 1):
-            if self._forces:
+            self._motor_mean.start()
+        if n > 1:
+            self._substep_contacts.start()
+        for t in self._times:
+            if self.forces:
                 self._apply_forces()
             p.stepSimulation(physicsClientId=c)
-            if self._kinematic:
-                self._place_kinematic(s / n)
+            if self.kinematic:
+                self._follow_track(t)
             if motors:
-                self._motor_sum += self._motor_torques()
-        self._forces.clear()
-        for i, (pos, quat, lin, ang) in self._kinematic.items():
-            self._kinematic[i] = (self._advance(pos, lin, 1.0), integrate_quat(quat, ang, self.world.dt), lin, ang)
+                self._motor_mean.add(self._motor_torques())
+            if n > 1:
+                self._substep_contacts.add(self._contact_reader(p.getContactPoints(physicsClientId=c)))
+        if motors:
+            self._motor_mean.finish()
 
-    def _advance(self, pos: Vec3, lin: Vec3, fraction: float) -> Vec3:
-        t = self.world.dt * fraction
-        return (pos[0] + lin[0] * t, pos[1] + lin[1] * t, pos[2] + lin[2] * t)
-
-    def _place_kinematic(self, fraction: float) -> None:
-        """PyBullet does not move mass-0 bases: put each kinematic body where its velocity says."""
-        c, dt = self._c, self.world.dt
-        for i, (pos, quat, lin, ang) in self._kinematic.items():
+    def _follow_track(self, t: float) -> None:
+        """PyBullet does not move mass-0 bases: put each kinematic body where its velocity says at ``t``."""
+        c = self._c
+        for i, pose in self.kinematic.items():
             uid = self._layout.uid[i]
-            q = integrate_quat(quat, ang, dt * fraction)
-            p.resetBasePositionAndOrientation(uid, self._advance(pos, lin, fraction), xyzw(q), physicsClientId=c)
-            p.resetBaseVelocity(uid, lin, ang, physicsClientId=c)
+            pos, quat = pose.at(t)
+            p.resetBasePositionAndOrientation(uid, pos, xyzw(quat), physicsClientId=c)
+            p.resetBaseVelocity(uid, pose.lin_vel, pose.ang_vel, physicsClientId=c)
 
     def _apply_forces(self) -> None:
         """At the centre of mass, world frame, for this substep (PyBullet clears them after each)."""
         c, layout = self._c, self._layout
-        for i, ft in self._forces.items():
+        for i, ft in self.forces.items():
             uid, link = layout.uid[i], layout.link[i]
             if link < 0:
                 com = p.getBasePositionAndOrientation(uid, physicsClientId=c)[0]
@@ -244,99 +234,68 @@ class PyBulletBackend(Backend):
                     uid, links, computeLinkVelocity=1, computeForwardKinematics=1, physicsClientId=c
                 )
                 arr[bodies] = [ls[0] + ls[1] + ls[6] + ls[7] for ls in states]
-        if not np.isfinite(arr).all():
-            bad = self.world.bodies[int(np.flatnonzero(~np.isfinite(arr).all(axis=1))[0])].name
-            raise EngineFailure(
-                f"pybullet: body `{bad}` has a non-finite state after step {self._steps}",
-                backend=_NAME,
-                body=bad,
-                time=self._steps * self.world.dt,
-            )
         self._cache = arr
         return arr
 
-    def body_states(self) -> BodyStates:
-        with map_engine_errors(_NAME, "reading body states"):
-            arr = self._read()
-            return BodyStates(
-                pos=arr[:, 0:3].copy(),
-                quat=arr[:, _WXYZ],  # x, y, z, w -> w, x, y, z
-                lin_vel=arr[:, 7:10].copy(),
-                ang_vel=arr[:, 10:13].copy(),
-            )
+    def _body_states(self) -> BodyStates:
+        arr = self._read()
+        return BodyStates(
+            pos=arr[:, 0:3].copy(),
+            quat=arr[:, _WXYZ],  # x, y, z, w -> w, x, y, z
+            lin_vel=arr[:, 7:10].copy(),
+            ang_vel=arr[:, 10:13].copy(),
+        )
 
-    def joint_states(self) -> JointStates:
-        with map_engine_errors(_NAME, "reading joint states"):
-            m = len(self.world.joints)
-            pos, vel, force = np.full(m, np.nan), np.full(m, np.nan), np.zeros(m)
-            for k in self._motor_joints:
-                h = self._layout.joints[k]
-                q, qd, _, torque = p.getJointState(h.uid, h.link, physicsClientId=self._c)
-                pos[k], vel[k], force[k] = h.sign * q, h.sign * qd, h.sign * torque
-            if self.world.substeps > 1 and self._steps:
-                force = self._motor_sum / self.world.substeps  # the mean over the step's substeps
-            return JointStates(position=pos, velocity=vel, motor_force=force)
+    def _joint_states(self) -> JointStates:
+        m = len(self.world.joints)
+        pos, vel, force = np.full(m, np.nan), np.full(m, np.nan), np.zeros(m)
+        for k in self._motor_joints:
+            h = self._layout.joints[k]
+            q, qd, _, torque = p.getJointState(h.uid, h.link, physicsClientId=self._c)
+            pos[k], vel[k], force[k] = h.sign * q, h.sign * qd, h.sign * torque
+        if self.world.substeps > 1 and self.steps:
+            force = self._motor_mean.mean.copy()  # the mean over the step's substeps
+        return JointStates(position=pos, velocity=vel, motor_force=force)
 
-    def contacts(self) -> list[Contact]:
-        with map_engine_errors(_NAME, "reading contacts"):
-            if self._contacts is None:
-                self._contacts = self._contact_reader(p.getContactPoints(physicsClientId=self._c))
-            return list(self._contacts)
+    def _contacts(self) -> list[Contact]:
+        if self._listed is None:
+            if self.world.substeps > 1:
+                self._listed = self._substep_contacts.merged() if self.steps else []
+            else:
+                self._listed = self._contact_reader(p.getContactPoints(physicsClientId=self._c))
+        return list(self._listed)
 
     # --- inputs ---------------------------------------------------------------------------------
 
-    def set_kinematic(self, body: int, pos: Vec3, quat: Quat, lin_vel: Vec3, ang_vel: Vec3) -> None:
-        with map_engine_errors(_NAME, f"placing kinematic body {body}"):
-            if body not in self._kinematic:
-                raise UnsupportedFeature(f"Body `{self.world.bodies[body].name}` is not kinematic.")
-            self._kinematic[body] = (tuple(pos), tuple(quat), tuple(lin_vel), tuple(ang_vel))  # type: ignore[assignment]
-            uid = self._layout.uid[body]
-            p.resetBasePositionAndOrientation(uid, list(pos), xyzw(quat), physicsClientId=self._c)
-            p.resetBaseVelocity(uid, list(lin_vel), list(ang_vel), physicsClientId=self._c)
-            self._cache = None
+    def _place_kinematic(self, body: int, pose: KinematicPose) -> None:
+        uid = self._layout.uid[body]
+        p.resetBasePositionAndOrientation(uid, list(pose.pos), xyzw(pose.quat), physicsClientId=self._c)
+        p.resetBaseVelocity(uid, list(pose.lin_vel), list(pose.ang_vel), physicsClientId=self._c)
+        self._cache = None
 
-    def set_motor(self, joint: int, vel: float, fmax: float) -> None:
-        with map_engine_errors(_NAME, f"setting the motor of joint {joint}"):
-            h = self._layout.joints[joint]
-            if h.dofs != 1:
-                raise UnsupportedFeature(f"Joint `{self.world.joints[joint].name}` has no motor on PyBullet.")
-            if not fmax >= 0.0:
-                raise ValueError(f"fmax must be >= 0, got {fmax}")
-            p.setJointMotorControl2(
-                h.uid, h.link, p.VELOCITY_CONTROL, targetVelocity=h.sign * vel, force=fmax, physicsClientId=self._c
-            )
+    def _set_motor(self, joint: int, vel: float, fmax: float) -> None:
+        h = self._layout.joints[joint]
+        p.setJointMotorControl2(
+            h.uid, h.link, p.VELOCITY_CONTROL, targetVelocity=h.sign * vel, force=fmax, physicsClientId=self._c
+        )
 
-    def apply_force(self, body: int, force: Vec3, torque: Vec3) -> None:
-        if self.world.bodies[body].motion is not Motion.DYNAMIC:
-            return  # ODE: forces on static or kinematic bodies have no effect
-        acc = self._forces.setdefault(body, np.zeros(6))
-        acc[:3] += force
-        acc[3:] += torque
-
-    def reset_body(self, body: int, pos: Vec3, quat: Quat, lin_vel: Vec3, ang_vel: Vec3) -> None:
-        with map_engine_errors(_NAME, f"resetting body {body}"):
-            spec = self.world.bodies[body]
-            if spec.motion is not Motion.DYNAMIC or body in self._jointed:
-                raise UnsupportedFeature(
-                    f"Backend `pybullet` can only reset a dynamic body without joints; `{spec.name}` is not one."
-                )
-            uid = self._layout.uid[body]
-            p.resetBasePositionAndOrientation(uid, list(pos), xyzw(quat), physicsClientId=self._c)
-            p.resetBaseVelocity(uid, list(lin_vel), list(ang_vel), physicsClientId=self._c)
-            self._cache = None
+    def _reset_body(self, body: int, pos: Vec3, quat: Quat, lin_vel: Vec3, ang_vel: Vec3) -> None:
+        uid = self._layout.uid[body]
+        p.resetBasePositionAndOrientation(uid, list(pos), xyzw(quat), physicsClientId=self._c)
+        p.resetBaseVelocity(uid, list(lin_vel), list(ang_vel), physicsClientId=self._c)
+        self._cache = None
 
     # --- metadata and teardown --------------------------------------------------------------------
 
-    def settings(self) -> dict[str, Any]:
-        with map_engine_errors(_NAME, "reading settings"):
-            engine = dict(p.getPhysicsEngineParameters(physicsClientId=self._c)) if self._c >= 0 else {}
+    def _settings(self) -> dict[str, Any]:
+        engine = dict(p.getPhysicsEngineParameters(physicsClientId=self._c))
         out: dict[str, Any] = {
             "mode": "DIRECT",
             "fixed_time_step": self._h,
             "substeps": self.world.substeps,
             "num_sub_steps": 0,
-            "solver_iterations": self._iterations,
-            "deterministic_overlapping_pairs": self._overlapping,
+            "solver_iterations": self.options.solver_iterations,
+            "deterministic_overlapping_pairs": self.options.deterministic_overlapping_pairs,
             "restitution_velocity_threshold": self._threshold,
             "bounce_vel": self._fit.restitution_threshold,
             "contact_breaking_threshold": CONTACT_BREAKING_THRESHOLD,
@@ -355,11 +314,8 @@ class PyBulletBackend(Backend):
             out["lateral_friction_per_body"] = dict(zip(names, self._fit.friction, strict=True))
         return out
 
-    def close(self) -> None:
-        if self._c < 0:
-            return
+    def _close(self) -> None:
         c, self._c = self._c, -1
-        self._cache, self._contacts = None, None
-        with map_engine_errors(_NAME, "disconnecting"):
-            if p.isConnected(physicsClientId=c):
-                p.disconnect(physicsClientId=c)
+        self._cache, self._listed = None, None
+        if p.isConnected(physicsClientId=c):
+            p.disconnect(physicsClientId=c)

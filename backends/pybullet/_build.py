@@ -244,24 +244,6 @@ def _build_tree(
     layout.link_groups.append((uid, [li for _, li in order], [b for b, _ in order]))
 
 
-def read_options(world: CompiledWorld) -> tuple[int, bool]:
-    """``solver_iterations`` and ``deterministic_overlapping_pairs`` from ``backend_options.pybullet``."""
-    opts = world.options_for("pybullet")
-    iterations = opts.get("solver_iterations", 50)
-    if isinstance(iterations, bool) or not isinstance(iterations, int) or iterations < 1:
-        raise UnsupportedFeature(
-            "Invalid `backend_options.pybullet.solver_iterations`. Expected a positive integer. "
-            f"Received: solver_iterations={iterations!r}"
-        )
-    overlapping = opts.get("deterministic_overlapping_pairs", True)
-    if not isinstance(overlapping, bool):
-        raise UnsupportedFeature(
-            "Invalid `backend_options.pybullet.deterministic_overlapping_pairs`. Expected true or false. "
-            f"Received: deterministic_overlapping_pairs={overlapping!r}"
-        )
-    return iterations, overlapping
-
-
 def initial_rate(world: CompiledWorld, joint: JointSpec) -> float:
     """The joint rate implied by the bodies' initial velocities (body relative to other, along axis)."""
     specs = {b.name: b for b in world.bodies}

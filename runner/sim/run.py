@@ -127,6 +127,7 @@ def _run(program, loaded: LoadedScenario, backend, trace, progress, record_every
             0.0,
             failure=str(exc),
             extra={"body": exc.body, "time": exc.time, "last_good": exc.last_good},
+            engine_messages=session.engine_messages,
         )
     if trace is not None:
         trace.verdicts(result.end_time, [v.as_dict() for v in result.verdicts])
@@ -138,6 +139,7 @@ def _run(program, loaded: LoadedScenario, backend, trace, progress, record_every
             "end_time": result.end_time,
             "failure": result.failure,
             **({"failure_detail": result.extra} if result.failure else {}),
+            **({"engine_messages": result.engine_messages} if result.engine_messages else {}),
         }
         result.trace = str(trace.finish(result.status, summary))
         write_cost(Path(result.trace), result)

@@ -37,7 +37,10 @@ from runner.sim.intervals import IntervalManager
 from runner.sim.kinematics import KinematicTable
 from runner.sim.resolver import Snapshot, StateResolver
 
-MAX_SPEED = 1.0e4  # m/s or rad/s: beyond this a body is taken to have blown up
+#: The one blow-up limit, for every engine (docs/semantics.md, "Blow-ups"): a body whose state is not finite,
+#: or whose linear (m/s) or angular (rad/s) speed exceeds this, has blown up. Adapters check nothing
+#: themselves beyond what their engine calls fatal (backends/base.py).
+MAX_SPEED = 1.0e4
 
 
 @dataclass
@@ -55,6 +58,7 @@ class RunResult:
     trace: str | None = None
     failure: str | None = None
     extra: dict[str, Any] = field(default_factory=dict)
+    engine_messages: int = 0  # lines the engine printed about itself (Backend.drain_messages), in the trace log
 
     @property
     def passed(self) -> bool:
@@ -98,6 +102,7 @@ class Session:
             or any(type(a).__name__ == "ContactAssertion" for a in model.assertions)
         )
         self.events: list[tuple[float, str, str]] = []
+        self.engine_messages = 0
         self.event_counts: dict[str, int] = {}
         self.sound_starts: list[tuple[float, str]] = []
         self.playing_sounds: dict[str, float] = {}
@@ -241,7 +246,15 @@ class Session:
             if exc.body in self.body_index:
                 exc.last_good = self._last_good(self.body_index[exc.body])
                 exc.time = t_next if exc.time is None else exc.time
+            self._log_engine_messages(t_next)
             raise
+        self._log_engine_messages(t_next)
+
+    def _log_engine_messages(self, t: float) -> None:
+        """What the engine printed about itself (ODE's LCP messages...) goes to the trace's log, counted."""
+        for line in self.backend.drain_messages():
+            self.engine_messages += 1
+            self.log(t, "warning", line, "engine")
 
     def _read(self, t: float, contacts: bool = True) -> None:
         states = self.backend.body_states()
@@ -325,6 +338,7 @@ class Session:
         start = wallclock.perf_counter()
         steps = self.program.steps
         inputs = deque(self.program.inputs)
+        self._log_engine_messages(0.0)
         self._read(0.0)
         self._record(0.0)
         self.queue.append(("start", "start"))
@@ -375,4 +389,5 @@ class Session:
             self.events,
             self.sound_starts,
             wallclock.perf_counter() - start,
+            engine_messages=self.engine_messages,
         )

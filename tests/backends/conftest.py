@@ -26,3 +26,12 @@ def backend_name(request: pytest.FixtureRequest) -> str:
 @pytest.fixture
 def backend_cls(backend_name: str) -> type[Backend]:
     return get_backend(backend_name)
+
+
+@pytest.fixture(params=[*(e.name for e in list_backends()), "fake"])
+def any_backend(request: pytest.FixtureRequest) -> str:
+    """Every engine backend and the fake one: for the edge cases the contract settles for all of them."""
+    name: str = request.param
+    if not is_installed(name):
+        pytest.skip(f"engine not installed: {entry(name).hint}")
+    return name

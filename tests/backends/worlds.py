@@ -235,3 +235,39 @@ def busy() -> CompiledWorld:
         bodies.append(box(f"box{i}", (0.2, 0.2, 0.2), pos, density=500.0, quat=quat))
     bodies.append(sphere("ball", 0.1, (0.02, 0.0, 2.0), lin_vel=(0.1, 0.0, 0.0), ang_vel=(0.0, 0.0, 3.0)))
     return world("busy", bodies, surface=Surface(bounce=0.2, mu=0.8))
+
+
+def misuse(with_ball: bool = True) -> CompiledWorld:
+    """One body of each kind for the edge cases: static ground, kinematic platform, a free dynamic box,
+    the lab's door on a slider and (where the backend has ball joints) a bob on a ball joint."""
+    bodies = [
+        ground(),
+        box("platform", (1.0, 1.0, 0.1), (5.0, 0.0, 0.5), motion=Motion.KINEMATIC),
+        box("box", LAB_BOX, (0.0, 0.0, 2.0), density=500.0),
+        box("door", LAB_DOOR, (10.0, 0.0, 1.0), density=1000.0),
+    ]
+    joints = [JointSpec("slider", JointKind.SLIDER, "door", None, axis=(1.0, 0.0, 0.0), motor=LAB_MOTOR)]
+    if with_ball:
+        bodies.append(box("bob", (0.1, 0.1, 0.1), (20.5, 0.0, 1.0)))
+        joints.append(JointSpec("ball", JointKind.BALL, "bob", None, anchor=(20.0, 0.0, 1.0)))
+    return world("misuse", bodies, joints=tuple(joints), gravity=(0.0, 0.0, 0.0), dt=0.01)
+
+
+def resting_box(substeps: int) -> CompiledWorld:
+    """The lab's box (13.5 kg) resting on a plane, dt 0.04 in ``substeps`` engine steps."""
+    cube = box("box", LAB_BOX, (0.0, 0.0, 0.15), density=500.0)
+    return world("resting-box", [ground(), cube], dt=0.04, substeps=substeps)
+
+
+def lab_door_substeps(substeps: int) -> CompiledWorld:
+    """The lab's door (400 kg) on its slider, dt 0.04 in ``substeps`` engine steps, motor off at first."""
+    base = lab_door(motor=Motor(0.0, 0.0))
+    return world("door-substeps", list(base.bodies), joints=base.joints, dt=0.04, substeps=substeps)
+
+
+def turntable(mu: float = 1.0) -> CompiledWorld:
+    """A kinematic 2 x 2 x 0.1 turntable at the origin (top at z 0.55) with a 0.2 m cube resting on it
+    0.5 m from the axis (along +x), Coulomb mu; dt 0.01."""
+    table = box("table", (2.0, 2.0, 0.1), (0.0, 0.0, 0.5), motion=Motion.KINEMATIC)
+    cube = box("cube", (0.2, 0.2, 0.2), (0.5, 0.0, 0.65), density=500.0)
+    return world("turntable", [table, cube], surface=Surface(mu=mu), dt=0.01)

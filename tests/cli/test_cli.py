@@ -107,6 +107,8 @@ def test_backends_lists_versions() -> None:
     assert done.returncode == 0
     for name in ("pybullet", "mujoco", "dart", "ode"):
         assert name in done.stdout
+    text = " ".join(done.stdout.split())  # rich wraps long cells
+    assert "ODE 0.13.1" in text and "MuJoCo " in text and "DART " in text  # the engines' own versions
 
 
 def test_existing_trace_is_not_overwritten_without_force(tmp_path: Path) -> None:

@@ -33,3 +33,23 @@ def test_raw_loop_matches_the_runner(backend: str, tmp_path: Path) -> None:
     assert np.abs(final[1:, 2] - np.array([b.pos[2] for b in world.bodies[1:]])).max() > 0.005
     # the instrumented parts add up: engine, trace and the runner's own work are each a positive share
     assert 0 < timing.engine_step < timing.seconds and 0 < timing.trace < timing.seconds and timing.runner_own > 0
+
+
+def test_bench_takes_its_engines_from_the_registry() -> None:
+    """No engine's registry name is written in bench/ outside the engines' own loops (raw_<name>.py): the
+    benchmarks list what the registry lists, so a fifth engine joins them by its registry line."""
+    import ast
+
+    from backends.registry import list_backends
+    from bench import __main__ as cli
+
+    names = {e.name for e in list_backends()}
+    assert set(cli.ENGINES) == names and set(measure.RAW_LOOPS) <= names
+    wrong = []
+    for path in sorted((Path(measure.__file__).parent).glob("*.py")):
+        if path.stem.startswith("raw_") and path.stem[4:] in names:
+            continue
+        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+            if isinstance(node, ast.Constant) and isinstance(node.value, str) and node.value in names:
+                wrong.append(f"{path.name}:{node.lineno} {node.value!r}")
+    assert not wrong, "engine names in bench/: " + ", ".join(wrong)

@@ -82,6 +82,7 @@ def _result_json(r: RunResult) -> dict[str, Any]:
         "trace": r.trace,
         "failure": r.failure,
         "failure_detail": r.extra or None,
+        "engine_messages": r.engine_messages,
         "verdicts": [v.as_dict() for v in r.verdicts],
         "events": [{"time": t, "name": n, "source": s} for t, n, s in r.events],
     }
@@ -200,6 +201,8 @@ def _print_result(out: Console, result: RunResult, quiet: bool) -> None:
         detail = result.extra.get("last_good")
         if detail:
             out.print(f"  last good state of `{result.extra.get('body')}`: {escape(json.dumps(detail))}")
+    if result.engine_messages:
+        out.print(f"  {result.engine_messages} engine message(s) from {result.backend}, in the trace's log (`engine`)")
     if result.verdicts and (not quiet or not result.passed):
         out.print(verdict_table(result, failures_only=quiet))
     if result.trace and not quiet:
