@@ -46,11 +46,13 @@ def due_step(t: float, dt: float) -> int:
 
 
 def input_time(step: int, dt: float) -> float:
-    """The shortest decimal time that the loader maps back to ``step`` (1.2, not 1.2000000000000002)."""
+    """The time of step ``step`` (``step * dt``, when the input was delivered) as the shortest decimal that
+    is that time to a nanosecond (the trace's resolution) and that the loader maps back to ``step``: 1.2,
+    not 1.2000000000000002 (and never 1.5 for step 38 of 0.04 s, which the loader would also map there)."""
     exact = step * dt
     for digits in range(1, 18):
         t = round(exact, digits)
-        if due_step(t, dt) == step:
+        if abs(t - exact) < 0.5e-9 and due_step(t, dt) == step:
             return t
     return exact  # pragma: no cover - k*dt itself always maps to k
 

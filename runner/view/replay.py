@@ -29,11 +29,9 @@ __all__ = ["Replay", "label_of"]
 
 
 def label_of(trace: Trace) -> str:
-    s = trace.scenario
-    passed = sum(1 for v in trace.verdicts for d in v.data.get("verdicts", []) if d.get(tf.VERDICT_PASSED))
-    total = sum(len(v.data.get("verdicts", [])) for v in trace.verdicts)
-    parts = [s.get(tf.KEY_BACKEND, "?"), s.get(tf.KEY_VARIANT, "?"), trace.status, f"{passed}/{total} passed"]
-    return "  |  ".join(parts)
+    """The line under a run's picture: backend, how the run ended, verdicts passed."""
+    passed = sum(1 for v in trace.verdicts if v.passed)
+    return f"{trace.scenario.get(tf.KEY_BACKEND, '?')}: {trace.status}, {passed}/{len(trace.verdicts)} passed"
 
 
 @dataclass
@@ -45,12 +43,11 @@ class _Run:
 
 
 def _verdicts(trace: Trace) -> list[tuple[float, str, bool]]:
+    """(decided at, name, passed) of every verdict (recorded at the end, each with the time it was decided)."""
     out = []
-    for record in trace.verdicts:
-        for d in record.data.get("verdicts", []):
-            when = d.get("time")
-            at = float(when) if isinstance(when, int | float) else record.t
-            out.append((at, str(d.get(tf.VERDICT_NAME, "?")), bool(d.get(tf.VERDICT_PASSED))))
+    for v in trace.verdicts:
+        when = v.data.get("time")
+        out.append((float(when) if isinstance(when, int | float) else v.t, v.name, bool(v.passed)))
     return sorted(out, key=lambda v: v[0])
 
 
@@ -69,7 +66,7 @@ class Replay:
         self.end = max((r.model.end_time for r in self.runs), default=0.0)
         self.times = np.unique(np.concatenate([r.trace.times for r in self.runs])) if self.runs else np.zeros(1)
         first = traces[0].scenario
-        title = f"scenario view: {first.get(tf.KEY_NAME, '?')} (replay of {len(traces)} trace(s))"
+        title = f"scenario view: {first.get(tf.KEY_NAME, '?')} / {first.get(tf.KEY_VARIANT, '?')} (replay)"
         self.hud = Hud(title=title, end_time=self.end, mode="replay")
         scenes = [PandaScene(r.model) for r in self.runs]
         starts = [r.model.pose(b, 0.0) for r in self.runs for b in r.model.bodies if r.model.shape.get(b) != "plane"]
