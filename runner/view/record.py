@@ -60,7 +60,7 @@ def input_time(step: int, dt: float) -> float:
 def _yaml() -> Any:
     from ruamel.yaml import YAML
 
-    yaml = YAML()  # round trip: keeps comments, key order, flow and block styles, quotes
+    yaml = YAML()  # round trip (typ "rt"): keeps comments, order, styles, quotes; builds no Python objects from tags
     yaml.preserve_quotes = True
     yaml.width = 4096
     yaml.indent(mapping=2, sequence=4, offset=2)
@@ -129,8 +129,8 @@ def variant_text(plan: RecordPlan, loaded: LoadedScenario, played: Sequence[Play
     """The new variant's lines (comments, then the YAML), indented for the file."""
     from ruamel.yaml.comments import CommentedMap, CommentedSeq
 
-    yaml = _yaml()
-    data = yaml.load(loaded.text)
+    editor = _yaml()
+    data = editor.load(loaded.text)
     source = (data.get("variants") or {}).get(loaded.variant) if loaded.variant != BASE_CASE else None
     source = source if isinstance(source, dict) else {}
     body = CommentedMap()
@@ -155,7 +155,7 @@ def variant_text(plan: RecordPlan, loaded: LoadedScenario, played: Sequence[Play
     if source.get("assertions"):
         body["assertions"] = copy.deepcopy(source["assertions"])
     out = io.StringIO()
-    yaml.dump({plan.name: body}, out)
+    editor.dump({plan.name: body}, out)
     header = [f"Recorded by `scenario view` on {backend} ({engine}); the played inputs are at the step"]
     header.append("boundaries they were delivered at (the times are multiples of dt).")
     header += _verdict_lines(verdicts)
