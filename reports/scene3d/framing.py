@@ -18,7 +18,7 @@ import numpy as np
 
 from reports.scene3d.model import SceneModel
 
-__all__ = ["HEADING", "PITCH", "CameraSpec", "frame_camera", "moving_bodies", "reach"]
+__all__ = ["HEADING", "LAB_CAMERA", "PITCH", "CameraSpec", "frame_camera", "moving_bodies", "reach"]
 
 HEADING = 25.0  # degrees
 PITCH = -25.0
@@ -39,6 +39,17 @@ class CameraSpec:
     def axes(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(right, forward, up) unit vectors in world coordinates."""
         return _axes(self.heading, self.pitch)
+
+    def with_aspect(self, aspect: float) -> CameraSpec:
+        """The same camera for a picture or window ``aspect`` = width / height wide: the horizontal field
+        of view kept, the vertical one from it (a pinhole: tan(v/2) = tan(h/2) / aspect)."""
+        v = math.degrees(2 * math.atan(math.tan(math.radians(self.fov[0] / 2)) / aspect))
+        return CameraSpec(self.pos, self.heading, self.pitch, (self.fov[0], v))
+
+
+#: The lab's camera (seed: "place the camera at (1,-8,5) with a pitch of -25 degrees"), with Panda3D's
+#: default horizontal field of view of 40 degrees (config ``default-fov``), for a 4:3 window.
+LAB_CAMERA = CameraSpec((1.0, -8.0, 5.0), 0.0, -25.0, (40.0, 40.0)).with_aspect(4 / 3)
 
 
 def _axes(heading: float, pitch: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

@@ -99,6 +99,10 @@ class SceneModel:
             updates=[(0.0, entities)],
         )
 
+    def add_update(self, t: float, entities: Sequence[EntityVisual]) -> None:
+        """A live run's scene changes at ``t`` (each entity replaces the one of its id), in time order."""
+        self.updates.append((t, {e.id: e for e in entities}))
+
     def entities_at(self, t: float) -> dict[str, EntityVisual]:
         """Every entity as the scene shows it at ``t``."""
         out: dict[str, EntityVisual] = {}

@@ -20,13 +20,10 @@ from panda3d.core import (
     GraphicsOutput,
     GraphicsPipe,
     GraphicsPipeSelection,
-    Material,
-    MaterialAttrib,
     NodePath,
     PerspectiveLens,
     Point2,
     Point3,
-    RenderState,
     Texture,
     WindowProperties,
     loadPrcFileData,
@@ -34,12 +31,11 @@ from panda3d.core import (
 from PIL import Image
 
 from reports.scene3d.framing import CameraSpec
-from reports.scene3d.panda import PandaScene
+from reports.scene3d.panda import BACKGROUND, PandaScene, software_camera_state
 
 __all__ = ["BACKGROUND", "SUPERSAMPLE", "OffscreenRenderer", "RendererUnavailable"]
 
 SUPERSAMPLE = 2
-BACKGROUND = (0.92, 0.94, 0.97)
 NEAR, FAR = 0.05, 2000.0
 
 # before the first pipe exists: no X display is needed, and its absence is not an error worth printing
@@ -79,12 +75,7 @@ class OffscreenRenderer:
         self.lens = PerspectiveLens()
         self.lens.setNearFar(NEAR, FAR)
         camera = Camera("camera", self.lens)
-        # tinydisplay multiplies a lit vertex colour by itself once more unless a material supplies the
-        # lit terms: white ambient and diffuse leave the vertex colour to modulate once, as OpenGL does
-        white = Material("white")
-        white.setAmbient((1.0, 1.0, 1.0, 1.0))
-        white.setDiffuse((1.0, 1.0, 1.0, 1.0))
-        camera.setInitialState(RenderState.make(MaterialAttrib.make(white), 1))
+        camera.setInitialState(software_camera_state())
         self.camera = NodePath(camera)
         self.region = self.buffer.makeDisplayRegion()
         self.region.setCamera(self.camera)

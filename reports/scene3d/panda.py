@@ -22,19 +22,34 @@ from panda3d.core import (
     GeomVertexData,
     GeomVertexFormat,
     GeomVertexWriter,
+    Material,
+    MaterialAttrib,
     NodePath,
     Quat,
+    RenderState,
     TransparencyAttrib,
 )
 
 from reports.scene3d.meshes import primitive_mesh
 from reports.scene3d.model import EntityVisual, Primitive, SceneModel
 
-__all__ = ["AMBIENT", "LIGHT_HPR", "PandaScene"]
+__all__ = ["AMBIENT", "BACKGROUND", "LIGHT_HPR", "PandaScene", "software_camera_state"]
 
 AMBIENT = 0.42
 DIRECTIONAL = 0.62
 LIGHT_HPR = (35.0, -60.0, 0.0)  # from above, front-right
+BACKGROUND = (0.92, 0.94, 0.97)  # the pictures' and the window's clear colour
+
+
+def software_camera_state() -> RenderState:
+    """The initial state of a camera drawn by ``p3tinydisplay``: that renderer multiplies a lit vertex
+    colour by itself once more unless a material supplies the lit terms; white ambient and diffuse leave
+    the vertex colour to modulate once, as OpenGL does (an OpenGL camera must not get it: a material
+    there replaces the vertex colours)."""
+    white = Material("white")
+    white.setAmbient((1.0, 1.0, 1.0, 1.0))
+    white.setDiffuse((1.0, 1.0, 1.0, 1.0))
+    return RenderState.make(MaterialAttrib.make(white), 1)
 
 
 def _triangles(prims: Sequence[Primitive]) -> Geom | None:

@@ -23,7 +23,8 @@ def trace_path(out_dir: Path, loaded: LoadedScenario, backend: str) -> Path:
     return out_dir / f"{stem}.mcap"
 
 
-def _solids(program) -> list:  # noqa: ANN001 - runner-internal
+def solid_visuals(program) -> list:  # noqa: ANN001 - runner-internal
+    """The collision solids as the trace's scene draws them (scaled, in their body's frame)."""
     from runner.trace.writer import SolidVisual
 
     out = []
@@ -55,19 +56,21 @@ def run_loaded(
     force: bool = True,
     record_every: int = 1,
     trace_process: bool = False,
+    drive: Callable[[Session], RunResult] | None = None,
 ) -> RunResult:
     """Build, run and record one case. Engine failures come back as a result with status engine-failure;
     an interruption (KeyboardInterrupt) finishes the trace as interrupted and propagates.
 
     ``record_every``: the trace gets every k-th step and the last (assertions still check every step);
-    ``trace_process``: the trace is formatted and written by a second process (runner.trace.process)."""
+    ``trace_process``: the trace is formatted and written by a second process (runner.trace.process);
+    ``drive``: what runs the session instead of ``Session.run`` (a live run, runner.view)."""
     program = build_program(loaded)
     cls = get_backend(backend_name)
     check_capabilities(cls, program.world)
     backend = cls(program.world)
     try:
         if out_dir is None:
-            return _run(program, loaded, backend, None, progress, record_every)
+            return _run(program, loaded, backend, None, progress, record_every, drive)
         from runner.trace.writer import TraceMeta, TraceWriter
 
         try:
@@ -103,16 +106,18 @@ def run_loaded(
             writer = BackgroundTraceWriter
         with interrupts.deferred(), writer(trace_path(out_dir, loaded, backend_name), meta, force=force) as trace:
             _attach_sources(trace, loaded, program)
-            trace.scene(0.0, _solids(program))
-            return _run(program, loaded, backend, trace, progress, record_every)
+            trace.scene(0.0, solid_visuals(program))
+            return _run(program, loaded, backend, trace, progress, record_every, drive)
     finally:
         backend.close()
 
 
-def _run(program, loaded: LoadedScenario, backend, trace, progress, record_every: int = 1) -> RunResult:  # noqa: ANN001
+def _run(  # noqa: ANN001
+    program, loaded: LoadedScenario, backend, trace, progress, record_every: int = 1, drive=None
+) -> RunResult:
     session = Session(program, backend, trace, progress, record_every)
     try:
-        result = session.run()
+        result = session.run() if drive is None else drive(session)
     except EngineFailure as exc:
         result = RunResult(
             program.name,

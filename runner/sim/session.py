@@ -17,7 +17,7 @@ from __future__ import annotations
 import math
 import time as wallclock
 from collections import deque
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Generator, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -108,6 +108,7 @@ class Session:
         self.playing_sounds: dict[str, float] = {}
         self.forces: dict[int, np.ndarray] = {}
         self.queue: deque[tuple[str, str]] = deque()
+        self.injected: list[str] = []  # input events for the next step boundary (inject(); scenario view)
         self.ended = False
         self.end_reason = ""
         self.resolver = StateResolver(
@@ -335,6 +336,22 @@ class Session:
         self._recorded = t
 
     def run(self) -> RunResult:
+        """Run every step; the result."""
+        steps = self.advance()
+        while True:
+            try:
+                next(steps)
+            except StopIteration as done:
+                return done.value
+
+    def inject(self, event: str) -> None:
+        """Deliver ``event`` at the next step boundary exactly as a timed input due there would be (source
+        "input", after the timed inputs of that step): how a live run (scenario view) gets keys and clicks."""
+        self.injected.append(event)
+
+    def advance(self) -> Generator[float, None, RunResult]:
+        """The step loop, one step at a time: yields the simulated time reached (0 before the first step,
+        then after each step), returns the result. ``run()`` drains it; a live run paces it."""
         start = wallclock.perf_counter()
         steps = self.program.steps
         inputs = deque(self.program.inputs)
@@ -344,12 +361,15 @@ class Session:
         self.queue.append(("start", "start"))
         t = 0.0
         k = 0
+        yield t
         for k in range(steps):
             t = k * self.dt
             pending = list(self.queue)
             self.queue.clear()
             while inputs and inputs[0].step <= k:
                 pending.append((inputs.popleft().event, "input"))
+            pending.extend((event, "input") for event in self.injected)
+            self.injected.clear()
             for event, source in pending:
                 self.dispatch(event, t, source)
                 if self.ended:
@@ -371,6 +391,7 @@ class Session:
             t = t_next
             if self.progress is not None and (k % 50 == 0 or k == steps - 1):
                 self.progress(k + 1, steps)
+            yield t
         else:
             k = steps
         if self.trace is not None and self._recorded != t:  # ended between recorded steps: keep the last state

@@ -24,6 +24,7 @@ FORBIDDEN = {
     "runner.ci": ("runner.exec", "runner.conformance"),
     "backends": ("runner", "reports"),
     "reports": ("runner",),
+    "runner.view": ("runner.exec", "runner.ci", "runner.conformance", "runner.cli"),
 }  # fmt: skip
 
 #: Engine modules, imported only inside their own adapter package.
@@ -58,9 +59,10 @@ def test_stages_import_only_what_comes_before_them(stage: str) -> None:
     assert not wrong, f"{stage} imports a later stage: " + ", ".join(wrong)
 
 
-#: Panda3D is also the renderer of the report's pictures (and of `scenario view`): reports.scene3d may import its
-#: rendering modules (panda3d.core), never its physics (panda3d.ode).
-RENDERERS = {"panda3d": "reports.scene3d"}
+#: Panda3D is also the renderer of the report's pictures and of `scenario view`'s window: reports.scene3d and
+#: runner.view may import its rendering and display modules (panda3d.core, direct.showbase, direct.gui), never its
+#: physics (panda3d.ode).
+RENDERERS = {"panda3d": ("reports.scene3d", "runner.view"), "direct": ("runner.view",)}
 
 
 def _full_imports(path: object) -> set[str]:
@@ -83,10 +85,24 @@ def test_only_an_engines_adapter_imports_the_engine() -> None:
         for engine in external_imports(name, path) & set(ENGINES):
             if _in(name, ENGINES[engine]):
                 continue
-            renderer = RENDERERS.get(engine)
-            if renderer and _in(name, renderer) and not any(m.startswith("panda3d.ode") for m in _full_imports(path)):
+            renderers = RENDERERS.get(engine, ())
+            if any(_in(name, r) for r in renderers) and not any(
+                m.startswith("panda3d.ode") for m in _full_imports(path)
+            ):
                 continue
             wrong.append(f"{name} imports {engine}")
+    assert not wrong, ", ".join(wrong)
+
+
+def test_no_stage_of_a_run_imports_the_viewer() -> None:
+    """runner.view drives runs; the stages it drives (and reports) never import it."""
+    wrong = sorted(
+        f"{a} -> {b}"
+        for a, targets in GRAPH.items()
+        if not _in(a, "runner.view") and not _in(a, "runner.cli")
+        for b in targets
+        if _in(b, "runner.view")
+    )
     assert not wrong, ", ".join(wrong)
 
 
