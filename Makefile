@@ -3,8 +3,10 @@ PYTHON ?= python3
 VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
+# tools that are not Python packages of the project (protoc, the Foxglove Studio bundle) live here, outside the repo
+CACHE ?= $(or $(XDG_CACHE_HOME),$(HOME)/.cache)/physics-scenarios
 
-.PHONY: demo test lint setup clean sounds schema conformance baselines bench bench-quick fuzz
+.PHONY: demo test lint setup clean sounds schema conformance baselines bench bench-quick fuzz proto
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -49,3 +51,9 @@ bench-quick: $(STAMP)
 
 clean:
 	rm -rf $(VENV) traces .pytest_cache
+
+# regenerate runner/trace/proto/physics_scenarios_pb2.py(i) from the .proto (protoc 29 from grpcio-tools 1.71, whose
+# code runs on protobuf >= 5.29); tests/trace/test_proto.py checks that the two agree
+proto:
+	test -x $(CACHE)/protoc/bin/python || ($(PYTHON) -m venv $(CACHE)/protoc && $(CACHE)/protoc/bin/pip install -q 'grpcio-tools==1.71.*')
+	cd runner/trace/proto && $(CACHE)/protoc/bin/python -m grpc_tools.protoc -I. --python_out=. --pyi_out=. physics_scenarios.proto

@@ -165,6 +165,9 @@ class BackgroundTraceWriter:
     def sound(self, t: float, name: str, action: str, offset: float = 0.0, volume: float = 1.0) -> None:
         self._send("sound", t, name, action, offset, volume)
 
+    def verdict(self, t: float, verdict: Mapping[str, Any]) -> None:
+        self._send("verdict", t, dict(verdict))
+
     def verdicts(self, t: float, verdicts: Sequence[Mapping[str, Any]]) -> None:
         self._send("verdicts", t, [dict(v) for v in verdicts])
 
