@@ -33,6 +33,7 @@ from runner.trace.sounds import SoundBank
 
 __all__ = ["SolidVisual", "TraceMeta", "TraceWriter"]
 
+
 @dataclass(frozen=True)
 class TraceMeta:
     scenario: str
