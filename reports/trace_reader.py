@@ -238,9 +238,9 @@ def _check_format(path: Path, metadata: dict[str, str]) -> None:
     if version == str(tf.TRACE_FORMAT_VERSION):
         return
     known = tf.PREVIOUS_FORMATS.get(int(version)) if version.isdigit() else None
-    what = f"trace format {version or '(none)'}" + (f": {known}" if known else "")
+    what = f"trace format {version or '(none)'}" + (f" ({known})" if known else "")
     raise TraceReadError(
-        f"{path} is a {what}; this version of physics-scenarios reads trace format {tf.TRACE_FORMAT_VERSION} "
+        f"{path} is in {what}; this version of physics-scenarios reads trace format {tf.TRACE_FORMAT_VERSION} "
         "only. Run the scenario again to get a trace in the current format."
     )
 

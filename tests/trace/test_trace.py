@@ -270,7 +270,7 @@ def test_a_trace_of_the_previous_format_is_refused_with_its_version(tmp_path: Pa
         w.add_metadata(tf.METADATA_SCENARIO, {tf.KEY_NAME: "old", tf.KEY_TRACE_FORMAT: "1"})
         w.add_message(ch, 0, b'{"transforms":[]}', 0)
         w.finish()
-    with pytest.raises(TraceReadError, match=r"trace format 1: JSON .* reads trace format 2 only"):
+    with pytest.raises(TraceReadError, match=r"is in trace format 1 \(JSON .*\); .* reads trace format 2 only"):
         read_trace(path)
 
 
