@@ -3,8 +3,11 @@ PYTHON ?= python3
 VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
+# tools that are not Python packages of the project (protoc, the Foxglove Studio bundle) live here, outside the repo
+CACHE ?= $(or $(XDG_CACHE_HOME),$(HOME)/.cache)/physics-scenarios
+FOXGLOVE_STUDIO := $(CACHE)/foxglove-studio
 
-.PHONY: demo test lint setup clean sounds schema conformance baselines bench bench-quick fuzz
+.PHONY: demo test lint setup clean sounds schema conformance baselines bench bench-quick fuzz proto foxglove
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -49,3 +52,22 @@ bench-quick: $(STAMP)
 
 clean:
 	rm -rf $(VENV) traces .pytest_cache
+
+# regenerate runner/trace/proto/physics_scenarios_pb2.py(i) from the .proto (protoc 29 from grpcio-tools 1.71, whose
+# code runs on protobuf >= 5.29); tests/trace/test_proto.py checks that the two agree
+proto:
+	test -x $(CACHE)/protoc/bin/python || ($(PYTHON) -m venv $(CACHE)/protoc && $(CACHE)/protoc/bin/pip install -q 'grpcio-tools==1.71.*')
+	cd runner/trace/proto && $(CACHE)/protoc/bin/python -m grpc_tools.protoc -I. --python_out=. --pyi_out=. physics_scenarios.proto
+
+# the Foxglove Studio web bundle (npm @foxglove/studio-base 1.48.0 with React 17) for tests/trace/test_foxglove.py;
+# needs node and npm; installed outside the repo
+foxglove: $(FOXGLOVE_STUDIO)/assets/index.js
+
+$(FOXGLOVE_STUDIO)/assets/index.js:
+	rm -rf $(FOXGLOVE_STUDIO) && mkdir -p $(FOXGLOVE_STUDIO)/npm
+	cd $(FOXGLOVE_STUDIO)/npm && npm pack --silent @foxglove/studio-base@1.48.0 >/dev/null \
+	  && tar -xzf foxglove-studio-base-1.48.0.tgz && rm foxglove-studio-base-1.48.0.tgz \
+	  && npm install --silent --no-save --no-audit --no-fund --prefix . react@17.0.2 react-dom@17.0.2 >/dev/null
+	cp $(FOXGLOVE_STUDIO)/npm/node_modules/react/umd/react.production.min.js \
+	   $(FOXGLOVE_STUDIO)/npm/node_modules/react-dom/umd/react-dom.production.min.js $(FOXGLOVE_STUDIO)/
+	ln -sfn npm/package/assets $(FOXGLOVE_STUDIO)/assets

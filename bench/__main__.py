@@ -11,13 +11,13 @@ from pathlib import Path
 
 from backends.registry import DEFAULT_BACKEND, is_installed, list_backends
 
-from . import batch, memory, overhead, scaling
+from . import batch, encoding, memory, overhead, scaling
 from .instrument import wrapper_cost
 from .report import Results, append_notes, render
 
 #: Every engine the registry lists (a fifth engine joins the benchmarks by its registry line).
 ENGINES = tuple(e.name for e in list_backends())
-SECTIONS = ("overhead", "scaling", "memory", "batch")
+SECTIONS = ("overhead", "scaling", "memory", "batch", "encoding")
 
 
 def _ints(text: str) -> list[int]:
@@ -50,6 +50,9 @@ def parser() -> argparse.ArgumentParser:
     p.add_argument("--batch-backend", default=DEFAULT_BACKEND)
     p.add_argument("--batch-jobs", type=_ints, default=[1, 2])
     p.add_argument("--batch-reps", type=int, default=3)
+    p.add_argument("--encoding-backends", type=_names, default=None, help="encoding: engines (default: installed)")
+    p.add_argument("--encoding-duration", type=float, default=10.0, help="encoding: simulated seconds of the pile")
+    p.add_argument("--encoding-reps", type=int, default=3, help="encoding: interleaved repetitions (median)")
     return p
 
 
@@ -58,6 +61,7 @@ def _quick(a: argparse.Namespace) -> None:
     a.scaling_sizes, a.scaling_duration = [10, 40], 0.2
     a.memory_durations, a.memory_pile = [1.0, 4.0], [2, 1, 1]
     a.batch_reps = 1
+    a.encoding_duration, a.encoding_reps = 0.4, 1
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -80,6 +84,7 @@ def main(argv: list[str] | None = None) -> int:
         "memory": f"{'x'.join(map(str, args.memory_pile))} boxes, {args.memory_durations} s, "
         f"{','.join(args.memory_backends)}",
         "batch": f"-j {args.batch_jobs}, {args.batch_reps} reps, {args.batch_backend}",
+        "encoding": f"{'x'.join(map(str, args.pile))} boxes, {args.encoding_duration:g} s, {args.encoding_reps} reps",
     }
     results = Results(command=shlex.join(["python", "-m", "bench", *(argv if argv is not None else sys.argv[1:])]),
                       sizes={k: v for k, v in sizes.items() if k in args.sections})  # fmt: skip
@@ -103,6 +108,11 @@ def main(argv: list[str] | None = None) -> int:
             files = files[:3]
         log(f"batch: {sizes['batch']}, {len(files)} files")
         results.batch = batch.run(files, args.batch_backend, args.batch_jobs, args.batch_reps, log)
+    if "encoding" in args.sections:
+        chosen = [b for b in (args.encoding_backends or installed) if b in installed]
+        log(f"encoding: {sizes['encoding']}, {','.join(chosen)}")
+        results.encoding = encoding.run(chosen, tuple(args.pile), args.encoding_duration,  # type: ignore[arg-type]
+                                        args.encoding_reps, log)  # fmt: skip
     results.load = (results.load[0], os.getloadavg()[0])
     results.wall_seconds = time.perf_counter() - started
     if args.quick:

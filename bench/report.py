@@ -14,6 +14,7 @@ from typing import Any
 
 from backends.registry import list_backends
 
+from . import encoding as enc
 from .batch import BatchFigures
 from .memory import MemoryFigures
 from .overhead import PROCESS, BackendFigures
@@ -33,6 +34,7 @@ class Results:
     scaling: list[SizeFigures] = field(default_factory=list)
     memory: list[MemoryFigures] = field(default_factory=list)
     batch: BatchFigures | None = None
+    encoding: list[enc.EncodingFigures] = field(default_factory=list)
     wrapper_us: float = 0.0
     load: tuple[float, float] = (0.0, 0.0)  # 1-minute load average at the start and the end
     wall_seconds: float = 0.0
@@ -92,6 +94,8 @@ def render(r: Results) -> str:
         out += _memory(r.memory)
     if r.batch is not None:
         out += _batch(r.batch)
+    if r.encoding:
+        out += enc.render(r.encoding)
     out += ["## What remains, and why (profiling)", "", *_floor(r.overhead), *(f"- {c}" for c in KNOWN_CAUSES), ""]
     return "\n".join(out) + "\n"
 
@@ -115,6 +119,7 @@ def _targets(r: Results) -> list[str]:
             rows.append(f"| runner's own cost linear in bodies ({backend}): marginal cost per body "
                         f"{steps[-1][0]}->{steps[-1][1]} / {steps[0][0]}->{steps[0][1]} <= {TARGET_LINEAR} "
                         f"| {growth:.2f} | {_met(growth <= TARGET_LINEAR)} | |")  # fmt: skip
+    rows += enc.targets(r.encoding)
     for backend in sorted({m.backend for m in r.memory}):
         runs = sorted((m for m in r.memory if m.backend == backend), key=lambda m: m.duration)
         if len(runs) >= 2:

@@ -96,7 +96,7 @@ def _events(trace: Trace, limit: int) -> Table:
 
 def _verdicts(trace: Trace) -> Table:
     table = Table(title=f"Verdicts ({len(trace.verdicts)})", title_justify="left")
-    table.add_column("t (s)", justify="right")
+    table.add_column("decided (s)", justify="right")
     table.add_column("assertion", no_wrap=True)
     table.add_column("result", no_wrap=True)
     table.add_column("measured", overflow="fold")
@@ -106,7 +106,9 @@ def _verdicts(trace: Trace) -> Table:
         result = Text("pass", "green") if passed else Text("FAIL", "bold red") if passed is False else Text("?")
         measured = _short(v.data[tf.VERDICT_MEASURED]) if tf.VERDICT_MEASURED in v.data else ""
         expected = _short(v.data[tf.VERDICT_EXPECTED]) if tf.VERDICT_EXPECTED in v.data else ""
-        table.add_row(f"{v.t:.4f}", Text(v.name), result, Text(measured), Text(expected))
+        decided = v.data.get("time")
+        when = f"{decided:.4f}" if isinstance(decided, int | float) and not isinstance(decided, bool) else "-"
+        table.add_row(when, Text(v.name), result, Text(measured), Text(expected))
     return table
 
 

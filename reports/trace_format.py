@@ -1,17 +1,23 @@
-"""The MCAP trace format: the one place where the writer (runner/trace/writer.py) and the readers agree.
+"""The MCAP trace format: the one place where the writer (runner/trace/) and the readers agree.
 
-Constants only. A trace is one MCAP file per run and variant:
+Constants only; the format is described for users in docs/trace-format.md. A trace is one MCAP file per
+run and variant:
 
 * log time and publish time of every message = simulated time in integer nanoseconds
   (``round(t * 1e9)``); nothing in the file comes from the wall clock;
-* chunked, LZ4-compressed, written while running to ``<path>.partial`` and renamed to ``<path>``
+* chunked, zstd-compressed, written while running to ``<path>.partial`` and renamed to ``<path>``
   when finished, so a file under its final name always has a ``result`` metadata record;
-* channels in JSON (schema encoding ``jsonschema``): three Foxglove well-known schemas for the 3D,
-  Log and Plot panels, plus the project's own plottable channels below.
+* every channel in protobuf (schema encoding ``protobuf``, the schema record a serialised
+  ``FileDescriptorSet``): Foxglove's well-known schemas for the 3D, Log and Audio panels
+  (``foxglove-schemas-protobuf``), and the project's own messages
+  (``runner/trace/proto/physics_scenarios.proto``, plus Bodies, Joints and State generated per trace
+  from the scenario's names).
 
-Per-step numbers on /tf, /bodies, /joints and /contacts (depth, normal force) are written with a
-fixed absolute resolution of :data:`VALUE_RESOLUTION` (as ``<integer>e-9`` JSON numbers, ten times
-cheaper to format than a float's shortest repr); non-finite values are written as ``null``.
+Per-step numbers on /tf, /bodies, /joints and /contacts are doubles rounded to :data:`VALUE_RESOLUTION`
+(NaN and infinities kept), so a body at rest writes identical bytes every step and compresses away.
+
+Format 1 (until physics-scenarios 0.1.0) was JSON (``jsonschema``/``json``) with LZ4; readers name its
+version and refuse it (:data:`TRACE_FORMAT_VERSION`, metadata key :data:`KEY_TRACE_FORMAT`).
 """
 
 from __future__ import annotations
@@ -19,7 +25,9 @@ from __future__ import annotations
 from typing import Final
 
 #: bump when the layout of a channel or a metadata record changes meaning
-TRACE_FORMAT_VERSION: Final = 1
+TRACE_FORMAT_VERSION: Final = 2
+#: what each earlier format was, for the reader's refusal message
+PREVIOUS_FORMATS: Final = {1: "JSON channels with LZ4 chunks (physics-scenarios 0.1.0 and earlier)"}
 
 #: MCAP header
 PROFILE: Final = ""
@@ -28,10 +36,12 @@ LIBRARY: Final = "physics-scenarios"
 #: file naming
 FILE_SUFFIX: Final = ".mcap"
 PARTIAL_SUFFIX: Final = ".partial"  # appended to the final name while writing
+#: the Foxglove layout written beside the traces (runner/trace/layout.py)
+LAYOUT_FILE: Final = "foxglove-layout.json"
 
 #: encodings
-SCHEMA_ENCODING: Final = "jsonschema"
-MESSAGE_ENCODING: Final = "json"
+SCHEMA_ENCODING: Final = "protobuf"
+MESSAGE_ENCODING: Final = "protobuf"
 
 #: absolute resolution of per-step values on /tf, /bodies, /joints and /contacts (SI units)
 VALUE_RESOLUTION: Final = 1e-9
@@ -39,22 +49,28 @@ VALUE_RESOLUTION: Final = 1e-9
 #: the root frame of the transform tree; every body's frame is its name, parented to it
 WORLD_FRAME: Final = "world"
 
+#: the columns of one body's row of per-step values (backends.types.BodyStates.rows())
+BODY_ROW: Final = ("pos.x", "pos.y", "pos.z", "quat.w", "quat.x", "quat.y", "quat.z",
+                   "vel.x", "vel.y", "vel.z", "angvel.x", "angvel.y", "angvel.z")  # fmt: skip
+
 # ---- topics -------------------------------------------------------------------------------------
-TOPIC_TF: Final = "/tf"  # foxglove.FrameTransforms, every body, one message per step
+TOPIC_TF: Final = "/tf"  # foxglove.FrameTransforms: every body's pose, one message per step
 TOPIC_SCENE: Final = "/scene"  # foxglove.SceneUpdate, at t=0 and when a visual scale changes
-TOPIC_LOG: Final = "/log"  # foxglove.Log: events, handler logs, sounds, verdicts
-TOPIC_BODIES: Final = "/bodies"  # {"box": {"pos": {x,y,z}, "quat": {w,x,y,z}, "vel": .., "angvel": ..}}
-TOPIC_JOINTS: Final = "/joints"  # {"slider": {"position", "velocity", "motor_force"}}
-TOPIC_CONTACTS: Final = "/contacts"  # {"count": n, "pairs": [{"a","b","points","depth","normal_force"}]}
-TOPIC_STATE: Final = "/state"  # {name: value}
-TOPIC_EVENTS: Final = "/events"  # {"time", "name", "source", "detail"}
-TOPIC_SOUNDS: Final = "/sounds"  # {"time", "name", "action", "offset", "volume"}
-TOPIC_VERDICTS: Final = "/verdicts"  # {"time", "verdicts": [...]}
+TOPIC_LOG: Final = "/log"  # foxglove.Log: events, handler logs, sounds, verdicts (when decided), summary
+TOPIC_BODIES: Final = "/bodies"  # physics_scenarios.Bodies: box.vel.{x,y,z}, box.angvel.{x,y,z} per step
+TOPIC_JOINTS: Final = "/joints"  # physics_scenarios.Joints: slider.{position,velocity,motor_force} per step
+TOPIC_CONTACTS: Final = "/contacts"  # physics_scenarios.Contacts: count, pairs[{a,b,points,depth,normal_force}]
+TOPIC_STATE: Final = "/state"  # physics_scenarios.State: one field per state variable, per step
+TOPIC_EVENTS: Final = "/events"  # physics_scenarios.Event: time, name, source, detail
+TOPIC_SOUNDS: Final = "/sounds"  # physics_scenarios.Sound: time, name, action, offset, volume
+TOPIC_AUDIO: Final = "/audio"  # foxglove.RawAudio: each sound's samples from where it starts playing
+TOPIC_VERDICTS: Final = "/verdicts"  # physics_scenarios.Verdicts: every verdict, at the end
 
 # ---- schema names -------------------------------------------------------------------------------
 SCHEMA_FRAME_TRANSFORMS: Final = "foxglove.FrameTransforms"
 SCHEMA_SCENE_UPDATE: Final = "foxglove.SceneUpdate"
 SCHEMA_LOG: Final = "foxglove.Log"
+SCHEMA_RAW_AUDIO: Final = "foxglove.RawAudio"
 SCHEMA_BODIES: Final = "physics_scenarios.Bodies"
 SCHEMA_JOINTS: Final = "physics_scenarios.Joints"
 SCHEMA_CONTACTS: Final = "physics_scenarios.Contacts"
@@ -64,8 +80,8 @@ SCHEMA_SOUND: Final = "physics_scenarios.Sound"
 SCHEMA_VERDICTS: Final = "physics_scenarios.Verdicts"
 
 # ---- field names inside the project's channels --------------------------------------------------
-BODY_FIELDS: Final = ("pos", "quat", "vel", "angvel")
-QUAT_KEYS: Final = ("w", "x", "y", "z")  # /bodies quaternions; /tf uses Foxglove's x, y, z, w
+BODY_FIELDS: Final = ("pos", "quat", "vel", "angvel")  # the reader's BodySeries; pos and quat come from /tf
+QUAT_KEYS: Final = ("w", "x", "y", "z")  # the reader's quaternions; /tf has Foxglove's x, y, z, w fields
 VEC_KEYS: Final = ("x", "y", "z")
 JOINT_FIELDS: Final = ("position", "velocity", "motor_force")
 

@@ -4,6 +4,8 @@ The file is read front to back with mcap's non-seeking stream reader, which need
 so the same code reads a finished trace and, with ``recover=True``, one cut off by a hard kill: it
 stops cleanly at the first record that is incomplete or fails its CRC, keeping everything before it
 (all complete chunks). Without ``recover`` a damaged or unfinished file raises :class:`TraceReadError`.
+Messages are decoded by :mod:`reports.trace_decode` (format 2, protobuf); a trace of another format
+version is refused with a message naming it.
 """
 
 from __future__ import annotations
@@ -21,6 +23,7 @@ from mcap.records import Attachment, Channel, Footer, Message, Metadata, Schema
 from mcap.stream_reader import StreamReader
 
 from reports import trace_format as tf
+from reports.trace_decode import MessageDecoder, UnreadableMessage, body_arrays
 
 __all__ = [
     "AttachmentInfo",
@@ -230,74 +233,24 @@ def _records(stream: _StrictStream, recover: bool, path: Path) -> Iterator[Any]:
         yield record
 
 
-class _Builder:
-    """Accumulates decoded messages; arrays are built once at the end."""
+def _check_format(path: Path, metadata: dict[str, str]) -> None:
+    version = metadata.get(tf.KEY_TRACE_FORMAT, "")
+    if version == str(tf.TRACE_FORMAT_VERSION):
+        return
+    known = tf.PREVIOUS_FORMATS.get(int(version)) if version.isdigit() else None
+    what = f"trace format {version or '(none)'}" + (f" ({known})" if known else "")
+    raise TraceReadError(
+        f"{path} is in {what}; this version of physics-scenarios reads trace format {tf.TRACE_FORMAT_VERSION} "
+        "only. Run the scenario again to get a trace in the current format."
+    )
 
-    def __init__(self) -> None:
-        self.times: list[float] = []
-        self.body_names: list[str] = []
-        self.body_rows: list[list[Any]] = []
-        self.joint_times: list[float] = []
-        self.joint_names: list[str] = []
-        self.joint_rows: list[list[Any]] = []
-        self.state_times: list[float] = []
-        self.state: dict[str, list[Any]] = {}
-        self.contacts: list[tuple[float, list[dict[str, Any]]]] = []
-        self.events: list[EventRecord] = []
-        self.logs: list[LogRecord] = []
-        self.sounds: list[SoundRecord] = []
-        self.verdicts: list[Verdict] = []
 
-    def add(self, topic: str, t: float, data: bytes) -> None:
-        if topic in (tf.TOPIC_TF, tf.TOPIC_SCENE):
-            return  # /bodies carries the same poses; the scene is for Foxglove
-        msg = json.loads(data)
-        if topic == tf.TOPIC_BODIES:
-            if not self.body_names:
-                self.body_names = list(msg)
-            self.times.append(t)
-            row: list[Any] = []
-            for name in self.body_names:
-                b = msg[name]
-                p, q, v, w = b["pos"], b["quat"], b["vel"], b["angvel"]
-                row += (p["x"], p["y"], p["z"], q["w"], q["x"], q["y"], q["z"])
-                row += (v["x"], v["y"], v["z"], w["x"], w["y"], w["z"])
-            self.body_rows.append(row)
-        elif topic == tf.TOPIC_JOINTS:
-            if not self.joint_names:
-                self.joint_names = list(msg)
-            self.joint_times.append(t)
-            self.joint_rows.append([msg[j][k] for j in self.joint_names for k in tf.JOINT_FIELDS])
-        elif topic == tf.TOPIC_STATE:
-            n = len(self.state_times)
-            self.state_times.append(t)
-            for k, v in msg.items():
-                self.state.setdefault(k, [None] * n).append(v)
-            for values in self.state.values():
-                values.extend([None] * (n + 1 - len(values)))
-        elif topic == tf.TOPIC_CONTACTS:
-            if msg.get("pairs"):
-                self.contacts.append((t, msg["pairs"]))
-        elif topic == tf.TOPIC_EVENTS:
-            self.events.append(EventRecord(t, msg["name"], msg["source"], msg.get("detail") or {}))
-        elif topic == tf.TOPIC_LOG:
-            level = tf.LOG_LEVEL_NAMES.get(msg.get("level", 0), "unknown")
-            self.logs.append(LogRecord(t, level, msg.get("name", ""), msg.get("message", "")))
-        elif topic == tf.TOPIC_SOUNDS:
-            self.sounds.append(SoundRecord(t, msg["name"], msg["action"], msg["offset"], msg["volume"]))
-        elif topic == tf.TOPIC_VERDICTS:
-            self.verdicts += [Verdict(t, v) for v in msg.get("verdicts", [])]
-
-    def bodies(self) -> dict[str, BodySeries]:
-        arr = np.array(self.body_rows, dtype=float).reshape(len(self.times), len(self.body_names), 13)
-        return {
-            name: BodySeries(arr[:, i, 0:3], arr[:, i, 3:7], arr[:, i, 7:10], arr[:, i, 10:13])
-            for i, name in enumerate(self.body_names)
-        }
-
-    def joints(self) -> dict[str, JointSeries]:
-        arr = np.array(self.joint_rows, dtype=float).reshape(len(self.joint_times), len(self.joint_names), 3)
-        return {name: JointSeries(arr[:, i, 0], arr[:, i, 1], arr[:, i, 2]) for i, name in enumerate(self.joint_names)}
+def _names(metadata: dict[str, str], key: str) -> list[str]:
+    try:
+        names = json.loads(metadata.get(key, "[]"))
+    except json.JSONDecodeError as exc:
+        raise TraceReadError(f"the scenario record's {key!r} is not a JSON list: {exc}") from exc
+    return [str(n) for n in names]
 
 
 def read_trace(path: str | Path, recover: bool = False) -> Trace:
@@ -314,7 +267,7 @@ def read_trace(path: str | Path, recover: bool = False) -> Trace:
     channels: dict[int, Channel] = {}
     metadata: dict[str, dict[str, str]] = {}
     attachments: list[AttachmentInfo] = []
-    build = _Builder()
+    decoder: MessageDecoder | None = None
     counts: dict[int, int] = {}
     first: int | None = None
     last: int | None = None
@@ -331,23 +284,34 @@ def read_trace(path: str | Path, recover: bool = False) -> Trace:
                     counts[ch.id] = counts.get(ch.id, 0) + 1
                     first = record.log_time if first is None else min(first, record.log_time)
                     last = record.log_time if last is None else max(last, record.log_time)
-                    build.add(ch.topic, record.log_time / 1e9, record.data)
+                    if decoder is None:
+                        scenario = metadata.get(tf.METADATA_SCENARIO)
+                        if scenario is None:
+                            raise TraceReadError(f"{path} has messages before its scenario record: not a "
+                                                 "physics-scenarios trace")  # fmt: skip
+                        decoder = MessageDecoder(_names(scenario, tf.KEY_BODIES), _names(scenario, tf.KEY_JOINTS))
+                    decoder.add(ch.topic, schemas.get(ch.schema_id), ch.message_encoding, record.log_time / 1e9,
+                                record.data)  # fmt: skip
                 elif isinstance(record, Schema):
                     schemas[record.id] = record
                 elif isinstance(record, Channel):
                     channels[record.id] = record
                 elif isinstance(record, Metadata):
                     metadata[record.name] = dict(record.metadata)
+                    if record.name == tf.METADATA_SCENARIO:
+                        _check_format(path, metadata[record.name])
                 elif isinstance(record, Attachment):
                     attachments.append(AttachmentInfo(record.name, record.media_type, len(record.data), record.data))
                 elif isinstance(record, Footer):
                     complete = True
     except OSError as exc:
         raise TraceReadError(f"cannot read {path}: {exc.strerror or exc}") from exc
-    except (KeyError, TypeError, json.JSONDecodeError) as exc:
+    except (KeyError, TypeError, UnreadableMessage) as exc:
         raise TraceReadError(f"{path} is not a physics-scenarios trace: {type(exc).__name__}: {exc}") from exc
     if not complete and not recover:
         raise TraceReadError(f"{path} has no footer (unfinished); read what it holds with recover=True")
+    if tf.METADATA_SCENARIO not in metadata and any(s.encoding == "jsonschema" for s in schemas.values()):
+        _check_format(path, {})
     infos: dict[str, ChannelInfo] = {}
     for ch in channels.values():
         schema = schemas.get(ch.schema_id)
@@ -355,6 +319,11 @@ def read_trace(path: str | Path, recover: bool = False) -> Trace:
             ch.topic, schema.name if schema else "", schema.encoding if schema else "", ch.message_encoding,
             counts.get(ch.id, 0),
         )  # fmt: skip
+    decoded = decoder.out if decoder is not None else MessageDecoder([], []).out
+    bodies = decoder.bodies if decoder is not None else []
+    joints = decoder.joints if decoder is not None else []
+    times, rows = body_arrays(decoded, len(bodies))
+    jrows = np.array(decoded.joint_rows, dtype=float).reshape(len(decoded.joint_times), len(joints), 3)
     return Trace(
         path=path,
         complete=complete,
@@ -363,17 +332,18 @@ def read_trace(path: str | Path, recover: bool = False) -> Trace:
         channels=infos,
         start_time=None if first is None else first / 1e9,
         end_time=None if last is None else last / 1e9,
-        times=np.array(build.times),
-        bodies=build.bodies(),
-        joint_times=np.array(build.joint_times),
-        joints=build.joints(),
-        state_times=np.array(build.state_times),
-        state=build.state,
-        contacts=build.contacts,
-        events=build.events,
-        logs=build.logs,
-        sounds=build.sounds,
-        verdicts=build.verdicts,
+        times=times,
+        bodies={name: BodySeries(rows[:, i, 0:3], rows[:, i, 3:7], rows[:, i, 7:10], rows[:, i, 10:13])
+                for i, name in enumerate(bodies)},  # fmt: skip
+        joint_times=np.array(decoded.joint_times),
+        joints={name: JointSeries(jrows[:, i, 0], jrows[:, i, 1], jrows[:, i, 2]) for i, name in enumerate(joints)},
+        state_times=np.array(decoded.state_times),
+        state=decoded.state,
+        contacts=decoded.contacts,
+        events=[EventRecord(*e) for e in decoded.events],
+        logs=[LogRecord(*entry) for entry in decoded.logs],
+        sounds=[SoundRecord(*entry) for entry in decoded.sounds],
+        verdicts=[Verdict(t, data) for t, data in decoded.verdicts],
         attachments=attachments,
         stop_reason=stop_reason,
     )

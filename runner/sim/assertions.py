@@ -91,6 +91,12 @@ class AssertionTracker:
         self.dt = dt
         self.expr = expressions
         self.checks = [_Check(s, type(s).__name__.removesuffix("Assertion").lower()) for s in specs]
+        self.decided: list[Verdict] = []  # verdicts decided since the last pop_decided(), in order
+
+    def pop_decided(self) -> list[Verdict]:
+        """The verdicts decided since the last call (the session logs each at the time it was decided)."""
+        out, self.decided = self.decided, []
+        return out
 
     def _number(self, value: Any, r: Resolver) -> float:
         return self.expr[value].number(r) if isinstance(value, str) else float(value)
@@ -108,6 +114,11 @@ class AssertionTracker:
         return math.floor(t / self.dt + 0.5) == math.floor(float(at) / self.dt + 0.5 + 1e-9)
 
     def on_step(self, t: float, r: Resolver, contact: Callable[[str, str], bool], final: bool = False) -> None:
+        pending = [c for c in self.checks if c.done is None]
+        self._on_step(t, r, contact, final)
+        self.decided += [c.done for c in pending if c.done is not None]
+
+    def _on_step(self, t: float, r: Resolver, contact: Callable[[str, str], bool], final: bool) -> None:
         for c in self.checks:
             if c.done is not None:
                 continue
@@ -247,6 +258,7 @@ class AssertionTracker:
                         f"the run ended at t={t_end:.4f} before t={at}",
                     )
                 )
+        self.decided += [v for v, c in zip(out, self.checks, strict=True) if c.done is None]  # decided now
         return out
 
     def _event(self, s: A.EventAssertion, events: Sequence[tuple[float, str]], r: Resolver) -> Verdict:

@@ -321,6 +321,14 @@ class Session:
         if self.trace is not None and (k % self.record_every == 0 or last):
             self._trace_step(t)
         self.tracker.on_step(t, self.resolver, self.in_contact)
+        self._log_verdicts(t)
+
+    def _log_verdicts(self, t: float) -> None:
+        """Log the verdicts the tracker decided, at ``t``, the time they were decided."""
+        decided = self.tracker.pop_decided()
+        if self.trace is not None:
+            for v in decided:
+                self.trace.verdict(t, v.as_dict())
 
     def _trace_step(self, t: float) -> None:
         trace = self.trace
@@ -398,6 +406,7 @@ class Session:
             self._trace_step(t)
         self.tracker.on_step(t, self.resolver, self.in_contact, final=True)
         verdicts = self.tracker.finish(t, [(e[0], e[1]) for e in self.events], self.sound_starts, self.resolver)
+        self._log_verdicts(t)
         status = "passed" if all(v.passed for v in verdicts) else "failed"
         return RunResult(
             self.program.name,

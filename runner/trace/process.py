@@ -4,8 +4,8 @@
 through a pipe to a child process that runs a real ``TraceWriter`` on it, in the same order, so the
 file is byte for byte the one the in-process writer makes. A step travels as raw doubles (states,
 joints, contacts packed with ``struct``, no pickling of arrays), and calls go in batches of
-:data:`BATCH_STEPS` steps: the caller pays about 20 microseconds per step for 100 bodies instead of
-formatting them (about 0.4 ms). The pipe's buffer bounds how far the child may lag, so memory stays flat.
+:data:`BATCH_STEPS` steps: the caller pays for packing a step's doubles instead of encoding and compressing
+them (bench/results.md has both). The pipe's buffer bounds how far the child may lag, so memory stays flat.
 
 Failures: opening errors (an existing file without ``force``, a bad folder) are raised by the
 constructor, as in-process; a write error in the child is raised by the next ``finish()``. The child
@@ -164,6 +164,9 @@ class BackgroundTraceWriter:
 
     def sound(self, t: float, name: str, action: str, offset: float = 0.0, volume: float = 1.0) -> None:
         self._send("sound", t, name, action, offset, volume)
+
+    def verdict(self, t: float, verdict: Mapping[str, Any]) -> None:
+        self._send("verdict", t, dict(verdict))
 
     def verdicts(self, t: float, verdicts: Sequence[Mapping[str, Any]]) -> None:
         self._send("verdicts", t, [dict(v) for v in verdicts])

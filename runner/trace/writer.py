@@ -1,19 +1,17 @@
 """The MCAP trace writer: the only writer-side importer of ``mcap``.
 
 Layout, topics and metadata: :mod:`reports.trace_format`. The file is written while the run goes on
-(chunked, LZ4, memory constant in the duration) to ``<path>.partial`` through an unbuffered sink, so a
+(chunked, zstd, memory constant in the duration) to ``<path>.partial`` through an unbuffered sink, so a
 finished chunk is in the operating system at once; a chunk closes when it exceeds ``chunk_size`` bytes
 and after the first step at or past each multiple of ``flush_interval`` simulated seconds, which bounds
 what a hard kill loses. ``finish()`` writes the ``result`` record and the summary, then renames the file
-to ``<path>``. /tf, /bodies and /joints are formatted through templates prepared once per trace
-(:class:`runner.trace.foxglove.StepTemplate`), about ten times cheaper than ``json.dumps``, and
-/contacts at the same fixed resolution (:func:`runner.trace.foxglove.contacts_message`).
+to ``<path>``. Messages are encoded by :class:`runner.trace.encoder.TraceEncoder` (protobuf; the
+per-step ones through serialised templates).
 """
 
 from __future__ import annotations
 
 import contextlib
-import json
 import math
 import os
 from collections.abc import Mapping, Sequence
@@ -22,7 +20,6 @@ from pathlib import Path
 from types import TracebackType
 from typing import IO, Any, cast
 
-import numpy as np
 from mcap.exceptions import McapError
 from mcap.writer import CompressionType, Writer
 
@@ -31,10 +28,10 @@ from backends.types import BodySpec, BodyStates, Contact, JointSpec, JointStates
 from reports import trace_format as tf
 from runner.errors import TraceError
 from runner.trace import foxglove as fx
+from runner.trace.encoder import TraceEncoder, dumps, verdict_text
+from runner.trace.sounds import SoundBank
 
 __all__ = ["SolidVisual", "TraceMeta", "TraceWriter"]
-
-_TF_COLS = [0, 1, 2, 4, 5, 6, 3]  # /bodies row (pos, quat w x y z, ...) -> /tf translation, rotation x y z w
 
 
 @dataclass(frozen=True)
@@ -124,7 +121,6 @@ class TraceWriter:
         self._force = force
         self._names = [b.name for b in meta.bodies]
         self._joint_names = [j.name for j in meta.joints]
-        self._quoted = [json.dumps(n) for n in self._names]
         if len(set(self._names)) != len(self._names) or len(set(self._joint_names)) != len(self._joint_names):
             raise ValueError("body and joint names must be unique")
         if set(meta.extra) & set(tf.SCENARIO_KEYS):
@@ -135,10 +131,11 @@ class TraceWriter:
         self._steps = 0
         self._final: Path | None = None
         self._closed = False
-        self._tf_tpl, self._bodies_tpl, self._joints_tpl = fx.step_templates(self._names, self._joint_names)
+        self._encoder = TraceEncoder(self._names, self._joint_names)
+        self._sounds = SoundBank()
         self._sink = self._open()
         try:
-            self._writer = Writer(cast(IO[bytes], self._sink), chunk_size=chunk_size, compression=CompressionType.LZ4)
+            self._writer = Writer(cast(IO[bytes], self._sink), chunk_size=chunk_size, compression=CompressionType.ZSTD)
             self._writer.start(profile=tf.PROFILE, library=tf.LIBRARY)
             self._channels: dict[str, int] = {}
             self._register_all()
@@ -165,26 +162,13 @@ class TraceWriter:
         except OSError as exc:
             raise TraceError(f"cannot write trace {self.partial_path}: {exc.strerror or exc}") from exc
 
-    def _register(self, topic: str, schema: Mapping[str, Any]) -> None:
-        sid = self._writer.register_schema(schema["title"], tf.SCHEMA_ENCODING, fx.schema_bytes(schema))
+    def _register(self, topic: str, schema_name: str, schema_data: bytes) -> None:
+        sid = self._writer.register_schema(schema_name, tf.SCHEMA_ENCODING, schema_data)
         self._channels[topic] = self._writer.register_channel(topic, tf.MESSAGE_ENCODING, sid)
 
     def _register_all(self) -> None:
-        channels = [
-            (tf.TOPIC_TF, fx.FRAME_TRANSFORMS),
-            (tf.TOPIC_SCENE, fx.SCENE_UPDATE),
-            (tf.TOPIC_LOG, fx.LOG),
-            (tf.TOPIC_BODIES, fx.bodies_schema(self._names)),
-            (tf.TOPIC_JOINTS, fx.joints_schema(self._joint_names) if self._joint_names else None),
-            (tf.TOPIC_CONTACTS, fx.CONTACTS),
-            (tf.TOPIC_STATE, fx.state_schema(self.meta.state_names) if self.meta.state_names else None),
-            (tf.TOPIC_EVENTS, fx.EVENT),
-            (tf.TOPIC_SOUNDS, fx.SOUND),
-            (tf.TOPIC_VERDICTS, fx.VERDICTS),
-        ]
-        for topic, schema in channels:
-            if schema is not None:
-                self._register(topic, schema)
+        for channel in self._encoder.channels():
+            self._register(channel.topic, channel.schema_name, channel.schema_data)
 
     def _scenario_record(self) -> dict[str, str]:
         m = self.meta
@@ -193,7 +177,7 @@ class TraceWriter:
             tf.KEY_VARIANT: m.variant,
             tf.KEY_BACKEND: m.backend,
             tf.KEY_BACKEND_VERSION: m.backend_version,
-            tf.KEY_ENGINE_SETTINGS: fx.dumps(m.engine_settings, sort_keys=True),
+            tf.KEY_ENGINE_SETTINGS: dumps(m.engine_settings, sort_keys=True),
             tf.KEY_DT: repr(float(m.dt)),
             tf.KEY_SUBSTEPS: str(int(m.substeps)),
             tf.KEY_DURATION: repr(float(m.duration)),
@@ -202,11 +186,11 @@ class TraceWriter:
             tf.KEY_SCENARIO_PATH: m.scenario_path,
             tf.KEY_SCHEMA_VERSION: str(m.schema_version),
             tf.KEY_TRACE_FORMAT: str(tf.TRACE_FORMAT_VERSION),
-            tf.KEY_BODIES: fx.dumps(self._names),
-            tf.KEY_BODY_SPECS: fx.dumps([asdict(b) for b in m.bodies]),
-            tf.KEY_JOINTS: fx.dumps(self._joint_names),
-            tf.KEY_JOINT_SPECS: fx.dumps([asdict(j) for j in m.joints]),
-            tf.KEY_STATE: fx.dumps(list(m.state_names)),
+            tf.KEY_BODIES: dumps(self._names),
+            tf.KEY_BODY_SPECS: dumps([asdict(b) for b in m.bodies]),
+            tf.KEY_JOINTS: dumps(self._joint_names),
+            tf.KEY_JOINT_SPECS: dumps([asdict(j) for j in m.joints]),
+            tf.KEY_STATE: dumps(list(m.state_names)),
         }
         record.update({str(k): str(v) for k, v in m.extra.items()})
         return record
@@ -222,19 +206,21 @@ class TraceWriter:
         self._last_ns = max(self._last_ns, ns)
         return ns
 
-    def _write(self, topic: str, ns: int, text: str) -> None:
+    def _write(self, topic: str, ns: int, data: bytes) -> None:
         try:
-            self._writer.add_message(self._channels[topic], ns, text.encode(), ns)
+            self._writer.add_message(self._channels[topic], ns, data, ns)
         except OSError as exc:
             raise TraceError(f"cannot write trace {self.partial_path}: {exc}") from exc
 
     def _log(self, ns: int, level: int, message: str, name: str) -> None:
-        self._write(tf.TOPIC_LOG, ns, fx.dumps(fx.log(ns, level, message, name)))
+        self._write(tf.TOPIC_LOG, ns, self._encoder.log(ns, level, message, name))
 
     def attach(self, name: str, data: bytes, media_type: str) -> None:
+        """Attach a file (the scenario, its sounds); a ``sounds/<name>.wav`` also feeds /audio."""
         if self._closed:
             raise TraceError(f"trace {self.path} is already finished")
         self._writer.add_attachment(0, self._last_ns, name, media_type, bytes(data))
+        self._sounds.add(name, bytes(data))
 
     def scene(self, t: float, solids: Sequence[SolidVisual] = (), scales: Mapping[str, float] | None = None) -> None:
         """Publish every body's shape and the given solids (already scaled, body frame).
@@ -256,7 +242,7 @@ class TraceWriter:
                 raise ValueError(f"solid {s.node!r} is attached to unknown body {s.body!r}")
             prims = fx.solid_primitives(s.kind, s.center, s.radius, s.size, s.vertices)
             entities.append(fx.entity(ns, s.body, f"solid/{s.body}/{s.node}", {"solid": s.node}, **prims))
-        self._write(tf.TOPIC_SCENE, ns, fx.dumps({"deletions": [], "entities": entities}))
+        self._write(tf.TOPIC_SCENE, ns, self._encoder.scene(entities))
 
     def step(
         self,
@@ -267,20 +253,18 @@ class TraceWriter:
         state_vars: Mapping[str, bool | float | str],
     ) -> None:
         ns = self._ns(t)
-        rows = states.rows()
-        sec, nsec = divmod(ns, 1_000_000_000)
-        stamp = f'{{"sec":{sec},"nsec":{nsec}}}'
-        self._write(tf.TOPIC_TF, ns, self._tf_tpl.render(rows[:, _TF_COLS].ravel(), stamp))
-        self._write(tf.TOPIC_BODIES, ns, self._bodies_tpl.render(rows.ravel()))
+        enc = self._encoder
+        transforms, bodies = enc.transforms_and_bodies(ns, states.rows())
+        self._write(tf.TOPIC_TF, ns, transforms)
+        self._write(tf.TOPIC_BODIES, ns, bodies)
         if self._joint_names:
-            jrows = np.empty((len(self._joint_names), 3))
-            jrows[:, 0], jrows[:, 1], jrows[:, 2] = joints.position, joints.velocity, joints.motor_force
-            self._write(tf.TOPIC_JOINTS, ns, self._joints_tpl.render(jrows.ravel()))
-        self._write(tf.TOPIC_CONTACTS, ns, fx.contacts_message(contacts, self._quoted))
+            self._write(tf.TOPIC_JOINTS, ns, enc.joints_message(joints.position, joints.velocity, joints.motor_force))
+        self._write(tf.TOPIC_CONTACTS, ns, enc.contacts_message(contacts))
         if state_vars:
             if tf.TOPIC_STATE not in self._channels:
-                self._register(tf.TOPIC_STATE, fx.state_schema(state_vars))
-            self._write(tf.TOPIC_STATE, ns, fx.dumps(state_vars))
+                channel = enc.state_channel(state_vars)
+                self._register(channel.topic, channel.schema_name, channel.schema_data)
+            self._write(tf.TOPIC_STATE, ns, enc.state_message(state_vars))
         self._steps += 1
         if ns >= self._next_flush_ns:
             self._writer.flush()
@@ -288,8 +272,8 @@ class TraceWriter:
 
     def event(self, t: float, name: str, source: str, detail: Mapping[str, Any] | None = None) -> None:
         ns = self._ns(t)
-        self._write(tf.TOPIC_EVENTS, ns, fx.dumps({"time": t, "name": name, "source": source, "detail": detail or {}}))
-        extra = f" {fx.dumps(detail)}" if detail else ""
+        self._write(tf.TOPIC_EVENTS, ns, self._encoder.event(t, name, source, detail))
+        extra = f" {dumps(detail, ensure_ascii=False)}" if detail else ""
         self._log(ns, tf.LOG_LEVELS["info"], f"{name} ({source}){extra}", tf.LOGGER_EVENT)
 
     def log(self, t: float, level: str, message: str, name: str = tf.LOGGER_SCENARIO) -> None:
@@ -302,8 +286,11 @@ class TraceWriter:
         if action not in tf.SOUND_ACTIONS:
             raise ValueError(f"unknown sound action {action!r}; expected one of {sorted(tf.SOUND_ACTIONS)}")
         ns = self._ns(t)
-        record = {"time": t, "name": name, "action": action, "offset": offset, "volume": volume}
-        self._write(tf.TOPIC_SOUNDS, ns, fx.dumps(record))
+        self._write(tf.TOPIC_SOUNDS, ns, self._encoder.sound(t, name, action, offset, volume))
+        if action == "start":
+            clip = self._sounds.clip(name, offset, volume)
+            if clip is not None:
+                self._write(tf.TOPIC_AUDIO, ns, self._encoder.audio(ns, *clip))
         text = (
             f"{action} {name}"
             + (f" from {offset:g} s" if offset else "")
@@ -311,18 +298,19 @@ class TraceWriter:
         )
         self._log(ns, tf.LOG_LEVELS["info"], text, tf.LOGGER_SOUND)
 
+    def verdict(self, t: float, verdict: Mapping[str, Any]) -> None:
+        """Log one verdict at the time it was decided (/log only; /verdicts gets them all at the end)."""
+        level, text = verdict_text(verdict)
+        self._log(self._ns(t), tf.LOG_LEVELS[level], text, tf.LOGGER_VERDICT)
+
     def verdicts(self, t: float, verdicts: Sequence[Mapping[str, Any]]) -> None:
+        """Every verdict of the run on /verdicts, and a summary line on /log."""
         ns = self._ns(t)
-        self._write(tf.TOPIC_VERDICTS, ns, fx.dumps({"time": t, "verdicts": list(verdicts)}))
-        for v in verdicts:
-            passed = v.get(tf.VERDICT_PASSED)
-            level = "info" if passed is True else "error" if passed is False else "warning"
-            label = "PASS" if passed is True else "FAIL" if passed is False else "????"
-            text = f"{label} {v.get(tf.VERDICT_NAME, '?')}"
-            for key in (tf.VERDICT_MEASURED, tf.VERDICT_EXPECTED):
-                if key in v:
-                    text += f"; {key} {fx.dumps(v[key])}"
-            self._log(ns, tf.LOG_LEVELS[level], text, tf.LOGGER_VERDICT)
+        self._write(tf.TOPIC_VERDICTS, ns, self._encoder.verdicts(t, verdicts))
+        passed = sum(v.get(tf.VERDICT_PASSED) is True for v in verdicts)
+        failed = [str(v.get(tf.VERDICT_NAME, "?")) for v in verdicts if v.get(tf.VERDICT_PASSED) is not True]
+        text = f"{passed}/{len(verdicts)} assertions passed" + (f"; failed: {', '.join(failed)}" if failed else "")
+        self._log(ns, tf.LOG_LEVELS["error" if failed else "info"], text, tf.LOGGER_VERDICT)
 
     # ---- finishing -------------------------------------------------------------------------------
 
@@ -336,7 +324,7 @@ class TraceWriter:
             raise TraceError(f"trace {self.path} was abandoned; what was written is in {self.partial_path}")
         result = {
             tf.KEY_STATUS: status,
-            tf.KEY_SUMMARY: fx.dumps(summary, sort_keys=True),
+            tf.KEY_SUMMARY: dumps(summary, sort_keys=True),
             tf.KEY_STEPS: str(self._steps),
             tf.KEY_END_TIME: repr(self._last_ns / 1e9),
         }

@@ -32,9 +32,9 @@ def find_chromium() -> str | None:
 class Browser:
     """One Chromium process and a connection to its first page; ``events`` keeps every event seen."""
 
-    def __init__(self, binary: str, profile: Path) -> None:
+    def __init__(self, binary: str, profile: Path, flags: list[str] | None = None) -> None:
         self.proc = subprocess.Popen(
-            [binary, *FLAGS, f"--user-data-dir={profile}", "about:blank"],
+            [binary, *(FLAGS if flags is None else flags), f"--user-data-dir={profile}", "about:blank"],
             stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True,
         )  # fmt: skip
         self.stderr: list[str] = []

@@ -1,19 +1,29 @@
-"""The MCAP trace: writer (runner/trace/writer.py), reader and inspect (reports/), read back with `mcap` itself."""
+"""The MCAP trace: writer (runner/trace/writer.py), reader and inspect (reports/), read back with `mcap` itself
+and Foxglove's own protobuf decoder (mcap-protobuf-support), which builds the message classes from the
+schema records in the file: an outside reader, not ours."""
 
 from __future__ import annotations
 
+import io
 import json
 import math
 import signal
 import subprocess
 import sys
 import textwrap
+import wave
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 import pytest
+from foxglove_schemas_protobuf.FrameTransforms_pb2 import FrameTransforms
+from foxglove_schemas_protobuf.Log_pb2 import Log
+from foxglove_schemas_protobuf.SceneUpdate_pb2 import SceneUpdate
+from google.protobuf.descriptor_pb2 import FileDescriptorSet
 from mcap.reader import make_reader
+from mcap.writer import Writer
+from mcap_protobuf.decoder import DecoderFactory
 
 from backends import types as bt
 from backends.errors import EngineFailure
@@ -91,19 +101,16 @@ def write_trace(path: Path, steps: int = 50, finish: bool = True, writer: Any = 
     return w
 
 
-def mcap_messages(path: Path) -> list[tuple[str, str, int, dict[str, Any]]]:
-    """[(topic, schema name, log time, message)] in file order, with mcap's seeking reader; no NaN allowed."""
+def mcap_messages(path: Path) -> list[tuple[str, str, int, Any]]:
+    """[(topic, schema name, log time, decoded protobuf message)] in file order: mcap's seeking reader and
+    mcap-protobuf's decoder, with classes built from the file's own schema records."""
     with open(path, "rb") as f:
-        messages = make_reader(f).iter_messages(log_time_order=False)
-        return [(c.topic, s.name, m.log_time, json.loads(m.data, parse_constant=_no_nan)) for s, c, m in messages]
+        reader = make_reader(f, decoder_factories=[DecoderFactory()])
+        return [(c.topic, s.name, m.log_time, d) for s, c, m, d in reader.iter_decoded_messages(log_time_order=False)]
 
 
 def as_ns(times: np.ndarray) -> list[int]:
     return [round(t * 1e9) for t in times.tolist()]
-
-
-def _no_nan(token: str) -> None:
-    raise AssertionError(f"{token} is not JSON")
 
 
 @pytest.fixture
@@ -120,15 +127,17 @@ def test_round_trip_with_the_mcap_reader(trace_file: Path) -> None:
         assert reader.get_header().library == tf.LIBRARY
         schema_of = {ch.topic: summary.schemas[ch.schema_id] for ch in summary.channels.values()}
         for ch in summary.channels.values():
-            assert (ch.message_encoding, schema_of[ch.topic].encoding) == ("json", "jsonschema")
+            assert (ch.message_encoding, schema_of[ch.topic].encoding) == ("protobuf", "protobuf")
         assert schema_of["/tf"].name == "foxglove.FrameTransforms"
         assert schema_of["/scene"].name == "foxglove.SceneUpdate"
         assert schema_of["/log"].name == "foxglove.Log"
-        assert {c.compression for c in summary.chunk_indexes} == {"lz4"}
+        assert schema_of["/audio"].name == "foxglove.RawAudio"
+        assert {c.compression for c in summary.chunk_indexes} == {"zstd"}
         meta = {m.name: m.metadata for m in reader.iter_metadata()}
         attachments = {a.name: (a.media_type, a.data, a.log_time) for a in reader.iter_attachments()}
     scenario = meta[tf.METADATA_SCENARIO]
     assert scenario[tf.KEY_NAME] == "unit" and scenario[tf.KEY_VARIANT] == "fall"
+    assert scenario[tf.KEY_TRACE_FORMAT] == str(tf.TRACE_FORMAT_VERSION) == "2"
     assert (scenario[tf.KEY_BACKEND], scenario[tf.KEY_BACKEND_VERSION]) == ("fake", "1.2.3")
     assert float(scenario[tf.KEY_DT]) == DT and scenario[tf.KEY_SCENARIO_SHA256] == "ab" * 32
     assert json.loads(scenario[tf.KEY_ENGINE_SETTINGS]) == {"erp": 0.2, "solver_iterations": 50}
@@ -143,100 +152,126 @@ def test_round_trip_with_the_mcap_reader(trace_file: Path) -> None:
     assert [ns for ns, _ in tf_msgs] == [round(k * DT * 1e9) for k in range(50)]  # simulated time in ns
     ns, msg = tf_msgs[30]
     t = 30 * DT
-    box = msg["transforms"][1]
-    assert box["timestamp"] == {"sec": ns // 10**9, "nsec": ns % 10**9}
-    assert (box["parent_frame_id"], box["child_frame_id"]) == ("world", "box")
-    assert box["translation"]["z"] == pytest.approx(Z0 - 0.5 * G * t * t, abs=RES)
-    assert box["rotation"]["w"] == pytest.approx(math.cos(0.35 * t), abs=RES)
-    assert box["rotation"]["z"] == pytest.approx(math.sin(0.35 * t), abs=RES)
+    box = msg.transforms[1]
+    assert (box.timestamp.seconds, box.timestamp.nanos) == (ns // 10**9, ns % 10**9)
+    assert (box.parent_frame_id, box.child_frame_id) == ("world", "box")
+    assert box.translation.z == pytest.approx(Z0 - 0.5 * G * t * t, abs=RES)
+    assert box.rotation.w == pytest.approx(math.cos(0.35 * t), abs=RES)
+    assert box.rotation.z == pytest.approx(math.sin(0.35 * t), abs=RES)
+    assert msg.transforms[2].translation.x == pytest.approx(1 + 0.3 * t, abs=RES)
     bodies = [m for topic, _, ns, m in messages if topic == "/bodies"]
-    assert bodies[30]["box"]["vel"]["z"] == pytest.approx(-G * t, abs=RES)
-    assert bodies[30]["door"]["pos"]["x"] == pytest.approx(1 + 0.3 * t, abs=RES)
-    assert bodies[30]["box"]["quat"]["w"] == pytest.approx(math.cos(0.35 * t), abs=RES)
+    assert bodies[30].box.vel.z == pytest.approx(-G * t, abs=RES)
+    assert bodies[30].box.angvel.z == 0.7 and bodies[30].door.vel.x == 0.3
+    assert [f.name for f in type(bodies[30]).DESCRIPTOR.fields] == ["floor", "box", "door"]
     joints = [m for topic, _, _, m in messages if topic == "/joints"]
-    assert joints[30] == {
-        "slider": {"position": pytest.approx(0.3 * t, abs=RES), "velocity": 0.3, "motor_force": -12.5}
-    }
+    slider = joints[30].slider
+    assert (slider.position, slider.velocity, slider.motor_force) == (pytest.approx(0.3 * t, abs=RES), 0.3, -12.5)
+    state = [m for topic, _, _, m in messages if topic == "/state"]
+    assert (state[9].door_open, state[10].door_open, state[12].count) == (False, True, 12.0)
     logs = [(ns, m) for topic, _, ns, m in messages if topic == "/log"]
     event_ns = round(10 * DT * 1e9)
-    event_logs = [m for ns, m in logs if m["name"] == tf.LOGGER_EVENT]
-    assert [m["level"] for m in event_logs] == [2] and event_logs[0]["message"].startswith("box-into-door")
-    assert event_logs[0]["timestamp"] == {"sec": 0, "nsec": event_ns}
-    verdict_logs = [m for _, m in logs if m["name"] == tf.LOGGER_VERDICT]
-    assert [(m["level"], m["message"].split()[0]) for m in verdict_logs] == [(2, "PASS"), (4, "FAIL")]
-    assert [m for topic, _, _, m in messages if topic == "/events"] == [
-        {"time": 10 * DT, "name": "box-into-door", "source": "collision", "detail": {"into": "lid"}}
-    ]
+    event_logs = [(ns, m) for ns, m in logs if m.name == tf.LOGGER_EVENT]
+    assert [m.level for _, m in event_logs] == [Log.INFO]
+    assert event_logs[0][1].message == 'box-into-door (collision) {"into":"lid"}'
+    assert (event_logs[0][0], event_logs[0][1].timestamp.nanos) == (event_ns, event_ns)
+    verdict_logs = [m for _, m in logs if m.name == tf.LOGGER_VERDICT]
+    assert [(m.level, m.message) for m in verdict_logs] == [(Log.ERROR, "1/2 assertions passed; failed: never-bounces")]
+    assert [(m.time, m.name, m.source, [(d.key, d.value) for d in m.detail])
+            for topic, _, _, m in messages if topic == "/events"] == [
+        (10 * DT, "box-into-door", "collision", [("into", '"lid"')])
+    ]  # fmt: skip
+    sounds = [(m.name, m.action, m.volume) for topic, _, _, m in messages if topic == "/sounds"]
+    assert sounds == [("thud", "start", pytest.approx(0.8)), ("thud", "stop", 1.0)]
 
 
 def test_scene_entities_are_frame_locked_body_shapes_and_translucent_solids(trace_file: Path) -> None:
     messages = mcap_messages(trace_file)
     scenes = [(ns, m) for topic, _, ns, m in messages if topic == "/scene"]
     assert [ns for ns, _ in scenes] == [0, round(20 * DT * 1e9)]
-    first = {e["id"]: e for e in scenes[0][1]["entities"]}
+    first = {e.id: e for e in scenes[0][1].entities}
     assert set(first) == {"body/floor", "body/box", "body/door", "solid/box/ball", "solid/door/lid"}
     box = first["body/box"]
-    assert (box["frame_id"], box["frame_locked"], box["lifetime"]) == ("box", True, {"sec": 0, "nsec": 0})
-    assert box["cubes"][0]["size"] == {"x": 0.3, "y": 0.2, "z": 0.1}
-    assert box["cubes"][0]["color"] == {"r": 0.9, "g": 0.2, "b": 0.1, "a": 1.0}
-    floor = first["body/floor"]["cubes"][0]
-    assert floor["size"]["z"] == fx.PLANE_THICKNESS and floor["size"]["x"] >= 20
-    assert floor["pose"]["position"]["z"] + floor["size"]["z"] / 2 == pytest.approx(0.0)  # top face = the plane
-    ball = first["solid/box/ball"]["spheres"][0]
-    assert ball["size"] == {"x": 0.9, "y": 0.9, "z": 0.9} and ball["color"]["a"] < 1
+    assert (box.frame_id, box.frame_locked, box.lifetime.seconds, box.lifetime.nanos) == ("box", True, 0, 0)
+    assert box.HasField("lifetime")
+    cube = box.cubes[0]
+    assert (cube.size.x, cube.size.y, cube.size.z) == (0.3, 0.2, 0.1)
+    assert (cube.color.r, cube.color.g, cube.color.b, cube.color.a) == (0.9, 0.2, 0.1, 1.0)
+    floor = first["body/floor"].cubes[0]
+    assert floor.size.z == fx.PLANE_THICKNESS and floor.size.x >= 20
+    assert floor.pose.position.z + floor.size.z / 2 == pytest.approx(0.0)  # top face = the plane
+    ball = first["solid/box/ball"].spheres[0]
+    assert (ball.size.x, ball.size.y, ball.size.z) == (0.9, 0.9, 0.9) and ball.color.a < 1
     lid = first["solid/door/lid"]
-    assert len(lid["triangles"][0]["points"]) == 2 * 2 * 3  # both faces of 2 triangles
-    assert len(lid["lines"][0]["points"]) == 4
-    rescaled = {e["id"]: e for e in scenes[1][1]["entities"]}
-    assert rescaled["body/box"]["cubes"][0]["size"] == {"x": 0.6, "y": 0.4, "z": 0.2}
+    assert len(lid.triangles[0].points) == 2 * 2 * 3  # both faces of 2 triangles
+    assert len(lid.lines[0].points) == 4
+    rescaled = {e.id: e for e in scenes[1][1].entities}
+    size = rescaled["body/box"].cubes[0].size
+    assert (size.x, size.y, size.z) == (0.6, 0.4, 0.2)
 
 
-def _check(value: Any, schema: dict[str, Any], where: str) -> None:
-    """Every field is declared in the schema (recursively); Foxglove objects carry all their fields."""
-    if value is None:
-        return
-    if schema.get("type") == "object" and "properties" in schema:
-        props = schema["properties"]
-        assert isinstance(value, dict), where
-        assert set(value) <= set(props), f"{where}: undeclared {set(value) - set(props)}"
-        if schema["title"].startswith("foxglove.") or schema["title"] in ("time", "duration"):
-            assert set(value) == set(props), f"{where}: missing {set(props) - set(value)}"
-        for k, v in value.items():
-            _check(v, props[k], f"{where}.{k}")
-    elif schema.get("type") == "array":
-        for i, v in enumerate(value):
-            _check(v, schema.get("items", {}), f"{where}[{i}]")
-    elif "oneOf" in schema:
-        assert value in [c["const"] for c in schema["oneOf"]], where
-
-
-def test_every_message_matches_its_channel_schema(trace_file: Path) -> None:
+def test_foxglove_channels_carry_foxglove_s_own_schemas(trace_file: Path) -> None:
+    """/tf, /scene and /log carry the exact files of foxglove-schemas-protobuf (Foxglove and Rerun recognise
+    them by name and read them by these descriptors)."""
     with open(trace_file, "rb") as f:
         summary = make_reader(f).get_summary()
-        schemas = {ch.topic: json.loads(summary.schemas[ch.schema_id].data) for ch in summary.channels.values()}
-    messages = mcap_messages(trace_file)
-    assert {topic for topic, *_ in messages} == set(schemas)
-    for topic, name, _, msg in messages:
-        assert schemas[topic]["title"] == name
-        _check(msg, schemas[topic], topic)
+    schemas = {ch.topic: summary.schemas[ch.schema_id] for ch in summary.channels.values()}
+    for topic, cls in (("/tf", FrameTransforms), ("/scene", SceneUpdate), ("/log", Log)):
+        files = {fd.name: fd for fd in FileDescriptorSet.FromString(schemas[topic].data).file}
+        assert cls.DESCRIPTOR.file.name in files
+        official = FileDescriptorSet()
+        cls.DESCRIPTOR.file.CopyToProto(official.file.add())
+        assert files[cls.DESCRIPTOR.file.name] == official.file[0]
+    messages = mcap_messages(trace_file)  # every message decodes with its channel's schema
+    assert {topic for topic, *_ in messages} == set(schemas) - {"/audio"}
 
 
-def test_non_finite_values_are_written_as_null_and_read_back_as_nan(tmp_path: Path) -> None:
+def test_non_finite_values_are_written_as_they_are_and_read_back(tmp_path: Path) -> None:
     with TraceWriter(tmp_path / "nan.mcap", make_meta()) as w:
         s = states_at(0.0)
         s.pos[1, 2] = np.nan
         s.lin_vel[2, 0] = np.inf
         w.step(0.0, s, bt.JointStates(np.array([np.nan]), np.array([0.0]), np.array([2e9])), [], {"count": math.nan})
         path = w.finish(tf.STATUS_ENGINE_FAILURE, {"error": "NaN", "last": math.inf})
-    messages = mcap_messages(path)  # parse_constant refuses NaN and Infinity
+    messages = mcap_messages(path)
+    pose = next(m for topic, _, _, m in messages if topic == "/tf").transforms[1].translation
+    assert pose.x == 1.0 and math.isnan(pose.z)
     bodies = next(m for topic, _, _, m in messages if topic == "/bodies")
-    assert bodies["box"]["pos"] == {"x": 1.0, "y": 0.0, "z": None} and bodies["door"]["vel"]["x"] is None
+    assert bodies.door.vel.x == math.inf
     joints = next(m for topic, _, _, m in messages if topic == "/joints")
-    assert joints["slider"] == {"position": None, "velocity": 0.0, "motor_force": 2e9}  # exact, via repr
+    assert math.isnan(joints.slider.position) and joints.slider.motor_force == 2e9  # exact
     trace = read_trace(path)
     assert math.isnan(trace.bodies["box"].pos[0, 2]) and trace.bodies["box"].pos[0, 0] == 1.0
-    assert trace.summary == {"error": "NaN", "last": None}
+    assert trace.summary == {"error": "NaN", "last": None}  # metadata stays JSON: null
     assert math.isnan(trace.series("state.count")[1][0])
+
+
+def test_values_are_rounded_to_the_resolution_the_reader_gets_exactly(tmp_path: Path) -> None:
+    """Doubles rounded to 1e-9 read back as the nearest double to the decimal n * 1e-9, as format 1 gave."""
+    rng = np.random.default_rng(3)
+    raw = rng.normal(scale=5.0, size=(3, 3))
+    with TraceWriter(tmp_path / "q.mcap", make_meta()) as w:
+        s = states_at(0.0)
+        s.pos[:] = raw
+        w.step(0.0, s, joints_at(0.0), [], {})
+        path = w.finish(tf.STATUS_PASSED, {})
+    trace = read_trace(path)
+    got = np.array([trace.bodies[n].pos[0] for n in ("floor", "box", "door")])
+    expected = np.array([[float(f"{round(v * 1e9)}e-9") for v in row] for row in raw])
+    np.testing.assert_array_equal(got, expected)
+
+
+def test_a_trace_of_the_previous_format_is_refused_with_its_version(tmp_path: Path) -> None:
+    path = tmp_path / "old.mcap"
+    with open(path, "wb") as f:
+        w = Writer(f)
+        w.start(profile="", library=tf.LIBRARY)
+        sid = w.register_schema("foxglove.FrameTransforms", "jsonschema", b'{"type":"object"}')
+        ch = w.register_channel("/tf", "json", sid)
+        w.add_metadata(tf.METADATA_SCENARIO, {tf.KEY_NAME: "old", tf.KEY_TRACE_FORMAT: "1"})
+        w.add_message(ch, 0, b'{"transforms":[]}', 0)
+        w.finish()
+    with pytest.raises(TraceReadError, match=r"is in trace format 1 \(JSON .*\); .* reads trace format 2 only"):
+        read_trace(path)
 
 
 def test_identical_calls_give_identical_bytes(tmp_path: Path) -> None:
@@ -377,7 +412,7 @@ def test_reader_arrays_series_and_records(trace_file: Path) -> None:
     assert trace.complete and not trace.recovered and trace.status == tf.STATUS_FAILED
     assert (trace.start_time, trace.end_time) == (0.0, pytest.approx(49 * DT))
     assert trace.channels["/tf"].count == 50 and trace.channels["/scene"].count == 2
-    assert trace.channels["/log"].schema == "foxglove.Log" and trace.channels["/log"].count == 6
+    assert trace.channels["/log"].schema == "foxglove.Log" and trace.channels["/log"].count == 5
     t, z = trace.series("box.pos.z")
     np.testing.assert_allclose(z, Z0 - 0.5 * G * t**2, atol=RES)
     _, w = trace.series("box.angvel.z")
@@ -388,12 +423,15 @@ def test_reader_arrays_series_and_records(trace_file: Path) -> None:
     assert door_open.sum() == 40
     assert [(s.name, s.action, s.volume) for s in trace.sounds] == [("thud", "start", 0.8), ("thud", "stop", 1.0)]
     assert [(v.name, v.passed) for v in trace.verdicts] == [("lands", True), ("never-bounces", False)]
-    assert trace.verdicts[1].data["measured"] is None  # inf -> null
+    assert trace.verdicts[1].data["measured"] == "inf" and trace.verdicts[1].data["time"] is None
     assert [(lg.level, lg.name) for lg in trace.logs if lg.name == "handler"] == [("warning", "handler")]
     touching = dict(trace.contacts)
-    assert len(touching) == 50 and touching[7 * DT][1] == {
-        "a": "box", "b": "door", "points": 1, "depth": 0.002, "normal_force": None,
-    }  # fmt: skip
+    assert len(touching) == 50 and touching[0.0] == [
+        {"a": "floor", "b": "door", "points": 4, "depth": 0.001, "normal_force": 3924.0}
+    ]
+    pair = touching[7 * DT][1]
+    assert math.isnan(pair.pop("normal_force"))
+    assert pair == {"a": "box", "b": "door", "points": 1, "depth": 0.002}
     assert trace.attachment("unit.yaml") == YAML
     with pytest.raises(KeyError):
         trace.series("box.pos.w")
@@ -407,18 +445,45 @@ def test_inspect_summary_names_what_ran_and_how_it_ended(trace_file: Path) -> No
     assert "unfinished" not in text
 
 
-def test_step_template_fast_and_fallback_paths_agree() -> None:
-    tf_tpl, bodies_tpl, _ = fx.step_templates(["a", 'q"uote%'], [])
-    rng = np.random.default_rng(7)
-    values = rng.normal(scale=100.0, size=26)
-    fast = json.loads(bodies_tpl.render(values))
-    big = values.copy()
-    big[0] = 3e9  # beyond the int64 fast path: repr for the whole message
-    slow = json.loads(bodies_tpl.render(big))
-    assert list(fast) == ["a", 'q"uote%'] and slow["a"]["pos"]["x"] == 3e9
-    flat_fast = [fast[b][f][k] for b in fast for f in fast[b] for k in fast[b][f]]
-    flat_slow = [slow[b][f][k] for b in slow for f in slow[b] for k in slow[b][f]]
-    np.testing.assert_allclose(flat_fast, values, rtol=0, atol=RES / 2 + 1e-13)
-    assert flat_slow[1:] == values[1:].tolist()  # the fallback is exact
-    frames = json.loads(tf_tpl.render(values[:14], '{"sec":3,"nsec":5}'))["transforms"]
-    assert [f["timestamp"] for f in frames] == [{"sec": 3, "nsec": 5}] * 2
+def _wav(samples: np.ndarray, rate: int) -> bytes:
+    buffer = io.BytesIO()
+    with wave.open(buffer, "wb") as w:
+        w.setnchannels(1)
+        w.setsampwidth(2)
+        w.setframerate(rate)
+        w.writeframes(samples.astype("<i2").tobytes())
+    return buffer.getvalue()
+
+
+def test_sounds_are_also_raw_audio_from_their_offset_at_their_volume(tmp_path: Path) -> None:
+    rate = 8000
+    samples = (np.arange(4000) % 200 * 100 - 10000).astype(np.int16)
+    with TraceWriter(tmp_path / "audio.mcap", make_meta()) as w:
+        w.attach("sounds/beep.wav", _wav(samples, rate), "audio/wav")
+        w.attach("sounds/broken.wav", b"RIFF not a wav", "audio/wav")
+        w.sound(0.5, "beep", "start", 0.25, 0.5)
+        w.sound(0.6, "broken", "start")
+        w.sound(0.7, "beep", "stop")
+        path = w.finish(tf.STATUS_PASSED, {})
+    audio = [(ns, m) for topic, _, ns, m in mcap_messages(path) if topic == "/audio"]
+    assert len(audio) == 1
+    ns, msg = audio[0]
+    assert ns == 500_000_000 and (msg.timestamp.seconds, msg.timestamp.nanos) == (0, ns)
+    assert (msg.format, msg.sample_rate, msg.number_of_channels) == ("pcm-s16", rate, 1)
+    got = np.frombuffer(msg.data, dtype="<i2")
+    np.testing.assert_array_equal(got, np.rint(samples[2000:] * 0.5).astype(np.int16))
+
+
+def test_a_verdict_is_logged_when_it_is_decided(tmp_path: Path) -> None:
+    with TraceWriter(tmp_path / "v.mcap", make_meta()) as w:
+        w.verdict(0.4, {"name": "kick", "passed": True, "measured": "2.57056", "expected": "2.57056 ± 0.001"})
+        w.verdict(1.2, {"name": "rest", "passed": False, "measured": "false", "expected": "always true",
+                        "message": "false at t=1.2000"})  # fmt: skip
+        w.verdicts(2.0, [{"name": "kick", "passed": True}, {"name": "rest", "passed": False}])
+        path = w.finish(tf.STATUS_FAILED, {})
+    logs = [(lg.t, lg.level, lg.message) for lg in read_trace(path).logs]
+    assert logs == [
+        (0.4, "info", "PASS kick: measured 2.57056 (expected 2.57056 ± 0.001)"),
+        (1.2, "error", "FAIL rest: measured false (expected always true); false at t=1.2000"),
+        (2.0, "error", "1/2 assertions passed; failed: rest"),
+    ]

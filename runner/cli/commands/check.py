@@ -48,6 +48,10 @@ def execute(args: argparse.Namespace, out: Console, err: Console) -> int:
     overrides = parse_tolerance_options(args.atol, args.rtol)
     backends = backends_from(args.backend)
     cases = load_cases(args.files, args.variant)
+    if args.out is not None:
+        from runner.cli.layouts import write_layouts
+
+        write_layouts([args.out], cases)  # foxglove-layout.json beside the traces
     outcomes = []
     for backend in backends:
         for case in cases:

@@ -109,6 +109,9 @@ def execute(args: argparse.Namespace, out: Console, err: Console) -> int:
             out.print(f"  [{colour}]{run.label:<20}[/] {run.scenario} · {run.variant} · {run.backend} "
                       f"({run.wall_seconds:.1f} s)")  # fmt: skip
 
+    from runner.cli.layouts import write_layouts
+
+    write_layouts([args.out / "traces"], cases)  # foxglove-layout.json beside the traces
     runs = run_many(work, args.out / "traces", jobs=args.jobs, timeout=args.timeout, on_done=done)
     inputs = [r.trace if r.trace is not None else r.outcome_file for r in runs]
     try:

@@ -145,6 +145,10 @@ def _execute(
             raise ScenarioError(f"cannot use {out_dir} as the trace folder: {exc.strerror or exc}") from None
     if out_dir is not None and not args.force:
         _refuse_overwrite(out_dir, cases, args.backend)
+    if out_dir is not None:
+        from runner.cli.layouts import write_layouts
+
+        write_layouts([out_dir], cases)  # foxglove-layout.json: the 3D scene, asserted quantities, events, log
     show_progress = err.is_terminal and not (args.quiet or args.json) and not args.isolate
     crashed: list[str] = []
     parallel = args.jobs > 1 or args.executor != "local"

@@ -1,0 +1,176 @@
+"""Decoding a trace's messages (format 2, protobuf) into the reader's records.
+
+Message classes come from the schema records in the file itself, through mcap-protobuf's decoder factory:
+the reader needs none of the writer's code, and reads any file whose channels carry these schemas.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+from google.protobuf.message import DecodeError
+from mcap.records import Schema
+from mcap_protobuf.decoder import DecoderFactory
+
+from reports import trace_format as tf
+
+__all__ = ["Decoded", "MessageDecoder", "UnreadableMessage"]
+
+_VERDICT_NUMBERS = ("time", "value", "target", "tolerance")
+_FIELD_TYPE_BOOL, _FIELD_TYPE_STRING = 8, 9  # google.protobuf.FieldDescriptor.TYPE_*
+
+
+class UnreadableMessage(ValueError):
+    """A message that its channel's schema does not decode."""
+
+
+@dataclass
+class Decoded:
+    """What the messages held, as lists; the reader turns them into arrays once at the end."""
+
+    tf_times: list[float] = field(default_factory=list)
+    poses: list[list[float]] = field(default_factory=list)  # per step: body-major x y z, w x y z
+    motion_times: list[float] = field(default_factory=list)
+    motions: list[list[float]] = field(default_factory=list)  # per step: body-major vel xyz, angvel xyz
+    joint_times: list[float] = field(default_factory=list)
+    joint_rows: list[list[float]] = field(default_factory=list)
+    state_times: list[float] = field(default_factory=list)
+    state: dict[str, list[Any]] = field(default_factory=dict)
+    contacts: list[tuple[float, list[dict[str, Any]]]] = field(default_factory=list)
+    events: list[tuple[float, str, str, dict[str, Any]]] = field(default_factory=list)
+    logs: list[tuple[float, str, str, str]] = field(default_factory=list)
+    sounds: list[tuple[float, str, str, float, float]] = field(default_factory=list)
+    verdicts: list[tuple[float, dict[str, Any]]] = field(default_factory=list)
+
+
+class MessageDecoder:
+    """Decodes messages channel by channel; ``bodies`` and ``joints`` name the rows' order."""
+
+    def __init__(self, bodies: list[str], joints: list[str]) -> None:
+        self.bodies = bodies
+        self.joints = joints
+        self._index = {name: i for i, name in enumerate(bodies)}
+        self._factory = DecoderFactory()
+        self._decoders: dict[int, Callable[[bytes], Any]] = {}
+        self.out = Decoded()
+
+    def _decode(self, schema: Schema, message_encoding: str, data: bytes) -> Any:
+        decode = self._decoders.get(schema.id)
+        if decode is None:
+            found = self._factory.decoder_for(message_encoding, schema)
+            if found is None:
+                raise UnreadableMessage(f"no protobuf decoder for schema {schema.name!r} ({schema.encoding})")
+            decode = self._decoders[schema.id] = found
+        try:
+            return decode(data)
+        except (DecodeError, RuntimeError, ValueError) as exc:
+            raise UnreadableMessage(f"a {schema.name} message does not decode: {exc}") from exc
+
+    def add(self, topic: str, schema: Schema | None, message_encoding: str, t: float, data: bytes) -> None:
+        handler = self._handlers.get(topic)
+        if handler is None or schema is None:
+            return  # /scene and /audio are for viewers; unknown topics are someone else's
+        handler(self, t, self._decode(schema, message_encoding, data))
+
+    # ---- per channel ------------------------------------------------------------------------------
+    def _tf(self, t: float, msg: Any) -> None:
+        row = [math.nan] * (7 * len(self.bodies))
+        index = self._index
+        for frame in msg.transforms:
+            i = index.get(frame.child_frame_id)
+            if i is None:
+                continue
+            p, q = frame.translation, frame.rotation
+            row[7 * i : 7 * i + 7] = (p.x, p.y, p.z, q.w, q.x, q.y, q.z)
+        self.out.tf_times.append(t)
+        self.out.poses.append(row)
+
+    def _bodies(self, t: float, msg: Any) -> None:
+        row: list[float] = []
+        for name in self.bodies:
+            b = getattr(msg, name, None)
+            if b is None:
+                row += [math.nan] * 6
+                continue
+            v, w = b.vel, b.angvel
+            row += (v.x, v.y, v.z, w.x, w.y, w.z)
+        self.out.motion_times.append(t)
+        self.out.motions.append(row)
+
+    def _joints(self, t: float, msg: Any) -> None:
+        row: list[float] = []
+        for name in self.joints:
+            j = getattr(msg, name, None)
+            row += (math.nan,) * 3 if j is None else (j.position, j.velocity, j.motor_force)
+        self.out.joint_times.append(t)
+        self.out.joint_rows.append(row)
+
+    def _state(self, t: float, msg: Any) -> None:
+        out = self.out
+        n = len(out.state_times)
+        out.state_times.append(t)
+        for f in msg.DESCRIPTOR.fields:
+            value = getattr(msg, f.name)
+            if f.type not in (_FIELD_TYPE_BOOL, _FIELD_TYPE_STRING):
+                value = float(value)
+            out.state.setdefault(f.name, [None] * n).append(value)
+        for values in out.state.values():
+            values.extend([None] * (n + 1 - len(values)))
+
+    def _contacts(self, t: float, msg: Any) -> None:
+        if msg.pairs:
+            pairs = [{"a": p.a, "b": p.b, "points": p.points, "depth": p.depth, "normal_force": p.normal_force}
+                     for p in msg.pairs]  # fmt: skip
+            self.out.contacts.append((t, pairs))
+
+    def _event(self, t: float, msg: Any) -> None:
+        detail = {}
+        for kv in msg.detail:
+            try:
+                detail[kv.key] = json.loads(kv.value)
+            except json.JSONDecodeError:
+                detail[kv.key] = kv.value
+        self.out.events.append((t, msg.name, msg.source, detail))
+
+    def _log(self, t: float, msg: Any) -> None:
+        level = tf.LOG_LEVEL_NAMES.get(int(msg.level), "unknown")
+        self.out.logs.append((t, level, msg.name, msg.message))
+
+    def _sound(self, t: float, msg: Any) -> None:
+        self.out.sounds.append((t, msg.name, msg.action, msg.offset, msg.volume))
+
+    def _verdicts(self, t: float, msg: Any) -> None:
+        for v in msg.verdicts:
+            data: dict[str, Any] = {
+                "name": v.name, "kind": v.kind, "passed": v.passed, "measured": v.measured,
+                "expected": v.expected, "message": v.message,
+            }  # fmt: skip
+            for key in _VERDICT_NUMBERS:
+                data[key] = getattr(v, key) if v.HasField(key) else None
+            self.out.verdicts.append((t, data))
+
+    _handlers: dict[str, Callable[[MessageDecoder, float, Any], None]] = {
+        tf.TOPIC_TF: _tf,
+        tf.TOPIC_BODIES: _bodies,
+        tf.TOPIC_JOINTS: _joints,
+        tf.TOPIC_STATE: _state,
+        tf.TOPIC_CONTACTS: _contacts,
+        tf.TOPIC_EVENTS: _event,
+        tf.TOPIC_LOG: _log,
+        tf.TOPIC_SOUNDS: _sound,
+        tf.TOPIC_VERDICTS: _verdicts,
+    }
+
+
+def body_arrays(decoded: Decoded, n_bodies: int) -> tuple[np.ndarray, np.ndarray]:
+    """(times, (S, N, 13) rows in :data:`reports.trace_format.BODY_ROW` order) from /tf and /bodies, over the
+    steps both hold (a recovered trace may end between the two)."""
+    steps = min(len(decoded.tf_times), len(decoded.motion_times))
+    poses = np.array(decoded.poses[:steps], dtype=float).reshape(steps, n_bodies, 7)
+    motions = np.array(decoded.motions[:steps], dtype=float).reshape(steps, n_bodies, 6)
+    return np.array(decoded.tf_times[:steps]), np.concatenate([poses, motions], axis=2)

@@ -1,0 +1,138 @@
+"""The Foxglove layout shipped with the traces: ``foxglove-layout.json`` (Layouts → Import layout).
+
+One layout per trace folder, in Foxglove Studio's layout format (``configById`` + ``layout`` mosaic, as
+Foxglove Studio 1.48 imports and exports it; its newer releases and Lichtblick read the same):
+
+* a 3D panel following ``world``: the bodies and the collision solids (/scene, frame-locked to /tf),
+  the frames' labels, axes and links hidden (the settings turn them on), a neutral grid, the camera on
+  the bodies' start positions;
+* a Plot of the scenario's asserted quantities (:class:`PlotPath`, from runner/cli/layouts.py), with the
+  value at the current time in the legend;
+* a State Transitions panel of the events (/events ``name``) and of state variables;
+* the Log (/log: events, handler logs, sounds, each verdict when it was decided, the summary).
+
+The message paths are the ones docs/trace-format.md documents. Pure data: nothing here reads a scenario.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from reports import trace_format as tf
+
+__all__ = ["LayoutSpec", "PlotPath", "body_path", "joint_path", "layout", "state_path", "write_layout"]
+
+PANEL_TITLE = "foxglovePanelTitle"  # Foxglove's key for a panel's title in its config
+GRID_COLOR = "#9e9e9e"  # neutral grey: a body's colour stays the only colour in the scene
+MAX_PLOT_PATHS = 12
+
+
+@dataclass(frozen=True)
+class PlotPath:
+    value: str  # a Foxglove message path
+    label: str = ""
+
+
+@dataclass(frozen=True)
+class LayoutSpec:
+    """What a layout shows: plot paths, state-transition paths, and where the bodies start (camera)."""
+
+    plots: Sequence[PlotPath]
+    transitions: Sequence[str] = ()
+    spheres: Sequence[tuple[Sequence[float], float]] = ()  # each body at its start: (centre, bounding radius)
+
+
+def body_path(body: str, field: str, component: str) -> str:
+    """The message path of ``<body>.<field>.<component>``: pose from /tf, velocities from /bodies."""
+    if field in ("pos", "quat"):
+        part = "translation" if field == "pos" else "rotation"
+        return f'{tf.TOPIC_TF}.transforms[:]{{child_frame_id=="{body}"}}.{part}.{component}'
+    return f"{tf.TOPIC_BODIES}.{body}.{field}.{component}"
+
+
+def joint_path(joint: str, field: str) -> str:
+    return f"{tf.TOPIC_JOINTS}.{joint}.{'motor_force' if field == 'force' else field}"
+
+
+def state_path(variable: str) -> str:
+    return f"{tf.TOPIC_STATE}.{variable}"
+
+
+def _camera(spheres: Sequence[tuple[Sequence[float], float]]) -> dict[str, Any]:
+    """A perspective view from above and to the side, centred on the bodies, at the distance where a 45-degree
+    field of view holds the sphere around them all (1 / sin(22.5 deg) = 2.6 times its radius), that radius at
+    least 1 m: bodies move, and one layout serves every variant of a file."""
+    if spheres:
+        lo = [min(c[i] - r for c, r in spheres) for i in range(3)]
+        hi = [max(c[i] + r for c, r in spheres) for i in range(3)]
+        target = [(a + b) / 2 for a, b in zip(lo, hi, strict=True)]
+        radius = math.dist(lo, hi) / 2
+    else:
+        target, radius = [0.0, 0.0, 0.0], 1.0
+    return {
+        "distance": round(2.6 * max(radius, 1.0), 3), "perspective": True, "phi": 55.0, "thetaOffset": 45.0,
+        "targetOffset": [round(c, 3) for c in target], "target": [0, 0, 0], "targetOrientation": [0, 0, 0, 1],
+        "fovy": 45, "near": 0.01, "far": 5000,
+    }  # fmt: skip
+
+
+def layout(spec: LayoutSpec) -> dict[str, Any]:
+    """The layout (Foxglove's ``LayoutData``) for ``spec``."""
+    plots = list(dict.fromkeys(spec.plots))[:MAX_PLOT_PATHS]
+    three_d = {
+        "followTf": tf.WORLD_FRAME, "followMode": "follow-pose", "cameraState": _camera(spec.spheres),
+        "scene": {"transforms": {"showLabel": False, "axisScale": 0, "lineWidth": 0}},  # bodies, not axes
+        "transforms": {},
+        "topics": {tf.TOPIC_SCENE: {"visible": True}},
+        "layers": {"grid": {"visible": True, "frameLocked": True, "label": "Grid", "instanceId": "grid",
+                            "layerId": "foxglove.Grid", "size": 20, "divisions": 20, "lineWidth": 1,
+                            "color": GRID_COLOR, "position": [0, 0, 0], "rotation": [0, 0, 0], "order": 1}},
+        "publish": {"type": "point", "poseTopic": "/move_base_simple/goal", "pointTopic": "/clicked_point",
+                    "poseEstimateTopic": "/initialpose", "poseEstimateXDeviation": 0.5,
+                    "poseEstimateYDeviation": 0.5, "poseEstimateThetaDeviation": 0.26179939},
+        "imageMode": {},
+        PANEL_TITLE: "Scene",
+    }  # fmt: skip
+    plot = {
+        "paths": [{"value": p.value, "enabled": True, "timestampMethod": "receiveTime", **({"label": p.label}
+                   if p.label else {})} for p in plots],
+        "showLegend": True, "legendDisplay": "floating", "showPlotValuesInLegend": True, "showXAxisLabels": True,
+        "showYAxisLabels": True, "isSynced": True, "xAxisVal": "timestamp", "sidebarDimension": 240,
+        PANEL_TITLE: "Asserted quantities",
+    }  # fmt: skip
+    transitions = [f"{tf.TOPIC_EVENTS}.name", *spec.transitions]
+    events = {
+        "paths": [{"value": p, "timestampMethod": "receiveTime"} for p in dict.fromkeys(transitions)],
+        "isSynced": True, PANEL_TITLE: "Events and state",
+    }  # fmt: skip
+    return {
+        "configById": {"3D!scene": three_d, "Plot!asserted": plot, "StateTransitions!events": events,
+                       "RosOut!log": {"searchTerms": [], "minLogLevel": 1, PANEL_TITLE: "Log"}},
+        "globalVariables": {},
+        "userNodes": {},
+        "playbackConfig": {"speed": 1},
+        "layout": {"direction": "row", "first": "3D!scene", "splitPercentage": 55,
+                   "second": {"direction": "column", "first": "Plot!asserted", "splitPercentage": 50,
+                              "second": {"direction": "column", "first": "StateTransitions!events",
+                                         "second": "RosOut!log", "splitPercentage": 35}}},
+    }  # fmt: skip
+
+
+def layout_text(spec: LayoutSpec) -> str:
+    return json.dumps(layout(spec), indent=2, ensure_ascii=False) + "\n"
+
+
+def write_layout(folder: Path, spec: LayoutSpec) -> Path:
+    """Write ``folder/foxglove-layout.json`` (atomically: a reader never sees half a file)."""
+    folder.mkdir(parents=True, exist_ok=True)
+    target = folder / tf.LAYOUT_FILE
+    tmp = target.with_name(f".{target.name}.{os.getpid()}.partial")
+    tmp.write_text(layout_text(spec), encoding="utf-8")
+    os.replace(tmp, target)
+    return target

@@ -1,0 +1,92 @@
+"""The per-trace messages ``physics_scenarios.Bodies``, ``Joints`` and ``State``: one field per body, joint
+or state variable, named after it, so that Foxglove's message paths read ``/bodies.box.vel.z``,
+``/joints.slider.position`` and ``/state.door_open``.
+
+They are built with google.protobuf's descriptor API (``FileDescriptorProto`` → ``DescriptorPool`` →
+message classes) in a pool of their own per trace, since two traces in one process may name different
+bodies. State is a file of its own, built when the first step brings the variables' values (their types
+are those of the initial values). Names are the language's identifiers (``[A-Za-z_][A-Za-z0-9_]*``),
+valid protobuf field names as they are; ``json_name`` is set to the name itself so no consumer camel-cases
+it.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field, replace
+from typing import Any
+
+from google.protobuf import descriptor_pb2, descriptor_pool, message_factory
+
+from runner.trace.proto import physics_scenarios_pb2 as base
+
+__all__ = ["PACKAGE", "ScenarioMessages", "scenario_messages", "state_field_type", "with_state"]
+
+PACKAGE = "physics_scenarios"
+FILE_NAME = "physics_scenarios_scenario.proto"
+STATE_FILE_NAME = "physics_scenarios_state.proto"
+_F = descriptor_pb2.FieldDescriptorProto
+
+#: state field types, by the Python type of the variable's initial value
+_STATE_TYPES = {bool: _F.TYPE_BOOL, int: _F.TYPE_DOUBLE, float: _F.TYPE_DOUBLE, str: _F.TYPE_STRING}
+
+
+def state_field_type(value: Any) -> str:
+    """"bool", "double" or "string": the field type of a state variable that starts at ``value``."""
+    kind = _STATE_TYPES.get(type(value), _F.TYPE_STRING)
+    return {_F.TYPE_BOOL: "bool", _F.TYPE_DOUBLE: "double"}.get(kind, "string")
+
+
+@dataclass(frozen=True)
+class ScenarioMessages:
+    """The message classes of one trace: ``bodies`` and ``joints``; ``state`` once its types are known."""
+
+    bodies: Any
+    joints: Any
+    state: Any = None
+    state_types: Mapping[str, str] = field(default_factory=dict)  # variable -> "bool" | "double" | "string"
+
+
+def _message(
+    file: descriptor_pb2.FileDescriptorProto, name: str, fields: Sequence[tuple[str, int, str | None]]
+) -> None:
+    msg = file.message_type.add(name=name)
+    for number, (field_name, kind, type_name) in enumerate(fields, start=1):
+        f = msg.field.add(name=field_name, json_name=field_name, number=number, type=kind, label=_F.LABEL_OPTIONAL)
+        if type_name is not None:
+            f.type_name = type_name
+
+
+def _classes(file: descriptor_pb2.FileDescriptorProto, names: Sequence[str], with_base: bool) -> list[Any]:
+    pool = descriptor_pool.DescriptorPool()
+    try:
+        if with_base:
+            pool.AddSerializedFile(base.DESCRIPTOR.serialized_pb)
+        pool.Add(file)
+        return [message_factory.GetMessageClass(pool.FindMessageTypeByName(f"{PACKAGE}.{n}")) for n in names]
+    except TypeError as exc:  # protobuf's error for a descriptor it refuses (duplicate or bad names)
+        raise ValueError(f"cannot build the trace's messages for these names: {exc}") from exc
+
+
+def scenario_messages(bodies: Sequence[str], joints: Sequence[str]) -> ScenarioMessages:
+    """``physics_scenarios.Bodies`` and ``Joints`` for a scenario's bodies and joints (CompiledWorld order).
+    Raises ``ValueError`` for names protobuf refuses."""
+    file = descriptor_pb2.FileDescriptorProto(
+        name=FILE_NAME, package=PACKAGE, syntax="proto3", dependency=[base.DESCRIPTOR.name]
+    )
+    motion = f".{base.BodyMotion.DESCRIPTOR.full_name}"
+    joint = f".{base.JointState.DESCRIPTOR.full_name}"
+    _message(file, "Bodies", [(b, _F.TYPE_MESSAGE, motion) for b in bodies])
+    _message(file, "Joints", [(j, _F.TYPE_MESSAGE, joint) for j in joints])
+    return ScenarioMessages(*_classes(file, ("Bodies", "Joints"), with_base=True))
+
+
+def with_state(messages: ScenarioMessages, state: Mapping[str, Any]) -> ScenarioMessages:
+    """``messages`` plus ``physics_scenarios.State`` for variables starting at ``state`` (name -> value):
+    a bool, double or string field each, by the type of its value."""
+    types = {name: state_field_type(value) for name, value in state.items()}
+    kinds = {"bool": _F.TYPE_BOOL, "double": _F.TYPE_DOUBLE, "string": _F.TYPE_STRING}
+    file = descriptor_pb2.FileDescriptorProto(name=STATE_FILE_NAME, package=PACKAGE, syntax="proto3")
+    _message(file, "State", [(name, kinds[kind], None) for name, kind in types.items()])
+    (state_class,) = _classes(file, ("State",), with_base=False)
+    return replace(messages, state=state_class, state_types=types)

@@ -1,0 +1,76 @@
+"""The Foxglove layout (runner/trace/layout.py, runner/cli/layouts.py): what `scenario layout` writes, and
+`scenario run` beside its traces. tests/trace/test_foxglove.py loads it in the real Foxglove Studio."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+from typing import Any
+
+from reports import trace_format as tf
+from runner.cli.layouts import layout_spec
+from runner.language.load import load_files
+from runner.trace.layout import layout
+from tests.paths import ROOT
+
+CLI = [sys.executable, "-m", "runner"]
+
+
+def _cli(*args: str, cwd: Path = ROOT) -> subprocess.CompletedProcess[str]:
+    return subprocess.run([*CLI, *args], capture_output=True, text=True, cwd=cwd, timeout=300)
+
+
+def _panels(data: dict[str, Any]) -> set[str]:
+    """The panel ids the mosaic places."""
+    out: set[str] = set()
+
+    def walk(node: Any) -> None:
+        if isinstance(node, str):
+            out.add(node)
+        else:
+            walk(node["first"])
+            walk(node["second"])
+
+    walk(data["layout"])
+    return out
+
+
+def test_the_layout_shows_the_scene_the_asserted_quantities_the_events_and_the_log() -> None:
+    data = layout(layout_spec(load_files([ROOT / "scenarios" / "factory_physics.yaml"], None, True)))
+    assert _panels(data) == set(data["configById"]) == {"3D!scene", "Plot!asserted", "StateTransitions!events",
+                                                         "RosOut!log"}  # fmt: skip
+    scene = data["configById"]["3D!scene"]
+    assert scene["followTf"] == tf.WORLD_FRAME and scene["topics"][tf.TOPIC_SCENE] == {"visible": True}
+    plots = {p["label"]: p["value"] for p in data["configById"]["Plot!asserted"]["paths"]}
+    # assertions read box.vel.z (kick), box.pos.z (apex), door.vel.x, box-door contact, slider.position
+    assert plots["box.vel.z"] == "/bodies.box.vel.z"
+    assert plots["box.pos.z"] == '/tf.transforms[:]{child_frame_id=="box"}.translation.z'
+    assert plots["slider.position"] == "/joints.slider.position"
+    assert plots["contact box-door force"] == '/contacts.pairs[:]{a=="box"}{b=="door"}.normal_force'
+    events = [p["value"] for p in data["configById"]["StateTransitions!events"]["paths"]]
+    assert events == ["/events.name", "/state.door_open"]
+    assert data["configById"]["Plot!asserted"]["showPlotValuesInLegend"] is True
+
+
+def test_a_scenario_whose_assertions_read_no_height_still_plots_one() -> None:
+    spec = layout_spec(load_files([ROOT / "scenarios" / "conformance" / "04_slider_motor.yaml"], None, True))
+    assert any(p.value.startswith("/tf.transforms") and p.value.endswith(".translation.z") for p in spec.plots)
+
+
+def test_scenario_layout_prints_or_writes_it_and_run_writes_it_beside_the_traces(tmp_path: Path) -> None:
+    printed = _cli("layout", "scenarios/factory_intervals.yaml")
+    assert printed.returncode == 0, printed.stderr
+    data = json.loads(printed.stdout)
+    assert _panels(data) == set(data["configById"])
+    written = _cli("layout", "scenarios/factory_intervals.yaml", "--out", str(tmp_path / "layout"))
+    assert written.returncode == 0 and json.loads((tmp_path / "layout" / tf.LAYOUT_FILE).read_text()) == data
+    run = _cli("run", "scenarios/factory_intervals.yaml", "--out", str(tmp_path / "traces"), "--quiet")
+    assert run.returncode == 0, run.stderr
+    assert json.loads((tmp_path / "traces" / tf.LAYOUT_FILE).read_text()) == layout(
+        layout_spec(load_files([ROOT / "scenarios" / "factory_intervals.yaml"], None, False))
+    )
+    (tmp_path / "file").write_text("not a folder")
+    bad = _cli("layout", "scenarios/factory_intervals.yaml", "--out", str(tmp_path / "file"))
+    assert bad.returncode == 2 and "cannot write" in bad.stderr and "Traceback" not in bad.stderr
