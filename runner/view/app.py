@@ -21,7 +21,7 @@ from runner.compile.program import build_program
 from runner.language.load import LoadedScenario
 from runner.sim.run import run_loaded, solid_visuals
 from runner.sim.session import RunResult
-from runner.trace import foxglove as fx
+from runner.trace.encoder import dumps
 from runner.view.display import ViewUnavailable, display_problem
 from runner.view.hud import Hud
 from runner.view.keys import RESERVED, named_events
@@ -56,7 +56,7 @@ def view_scenario(loaded: LoadedScenario, backend: str, out_dir: Path, *, record
         f"the scenario handles `{name}`, which the viewer keeps for itself ({RESERVED[name]}); it cannot be played"
         for name in sorted(set(program.handlers) & set(RESERVED))
     ]
-    specs = json.loads(fx.dumps([asdict(b) for b in world.bodies]))  # as the trace's metadata has them
+    specs = json.loads(dumps([asdict(b) for b in world.bodies]))  # as the trace's metadata has them
     model = SceneModel.from_specs(specs)
     model.updates = []
     model.add_update(0.0, scene_entities(world.bodies, solid_visuals(program)))

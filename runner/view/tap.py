@@ -10,9 +10,10 @@ of the trace will draw.
 
 from __future__ import annotations
 
-import json
 from collections.abc import Mapping, Sequence
 from typing import Any, Protocol
+
+from google.protobuf import json_format
 
 from backends.types import BodySpec
 from reports import trace_format as tf
@@ -42,7 +43,7 @@ def scene_entities(bodies: Sequence[BodySpec], solids: Sequence[SolidVisual] = (
     for s in solids:
         prims = fx.solid_primitives(s.kind, s.center, s.radius, s.size, s.vertices)
         out.append(fx.entity(0, s.body, f"solid/{s.body}/{s.node}", {"solid": s.node}, **prims))
-    return [entity_from_message(e) for e in json.loads(fx.dumps(out))]
+    return [entity_from_message(json_format.MessageToDict(e, preserving_proto_field_name=True)) for e in out]
 
 
 class TraceTap:

@@ -205,10 +205,14 @@ def test_bad_input_exits_two(tmp_path: Path) -> None:
 
 
 def test_the_report_links_the_foxglove_layout_beside_the_traces(compare_run: CompareRun, tmp_path: Path) -> None:
+    assert (compare_run.traces / "foxglove-layout.json").is_file()  # `compare` leaves it with its traces
+    assert '<a href="traces/foxglove-layout.json">Foxglove layout</a>' in (compare_run.out / "report.html").read_text()
     traces = tmp_path / "traces"
     shutil.copytree(compare_run.traces, traces)
-    assert "foxglove-layout.json" not in (compare_run.out / "report.html").read_text(encoding="utf-8")
-    (traces / "foxglove-layout.json").write_text("{}", encoding="utf-8")  # what `compare` leaves with its traces
+    (traces / "foxglove-layout.json").unlink()  # a folder of traces without the layout: no link
+    write_report([traces], tmp_path / "without")
+    assert "foxglove-layout.json" not in (tmp_path / "without" / "report.html").read_text(encoding="utf-8")
+    (traces / "foxglove-layout.json").write_text("{}", encoding="utf-8")
     write_report([traces], tmp_path)
     assert '<a href="traces/foxglove-layout.json">Foxglove layout</a>' in (tmp_path / "report.html").read_text()
     assert "[Foxglove layout](traces/foxglove-layout.json)" in (tmp_path / "report.md").read_text()
