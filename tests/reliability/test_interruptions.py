@@ -3,13 +3,18 @@ exit 130/143); SIGKILL leaves a `.partial` that `scenario inspect --recover` rea
 
 The run: a 0.1 m sphere drifting at 1 m/s without gravity for 50,000 simulated seconds (5e6 steps of
 0.01 s), so that it is always mid-run when the signal comes; its trace is checked step by step
-(x = t on the float64 engines). Then FUZZ_FAULTS runs (conftest.py) are signalled at random
-moments, on every real engine, and every outcome must leave a readable, self-consistent trace (read
-both by the project's stream reader and by mcap's own indexed reader) and no traceback.
+(x = t on the float64 engines). The engine runs in a worker process of the command (runner.exec): a
+signal to the command is passed on to it, SIGKILL of the command reaches it through the kernel, and
+the worker itself may be killed. Then FUZZ_FAULTS runs (conftest.py) are signalled at random moments
+(SIGINT, SIGTERM, SIGKILL to the command, SIGKILL to the worker, two SIGINTs), on every real engine,
+and every outcome must leave a readable, self-consistent trace (read both by the project's stream
+reader and by mcap's own indexed reader) and no traceback.
 """
 
 from __future__ import annotations
 
+import contextlib
+import os
 import random
 import signal
 import subprocess
@@ -166,20 +171,64 @@ def test_sigint_and_sigterm_finish_the_trace_as_interrupted(tmp_path: Path, sig:
     assert [a.name for a in trace.attachments] == ["drift.yaml"]
 
 
-def test_sigkill_leaves_a_partial_that_inspect_recovers_up_to_its_last_chunk(tmp_path: Path) -> None:
+def worker_of(child: subprocess.Popen) -> int:
+    """The pid of the worker process running the case (the command's child: it forks its workers)."""
+    deadline = time.monotonic() + 30
+    while time.monotonic() < deadline:
+        text = Path(f"/proc/{child.pid}/task/{child.pid}/children").read_text().split()
+        if text:
+            return int(text[0])
+        time.sleep(0.02)
+    raise AssertionError("no worker process")
+
+
+def wait_released(path: Path, timeout: float = 30.0) -> None:
+    """Until no process owns the case's output names (its worker has ended and removed its lock file)."""
+    lock = path.with_name(f".{path.name}.lock")
+    deadline = time.monotonic() + timeout
+    while lock.exists() and time.monotonic() < deadline:
+        time.sleep(0.02)
+    assert not lock.exists(), f"{lock} still held after {timeout} s"
+
+
+def assert_recovered_to_a_chunk(path: Path) -> Trace:
+    partial = partial_of(path)
+    assert partial.exists() and not path.exists()  # a half-written trace never has the final name
+    trace = read_trace(path, recover=True)
+    assert not trace.complete and trace.recovered and trace.status == tf.STATUS_INCOMPLETE
+    # chunks close after the first step at or past each simulated second: the last one read is whole
+    assert trace.times[-1] == pytest.approx(round(trace.times[-1])) and trace.times[-1] >= 1.0
+    assert complete_record_end(partial) == partial.stat().st_size  # every byte on disk is recovered
+    return trace
+
+
+def test_sigkill_of_the_command_lets_its_worker_finish_the_trace(tmp_path: Path) -> None:
+    """`scenario` killed outright: its worker is told by the kernel (PR_SET_PDEATHSIG) and finishes the
+    trace at the next step, as for SIGTERM; nothing is lost."""
     child, path = start(tmp_path)
     wait_for_chunks(child, path, 60_000)
     child.send_signal(signal.SIGKILL)
     rc, _ = finish(child)
     assert rc == -signal.SIGKILL
-    partial = partial_of(path)
-    assert partial.exists() and not path.exists()  # a half-written trace never has the final name
-    trace = read_trace(path, recover=True)
-    assert not trace.complete and trace.recovered and trace.status == tf.STATUS_INCOMPLETE
+    wait_released(path)
+    trace = read_trace(path)
+    assert trace.complete and trace.status == tf.STATUS_INTERRUPTED and trace.times[-1] > 5.0
+    assert_whole_steps(trace)
     assert_steps(trace)
-    # chunks close after the first step at or past each simulated second: the last one read is whole
-    assert trace.times[-1] == pytest.approx(round(trace.times[-1])) and trace.times[-1] >= 1.0
-    assert complete_record_end(partial) == partial.stat().st_size  # every byte on disk is recovered
+    mcap_index_agrees(path, trace)
+
+
+def test_a_killed_engine_process_is_a_crash_and_inspect_recovers_its_trace(tmp_path: Path) -> None:
+    """The process running the engine killed (the OOM killer, a crash): exit 3 "crashed (signal 9)", the
+    trace kept as .partial up to its last chunk, every byte on disk recovered."""
+    child, path = start(tmp_path)
+    wait_for_chunks(child, path, 60_000)
+    os.kill(worker_of(child), signal.SIGKILL)
+    rc, err = finish(child)
+    assert rc == 3 and "crashed (signal 9)" in err and "Traceback" not in err, err
+    trace = assert_recovered_to_a_chunk(path)
+    assert_steps(trace)
+    partial = partial_of(path)
     cli = [sys.executable, "-m", "runner", "inspect"]
     done = subprocess.run([*cli, str(partial), "--recover"], capture_output=True, text=True, timeout=120)
     assert done.returncode == 0, done.stderr
@@ -189,32 +238,62 @@ def test_sigkill_leaves_a_partial_that_inspect_recovers_up_to_its_last_chunk(tmp
     assert refused.returncode == 2 and "--recover" in refused.stderr and "Traceback" not in refused.stderr
 
 
+def test_a_second_signal_ends_the_run_at_once_and_keeps_the_partial(tmp_path: Path) -> None:
+    """Two SIGINTs in a row: the second kills the worker at once (as inside an engine call that never
+    returns), the command exits 130 and the trace is kept up to its last chunk."""
+    child, path = start(tmp_path)
+    wait_for_chunks(child, path, 60_000)
+    child.send_signal(signal.SIGINT)
+    child.send_signal(signal.SIGINT)
+    rc, err = finish(child)
+    assert rc == 130 and "Traceback" not in err, err
+    wait_released(path)
+    if path.exists():  # the worker finished its step and the trace before the second signal reached it
+        assert read_trace(path).status == tf.STATUS_INTERRUPTED
+    else:
+        assert_steps(assert_recovered_to_a_chunk(path))
+
+
+KINDS = ["SIGINT", "SIGTERM", "SIGKILL", "SIGKILL to the engine's process", "SIGINT twice"]
+EXPECTED = {"SIGINT": (130,), "SIGTERM": (143,), "SIGKILL": (-9,), "SIGKILL to the engine's process": (3,),
+            "SIGINT twice": (130,)}  # fmt: skip
+
+
 @pytest.mark.parametrize("case", range(FUZZ_FAULTS))
 def test_a_signal_at_a_random_moment_never_corrupts_the_trace(tmp_path: Path, case: int) -> None:
-    """A run of 0.1 s to a minute of wall time signalled at a random moment, possibly after it has finished."""
+    """A run of 0.1 s to a minute of wall time signalled at a random moment, possibly after it has finished:
+    whatever the signal, the trace is whole (finished) or a .partial read to its last byte."""
     rng = random.Random(case)
     backend = rng.choice(REAL)
-    sig = rng.choice([signal.SIGINT, signal.SIGTERM, signal.SIGKILL])
+    kind = rng.choice(KINDS)
     child, path = start(tmp_path, backend, duration=rng.choice([50, 500, 5000]))
     wait_for_chunks(child, path, 1)
+    worker = worker_of(child)
     time.sleep(rng.uniform(0.0, 2.0))
-    child.send_signal(sig)
+    if kind == "SIGKILL to the engine's process":
+        with contextlib.suppress(ProcessLookupError):
+            os.kill(worker, signal.SIGKILL)
+    else:
+        child.send_signal(getattr(signal, kind.split()[0]))
+        if kind == "SIGINT twice":
+            child.send_signal(signal.SIGINT)
     rc, err = finish(child)
-    expected = {signal.SIGINT: 130, signal.SIGTERM: 143, signal.SIGKILL: -signal.SIGKILL}[sig]
-    # -sig for SIGINT/SIGTERM: the signal came after `main()` had returned (the trace finished, exiting)
-    assert rc in (0, expected, -sig), (rc, err)
-    assert rc == -sig or "Traceback" not in err, err
-    late = rc == 0 or (rc == -sig and sig != signal.SIGKILL) or (path.exists() and sig == signal.SIGKILL)
-    outcome = "after the run had finished" if late else f"{signal.Signals(sig).name} mid-run"
+    wait_released(path)
+    sig = getattr(signal, kind.split()[0])
+    # -sig: the signal came after `main()` had returned (the run was over); 0: to its worker, after the run
+    assert rc in (0, -sig, *EXPECTED[kind]), (rc, err)
+    assert rc < 0 or "Traceback" not in err, err
+    late = rc == 0 or (rc == -sig and kind != "SIGKILL")
+    outcome = "after the run had finished" if late else f"{kind} mid-run"
     if path.exists():
         assert not partial_of(path).exists()
         trace = read_trace(path)
         assert trace.complete and trace.status in (tf.STATUS_PASSED, tf.STATUS_INTERRUPTED)
-        assert (trace.status == tf.STATUS_PASSED) == late
+        assert (trace.status == tf.STATUS_PASSED) == late or kind == "SIGKILL"
         assert_whole_steps(trace)
         mcap_index_agrees(path, trace)
     else:
-        assert rc == -signal.SIGKILL
+        assert kind in ("SIGKILL to the engine's process", "SIGINT twice"), (kind, rc, err)
         trace = read_trace(path, recover=True)
         assert complete_record_end(partial_of(path)) == partial_of(path).stat().st_size
         outcome += " (recovered)"
