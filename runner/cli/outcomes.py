@@ -66,8 +66,10 @@ def print_problem(err: Console, res: CaseResult) -> None:
 
 
 def summary_line(res: CaseResult, scenario: str, variant: str) -> str:
-    """``  <status>: <scenario> · <variant> · <backend>`` for a case that did not pass."""
-    return f"  [red]{escape(res.label)}[/]: {escape(scenario)} · {escape(variant)} · {escape(res.case.backend)}"
+    """``  <scenario> · <variant> · <backend>: <first message line>`` for a case that did not pass."""
+    where = f"{escape(scenario)} · {escape(variant)} · {escape(res.case.backend)}"
+    label, _, rest = res.headline.partition(": ")
+    return f"  {where}: [red]{escape(label)}[/]" + (f": {escape(rest)}" if rest else "")
 
 
 def print_summary(out: Console, results: list[CaseResult], names: list[tuple[str, str]]) -> None:

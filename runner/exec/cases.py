@@ -242,26 +242,32 @@ def case_result(case: Case, ending: Ending) -> CaseResult:
     res.trace = _kept_trace(case)
     if res.result is not None and res.trace is not None:
         res.result.trace = res.trace
-    _write_outcome(res)
+    if ending.how != RETURNED or _wants_outcome(res):
+        _tidy(res)
     return res
 
 
-def _write_outcome(res: CaseResult) -> None:
-    """An outcome file for a case whose trace cannot tell how it ended (none, or only a ``.partial``).
-    Written under the case's claim, taken again without clearing (its worker, which held it, is gone);
-    if another run has taken the names meanwhile, that run's files are left alone."""
-    case = res.case
+def _wants_outcome(res: CaseResult) -> bool:
+    """The case's trace cannot tell how it ended (there is none, or only a ``.partial``)."""
     finished = res.trace is not None and not res.trace.endswith(tf.PARTIAL_SUFFIX)
-    wanted = res.status in (CRASHED, TIMED_OUT_STATUS, EXITED) or (res.status == ERROR and not finished)
     refused = isinstance(res.error, TraceError) and not isinstance(res.error, OutputError)
-    if case.trace is None or not wanted or refused:
-        return  # refused for its outputs (in use, not the tool's): nothing of it may be written there
+    wanted = res.status in (CRASHED, TIMED_OUT_STATUS, EXITED) or (res.status == ERROR and not finished)
+    return res.case.trace is not None and wanted and not refused  # refused for its outputs: write nothing there
+
+
+def _tidy(res: CaseResult) -> None:
+    """After the case's worker is gone: take the case's names again (without clearing what it left), add
+    the outcome file if the trace cannot tell, and release them (a lock file a killed worker left is
+    removed). If another run has taken the names meanwhile, its files are left alone."""
+    if res.case.trace is None:
+        return
     try:
-        claim = Claim(Path(case.trace), clear=False)
+        claim = Claim(Path(res.case.trace), clear=False)
     except TraceError:
         return
     with claim:
-        _write_outcome_file(res, Path(case.trace))
+        if _wants_outcome(res):
+            _write_outcome_file(res, Path(res.case.trace))
 
 
 def _write_outcome_file(res: CaseResult, trace: Path) -> None:

@@ -31,12 +31,13 @@ from dataclasses import replace
 from pathlib import Path
 from typing import Any, Protocol
 
+from reports import trace_format as tf
 from runner.errors import ExitCode, TraceError, UsageError
 from runner.exec.cases import Case, CaseResult, case_result, estimate_cost, named, run_case
 from runner.exec.exits import most_severe
 from runner.exec.pool import RETURNED, TIMEOUT_GRACE, Ending, Job, Pool
 from runner.exec.transport import encode_error
-from runner.trace.output import Claim, foreign, refusal
+from runner.trace.output import Claim, foreign, publish_trace, refusal, write_error
 
 __all__ = [
     "EXECUTORS",
@@ -242,7 +243,10 @@ class RayExecutor:
         except (ray.exceptions.WorkerCrashedError, ray.exceptions.NodeDiedError) as exc:
             return Ending("crashed", None, output=f"the Ray worker died: {exc}")
         if case.out_dir is not None:
-            _publish(Path(case.out_dir), reply["written"])
+            try:
+                _publish(Path(case.out_dir), reply["written"])
+            except TraceError as exc:  # a full disk here is the case's output error, as in a local run
+                return _refused(exc)
         ending: Ending = reply["ending"]
         return ending
 
@@ -252,19 +256,25 @@ class RayExecutor:
 
 
 def _publish(out: Path, written: dict[str, bytes]) -> None:
-    """Files a remote run wrote, put in ``out`` (whose names this process owns): each written under a
-    temporary name and renamed, so that a finished trace appears whole or not at all."""
-    out.mkdir(parents=True, exist_ok=True)
-    for name, data in written.items():
-        target = out / name
-        tmp = out / f".{name}.incoming"
+    """Files a remote run wrote, put in ``out`` (whose names this process owns) as a local run writes them:
+    the trace first, through its ``.partial`` name (runner.trace.output.publish_trace), then the others
+    each under a temporary name and renamed."""
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise write_error(exc, f"into {out}") from exc
+    traces = [n for n in written if n.endswith((tf.FILE_SUFFIX, tf.FILE_SUFFIX + tf.PARTIAL_SUFFIX))]
+    for name in traces:
+        publish_trace(out / name, written[name])
+    for name in sorted(set(written) - set(traces)):
+        target, tmp = out / name, out / f"{name}.partial"
         try:
-            tmp.write_bytes(data)
+            tmp.write_bytes(written[name])
             os.replace(tmp, target)
-        except OSError:
+        except OSError as exc:
             with contextlib.suppress(OSError):
                 tmp.unlink()
-            raise
+            raise write_error(exc, str(target)) from exc
 
 
 def make_executor(kind: str = "local", jobs: int = 1, ray_address: str | None = None, *, isolate: bool = False,

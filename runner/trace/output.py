@@ -28,8 +28,10 @@ from __future__ import annotations
 import contextlib
 import errno
 import fcntl
+import io
 import json
 import os
+import struct
 from collections.abc import Iterable
 from pathlib import Path
 from types import TracebackType
@@ -42,8 +44,8 @@ from reports import outcome as oc
 from reports import trace_format as tf
 from runner.errors import OutputError, OutputInUse, TraceError
 
-__all__ = ["RESOURCE_ERRNOS", "Claim", "case_files", "foreign", "is_own", "lock_path", "refusal", "remove_own",
-           "write_error"]  # fmt: skip
+__all__ = ["RESOURCE_ERRNOS", "Claim", "case_files", "foreign", "is_own", "lock_path", "publish_trace", "refusal",
+           "remove_own", "write_error"]  # fmt: skip
 
 _MAGIC = b"\x89MCAP0\r\n"
 
@@ -210,3 +212,39 @@ def refusal(paths: list[Path]) -> str:
         f"{names} {verb} not written by scenario and would be overwritten; move {'it' if len(paths) == 1 else 'them'}, "
         "choose another --out folder, or pass --force to overwrite"
     )
+
+
+def _record_ends(data: bytes) -> list[int]:
+    """Offsets in ``data`` (an MCAP file) at which a whole record ends, read by mcap's own stream reader."""
+    stream = io.BytesIO(data)
+    ends = [len(_MAGIC)] if data.startswith(_MAGIC) else []
+    records = iter(StreamReader(stream, skip_magic=False).records)
+    while True:
+        try:
+            next(records)
+        except (StopIteration, McapError, EOFError, ValueError, struct.error):
+            return ends
+        ends.append(stream.tell())
+
+
+def publish_trace(target: Path, data: bytes) -> None:
+    """Write a trace made elsewhere (a Ray worker) under ``target`` as a local run would: through
+    ``<final>.partial``, cut back to the last whole record if the disk fills (then
+    :class:`~runner.errors.OutputError`), and renamed to ``target`` only when whole."""
+    final = target.name.endswith(tf.FILE_SUFFIX)
+    partial = target.with_name(target.name + tf.PARTIAL_SUFFIX) if final else target
+    good = 0
+    try:
+        with open(partial, "wb", buffering=0) as f:
+            for end in [*_record_ends(data), len(data)]:
+                if end > good:
+                    view = memoryview(data)[good:end]
+                    while view:
+                        view = view[f.write(view) :]
+                    good = end
+    except OSError as exc:
+        with contextlib.suppress(OSError):
+            os.truncate(partial, good)
+        raise write_error(exc, f"trace {partial}") from exc
+    if final:
+        os.replace(partial, target)

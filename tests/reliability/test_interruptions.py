@@ -33,6 +33,7 @@ from reports import trace_format as tf
 from reports.trace_reader import Trace, read_trace
 
 from .conftest import FUZZ_FAULTS, count
+from .processes import wait_released, worker_of
 
 DT = 0.01
 DRIFT = """\
@@ -169,26 +170,6 @@ def test_sigint_and_sigterm_finish_the_trace_as_interrupted(tmp_path: Path, sig:
     assert_steps(trace)
     mcap_index_agrees(path, trace)
     assert [a.name for a in trace.attachments] == ["drift.yaml"]
-
-
-def worker_of(child: subprocess.Popen) -> int:
-    """The pid of the worker process running the case (the command's child: it forks its workers)."""
-    deadline = time.monotonic() + 30
-    while time.monotonic() < deadline:
-        text = Path(f"/proc/{child.pid}/task/{child.pid}/children").read_text().split()
-        if text:
-            return int(text[0])
-        time.sleep(0.02)
-    raise AssertionError("no worker process")
-
-
-def wait_released(path: Path, timeout: float = 30.0) -> None:
-    """Until no process owns the case's output names (its worker has ended and removed its lock file)."""
-    lock = path.with_name(f".{path.name}.lock")
-    deadline = time.monotonic() + timeout
-    while lock.exists() and time.monotonic() < deadline:
-        time.sleep(0.02)
-    assert not lock.exists(), f"{lock} still held after {timeout} s"
 
 
 def assert_recovered_to_a_chunk(path: Path) -> Trace:

@@ -102,6 +102,7 @@ def execute(args: argparse.Namespace, out: Console, err: Console) -> int:
     from reports.build import ReportError, write_report
     from runner.cli.outcomes import print_problem
     from runner.exec.executors import LocalExecutor, check_outputs
+    from runner.trace.output import write_error
 
     _check(args)
     backends = _backends(args)
@@ -119,6 +120,8 @@ def execute(args: argparse.Namespace, out: Console, err: Console) -> int:
         colour = "green" if res.passed else "red"
         where = f"{escape(loaded.model.scenario)} · {escape(loaded.variant)} · {escape(res.case.backend)}"
         out.print(f"  [{colour}]{escape(res.label):<20}[/] {where} ({res.wall_seconds:.1f} s)")
+        if not res.passed:
+            out.print(f"      {escape(res.headline)} {escape(f'[exit {int(res.exit.code)}]')}", highlight=False)
         if res.result is None:
             print_problem(err, res)
 
@@ -129,6 +132,9 @@ def execute(args: argparse.Namespace, out: Console, err: Console) -> int:
             [p for p in inputs if p is not None], args.out, reference=args.reference, max_divergence=args.max_divergence
         )
     except ReportError as exc:
+        cause = exc.__cause__
+        if isinstance(cause, OSError):  # a full disk is an output error (74), a bad folder bad input (2)
+            raise write_error(cause, f"the report into {args.out}") from exc
         err.print(f"[bold red]error:[/] {escape(str(exc))}")
         return ExitCode.BAD_INPUT
     if args.junit is not None:
