@@ -24,7 +24,7 @@ from rich.console import Console
 from rich.markup import escape
 
 from runner import interrupts
-from runner.cli.outcomes import debug
+from runner.cli.outcomes import debug, in_tests
 from runner.errors import ExitCode, ScenarioValidationError
 from runner.exec.exits import classify
 from runner.interrupts import Terminated
@@ -76,12 +76,16 @@ def main(argv: Sequence[str] | None = None) -> int:
 
 
 def _report(exc: BaseException, err: Console) -> int:
-    """Print ``exc`` as its first message line (runner.exec.exits) and give its exit code. A bug is a
-    traceback with SCENARIO_DEBUG=1 (and in the test suite), else "internal error, please report"."""
+    """Print ``exc`` as its first message line (runner.exec.exits) and give its exit code. A bug is
+    "internal error, please report" (exit 70), with its traceback when SCENARIO_DEBUG=1; in the test
+    suite it is raised."""
     if isinstance(exc, SystemExit | GeneratorExit):
         raise exc
     exit = classify(exc)
-    if exit.code is ExitCode.INTERNAL_ERROR and debug():
+    remote = getattr(exc, "remote_traceback", "")
+    if exit.code is ExitCode.INTERNAL_ERROR and in_tests():  # a bug fails the test that met it, with its traceback
+        if remote:
+            exc.add_note(f"raised in a worker process:\n{remote}")
         raise exc
     if isinstance(exc, KeyboardInterrupt):
         err.print(f"{exit.label} ({'SIGTERM' if isinstance(exc, Terminated) else 'Ctrl-C'}); {exit.message}")
@@ -93,9 +97,10 @@ def _report(exc: BaseException, err: Console) -> int:
     else:
         err.print(f"[bold red]{escape(exit.label)}:[/] {escape(exit.message)}", markup=True)
     if exit.code is ExitCode.INTERNAL_ERROR:
-        remote = getattr(exc, "remote_traceback", "")
-        err.print(escape(remote or "".join(traceback.format_exception(exc))), highlight=False)
-        err.print("(set SCENARIO_DEBUG=1 to raise it; please report it with the lines above)")
+        if debug():
+            err.print(escape(remote or "".join(traceback.format_exception(exc))), highlight=False)
+        else:
+            err.print("run again with SCENARIO_DEBUG=1 to see where it happened, and please report it")
     return exit.code
 
 

@@ -22,13 +22,18 @@ from runner.exec.cases import CaseResult
 from runner.language.load import LoadedScenario
 from runner.sim.session import RunResult
 
-__all__ = ["debug", "junit_case", "print_problem", "print_result", "print_summary", "summary_line"]
+__all__ = ["debug", "in_tests", "junit_case", "print_problem", "print_result", "print_summary", "summary_line"]
+
+
+def in_tests() -> bool:
+    """Inside the test suite (pytest sets PYTEST_CURRENT_TEST, and commands it starts inherit it), unless
+    ``SCENARIO_DEBUG=0`` says to behave as for a user."""
+    return "PYTEST_CURRENT_TEST" in os.environ and os.environ.get("SCENARIO_DEBUG") != "0"
 
 
 def debug() -> bool:
-    """Tracebacks for bugs: ``SCENARIO_DEBUG=1``, and in the test suite unless ``SCENARIO_DEBUG=0``."""
-    flag = os.environ.get("SCENARIO_DEBUG")
-    return flag == "1" or (flag != "0" and "PYTEST_CURRENT_TEST" in os.environ)
+    """Tracebacks for bugs: ``SCENARIO_DEBUG=1``, and in the test suite."""
+    return os.environ.get("SCENARIO_DEBUG") == "1" or in_tests()
 
 
 def print_result(out: Console, result: RunResult, quiet: bool) -> None:

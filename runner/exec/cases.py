@@ -53,6 +53,7 @@ class Case:
     trace: str | None = None  # the final trace path, when out_dir is set (the parent names it)
     force: bool = False  # also replace files under the output names that this tool did not write
     scenario: str = ""  # the scenario's name (for the outcome file), when the parent loaded it
+    loaded: Any = field(default=None, compare=False, repr=False)  # the LoadedScenario, when the parent has it
 
     @property
     def label(self) -> str:
@@ -66,6 +67,7 @@ class Case:
         loaded = load_scenario(path, self.variant, self.overrides)
         files = [(path.name, path.read_bytes())]
         files += [(str(rel), (path.parent / rel).read_bytes()) for rel in loaded.model.sounds.values()]
+        # without `loaded`: the remote worker loads its own copy of the files
         return Case(self.path, self.variant, self.backend, self.overrides, self.out_dir, tuple(files), self.cost,
                     self.record_every, self.trace_process, self.budget, self.sha256, self.trace, self.force,
                     self.scenario)  # fmt: skip
@@ -111,7 +113,7 @@ def run_case(case: Case, report: Any = None) -> dict[str, Any]:
     with interrupts.deferred(check_at_exit=False):
         try:
             path = Path(case.path)
-            loaded = load_scenario(path, case.variant, case.overrides)
+            loaded = case.loaded if case.loaded is not None else load_scenario(path, case.variant, case.overrides)
             if case.sha256 is not None and loaded.sha256 != case.sha256:
                 raise ScenarioError(f"{path} changed after it was loaded; run again")
             interrupts.check()

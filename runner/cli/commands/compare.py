@@ -156,7 +156,7 @@ def _case(args: argparse.Namespace, loaded: LoadedScenario, backend: str,
     return Case(
         str(loaded.path), None if loaded.variant == BASE_CASE else loaded.variant, backend, overrides, str(traces),
         cost=estimate_cost(loaded), budget=budget, sha256=loaded.sha256,
-        trace=str(trace_path(traces, loaded, backend)), scenario=loaded.model.scenario,
+        trace=str(trace_path(traces, loaded, backend)), scenario=loaded.model.scenario, loaded=loaded,
     )  # fmt: skip
 
 

@@ -192,7 +192,7 @@ def _case(args: argparse.Namespace, loaded: LoadedScenario, overrides: tuple[tup
         None if out_dir is None else str(out_dir), cost=estimate_cost(loaded), record_every=args.record_every,
         trace_process=args.trace_process, budget=budget, sha256=loaded.sha256,
         trace=None if out_dir is None else str(trace_path(out_dir, loaded, args.backend)),
-        scenario=loaded.model.scenario,
+        scenario=loaded.model.scenario, loaded=loaded,
     )  # fmt: skip
 
 

@@ -130,7 +130,7 @@ def execute(args: argparse.Namespace, out: Console, err: Console) -> int:
                 budget = args.timeout if args.timeout is not None else (loaded.model.world.budget or DEFAULT_BUDGET)
                 cases.append(Case(str(args.file), variant, b, overrides, str(folder), cost=estimate_cost(loaded),
                                   budget=budget, sha256=loaded.sha256, trace=str(trace_path(folder, loaded, b)),
-                                  scenario=loaded.model.scenario))  # fmt: skip
+                                  scenario=loaded.model.scenario, loaded=loaded))  # fmt: skip
                 labels.append({"combo": k, "params": combo, "variant": loaded.variant, "backend": b})
                 loads.append(loaded)
     check_outputs(cases, args.force)

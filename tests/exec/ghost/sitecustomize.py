@@ -4,7 +4,8 @@ processes, the workers of a Ray cluster started with it):
 
 * ``ghost``: an engine that is found but cannot be imported, as after a broken install;
 * ``slowimport``: the fake backend behind an engine module that takes 2 s to import and, like a pybind11
-  module's initialisation, turns any exception raised meanwhile into ImportError (``slow_engine.py``).
+  module's initialisation, turns any exception raised meanwhile into ImportError (``slow_engine.py``);
+* ``buggy``: the fake backend with a bug: its third step raises TypeError (``buggy_engine.py``).
 """
 
 from __future__ import annotations
@@ -21,4 +22,8 @@ if os.environ.get("SCENARIO_GHOST_BACKEND") == "1":
     registry._KNOWN["slowimport"] = registry.BackendEntry(
         "slowimport", "slow_engine:SlowImportBackend", "slow_engine", "slow-engine", "slowimport",
         "test-only: an engine that takes 2 s to import", hidden=True,
+    )  # fmt: skip
+    registry._KNOWN["buggy"] = registry.BackendEntry(
+        "buggy", "buggy_engine:BuggyBackend", "json", "buggy-engine", "buggy",
+        "test-only: an adapter with a bug", hidden=True,
     )  # fmt: skip
