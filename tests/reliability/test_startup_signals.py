@@ -69,3 +69,30 @@ def test_sigterm_early_in_a_mujoco_run_is_always_143(tmp_path: Path, trial: int)
         assert read_trace(trace).status == "interrupted"
     else:
         assert not any(out.iterdir())
+
+
+def _handles_sigterm(pid: int) -> bool:
+    """The process has its own SIGTERM handler (the command installs it first thing: runner.cli.entry)."""
+    for line in Path(f"/proc/{pid}/status").read_text().splitlines():
+        if line.startswith("SigCgt:"):
+            return bool(int(line.split()[1], 16) & (1 << (signal.SIGTERM - 1)))
+    return False
+
+
+@pytest.mark.parametrize("trial", range(6))
+def test_a_signal_while_the_command_starts_is_an_interruption(tmp_path: Path, trial: int) -> None:
+    """At a random moment in the first 0.4 s after the command handles signals: importing its modules
+    (about 0.5 s), loading the scenario, starting its worker. (Before that the interpreter itself starts.)"""
+    rng = random.Random(trial)
+    sig, code = rng.choice([(signal.SIGTERM, 143), (signal.SIGINT, 130)])
+    source = tmp_path / "drift.yaml"
+    source.write_text(DRIFT)
+    proc = start("run", str(source), "--backend", "fake", "--out", str(tmp_path / "out"))
+    deadline = time.monotonic() + 30
+    while not _handles_sigterm(proc.pid) and time.monotonic() < deadline:
+        time.sleep(0.002)
+    time.sleep(rng.uniform(0.0, 0.4))
+    proc.send_signal(sig)
+    _, err = proc.communicate(timeout=60)
+    assert proc.returncode == code, err
+    assert "Traceback" not in err and ("terminated" if sig == signal.SIGTERM else "interrupted") in err

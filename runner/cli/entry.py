@@ -1,0 +1,30 @@
+"""The `scenario` command's entry point: handles SIGINT and SIGTERM before anything heavy is imported.
+
+Importing the command (Rich, pydantic, the scenario language) takes about half a second; a Ctrl-C or a
+SIGTERM meanwhile is an interruption like any other (exit 130 / 143, one line, no traceback).
+"""
+
+from __future__ import annotations
+
+import os
+import sys
+
+from runner import interrupts
+
+__all__ = ["main"]
+
+
+def main() -> int:
+    restore = interrupts.install()
+    try:
+        from runner.cli.main import main as command
+    except KeyboardInterrupt as exc:
+        code = 128 + interrupts.signal_of(exc)
+        sys.stderr.write(f"{'terminated (SIGTERM)' if code == 143 else 'interrupted (Ctrl-C)'} while starting\n")
+        sys.stderr.flush()
+        # at once: an import that saw the KeyboardInterrupt pass through C code may have marked it unhandled,
+        # and the interpreter would then end by SIGINT instead of this exit code; nothing is written yet
+        os._exit(code)
+    finally:
+        restore()
+    return command()
