@@ -168,6 +168,8 @@ class CaseResult:
         if self.status == ERROR and self.error is not None:
             return classify(self.error)
         if self.status == CRASHED:
+            if self.signal is None:  # a Ray worker lost with its node: no signal to name
+                return Exit(ExitCode.ENGINE_FAILURE, "crashed", _last_line(self.output))
             name = signal.Signals(self.signal).name if self.signal in signal.valid_signals() else "a signal"
             return Exit(ExitCode.ENGINE_FAILURE, f"crashed (signal {self.signal})",
                         _last_line(self.output) or f"the process running the engine was killed by {name}")  # fmt: skip

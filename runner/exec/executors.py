@@ -240,8 +240,10 @@ class RayExecutor:
         ray = self._ray
         try:
             reply: dict[str, Any] = ray.get(ref)
-        except (ray.exceptions.WorkerCrashedError, ray.exceptions.NodeDiedError) as exc:
-            return Ending("crashed", None, output=f"the Ray worker died: {exc}")
+        except ray.exceptions.RayTaskError:  # ray_task reports every error of the case: this is a bug in it
+            raise
+        except ray.exceptions.RayError as exc:  # the Ray worker, its raylet or its node died: not the engine's doing
+            return Ending("crashed", None, output=f"the Ray worker running the case was lost: {exc}")
         if case.out_dir is not None:
             try:
                 _publish(Path(case.out_dir), reply["written"])

@@ -22,6 +22,7 @@ import re
 import resource
 import shutil
 import signal
+import socket
 import subprocess
 import sys
 import tempfile
@@ -105,8 +106,11 @@ def output_folder(base: Path, full: bool) -> Iterator[tuple[Path, dict[str, int]
 
 
 def environment() -> dict[str, str]:
-    """The command's environment: the ghost backend registered, Rich wide enough to keep lines whole."""
-    env = {**os.environ, "SCENARIO_GHOST_BACKEND": "1", "COLUMNS": "400", "SCENARIO_DEBUG": "0"}
+    """The command's environment: the ghost backend registered, Rich wide enough to keep lines whole, and
+    Ray's token authentication off for the private cluster of :func:`ray_cluster` (listening on 127.0.0.1
+    only; the shared ~/.ray/auth_token may be rewritten by other clusters on the machine)."""
+    env = {**os.environ, "SCENARIO_GHOST_BACKEND": "1", "COLUMNS": "400", "SCENARIO_DEBUG": "0",
+           "RAY_AUTH_MODE": "disabled"}  # fmt: skip
     env["PYTHONPATH"] = os.pathsep.join(filter(None, [str(GHOST), str(ROOT), os.environ.get("PYTHONPATH")]))
     env.pop("PYTEST_CURRENT_TEST", None)
     return env
@@ -118,12 +122,12 @@ def _limits(limits: dict[str, int]) -> None:
         resource.setrlimit(resource.RLIMIT_FSIZE, (limits["fsize"], limits["fsize"]))
 
 
-def command(path: str, source: Path, backend: str, out: Path) -> list[str]:
+def command(path: str, source: Path, backend: str, out: Path, ray: str = "auto") -> list[str]:
     cli = [sys.executable, "-m", "runner"]
     if path == "compare":
         return [*cli, "compare", str(source), "--backends", backend, "--out", str(out), "-j", "2"]
     extra = {"serial": [], "-j 2": ["-j", "2"], "--isolate": ["--isolate"], "--trace-process": ["--trace-process"],
-             "ray": ["--executor", "ray", "--ray-address", "auto"]}[path]  # fmt: skip
+             "ray": ["--executor", "ray", "--ray-address", ray]}[path]  # fmt: skip
     return [*cli, "run", str(source), "--backend", backend, "--out", str(out), *extra]
 
 
@@ -131,12 +135,12 @@ _ROW_LINE = re.compile(r"^ {6}(.*) \[exit (\d+)\]$")  # compare: "      <first l
 _CASE_LINE = re.compile(r"^  \S+ · \S+ · \S+: (.*)$")  # run's summary: "  <scenario> · <variant> · <backend>: ..."
 
 
-def run_cell(row: Row, path: str, base: Path) -> Cell:
-    """Run ``row`` on ``path`` in a fresh folder under ``base``."""
+def run_cell(row: Row, path: str, base: Path, ray: str = "auto") -> Cell:
+    """Run ``row`` on ``path`` in a fresh folder under ``base`` (``ray``: the cluster's address)."""
     work = base / f"{re.sub(r'[^a-z0-9]+', '_', row.name)}-{re.sub(r'[^a-z0-9]+', '_', path)}"
     source = _source(work / "src", row)
     with output_folder(work, row.full_disk) as (out, limits):
-        done = subprocess.run(command(path, source, row.backend, out), capture_output=True, text=True, timeout=600,
+        done = subprocess.run(command(path, source, row.backend, out, ray), capture_output=True, text=True, timeout=600,
                               env=environment(), cwd=work, preexec_fn=lambda: _limits(limits))  # fmt: skip
     text = done.stdout + done.stderr
     code, line = done.returncode, ""
@@ -154,28 +158,33 @@ def run_cell(row: Row, path: str, base: Path) -> Cell:
 
 
 @contextlib.contextmanager
-def ray_cluster() -> Iterator[None]:
-    """A local Ray cluster for the ``ray`` column (``ray start --head``), with the ghost backend's environment."""
+def ray_cluster() -> Iterator[str]:
+    """A local Ray cluster for the ``ray`` column (``ray start --head`` on a free port, with the ghost
+    backend's environment); yields its address, named explicitly so that no other cluster on the machine
+    is picked up by ``auto``."""
     ray = str(BIN / "ray")
     tmp = tempfile.mkdtemp(prefix="ray-")
+    with socket.socket() as probe:
+        probe.bind(("127.0.0.1", 0))
+        port = probe.getsockname()[1]
     started = subprocess.run([ray, "start", "--head", "--num-cpus", "2", "--disable-usage-stats", "--temp-dir", tmp,
-                              "--include-dashboard", "false"], env=environment(), capture_output=True, text=True,
-                             timeout=300)  # fmt: skip
+                              "--include-dashboard", "false", "--node-ip-address", "127.0.0.1", "--port", str(port)],
+                             env=environment(), capture_output=True, text=True, timeout=300)  # fmt: skip
     if started.returncode != 0:
         raise RuntimeError(f"ray start failed: {started.stderr[-2000:]}")
     try:
-        yield
+        yield f"127.0.0.1:{port}"
     finally:
-        subprocess.run([ray, "stop", "--force"], capture_output=True, timeout=300)
+        subprocess.run([ray, "stop", "--force"], capture_output=True, timeout=300, env=environment())
         shutil.rmtree(tmp, ignore_errors=True)
 
 
-def table(paths: list[str], threads: int = 2) -> list[tuple[Row, dict[str, Cell]]]:
+def table(paths: list[str], threads: int = 2, ray: str = "auto") -> list[tuple[Row, dict[str, Cell]]]:
     """Every cell, ``threads`` commands at a time."""
     from concurrent.futures import ThreadPoolExecutor
 
     with tempfile.TemporaryDirectory(prefix="exit-table-") as tmp, ThreadPoolExecutor(threads) as pool:
-        futures = {(r.name, p): pool.submit(run_cell, r, p, Path(tmp)) for r in ROWS for p in paths}
+        futures = {(r.name, p): pool.submit(run_cell, r, p, Path(tmp), ray) for r in ROWS for p in paths}
         return [(r, {p: futures[r.name, p].result() for p in paths}) for r in ROWS]
 
 
@@ -187,7 +196,7 @@ def markdown(rows: list[tuple[Row, dict[str, Cell]]], paths: list[str]) -> str:
               "`compare`, `--out`/traces):", ""]
     for row, cells in rows:
         seen = sorted({c.line for c in cells.values()})
-        lines.append(f"- {row.name}: " + " / ".join(f"`{x}`" for x in seen))
+        lines.append(f"- {row.name}: " + " / ".join(f"`` {x} ``" if "`" in x else f"`{x}`" for x in seen))
     compare = [f"{row.name} {cells['compare'].command_code}" for row, cells in rows if "compare" in cells]
     if compare:
         lines += ["", "`compare`'s own exit code: " + ", ".join(compare) + "."]
@@ -201,8 +210,8 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     paths = [p for p in PATHS if args.ray or p != "ray"]
     if args.ray:
-        with ray_cluster():
-            rows = table(paths)
+        with ray_cluster() as address:
+            rows = table(paths, ray=address)
     else:
         rows = table(paths)
     text = markdown(rows, paths)

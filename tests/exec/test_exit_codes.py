@@ -28,8 +28,8 @@ def cells() -> Iterator[dict[str, dict[str, Cell]]]:
         pytest.skip(f"engine not installed: {', '.join(n for n, ok in NEEDED.items() if not ok)}")
     paths = [p for p in PATHS if p != "ray" or HAS_RAY]
     if HAS_RAY:
-        with ray_cluster():
-            rows = table(paths)
+        with ray_cluster() as address:
+            rows = table(paths, ray=address)
     else:
         rows = table(paths)
     yield {row.name: found for row, found in rows}
