@@ -243,7 +243,8 @@ def case_result(case: Case, ending: Ending) -> CaseResult:
         res.status = CRASHED
     elif ending.how == EXITED or ending.how == RETURNED:
         res.status = EXITED
-    res.trace = _kept_trace(case)
+    refused = isinstance(res.error, TraceError) and not isinstance(res.error, OutputError)
+    res.trace = None if refused else _kept_trace(case)  # refused for its outputs: what is there is not its own
     if res.result is not None and res.trace is not None:
         res.result.trace = res.trace
     if ending.how != RETURNED or _wants_outcome(res):

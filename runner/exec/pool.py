@@ -263,7 +263,10 @@ class Pool:
         worker.jobs_run += 1
         worker.reusable = not job.fresh
         worker.output()  # skip what came before this job
-        worker.conn.send((index, job.function, job.args))
+        try:
+            worker.conn.send((index, job.function, job.args))
+        except OSError:  # the worker died as it started: _poll finds it dead and says how
+            pass
 
     def _step(self, jobs: Sequence[Job], end: Callable[[int, Ending], None],
               on_progress: Callable[[int, int, int], None] | None) -> None:  # fmt: skip

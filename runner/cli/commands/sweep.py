@@ -107,6 +107,8 @@ def execute(args: argparse.Namespace, out: Console, err: Console) -> int:
     from runner.sim.budget import DEFAULT_BUDGET
     from runner.sim.run import trace_path
 
+    if args.timeout is not None and not (args.timeout > 0 and math.isfinite(args.timeout)):
+        raise UsageError(f"Invalid `--timeout`. Expected a positive number of seconds. Received: {args.timeout}")
     fixed = parse_overrides(args.set)
     base = load_scenario(args.file, None, fixed)
     grid = parse_params(args.param, set(base.model.params))
