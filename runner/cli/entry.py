@@ -6,6 +6,7 @@ SIGTERM meanwhile is an interruption like any other (exit 130 / 143, one line, n
 
 from __future__ import annotations
 
+import contextlib
 import os
 import sys
 
@@ -15,7 +16,7 @@ __all__ = ["main"]
 
 
 def main() -> int:
-    restore = interrupts.install()
+    interrupts.install()  # kept: runner.cli.main.main installs them again and restores these at its end
     try:
         from runner.cli.main import main as command
     except KeyboardInterrupt as exc:
@@ -25,6 +26,10 @@ def main() -> int:
         # at once: an import that saw the KeyboardInterrupt pass through C code may have marked it unhandled,
         # and the interpreter would then end by SIGINT instead of this exit code; nothing is written yet
         os._exit(code)
-    finally:
-        restore()
-    return command()
+    code = command()
+    if code in (130, 143):  # interrupted: its exit code, whatever an import that saw the signal may have marked
+        with contextlib.suppress(OSError):
+            sys.stdout.flush()
+            sys.stderr.flush()
+        os._exit(code)
+    return code

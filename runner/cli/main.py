@@ -60,17 +60,18 @@ def _console(stderr: bool) -> Console:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    out = _console(stderr=False)
-    err = _console(stderr=True)
-    parser, modules = build_parser()
-    args = parser.parse_args(argv)
-    restore = interrupts.install()
+    restore = interrupts.install()  # first: a signal while the commands are imported is an interruption too
+    err: Console | None = None
     try:
+        out = _console(stderr=False)
+        err = _console(stderr=True)
+        parser, modules = build_parser()
+        args = parser.parse_args(argv)
         return int(modules[args.command].execute(args, out, err))
     except BrokenPipeError:  # our output was closed (`scenario ... | head`): nothing more to say
         return ExitCode.OK
     except BaseException as exc:  # noqa: BLE001 - the one place where the exception tree meets exit codes
-        return _report(exc, err)
+        return _report(exc, err or _console(stderr=True))
     finally:
         restore()
 
