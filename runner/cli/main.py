@@ -83,6 +83,8 @@ def _report(exc: BaseException, err: Console) -> int:
     if isinstance(exc, SystemExit | GeneratorExit):
         raise exc
     exit = classify(exc)
+    if exit.code in (ExitCode.INTERRUPTED, ExitCode.TERMINATED):
+        exc = Terminated() if exit.code is ExitCode.TERMINATED else KeyboardInterrupt()  # whatever wrapped it
     remote = getattr(exc, "remote_traceback", "")
     if exit.code is ExitCode.INTERNAL_ERROR and in_tests():  # a bug fails the test that met it, with its traceback
         if remote:

@@ -167,14 +167,19 @@ class Pool:
         log = Path(self._folder.name) / f"worker{self._started}.log"
         parent, child = self._ctx.Pipe()
         process = self._ctx.Process(target=serve, args=(child, str(log)), name=f"scenario-worker-{self._started}")
-        process.start()
-        child.close()
         worker = _Worker(process, parent, log)
-        self._workers.append(worker)
+        self._workers.append(worker)  # before it starts: an interruption during start() leaves nothing untracked
+        try:
+            process.start()
+        finally:
+            child.close()
         return worker
 
     def _retire(self, worker: _Worker) -> None:
         self._workers.remove(worker)
+        if worker.process.pid is None:  # never started
+            worker.conn.close()
+            return
         try:
             worker.conn.send(None)
         except (OSError, ValueError):
@@ -187,7 +192,7 @@ class Pool:
 
     def close(self) -> None:
         for worker in list(self._workers):
-            if worker.index is not None:
+            if worker.index is not None and worker.process.pid is not None:
                 worker.process.kill()
             self._retire(worker)
         self._folder.cleanup()

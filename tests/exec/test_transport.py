@@ -81,3 +81,16 @@ def test_interruptions_and_the_order_of_severity() -> None:
     assert most_severe([0, 1, 3, 2]) == ExitCode.BAD_INPUT
     assert most_severe([1, 3]) == ExitCode.ENGINE_FAILURE and most_severe([0, 0]) == ExitCode.OK
     assert most_severe([2, 74, 70]) == ExitCode.INTERNAL_ERROR and most_severe([3, 143]) == ExitCode.TERMINATED
+
+
+def test_an_interruption_wrapped_while_it_was_raised_is_still_an_interruption() -> None:
+    """Python wraps an exception raised while a class is built (``__set_name__``: RuntimeError), pybind11 one
+    raised while its module initialises (ImportError): a signal that lands there is still an interruption."""
+    for outer in (RuntimeError("Error calling __set_name__ on 'Field' instance"), ImportError("initialization failed")):
+        try:
+            try:
+                raise Terminated()
+            except KeyboardInterrupt as inner:
+                raise outer from inner
+        except Exception as exc:  # noqa: BLE001
+            assert classify(exc).code == 143 and classify(exc).label == "terminated"
