@@ -20,7 +20,7 @@ import signal
 from collections.abc import Callable
 from types import FrameType, TracebackType
 
-__all__ = ["Terminated", "check", "deferred", "forget", "install", "kind_of", "pending", "signal_of"]
+__all__ = ["Terminated", "behind", "check", "deferred", "forget", "install", "kind_of", "pending", "signal_of"]
 
 
 class Terminated(KeyboardInterrupt):
@@ -47,6 +47,19 @@ def kind_of(signum: int) -> type[KeyboardInterrupt]:
 def signal_of(exc: BaseException) -> int:
     """The signal an interruption stands for: SIGTERM for :class:`Terminated`, else SIGINT."""
     return int(signal.SIGTERM if isinstance(exc, Terminated) else signal.SIGINT)
+
+
+def behind(exc: BaseException) -> KeyboardInterrupt | None:
+    """The SIGINT/SIGTERM behind ``exc``: itself, or one that Python or a library wrapped while it was raised
+    (a class being built wraps it in RuntimeError, a pybind11 module's initialisation in ImportError)."""
+    seen: set[int] = set()
+    current: BaseException | None = exc
+    while current is not None and id(current) not in seen:
+        if isinstance(current, KeyboardInterrupt):
+            return current
+        seen.add(id(current))
+        current = current.__cause__ or current.__context__
+    return None
 
 
 class deferred:  # noqa: N801 - used as a statement: `with deferred():`

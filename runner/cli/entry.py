@@ -19,8 +19,11 @@ def main() -> int:
     interrupts.install()  # kept: runner.cli.main.main installs them again and restores these at its end
     try:
         from runner.cli.main import main as command
-    except KeyboardInterrupt as exc:
-        code = 128 + interrupts.signal_of(exc)
+    except BaseException as exc:
+        interruption = interrupts.behind(exc)  # a class being built may have wrapped it in RuntimeError
+        if interruption is None:
+            raise
+        code = 128 + interrupts.signal_of(interruption)
         sys.stderr.write(f"{'terminated (SIGTERM)' if code == 143 else 'interrupted (Ctrl-C)'} while starting\n")
         sys.stderr.flush()
         # at once: an import that saw the KeyboardInterrupt pass through C code may have marked it unhandled,

@@ -124,6 +124,10 @@ def run_case(case: Case, report: Any = None) -> dict[str, Any]:
             return {"status": "interrupted", "signal": interrupts.signal_of(exc),
                     "wall_seconds": time.perf_counter() - start}  # fmt: skip
         except Exception as exc:  # noqa: BLE001 - every error crosses to the parent with its class
+            wrapped = interrupts.behind(exc)  # an interruption something wrapped while it was raised
+            if wrapped is not None:
+                return {"status": "interrupted", "signal": interrupts.signal_of(wrapped),
+                        "wall_seconds": time.perf_counter() - start}  # fmt: skip
             return {"status": "error", "error": encode_error(exc), "wall_seconds": time.perf_counter() - start}
     return {"status": "completed", "result": result_to_json(result), "wall_seconds": time.perf_counter() - start}
 

@@ -42,7 +42,7 @@ from runner.errors import (
     UnknownBackend,
     UnsupportedFeature,
 )
-from runner.interrupts import Terminated
+from runner.interrupts import Terminated, behind
 from runner.trace.output import RESOURCE_ERRNOS
 
 __all__ = ["RESOURCE_ERRNOS", "SEVERITY", "Exit", "classify", "first_line", "most_severe"]
@@ -106,22 +106,9 @@ def _code(exc: BaseException) -> ExitCode:
     return ExitCode.INTERNAL_ERROR
 
 
-def _interruption(exc: BaseException) -> KeyboardInterrupt | None:
-    """The SIGINT/SIGTERM behind ``exc``: itself, or one that Python or a library wrapped while it was raised
-    (an import turns it into ImportError, a class being built into RuntimeError)."""
-    seen: set[int] = set()
-    current: BaseException | None = exc
-    while current is not None and id(current) not in seen:
-        if isinstance(current, KeyboardInterrupt):
-            return current
-        seen.add(id(current))
-        current = current.__cause__ or current.__context__
-    return None
-
-
 def classify(exc: BaseException) -> Exit:
     """The exit code, label and message for ``exc``, wherever it was raised."""
-    exc = _interruption(exc) or exc
+    exc = behind(exc) or exc
     code = _code(exc)
     if isinstance(exc, OSError) and not isinstance(exc, PhysicsScenariosError):
         where = f"{exc.filename}: " if exc.filename else ""
