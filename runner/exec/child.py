@@ -15,7 +15,7 @@
   value, a JSON-able dictionary. A job reports its own errors in its payload (see
   :func:`runner.exec.cases.run_case`); anything that escapes it is sent as ``{"status": "error", ...}``.
 
-The worker ends when its parent closes the pipe or sends ``None``.
+The worker ends when its parent sends ``None``, closes the pipe, or is gone.
 """
 
 from __future__ import annotations
@@ -79,8 +79,12 @@ def serve(conn: Connection, log_path: str | None) -> None:
     interrupts.install(always=True, backstop=BACKSTOP)
     from runner.exec.transport import encode_error
 
+    parent = os.getppid()
     while True:
         try:
+            while not conn.poll(1.0):  # a forked worker holds its parent's end too: EOF never comes
+                if os.getppid() != parent:  # orphaned between jobs: nobody will send another
+                    return
             message = conn.recv()
         except (EOFError, OSError, KeyboardInterrupt):
             return

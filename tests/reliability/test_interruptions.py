@@ -174,6 +174,14 @@ def test_sigint_and_sigterm_finish_the_trace_as_interrupted(tmp_path: Path, sig:
     assert [a.name for a in trace.attachments] == ["drift.yaml"]
 
 
+def alive(pid: int) -> bool:
+    """The process exists and is not a zombie waiting to be reaped."""
+    try:
+        return Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0] != "Z"
+    except (FileNotFoundError, ProcessLookupError):
+        return False
+
+
 def assert_recovered_to_a_chunk(path: Path) -> Trace:
     partial = partial_of(path)
     assert partial.exists() and not path.exists()  # a half-written trace never has the final name
@@ -190,10 +198,15 @@ def test_sigkill_of_the_command_lets_its_worker_finish_the_trace(tmp_path: Path)
     trace at the next step, as for SIGTERM; nothing is lost."""
     child, path = start(tmp_path)
     wait_for_chunks(child, path, 60_000)
+    worker = worker_of(child)
     child.send_signal(signal.SIGKILL)
     rc, _ = finish(child)
     assert rc == -signal.SIGKILL
     wait_released(path)
+    deadline = time.monotonic() + 10
+    while alive(worker) and time.monotonic() < deadline:  # then it ends: nobody is left to send it a job
+        time.sleep(0.05)
+    assert not alive(worker), "the orphaned worker outlived its trace"
     trace = read_trace(path)
     assert trace.complete and trace.status == tf.STATUS_INTERRUPTED and trace.times[-1] > 5.0
     assert_whole_steps(trace)
