@@ -1,7 +1,7 @@
 """How an isolated run's process ended, when its trace cannot say so: the outcome file beside the trace.
 
 A run whose child process crashed, hung or could not start leaves no ``result`` record in its trace
-(only a ``.mcap.partial``, or nothing at all). The parent (:mod:`runner.exec.isolation`) then writes
+(only a ``.mcap.partial``, or nothing at all). The parent (:mod:`runner.exec.cases`) then writes
 ``<scenario>__<variant>__<backend>.outcome.json`` next to where the trace belongs (as the runner keeps a
 run's wall-clock cost in ``<...>.cost.json``), so that a report rebuilt from the files alone
 (``scenario report``) says "crashed (signal 11)" exactly as the comparison that ran it did. A run that
@@ -132,8 +132,12 @@ def write_outcome(path: Path, outcome: RunOutcome) -> Path:
     if outcome.outcome not in OUTCOMES:
         raise ValueError(f"unknown outcome {outcome.outcome!r}; expected one of {sorted(OUTCOMES)}")
     tmp = path.with_name(path.name + ".tmp")
-    tmp.write_text(json.dumps(outcome.to_json(), indent=2, sort_keys=True) + "\n", encoding="utf-8")
-    os.replace(tmp, path)
+    try:
+        tmp.write_text(json.dumps(outcome.to_json(), indent=2, sort_keys=True) + "\n", encoding="utf-8")
+        os.replace(tmp, path)
+    except OSError:
+        tmp.unlink(missing_ok=True)  # a full disk leaves nothing half-written behind
+        raise
     return path
 
 

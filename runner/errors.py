@@ -11,9 +11,15 @@ The whole tree (the root and the backend branch live in :mod:`backends.errors`):
     │   ├── BackendNotInstalled       engine missing (install hint)   exit 3
     │   ├── UnsupportedFeature        capability missing              exit 2
     │   └── EngineFailure             NaN, inf, blow-up, engine error exit 3
-    ├── TraceError                    a trace cannot be written/read  exit 2 (bad path) / 3
+    │       └── BudgetExceeded        over its wall-clock budget      exit 3
+    ├── TraceError                    an output path cannot be used   exit 2
+    │   ├── OutputInUse               another run is writing it       exit 2
+    │   └── OutputError               disk full, I/O error            exit 74
     └── InternalError                 a bug in this tool              exit 70
         └── ContractViolation         a backend contract misused
+
+Which exception gives which exit code and first message line, on every execution path:
+:func:`runner.exec.exits.classify`.
 """
 
 from __future__ import annotations
@@ -35,11 +41,14 @@ from backends.errors import (
 __all__ = [
     "BackendError",
     "BackendNotInstalled",
+    "BudgetExceeded",
     "ContractViolation",
     "EngineFailure",
     "ExitCode",
     "InternalError",
     "Issue",
+    "OutputError",
+    "OutputInUse",
     "PhysicsScenariosError",
     "ScenarioError",
     "ScenarioValidationError",
@@ -61,6 +70,8 @@ class ExitCode(enum.IntEnum):
     ENGINE_FAILURE = 3
     #: a bug in this tool ("internal error, please report"); BSD sysexits' EX_SOFTWARE
     INTERNAL_ERROR = 70
+    #: an output could not be written (disk full, I/O error); what was written is kept; sysexits' EX_IOERR
+    OUTPUT_ERROR = 74
     #: interrupted by SIGINT (Ctrl-C)
     INTERRUPTED = 130
     #: terminated by SIGTERM
@@ -101,3 +112,16 @@ class UsageError(ScenarioError):
 
 class TraceError(PhysicsScenariosError):
     """A trace cannot be written or read."""
+
+
+class OutputInUse(TraceError):
+    """Another run is writing the same outputs (same scenario, variant and backend into the same folder)."""
+
+
+class OutputError(TraceError):
+    """Writing an output failed part-way (disk full, quota, I/O error); what was written is kept."""
+
+
+class BudgetExceeded(EngineFailure):
+    """A run went over its wall-clock budget (``world.budget`` or ``--timeout``), or its cost per step
+    says it would; stopped at a step boundary, the trace finished."""

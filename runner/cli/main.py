@@ -1,8 +1,11 @@
 """The `scenario` command: a thin layer that parses arguments, calls the library and maps errors to exit codes.
 
-Exit codes (runner.errors.ExitCode): 0 all assertions passed; 1 an assertion failed; 2 bad input (scenario,
-option, path, unknown backend, unsupported feature); 3 backend or engine failure (missing engine, engine
-error, NaN or blow-up); 130 interrupted (SIGINT); 143 terminated (SIGTERM).
+Exit codes (runner.errors.ExitCode, mapped in one place: runner.exec.exits): 0 all assertions passed; 1 an
+assertion failed; 2 bad input (scenario, option, path, unknown backend, unsupported feature, an output
+another run is writing or that scenario did not write); 3 backend or engine failure (missing engine,
+engine error, NaN or blow-up, a crash by a signal, a time-out); 70 a bug in this tool ("internal error,
+please report"; a traceback with SCENARIO_DEBUG=1); 74 an output could not be written (disk full, I/O
+error); 130 interrupted (SIGINT); 143 terminated (SIGTERM).
 """
 
 from __future__ import annotations
@@ -11,6 +14,7 @@ import argparse
 import importlib
 import json
 import pkgutil
+import traceback
 from collections.abc import Sequence
 from pathlib import Path
 from types import ModuleType
@@ -19,19 +23,10 @@ from typing import Any
 from rich.console import Console
 from rich.markup import escape
 
-from reports.trace_reader import TraceReadError
 from runner import interrupts
-from runner.errors import (
-    BackendNotInstalled,
-    EngineFailure,
-    ExitCode,
-    PhysicsScenariosError,
-    ScenarioError,
-    ScenarioValidationError,
-    TraceError,
-    UnknownBackend,
-    UnsupportedFeature,
-)
+from runner.cli.outcomes import debug, in_tests
+from runner.errors import ExitCode, ScenarioValidationError
+from runner.exec.exits import classify
 from runner.interrupts import Terminated
 from runner.version import tool_version
 
@@ -65,42 +60,51 @@ def _console(stderr: bool) -> Console:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    out = _console(stderr=False)
-    err = _console(stderr=True)
-    parser, modules = build_parser()
-    args = parser.parse_args(argv)
-    restore = interrupts.install()
+    restore = interrupts.install()  # first: a signal while the commands are imported is an interruption too
+    err: Console | None = None
     try:
+        out = _console(stderr=False)
+        err = _console(stderr=True)
+        parser, modules = build_parser()
+        args = parser.parse_args(argv)
         return int(modules[args.command].execute(args, out, err))
-    except ScenarioValidationError as exc:
-        for issue in exc.issues:
-            err.print(f"[bold red]error:[/] {escape(str(issue))}", markup=True)
-        return ExitCode.BAD_INPUT
-    except (ScenarioError, UnknownBackend, UnsupportedFeature) as exc:
-        err.print(f"[bold red]error:[/] {escape(str(exc))}", markup=True)
-        return ExitCode.BAD_INPUT
-    except (BackendNotInstalled, EngineFailure) as exc:
-        err.print(f"[bold red]engine failure:[/] {escape(str(exc))}", markup=True)
-        return ExitCode.ENGINE_FAILURE
-    except TraceError as exc:
-        err.print(f"[bold red]trace error:[/] {escape(str(exc))}", markup=True)
-        return ExitCode.BAD_INPUT
-    except PhysicsScenariosError as exc:
-        err.print(f"[bold red]error:[/] {escape(str(exc))}", markup=True)
-        return ExitCode.ENGINE_FAILURE
-    except Terminated:
-        err.print("terminated (SIGTERM); traces written so far are finished and marked interrupted")
-        return ExitCode.TERMINATED
-    except KeyboardInterrupt:
-        err.print("interrupted (Ctrl-C); traces written so far are finished and marked interrupted")
-        return ExitCode.INTERRUPTED
-    except TraceReadError as exc:
-        err.print(f"[bold red]error:[/] cannot read the trace: {escape(str(exc))}", markup=True)
-        return ExitCode.BAD_INPUT
-    except BrokenPipeError:
+    except BrokenPipeError:  # our output was closed (`scenario ... | head`): nothing more to say
         return ExitCode.OK
+    except BaseException as exc:  # noqa: BLE001 - the one place where the exception tree meets exit codes
+        return _report(exc, err or _console(stderr=True))
     finally:
         restore()
+
+
+def _report(exc: BaseException, err: Console) -> int:
+    """Print ``exc`` as its first message line (runner.exec.exits) and give its exit code. A bug is
+    "internal error, please report" (exit 70), with its traceback when SCENARIO_DEBUG=1; in the test
+    suite it is raised."""
+    if isinstance(exc, SystemExit | GeneratorExit):
+        raise exc
+    exit = classify(exc)
+    if exit.code in (ExitCode.INTERRUPTED, ExitCode.TERMINATED):
+        exc = Terminated() if exit.code is ExitCode.TERMINATED else KeyboardInterrupt()  # whatever wrapped it
+    remote = getattr(exc, "remote_traceback", "")
+    if exit.code is ExitCode.INTERNAL_ERROR and in_tests():  # a bug fails the test that met it, with its traceback
+        if remote:
+            exc.add_note(f"raised in a worker process:\n{remote}")
+        raise exc
+    if isinstance(exc, KeyboardInterrupt):
+        err.print(f"{exit.label} ({'SIGTERM' if isinstance(exc, Terminated) else 'Ctrl-C'}); {exit.message}")
+        return exit.code
+    issues = getattr(exc, "issues", None)
+    if isinstance(exc, ScenarioValidationError) and issues:
+        for issue in issues:
+            err.print(f"[bold red]{exit.label}:[/] {escape(str(issue))}", markup=True)
+    else:
+        err.print(f"[bold red]{escape(exit.label)}:[/] {escape(exit.message)}", markup=True)
+    if exit.code is ExitCode.INTERNAL_ERROR:
+        if debug():
+            err.print(escape(remote or "".join(traceback.format_exception(exc))), highlight=False)
+        else:
+            err.print("run again with SCENARIO_DEBUG=1 to see where it happened, and please report it")
+    return exit.code
 
 
 def json_default(value: Any) -> Any:

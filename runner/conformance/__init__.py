@@ -1,7 +1,7 @@
 """The conformance suite: the promised semantics, checked against analytic values and the `ode` reference.
 
 ``discover(suite)`` lists the cases (every variant of every scenario in ``scenarios/conformance/``),
-``run_suite(cases, backends)`` runs them with each backend in its own worker process, ``build_matrix``
+``run_suite(cases, backends)`` runs them in worker processes of runner.exec (one engine per process), ``build_matrix``
 turns the results into the matrix (check x backend: error against the analytic value, difference from
 ``ode``, pass/fail), and ``markdown`` / ``console`` render it. ``scenario conformance`` is the command.
 """

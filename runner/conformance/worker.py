@@ -1,10 +1,7 @@
-"""Run conformance cases on one backend, in this process, and write one JSON line per case.
+"""Run one conformance case on one backend, in this process: the job a worker of runner.exec runs.
 
-Started by :mod:`runner.conformance.pool` as ``python -m runner.conformance.worker JOB RESULTS``, one
-process per backend. ``JOB`` is a JSON file ``{"backend": name, "cases": [{"id", "path", "variant"}]}``;
-``RESULTS`` receives, per case, a ``{"case": id, "started": true}`` line before the run and a
-``{"case": id, "result": {...}}`` line after it, each flushed at once, so that the parent knows which
-case a crash or a hang interrupted. Nothing is written to stdout: engines print there.
+:mod:`runner.conformance.pool` sends :func:`job` to worker processes (:mod:`runner.exec.pool`), one
+engine per process; what an engine prints goes to the worker's log, whose tail explains a crash.
 
 A case's result keeps, for every assertion, the raw numbers behind its verdict (measured value, target,
 tolerance: ``Verdict.value/target/tolerance``), which the matrix needs to the last digit.
@@ -12,11 +9,8 @@ tolerance: ``Verdict.value/target/tolerance``), which the matrix needs to the la
 
 from __future__ import annotations
 
-import json
 import math
-import sys
 import time
-from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
@@ -89,18 +83,6 @@ def run_case(path: Path, variant: str | None, backend_name: str) -> dict[str, An
         backend.close()
 
 
-def main(argv: Sequence[str]) -> int:
-    job = json.loads(Path(argv[0]).read_text())
-    backend = job["backend"]
-    with open(argv[1], "a", encoding="utf-8") as out:
-        for case in job["cases"]:
-            out.write(json.dumps({"case": case["id"], "started": True}) + "\n")
-            out.flush()
-            result = run_case(Path(case["path"]), case["variant"], backend)
-            out.write(json.dumps({"case": case["id"], "result": result}, allow_nan=False) + "\n")
-            out.flush()
-    return 0
-
-
-if __name__ == "__main__":
-    sys.exit(main(sys.argv[1:]))
+def job(path: str, variant: str | None, backend_name: str, report: object = None) -> dict[str, Any]:
+    """One case, as a job of :class:`runner.exec.pool.Pool` (``report``: progress, unused here)."""
+    return run_case(Path(path), variant, backend_name)

@@ -1,15 +1,20 @@
-"""Running many cases (file x variant x backend x parameter set) in parallel, locally or on a Ray cluster.
+"""Running many cases (file x variant x backend x parameter set) elsewhere: local worker processes or Ray.
 
-A :class:`Case` names a scenario file, a variant, ``--set`` overrides, a backend and an output folder.
-:func:`run_case` runs one case in the current process; an executor runs many and returns one
-:class:`CaseResult` per case, in the order given, whatever order they finish in:
+Every executor runs each case in a worker process through the one protocol of :mod:`runner.exec.pool`
+and :mod:`runner.exec.cases`, and returns one :class:`~runner.exec.cases.CaseResult` per case, in the
+order given, whatever order they finish in:
 
-* :class:`LocalExecutor` (the default): ``jobs == 1`` runs in this process; otherwise a pool of ``jobs``
-  spawned worker processes, each running one case at a time. A worker that dies (an engine crash) makes
-  its case ``crashed``; the other cases go on.
-* :class:`RayExecutor` (extra ``ray``): submits each case as a Ray task to an existing cluster
-  (``address``) or to a local instance it starts. The scenario file and its sounds travel with the task
-  and every file the run writes (trace, cost) comes back, so workers need no shared file system.
+* :class:`LocalExecutor`: ``jobs`` worker processes (``jobs == 1``: the serial path, one worker reused
+  from case to case); ``isolate`` gives every case a process of its own. A case whose engine kills its
+  process is ``crashed (signal N)``, one over its budget ``timed out``; the other cases go on.
+* :class:`RayExecutor` (extra ``ray``): each case is a Ray task that runs the same local protocol inside
+  the Ray worker, so a crash is still ``crashed (signal N)`` with its ``.partial`` trace, and a budget
+  still holds. The scenario file and its sounds travel with the task and every file the run wrote comes
+  back, so workers need no shared file system.
+
+Each case's output names are owned for the whole case (:class:`runner.trace.output.Claim`: taken by the
+worker that writes them, or by this process for a Ray task, whose files it writes when they come back):
+a concurrent run for the same names fails at once with exit 2 and never damages this one.
 
 Results are deterministic: the same cases give the same results and byte-identical traces whichever
 executor runs them (wall time stays out of them, in ``CaseResult.wall_seconds`` and the ``.cost.json``).
@@ -17,290 +22,164 @@ executor runs them (wall time stays out of them, in ``CaseResult.wall_seconds`` 
 
 from __future__ import annotations
 
-import math
-import multiprocessing
+import argparse
+import contextlib
 import os
-import signal
 import tempfile
-import time
-from collections.abc import Callable, Sequence
-from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
-from concurrent.futures.process import BrokenProcessPool
-from dataclasses import dataclass, field
+from collections.abc import Callable, Iterable, Sequence
+from dataclasses import replace
 from pathlib import Path
-from types import FrameType
 from typing import Any, Protocol
 
-from backends.errors import PhysicsScenariosError
-from runner.errors import ScenarioError, UsageError
+from reports import trace_format as tf
+from runner.errors import ExitCode, TraceError, UsageError
+from runner.exec.cases import Case, CaseResult, case_result, estimate_cost, named, run_case
+from runner.exec.exits import most_severe
+from runner.exec.pool import RETURNED, TIMEOUT_GRACE, Ending, Job, Pool
+from runner.exec.transport import encode_error
+from runner.trace.output import Claim, foreign, publish_trace, refusal, write_error
 
 __all__ = [
+    "EXECUTORS",
     "Case",
     "CaseResult",
     "Executor",
     "LocalExecutor",
+    "OnProgress",
+    "OnResult",
     "RayExecutor",
+    "add_arguments",
+    "check_outputs",
     "estimate_cost",
     "make_executor",
-    "run_case",
+    "status_code",
 ]
 
 EXECUTORS = ("local", "ray")
 RAY_HINT = "pip install 'physics-scenarios[ray]'"
-Files = tuple[tuple[str, bytes], ...]  # (path relative to the scenario's folder, content)
-
-
-@dataclass(frozen=True)
-class Case:
-    path: str  # the scenario file
-    variant: str | None  # None: the base case
-    backend: str
-    overrides: tuple[tuple[str, Any], ...] = ()  # --set items, applied in order
-    out_dir: str | None = None  # traces go here; None: no trace
-    files: Files = ()  # the scenario's files, for workers that cannot read `path` (see bundle())
-    cost: float = 0.0  # an estimate of the work (see estimate_cost): costly cases are started first
-    record_every: int = 1  # the trace gets every k-th step (run_loaded's record_every)
-
-    def bundle(self) -> Case:
-        """This case carrying its scenario file and the sounds it names (for remote workers)."""
-        from runner.language.load import load_scenario
-
-        path = Path(self.path)
-        loaded = load_scenario(path, self.variant, self.overrides)
-        files = [(path.name, path.read_bytes())]
-        files += [(str(rel), (path.parent / rel).read_bytes()) for rel in loaded.model.sounds.values()]
-        return Case(self.path, self.variant, self.backend, self.overrides, self.out_dir, tuple(files), self.cost,
-                    self.record_every)  # fmt: skip
-
-
-def estimate_cost(loaded: Any) -> float:
-    """Steps x bodies x substeps of a loaded case: the order to start cases in (longest first keeps the
-    last worker from finishing alone)."""
-    from runner.language.names import expand_bodies
-
-    world = loaded.model.world
-    return math.floor(world.duration / world.dt + 0.5) * (len(expand_bodies(loaded.model)) + 1) * world.substeps
-
-
-def _schedule(cases: Sequence[Case]) -> list[tuple[int, Case]]:
-    """(index, case) in the order to submit them, as a stack (pop() gives the next): costliest first."""
-    order = sorted(enumerate(cases), key=lambda item: (-item[1].cost, item[0]))
-    return list(reversed(order))
-
-
-@dataclass
-class CaseResult:
-    case: Case
-    status: str  # passed | failed | engine-failure | error | crashed | interrupted
-    result: Any = None  # runner.sim.session.RunResult when the run completed (any status but the last three)
-    failure: str | None = None
-    error_type: str | None = None  # for "error": the exception class (UnsupportedFeature, ...)
-    written: dict[str, bytes] = field(default_factory=dict)  # files a remote run wrote, by name
-    wall_seconds: float = 0.0  # never in tables or traces
-
-    @property
-    def passed(self) -> bool:
-        return self.status == "passed"
-
-    def raise_error(self) -> None:
-        """Raise again the exception that made this an ``error`` (for exit codes), else nothing."""
-        if self.status != "error":
-            return
-        from runner import errors as e
-
-        cls = getattr(e, self.error_type or "", None)
-        if not (isinstance(cls, type) and issubclass(cls, PhysicsScenariosError)) or cls is e.ScenarioValidationError:
-            cls = ScenarioError if self.error_type == "ScenarioValidationError" else PhysicsScenariosError
-        raise cls(self.failure or "")
-
-
-def run_case(case: Case) -> CaseResult:
-    """Run one case here. Errors of the product come back as status ``error``; an interruption propagates."""
-    from runner.language.load import load_scenario
-    from runner.sim.run import run_loaded
-
-    start = time.perf_counter()
-    with tempfile.TemporaryDirectory(prefix="scenario-case-") as tmp:
-        path = Path(case.path)
-        if case.files:
-            for rel, data in case.files:
-                target = Path(tmp, "src", rel)
-                target.parent.mkdir(parents=True, exist_ok=True)
-                target.write_bytes(data)
-            path = Path(tmp, "src", case.files[0][0])
-        out_dir = None if case.out_dir is None else Path(case.out_dir)
-        if out_dir is not None and case.files:
-            out_dir = Path(tmp, "out")  # gathered back by the caller
-        try:
-            loaded = load_scenario(path, case.variant, case.overrides)
-            result = run_loaded(loaded, case.backend, out_dir, record_every=case.record_every)
-        except (PhysicsScenariosError, OSError) as exc:
-            return CaseResult(case, "error", failure=str(exc), error_type=type(exc).__name__,
-                              wall_seconds=time.perf_counter() - start)  # fmt: skip
-        written = {}
-        if out_dir is not None and case.files and case.out_dir is not None:
-            written = {f.name: f.read_bytes() for f in sorted(out_dir.iterdir()) if f.is_file()}
-            if result.trace:  # where the caller puts it
-                result.trace = str(Path(case.out_dir, Path(result.trace).name))
-    return CaseResult(case, result.status, result, result.failure, None, written, time.perf_counter() - start)
+OnResult = Callable[[int, CaseResult], None]
+OnProgress = Callable[[int, int, int], None]  # (case index, steps done, steps in all)
 
 
 class Executor(Protocol):
-    def run(self, cases: Sequence[Case], on_result: Callable[[int, CaseResult], None] | None = None
-            ) -> list[CaseResult]: ...  # fmt: skip
+    """Runs cases and returns their results in the order given (see the module docstring)."""
+
+    def run(self, cases: Sequence[Case], on_result: OnResult | None = None,
+            on_progress: OnProgress | None = None) -> list[CaseResult]: ...  # fmt: skip
 
     def close(self) -> None: ...
 
 
-# --- local ------------------------------------------------------------------------------------------
+def check_outputs(cases: Iterable[Case], force: bool = False) -> None:
+    """Refuse, before anything runs, to overwrite files under these cases' output names that this tool did
+    not write (``--force`` allows it); the tool's own earlier outputs are replaced without asking."""
+    if force:
+        return
+    left = foreign(Path(c.trace) for c in cases if c.trace is not None)
+    if left:
+        raise TraceError(refusal(left))
 
 
-class _WorkerStop(KeyboardInterrupt):
-    """SIGTERM in a worker: finish the trace as interrupted, like Ctrl-C."""
+def _refused(exc: BaseException) -> Ending:
+    return Ending(RETURNED, {"status": "error", "error": encode_error(exc)})
 
 
-_busy = False  # a worker is running a case
+class _Claims:
+    """The output names of the cases in flight, held by this process."""
 
+    def __init__(self, cases: Sequence[Case], force: bool) -> None:
+        self.cases = cases
+        self.force = force
+        self.held: dict[int, Claim] = {}
 
-def _on_sigterm(signum: int, frame: FrameType | None) -> None:
-    if _busy:
-        raise _WorkerStop()
-    signal.signal(signal.SIGTERM, signal.SIG_DFL)  # idle (the pool is being torn down): just end
-    os.kill(os.getpid(), signal.SIGTERM)
+    def take(self, index: int) -> Ending | None:
+        trace = self.cases[index].trace
+        if trace is None:
+            return None
+        try:
+            self.held[index] = Claim(Path(trace), force=self.force)
+        except TraceError as exc:
+            return _refused(exc)
+        return None
 
+    def release(self, index: int) -> None:
+        claim = self.held.pop(index, None)
+        if claim is not None:
+            claim.release()
 
-def _init_worker() -> None:
-    signal.signal(signal.SIGTERM, _on_sigterm)
-
-
-def _pool_task(case: Case) -> CaseResult:
-    global _busy
-    _busy = True
-    try:
-        return run_case(case)
-    finally:
-        _busy = False
+    def release_all(self) -> None:
+        for index in list(self.held):
+            self.release(index)
 
 
 class LocalExecutor:
-    """A pool of ``jobs`` spawned processes (``jobs == 1``: this process)."""
+    """``jobs`` worker processes on this machine (see the module docstring)."""
 
-    def __init__(self, jobs: int = 1) -> None:
+    def __init__(self, jobs: int = 1, *, isolate: bool = False, force: bool = False,
+                 grace: float = TIMEOUT_GRACE) -> None:  # fmt: skip
         if jobs < 1:
             raise UsageError(f"Invalid `-j`. Expected a positive number of processes. Received: {jobs}")
         self.jobs = jobs
+        self.isolate = isolate
+        self.force = force
+        self.grace = grace  # seconds between a time limit's SIGTERM and SIGKILL
 
-    def run(self, cases: Sequence[Case], on_result: Callable[[int, CaseResult], None] | None = None
-            ) -> list[CaseResult]:  # fmt: skip
-        done: dict[int, CaseResult] = {}
+    def run(self, cases: Sequence[Case], on_result: OnResult | None = None,
+            on_progress: OnProgress | None = None) -> list[CaseResult]:  # fmt: skip
+        cases = [replace(named(c), force=c.force or self.force) for c in cases]
+        results: dict[int, CaseResult] = {}
 
-        def finish(i: int, r: CaseResult) -> None:
-            done[i] = r
+        def end(index: int, ending: Ending) -> None:
+            results[index] = case_result(cases[index], ending)
             if on_result is not None:
-                on_result(i, r)
+                on_result(index, results[index])
 
-        if self.jobs == 1 or len(cases) <= 1:
-            for i, case in enumerate(cases):
-                finish(i, run_case(case))
-        else:
-            self._pool(_schedule(cases), min(self.jobs, len(cases)), finish)
-        return [done[i] for i in range(len(cases))]
-
-    def _pool(self, todo: list[tuple[int, Case]], jobs: int, finish: Callable[[int, CaseResult], None]) -> None:
-        """At most ``jobs`` cases in flight; if a worker dies, each case then in flight is run alone to
-        find the one that crashes (it is reported ``crashed``) and the pool is started again."""
-        while todo:
-            pool = ProcessPoolExecutor(jobs, mp_context=_context(), initializer=_init_worker)
-            flight: dict[Future[CaseResult], tuple[int, Case]] = {}
-            suspects: list[tuple[int, Case]] = []
-            try:
-                while todo or flight:
-                    while todo and len(flight) < jobs:
-                        item = todo.pop()
-                        flight[pool.submit(_pool_task, item[1])] = item
-                    ready, _ = wait(flight, return_when=FIRST_COMPLETED)
-                    for future in ready:
-                        item = flight.pop(future)
-                        try:
-                            finish(item[0], future.result())
-                        except BrokenProcessPool:
-                            suspects.append(item)
-                    if suspects:
-                        suspects += list(flight.values())
-                        break
-            except BaseException:
-                _stop(pool)
-                raise
-            finally:
-                pool.shutdown(wait=True, cancel_futures=True)
-            for index, case in sorted(suspects):
-                finish(index, self._alone(case))
-
-    @staticmethod
-    def _alone(case: Case) -> CaseResult:
-        with ProcessPoolExecutor(1, mp_context=_context(), initializer=_init_worker) as p:
-            try:
-                return p.submit(_pool_task, case).result()
-            except BrokenProcessPool:
-                return CaseResult(case, "crashed", failure=f"the worker running {Path(case.path).name} on "
-                                  f"{case.backend} died (the engine crashed?)")  # fmt: skip
+        jobs = [Job(run_case, (c,), c.backend, c.budget, self.isolate, c.cost) for c in cases]
+        with Pool(min(self.jobs, max(1, len(cases))), timeout_grace=self.grace) as pool:
+            pool.run(jobs, end, on_progress)
+        return [results[i] for i in range(len(cases))]
 
     def close(self) -> None:
         """Nothing stays running between run() calls."""
 
 
-def _context() -> Any:
-    """How workers start. On Linux: ``fork`` when this process is safe to copy (one thread, no engine
-    imported: the CLI's case), which costs nothing; else ``forkserver`` (workers fork from a server that
-    imported the runner once, about 0.7 s); elsewhere ``spawn`` (each worker imports everything, ~1.5 s)."""
-    import sys
-    import threading
-
-    from backends.registry import engine_modules
-
-    methods = multiprocessing.get_all_start_methods()
-    engines = engine_modules() & set(sys.modules)
-    if sys.platform.startswith("linux") and "fork" in methods and threading.active_count() == 1 and not engines:
-        return multiprocessing.get_context("fork")
-    if "forkserver" in methods:
-        ctx = multiprocessing.get_context("forkserver")
-        ctx.set_forkserver_preload(_PRELOAD)
-        return ctx
-    return multiprocessing.get_context("spawn")
-
-
-_PRELOAD = ["numpy", "runner.sim.run", "runner.trace.writer", "runner.exec.executors", "reports.trace_reader"]
-
-
-def _stop(pool: ProcessPoolExecutor, grace: float = 5.0) -> None:
-    """Interrupted: SIGTERM every worker (each finishes its trace as interrupted), then wait for them."""
-    processes = list(getattr(pool, "_processes", {}).values())  # no public handle on the workers
-    for p in processes:
-        if p.is_alive():
-            p.terminate()
-    deadline = time.monotonic() + grace
-    for p in processes:
-        p.join(max(0.0, deadline - time.monotonic()))
-        if p.is_alive():
-            p.kill()
-
-
 # --- Ray ----------------------------------------------------------------------------------------------
+
+
+def ray_task(case: Case) -> dict[str, Any]:
+    """In a Ray worker: ``case`` (bundled) run by the local protocol in a child process, and the files it
+    wrote. Returns the ending and the files as plain data."""
+    with tempfile.TemporaryDirectory(prefix="scenario-ray-") as tmp:
+        src = Path(tmp, "src")
+        for rel, data in case.files:
+            target = src / rel
+            target.parent.mkdir(parents=True, exist_ok=True)
+            target.write_bytes(data)
+        out = Path(tmp, "out")
+        local = Case(str(src / case.files[0][0]), case.variant, case.backend, case.overrides,
+                     None if case.out_dir is None else str(out), (), case.cost, case.record_every,
+                     case.trace_process, case.budget, case.sha256)  # fmt: skip
+        with Pool(1) as pool:
+            (ending,) = pool.run([Job(run_case, (local,), case.backend, case.budget, True, case.cost)])
+        written = {f.name: f.read_bytes() for f in sorted(out.iterdir()) if f.is_file()} if out.is_dir() else {}
+    return {"ending": ending, "written": written}
 
 
 class RayExecutor:
     """Cases as Ray tasks (one CPU each) on the cluster at ``address`` ("auto", "ray://host:10001"), or on
     a local instance started here (``address=None``; ``jobs`` CPUs, default all). At most ``jobs`` tasks
-    are in flight when ``jobs`` is given. ``runtime_env`` is passed to ``ray.init`` (e.g. py_modules)."""
+    are in flight when ``jobs`` is given. ``runtime_env`` is passed to ``ray.init`` (e.g. py_modules).
+    An interrupted run cancels its tasks: their traces stay on the workers' temporary folders."""
 
     def __init__(self, address: str | None = None, jobs: int | None = None,
-                 runtime_env: dict[str, Any] | None = None) -> None:  # fmt: skip
+                 runtime_env: dict[str, Any] | None = None, *, force: bool = False) -> None:  # fmt: skip
         try:
             import ray
         except ImportError as exc:
             raise UsageError(f"`--executor ray` needs Ray (not installed); install it with: {RAY_HINT}") from exc
         self._ray = ray
         self.jobs = jobs
+        self.force = force
         self._started = not ray.is_initialized()
         if self._started:
             import logging
@@ -315,66 +194,104 @@ class RayExecutor:
                 ray.init(address=address, **kwargs)
             except (ConnectionError, RuntimeError, ValueError) as exc:
                 raise UsageError(f"cannot reach the Ray cluster at `{address}`: {exc}") from exc
-        self._task = ray.remote(num_cpus=1, max_retries=0)(run_case)
+        self._task = ray.remote(num_cpus=1, max_retries=0)(ray_task)
 
-    def run(self, cases: Sequence[Case], on_result: Callable[[int, CaseResult], None] | None = None
-            ) -> list[CaseResult]:  # fmt: skip
+    def run(self, cases: Sequence[Case], on_result: OnResult | None = None,
+            on_progress: OnProgress | None = None) -> list[CaseResult]:  # fmt: skip
         ray = self._ray
-        todo = _schedule(cases)
+        cases = [named(c) for c in cases]
+        stack = list(reversed(sorted(range(len(cases)), key=lambda i: (-cases[i].cost, i))))
         limit = self.jobs or len(cases) or 1
-        flight: dict[Any, tuple[int, Case]] = {}
+        claims = _Claims(cases, self.force)
+        flight: dict[Any, int] = {}
         done: dict[int, CaseResult] = {}
+
+        def finish(index: int, ending: Ending) -> None:
+            claims.release(index)  # the files are in place: the outcome file, if any, is written under a new claim
+            done[index] = case_result(cases[index], ending)
+            if on_result is not None:
+                on_result(index, done[index])
+
         try:
-            while todo or flight:
-                while todo and len(flight) < limit:
-                    index, case = todo.pop()
-                    flight[self._task.remote(case.bundle())] = (index, case)
+            while stack or flight:
+                while stack and len(flight) < limit:
+                    index = stack.pop()
+                    refused = claims.take(index)
+                    if refused is not None:
+                        finish(index, refused)
+                        continue
+                    flight[self._task.remote(cases[index].bundle())] = index
+                if not flight:
+                    continue
                 ready, _ = ray.wait(list(flight), num_returns=1)
                 for ref in ready:
-                    index, case = flight.pop(ref)
-                    done[index] = self._collect(ref, case)
-                    if on_result is not None:
-                        on_result(index, done[index])
+                    index = flight.pop(ref)
+                    finish(index, self._collect(ref, cases[index]))
         except BaseException:
             for ref in flight:
                 ray.cancel(ref, force=True)
             raise
+        finally:
+            claims.release_all()
         return [done[i] for i in range(len(cases))]
 
-    def _collect(self, ref: Any, case: Case) -> CaseResult:
+    def _collect(self, ref: Any, case: Case) -> Ending:
+        """The task's ending, its files put in place (this process holds the case's names)."""
         ray = self._ray
         try:
-            result: CaseResult = ray.get(ref)
-        except (ray.exceptions.WorkerCrashedError, ray.exceptions.NodeDiedError) as exc:
-            return CaseResult(case, "crashed", failure=f"the Ray worker died: {exc}")
-        except ray.exceptions.RayTaskError as exc:
-            return CaseResult(case, "error", failure=str(exc.cause), error_type=type(exc.cause).__name__)
-        result.case = case
+            reply: dict[str, Any] = ray.get(ref)
+        except ray.exceptions.RayTaskError:  # ray_task reports every error of the case: this is a bug in it
+            raise
+        except ray.exceptions.RayError as exc:  # the Ray worker, its raylet or its node died: not the engine's doing
+            return Ending("crashed", None, output=f"the Ray worker running the case was lost: {exc}")
         if case.out_dir is not None:
-            out = Path(case.out_dir)
-            out.mkdir(parents=True, exist_ok=True)
-            for name, data in result.written.items():
-                (out / name).write_bytes(data)
-            result.written = {}
-        return result
+            try:
+                _publish(Path(case.out_dir), reply["written"])
+            except TraceError as exc:  # a full disk here is the case's output error, as in a local run
+                return _refused(exc)
+        ending: Ending = reply["ending"]
+        return ending
 
     def close(self) -> None:
         if self._started and self._ray.is_initialized():
             self._ray.shutdown()
 
 
-def make_executor(kind: str = "local", jobs: int = 1, ray_address: str | None = None) -> Executor:
-    """The executor a command asked for (``--executor``, ``-j``, ``--ray-address``)."""
+def _publish(out: Path, written: dict[str, bytes]) -> None:
+    """Files a remote run wrote, put in ``out`` (whose names this process owns) as a local run writes them:
+    the trace first, through its ``.partial`` name (runner.trace.output.publish_trace), then the others
+    each under a temporary name and renamed."""
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise write_error(exc, f"into {out}") from exc
+    traces = [n for n in written if n.endswith((tf.FILE_SUFFIX, tf.FILE_SUFFIX + tf.PARTIAL_SUFFIX))]
+    for name in traces:
+        publish_trace(out / name, written[name])
+    for name in sorted(set(written) - set(traces)):
+        target, tmp = out / name, out / f"{name}.partial"
+        try:
+            tmp.write_bytes(written[name])
+            os.replace(tmp, target)
+        except OSError as exc:
+            with contextlib.suppress(OSError):
+                tmp.unlink()
+            raise write_error(exc, str(target)) from exc
+
+
+def make_executor(kind: str = "local", jobs: int = 1, ray_address: str | None = None, *, isolate: bool = False,
+                  force: bool = False) -> Executor:  # fmt: skip
+    """The executor a command asked for (``--executor``, ``-j``, ``--ray-address``, ``--isolate``)."""
     if kind == "local":
         if ray_address:
             raise UsageError("`--ray-address` needs `--executor ray`")
-        return LocalExecutor(jobs)
+        return LocalExecutor(jobs, isolate=isolate, force=force)
     if kind == "ray":
-        return RayExecutor(ray_address, jobs if jobs > 1 else None)
+        return RayExecutor(ray_address, jobs if jobs > 1 else None, force=force)
     raise UsageError(f"Invalid `--executor`. Expected one of {', '.join(EXECUTORS)}. Received: {kind}")
 
 
-def add_arguments(parser: Any, jobs_default: int = 1) -> None:
+def add_arguments(parser: argparse.ArgumentParser, jobs_default: int = 1) -> None:
     """``-j``, ``--executor`` and ``--ray-address``, for the commands that run many cases."""
     parser.add_argument("-j", "--jobs", type=int, default=jobs_default, metavar="N",
                         help=f"cases run in parallel (default {jobs_default})")  # fmt: skip
@@ -384,10 +301,6 @@ def add_arguments(parser: Any, jobs_default: int = 1) -> None:
                         help="a Ray cluster (`auto`, `ray://host:10001`); default: start a local one")  # fmt: skip
 
 
-def status_code(results: Sequence[CaseResult]) -> int:
-    """The exit code for a batch: 3 when any case met an engine failure or crashed, 1 when any failed."""
-    from runner.errors import ExitCode
-
-    if any(r.status in ("engine-failure", "crashed") for r in results):
-        return ExitCode.ENGINE_FAILURE
-    return ExitCode.OK if all(r.passed for r in results) else ExitCode.ASSERTION_FAILED
+def status_code(results: Sequence[CaseResult]) -> ExitCode:
+    """The exit code for a batch: the most severe of its cases' codes (runner.exec.exits.SEVERITY)."""
+    return most_severe(r.exit.code for r in results)

@@ -25,6 +25,12 @@ class World(Strict):
     dt: PositiveFloat = Field(description="The scenario step in seconds (the lab uses 0.04).")
     duration: PositiveFloat = Field(description="Simulated seconds to run.")
     substeps: Annotated[int, Field(ge=1, le=1000)] = Field(1, description="Physics steps per scenario step.")
+    budget: PositiveFloat | None = Field(
+        None,
+        description="Wall-clock seconds a run may take, building the world included (default: the command's "
+        "limit, 3600 s for `run`); `--timeout` overrides it. A run whose cost per step says it would take longer "
+        "is stopped early, naming that cost (exit 3).",
+    )
 
     _v = field_validator("gravity", mode="before")(finite_vec)
 

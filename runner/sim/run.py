@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import re
+import time as wallclock
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
@@ -14,7 +15,9 @@ from runner import interrupts
 from runner.compile.program import build_program
 from runner.errors import TraceError
 from runner.language.load import LoadedScenario
+from runner.sim.budget import Watchdog
 from runner.sim.session import RunResult, Session
+from runner.trace.output import Claim, write_error
 from runner.version import tool_version
 
 
@@ -57,26 +60,46 @@ def run_loaded(
     record_every: int = 1,
     trace_process: bool = False,
     drive: Callable[[Session], RunResult] | None = None,
+    budget: float | None = None,
+    claimed: bool = False,
 ) -> RunResult:
     """Build, run and record one case. Engine failures come back as a result with status engine-failure;
     an interruption (KeyboardInterrupt) finishes the trace as interrupted and propagates.
 
     ``record_every``: the trace gets every k-th step and the last (assertions still check every step);
     ``trace_process``: the trace is formatted and written by a second process (runner.trace.process);
-    ``drive``: what runs the session instead of ``Session.run`` (a live run, runner.view)."""
+    ``drive``: what runs the session instead of ``Session.run`` (a live run, runner.view);
+    ``budget``: wall-clock seconds the run may take from here (default: ``world.budget``, else none;
+    runner.sim.budget); ``claimed``: the caller already owns the case's output names
+    (:class:`runner.trace.output.Claim`), else this call takes them (``force``: also over files this
+    tool did not write)."""
+    started = wallclock.perf_counter()
     program = build_program(loaded)
     cls = get_backend(backend_name)
+    interrupts.check()  # a signal during the engine's import is an interruption, never a broken import
     check_capabilities(cls, program.world)
-    backend = cls(program.world)
-    try:
-        if out_dir is None:
-            return _run(program, loaded, backend, None, progress, record_every, drive)
-        from runner.trace.writer import TraceMeta, TraceWriter
-
+    budget = budget if budget is not None else loaded.model.world.budget
+    watchdog = None if budget is None else Watchdog(budget, program.steps, program.world.dt, started, backend_name)
+    claim: Claim | None = None
+    if out_dir is not None:
         try:
             out_dir.mkdir(parents=True, exist_ok=True)
         except OSError as exc:
             raise TraceError(f"cannot create the trace folder {out_dir}: {exc.strerror or exc}") from exc
+        if not claimed:
+            claim = Claim(trace_path(out_dir, loaded, backend_name), force=force)
+    try:
+        backend = cls(program.world)
+    except BaseException:
+        if claim is not None:
+            claim.release()
+        raise
+    try:
+        interrupts.check()  # building a big world can take long: a signal meanwhile ends the run here
+        if out_dir is None:
+            return _run(program, loaded, backend, None, progress, record_every, watchdog, drive)
+        from runner.trace.writer import TraceMeta, TraceWriter
+
         world = program.world
         meta = TraceMeta(
             scenario=loaded.model.scenario,
@@ -104,18 +127,21 @@ def run_loaded(
             from runner.trace.process import BackgroundTraceWriter
 
             writer = BackgroundTraceWriter
-        with interrupts.deferred(), writer(trace_path(out_dir, loaded, backend_name), meta, force=force) as trace:
+        with interrupts.deferred(), writer(trace_path(out_dir, loaded, backend_name), meta) as trace:
             _attach_sources(trace, loaded, program)
             trace.scene(0.0, solid_visuals(program))
-            return _run(program, loaded, backend, trace, progress, record_every, drive)
+            return _run(program, loaded, backend, trace, progress, record_every, watchdog, drive)
     finally:
         backend.close()
+        if claim is not None:
+            claim.release()
 
 
 def _run(  # noqa: ANN001
-    program, loaded: LoadedScenario, backend, trace, progress, record_every: int = 1, drive=None
-) -> RunResult:
-    session = Session(program, backend, trace, progress, record_every)
+    program, loaded: LoadedScenario, backend, trace, progress, record_every: int = 1,
+    watchdog: Watchdog | None = None, drive: Callable[[Session], RunResult] | None = None,
+) -> RunResult:  # fmt: skip
+    session = Session(program, backend, trace, progress, record_every, watchdog)
     try:
         result = session.run() if drive is None else drive(session)
     except EngineFailure as exc:
@@ -169,8 +195,12 @@ def write_cost(trace: Path, result: RunResult) -> None:
     }
     target = cost_path(trace)
     tmp = target.with_name(target.name + ".partial")
-    tmp.write_text(json.dumps(data, indent=2) + "\n")
-    tmp.replace(target)
+    try:
+        tmp.write_text(json.dumps(data, indent=2) + "\n")
+        tmp.replace(target)
+    except OSError as exc:
+        tmp.unlink(missing_ok=True)
+        raise write_error(exc, str(target)) from exc
 
 
 def _attach_sources(trace, loaded: LoadedScenario, program) -> None:  # noqa: ANN001

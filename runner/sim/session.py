@@ -32,6 +32,7 @@ from runner.language import model_behaviour as B
 from runner.language.hpr import hpr_to_quat, quat_to_hpr
 from runner.sim.actions import run_actions
 from runner.sim.assertions import AssertionTracker, Verdict
+from runner.sim.budget import Watchdog
 from runner.sim.collisions import EventHandler, SolidTraverser, quat_matrices
 from runner.sim.intervals import IntervalManager
 from runner.sim.kinematics import KinematicTable
@@ -73,8 +74,10 @@ class Session:
         trace: Any | None = None,
         progress: Callable[[int, int], None] | None = None,
         record_every: int = 1,
+        watchdog: Watchdog | None = None,
     ) -> None:
         self.program = program
+        self.watchdog = watchdog  # the wall-clock budget, checked after each step (runner.sim.budget)
         self.record_every = max(1, int(record_every))  # the trace gets every k-th step (and the last)
         self._recorded: float | None = None  # time of the last step in the trace
         self.world = program.world
@@ -396,6 +399,8 @@ class Session:
             self._detect(t_next)
             self._record(t_next, k + 1, last=k == steps - 1)
             interrupts.check()  # a SIGINT/SIGTERM that came during this step: the trace ends with it whole
+            if self.watchdog is not None:
+                self.watchdog.check(k + 1)
             t = t_next
             if self.progress is not None and (k % 50 == 0 or k == steps - 1):
                 self.progress(k + 1, steps)

@@ -30,7 +30,7 @@ import numpy as np
 
 from backends.types import BodyStates, Contact, JointStates
 from reports import trace_format as tf
-from runner.errors import TraceError
+from runner.errors import OutputError, OutputInUse, TraceError
 from runner.trace.writer import SolidVisual, TraceMeta, TraceWriter, finish_on_exit
 
 __all__ = ["BATCH_STEPS", "BackgroundTraceWriter"]
@@ -93,6 +93,14 @@ def _serve(conn: Any, path: Path, meta: TraceMeta, kwargs: dict[str, Any]) -> No
                 return
 
 
+def _error_class(kind: str | None) -> type[Exception]:
+    """The class of an error the writer process reported by name (a full disk stays an OutputError)."""
+    classes: dict[str | None, type[Exception]] = {
+        "ValueError": ValueError, "OutputError": OutputError, "OutputInUse": OutputInUse,
+    }  # fmt: skip
+    return classes.get(kind, TraceError)
+
+
 def _context() -> Any:
     """forkserver (Linux): the writer forks from a server that imported the trace modules once, never
     from the run's process, which holds an engine and may have threads; spawn elsewhere."""
@@ -122,7 +130,7 @@ class BackgroundTraceWriter:
         if status == "error":
             self._process.join()
             self._closed = True
-            raise (ValueError if kind == "ValueError" else TraceError)(text)
+            raise _error_class(kind)(text)
 
     def _reply(self) -> tuple[str, str | None, str | None]:
         try:
@@ -179,7 +187,7 @@ class BackgroundTraceWriter:
         reply, kind, text = self._reply()
         self._process.join()
         if reply == "error":
-            raise (ValueError if kind == "ValueError" else TraceError)(text or "")
+            raise _error_class(kind)(text or "")
         self._final = Path(text or self.path)
         return self._final
 

@@ -28,6 +28,7 @@ from backends.types import BodySpec, BodyStates, Contact, JointSpec, JointStates
 from reports import trace_format as tf
 from runner.errors import TraceError
 from runner.trace import foxglove as fx
+from runner.trace import output
 from runner.trace.encoder import TraceEncoder, dumps, verdict_text
 from runner.trace.sounds import SoundBank
 
@@ -68,17 +69,31 @@ class SolidVisual:
 
 
 class _Sink:
-    """An unbuffered file: the mcap writer hands it whole records, so nothing waits in Python."""
+    """An unbuffered file: the mcap writer hands it whole records, so nothing waits in Python.
+
+    A write that fails (disk full, I/O error) is undone: the file is cut back to the end of the last
+    whole write, so a ``.partial`` left by the failure ends on a record boundary and is read to its end
+    by ``inspect --recover``; every later write fails at once (:class:`~runner.errors.OutputError`)."""
 
     def __init__(self, path: Path, exclusive: bool) -> None:
+        self._path = path
         self._file = open(path, "xb" if exclusive else "wb", buffering=0)
         self._pos = 0
+        self._failed: TraceError | None = None
 
     def write(self, data: bytes | memoryview) -> int:
+        if self._failed is not None:
+            raise self._failed
         view = memoryview(data).cast("B")
         total = len(view)
-        while view:
-            view = view[self._file.write(view) :]
+        try:
+            while view:
+                view = view[self._file.write(view) :]
+        except OSError as exc:
+            with contextlib.suppress(OSError):
+                os.ftruncate(self._file.fileno(), self._pos)
+            self._failed = output.write_error(exc, f"trace {self._path}")
+            raise self._failed from exc
         self._pos += total
         return total
 
@@ -142,7 +157,9 @@ class TraceWriter:
             self._writer.add_metadata(tf.METADATA_SCENARIO, self._scenario_record())
         except BaseException as exc:
             self._abandon()
-            if isinstance(exc, OSError | McapError):
+            if isinstance(exc, OSError):
+                raise output.write_error(exc, f"trace {self.partial_path}") from exc
+            if isinstance(exc, McapError):
                 raise TraceError(f"cannot write trace {self.partial_path}: {exc}") from exc
             raise
 
@@ -160,7 +177,7 @@ class TraceWriter:
             self.path.parent.mkdir(parents=True, exist_ok=True)
             return _Sink(self.partial_path, exclusive=not self._force)
         except OSError as exc:
-            raise TraceError(f"cannot write trace {self.partial_path}: {exc.strerror or exc}") from exc
+            raise output.write_error(exc, f"trace {self.partial_path}") from exc
 
     def _register(self, topic: str, schema_name: str, schema_data: bytes) -> None:
         sid = self._writer.register_schema(schema_name, tf.SCHEMA_ENCODING, schema_data)
@@ -210,7 +227,7 @@ class TraceWriter:
         try:
             self._writer.add_message(self._channels[topic], ns, data, ns)
         except OSError as exc:
-            raise TraceError(f"cannot write trace {self.partial_path}: {exc}") from exc
+            raise output.write_error(exc, f"trace {self.partial_path}") from exc
 
     def _log(self, ns: int, level: int, message: str, name: str) -> None:
         self._write(tf.TOPIC_LOG, ns, self._encoder.log(ns, level, message, name))
@@ -333,7 +350,13 @@ class TraceWriter:
             self._writer.finish()
             self._closed = True
             self._sink.close(sync=True)
-        except (OSError, McapError) as exc:
+        except TraceError:
+            self._abandon()
+            raise
+        except OSError as exc:
+            self._abandon()
+            raise output.write_error(exc, f"trace {self.partial_path}") from exc
+        except McapError as exc:
             self._abandon()
             raise TraceError(f"cannot finish trace {self.partial_path}: {exc}") from exc
         if not self._force and self.path.exists():

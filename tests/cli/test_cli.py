@@ -111,15 +111,20 @@ def test_backends_lists_versions() -> None:
     assert "ODE 0.13.1" in text and "MuJoCo " in text and "DART " in text  # the engines' own versions
 
 
-def test_existing_trace_is_not_overwritten_without_force(tmp_path: Path) -> None:
+def test_a_rerun_replaces_its_own_trace_and_refuses_a_file_it_did_not_write(tmp_path: Path) -> None:
     path = str(ROOT / "scenarios" / "factory_intervals.yaml")
     assert scenario("run", path, "--backend", "fake", "--out", str(tmp_path), "-q").returncode == 0
     trace = tmp_path / "factory-intervals__door-closed__fake.mcap"
     before = trace.read_bytes()
     again = scenario("run", path, "--backend", "fake", "--out", str(tmp_path), "-q")
-    assert again.returncode == 2 and "already exists; pass --force to overwrite" in again.stderr
-    assert trace.read_bytes() == before
+    assert again.returncode == 0, again.stderr
+    assert trace.read_bytes() == before  # the same run again: the same bytes, in place
+    trace.write_bytes(b"someone's notes")
+    refused = scenario("run", path, "--backend", "fake", "--out", str(tmp_path), "-q")
+    assert refused.returncode == 2 and "was not written by scenario" in refused.stderr and "--force" in refused.stderr
+    assert trace.read_bytes() == b"someone's notes"
     assert scenario("run", path, "--backend", "fake", "--out", str(tmp_path), "-q", "--force").returncode == 0
+    assert trace.read_bytes() == before
 
 
 def test_isolate_reports_a_segfault_as_exit_three_and_keeps_the_trace(tmp_path: Path) -> None:

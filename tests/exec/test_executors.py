@@ -12,7 +12,8 @@ import pytest
 
 from backends.errors import UnknownBackend
 from runner.errors import UsageError
-from runner.exec.executors import Case, LocalExecutor, _schedule, estimate_cost, make_executor
+from runner.exec.executors import Case, LocalExecutor, estimate_cost, make_executor
+from runner.exec.pool import Job, schedule
 from runner.language.load import load_scenario
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -45,7 +46,7 @@ def test_a_crashing_engine_is_reported_and_the_other_cases_finish(tmp_path: Path
     seen: list[int] = []
     results = LocalExecutor(2).run(cases, lambda i, r: seen.append(i))
     assert [r.status for r in results] == ["crashed", "failed", "error"]
-    assert "died" in (results[0].failure or "")
+    assert results[0].label == "crashed (signal 11)" and results[0].exit.code == 3
     assert sorted(seen) == [0, 1, 2]
     assert results[2].error_type == "UnknownBackend"
     with pytest.raises(UnknownBackend, match="nope"):
@@ -59,9 +60,9 @@ def test_costly_cases_start_first_and_results_keep_their_order() -> None:
     long = load_scenario(Path(PILE), None, (("world.duration", 3.0), ("params.count", 9)))
     assert estimate_cost(short) == 30 * (5 + 2)  # steps x (bodies + 1)
     assert estimate_cost(long) == 300 * (9 + 2)
-    cases = [Case(PILE, None, "fake", cost=c) for c in (1.0, 5.0, 3.0, 5.0)]
-    stack = _schedule(cases)
-    assert [stack.pop()[0] for _ in range(4)] == [1, 3, 2, 0]  # costliest first, ties in order
+    jobs = [Job(dict, (), cost=c) for c in (1.0, 5.0, 3.0, 5.0)]
+    stack = schedule(jobs)
+    assert [stack.pop() for _ in range(4)] == [1, 3, 2, 0]  # costliest first, ties in order
 
 
 def test_executor_choice_is_checked() -> None:

@@ -3,13 +3,18 @@ exit 130/143); SIGKILL leaves a `.partial` that `scenario inspect --recover` rea
 
 The run: a 0.1 m sphere drifting at 1 m/s without gravity for 50,000 simulated seconds (5e6 steps of
 0.01 s), so that it is always mid-run when the signal comes; its trace is checked step by step
-(x = t on the float64 engines). Then FUZZ_FAULTS runs (conftest.py) are signalled at random
-moments, on every real engine, and every outcome must leave a readable, self-consistent trace (read
-both by the project's stream reader and by mcap's own indexed reader) and no traceback.
+(x = t on the float64 engines). The engine runs in a worker process of the command (runner.exec): a
+signal to the command is passed on to it, SIGKILL of the command reaches it through the kernel, and
+the worker itself may be killed. Then FUZZ_FAULTS runs (conftest.py) are signalled at random moments
+(SIGINT, SIGTERM, SIGKILL to the command, SIGKILL to the worker, two SIGINTs), on every real engine,
+and every outcome must leave a readable, self-consistent trace (read both by the project's stream
+reader and by mcap's own indexed reader) and no traceback.
 """
 
 from __future__ import annotations
 
+import contextlib
+import os
 import random
 import signal
 import subprocess
@@ -28,6 +33,7 @@ from reports import trace_format as tf
 from reports.trace_reader import Trace, read_trace
 
 from .conftest import FUZZ_FAULTS, count
+from .processes import wait_released, worker_of
 
 DT = 0.01
 DRIFT = """\
@@ -143,6 +149,8 @@ def complete_record_end(path: Path) -> int:
         while True:
             try:
                 next(records)
+            except StopIteration:  # the footer and the closing magic: a whole file (not renamed yet)
+                return stream.pos
             except Exception:  # noqa: BLE001 - the first incomplete record ends the readable part
                 return stream.good
             stream.good = stream.pos
@@ -166,20 +174,57 @@ def test_sigint_and_sigterm_finish_the_trace_as_interrupted(tmp_path: Path, sig:
     assert [a.name for a in trace.attachments] == ["drift.yaml"]
 
 
-def test_sigkill_leaves_a_partial_that_inspect_recovers_up_to_its_last_chunk(tmp_path: Path) -> None:
-    child, path = start(tmp_path)
-    wait_for_chunks(child, path, 60_000)
-    child.send_signal(signal.SIGKILL)
-    rc, _ = finish(child)
-    assert rc == -signal.SIGKILL
+def alive(pid: int) -> bool:
+    """The process exists and is not a zombie waiting to be reaped."""
+    try:
+        return Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0] != "Z"
+    except (FileNotFoundError, ProcessLookupError):
+        return False
+
+
+def assert_recovered_to_a_chunk(path: Path) -> Trace:
     partial = partial_of(path)
     assert partial.exists() and not path.exists()  # a half-written trace never has the final name
     trace = read_trace(path, recover=True)
     assert not trace.complete and trace.recovered and trace.status == tf.STATUS_INCOMPLETE
-    assert_steps(trace)
     # chunks close after the first step at or past each simulated second: the last one read is whole
     assert trace.times[-1] == pytest.approx(round(trace.times[-1])) and trace.times[-1] >= 1.0
     assert complete_record_end(partial) == partial.stat().st_size  # every byte on disk is recovered
+    return trace
+
+
+def test_sigkill_of_the_command_lets_its_worker_finish_the_trace(tmp_path: Path) -> None:
+    """`scenario` killed outright: its worker is told by the kernel (PR_SET_PDEATHSIG) and finishes the
+    trace at the next step, as for SIGTERM; nothing is lost."""
+    child, path = start(tmp_path)
+    wait_for_chunks(child, path, 60_000)
+    worker = worker_of(child)
+    child.send_signal(signal.SIGKILL)
+    rc, _ = finish(child)
+    assert rc == -signal.SIGKILL
+    wait_released(path)
+    deadline = time.monotonic() + 10
+    while alive(worker) and time.monotonic() < deadline:  # then it ends: nobody is left to send it a job
+        time.sleep(0.05)
+    assert not alive(worker), "the orphaned worker outlived its trace"
+    trace = read_trace(path)
+    assert trace.complete and trace.status == tf.STATUS_INTERRUPTED and trace.times[-1] > 5.0
+    assert_whole_steps(trace)
+    assert_steps(trace)
+    mcap_index_agrees(path, trace)
+
+
+def test_a_killed_engine_process_is_a_crash_and_inspect_recovers_its_trace(tmp_path: Path) -> None:
+    """The process running the engine killed (the OOM killer, a crash): exit 3 "crashed (signal 9)", the
+    trace kept as .partial up to its last chunk, every byte on disk recovered."""
+    child, path = start(tmp_path)
+    wait_for_chunks(child, path, 60_000)
+    os.kill(worker_of(child), signal.SIGKILL)
+    rc, err = finish(child)
+    assert rc == 3 and "crashed (signal 9)" in err and "Traceback" not in err, err
+    trace = assert_recovered_to_a_chunk(path)
+    assert_steps(trace)
+    partial = partial_of(path)
     cli = [sys.executable, "-m", "runner", "inspect"]
     done = subprocess.run([*cli, str(partial), "--recover"], capture_output=True, text=True, timeout=120)
     assert done.returncode == 0, done.stderr
@@ -189,34 +234,69 @@ def test_sigkill_leaves_a_partial_that_inspect_recovers_up_to_its_last_chunk(tmp
     assert refused.returncode == 2 and "--recover" in refused.stderr and "Traceback" not in refused.stderr
 
 
+def test_a_second_signal_ends_the_run_at_once_and_keeps_the_partial(tmp_path: Path) -> None:
+    """Two SIGINTs in a row: the second kills the worker at once (as inside an engine call that never
+    returns), the command exits 130 and the trace is kept up to its last chunk."""
+    child, path = start(tmp_path)
+    wait_for_chunks(child, path, 60_000)
+    child.send_signal(signal.SIGINT)
+    child.send_signal(signal.SIGINT)
+    rc, err = finish(child)
+    assert rc == 130 and "Traceback" not in err, err
+    wait_released(path)
+    if path.exists():  # the worker finished its step and the trace before the second signal reached it
+        assert read_trace(path).status == tf.STATUS_INTERRUPTED
+    else:
+        assert_steps(assert_recovered_to_a_chunk(path))
+
+
+KINDS = ["SIGINT", "SIGTERM", "SIGKILL", "SIGKILL to the engine's process", "SIGINT twice"]
+EXPECTED = {"SIGINT": (130,), "SIGTERM": (143,), "SIGKILL": (-9,), "SIGKILL to the engine's process": (3,),
+            "SIGINT twice": (130,)}  # fmt: skip
+
+
 @pytest.mark.parametrize("case", range(FUZZ_FAULTS))
 def test_a_signal_at_a_random_moment_never_corrupts_the_trace(tmp_path: Path, case: int) -> None:
-    """A run of 0.1 s to a minute of wall time signalled at a random moment, possibly after it has finished."""
+    """A run of 0.1 s to a minute of wall time signalled at a random moment, possibly after it has finished:
+    whatever the signal, the trace is whole (finished) or a .partial read to its last byte."""
     rng = random.Random(case)
     backend = rng.choice(REAL)
-    sig = rng.choice([signal.SIGINT, signal.SIGTERM, signal.SIGKILL])
+    kind = rng.choice(KINDS)
     child, path = start(tmp_path, backend, duration=rng.choice([50, 500, 5000]))
     wait_for_chunks(child, path, 1)
+    worker = worker_of(child)
     time.sleep(rng.uniform(0.0, 2.0))
-    child.send_signal(sig)
+    if kind == "SIGKILL to the engine's process":
+        with contextlib.suppress(ProcessLookupError):
+            os.kill(worker, signal.SIGKILL)
+    else:
+        child.send_signal(getattr(signal, kind.split()[0]))
+        if kind == "SIGINT twice":
+            child.send_signal(signal.SIGINT)
     rc, err = finish(child)
-    expected = {signal.SIGINT: 130, signal.SIGTERM: 143, signal.SIGKILL: -signal.SIGKILL}[sig]
-    # -sig for SIGINT/SIGTERM: the signal came after `main()` had returned (the trace finished, exiting)
-    assert rc in (0, expected, -sig), (rc, err)
-    assert rc == -sig or "Traceback" not in err, err
-    late = rc == 0 or (rc == -sig and sig != signal.SIGKILL) or (path.exists() and sig == signal.SIGKILL)
-    outcome = "after the run had finished" if late else f"{signal.Signals(sig).name} mid-run"
+    wait_released(path)
+    sig = getattr(signal, kind.split()[0])
+    # 0: the run was over; -sig: the signal came after `main()` had returned; the interrupted code: the
+    # command was stopped, mid-run or while it wrapped up a run its worker had finished
+    assert rc in (0, -sig, *EXPECTED[kind]), (rc, err)
+    assert rc < 0 or "Traceback" not in err, err
     if path.exists():
         assert not partial_of(path).exists()
         trace = read_trace(path)
         assert trace.complete and trace.status in (tf.STATUS_PASSED, tf.STATUS_INTERRUPTED)
-        assert (trace.status == tf.STATUS_PASSED) == late
+        late = trace.status == tf.STATUS_PASSED  # the worker had finished the run when the signal came
+        assert late or rc in EXPECTED[kind], (rc, trace.status)
         assert_whole_steps(trace)
         mcap_index_agrees(path, trace)
+        outcome = "after the run had finished" if late else f"{kind} mid-run"
     else:
-        assert rc == -signal.SIGKILL
+        assert kind in ("SIGKILL to the engine's process", "SIGINT twice"), (kind, rc, err)
         trace = read_trace(path, recover=True)
         assert complete_record_end(partial_of(path)) == partial_of(path).stat().st_size
-        outcome += " (recovered)"
+        outcome = f"{kind} mid-run (recovered)"
+        if not len(trace.times):  # killed before its first chunk closed (one simulated second): header only
+            assert trace.scenario["backend"] == backend and trace.attachments
+            count("signals injected", f"{backend} {kind} before the first chunk (recovered: the header)")
+            return
     assert_steps(trace, exact_physics=backend != "ode")
     count("signals injected", f"{backend} {outcome}")

@@ -1,5 +1,6 @@
-"""Output safety: nothing is overwritten without --force, two cases never share a trace, a half-written
-trace never has the final name, and text from a scenario or an engine is printed as text.
+"""Output safety: a re-run replaces the tool's own files and nothing else without --force, two cases never
+share a trace, a half-written trace never has the final name, and text from a scenario or an engine is
+printed as text.
 
 Found by this suite: two files with the same `scenario:` name run in one command wrote the same trace,
 the second silently replacing the first (without --force); text from a scenario was read as Rich
@@ -16,7 +17,6 @@ from pathlib import Path
 
 import pytest
 
-from reports import trace_format as tf
 from reports.trace_reader import read_trace
 
 SOURCE = """\
@@ -46,31 +46,47 @@ def source(tmp_path: Path) -> Path:
     return path
 
 
-def test_an_existing_trace_is_kept_without_force_and_replaced_with_it(tmp_path: Path, source: Path) -> None:
+def test_a_rerun_replaces_its_own_trace_without_a_flag(tmp_path: Path, source: Path) -> None:
     first = scenario("run", str(source), "--backend", "fake", "--out", "out", cwd=tmp_path)
     assert first.returncode == 0, first.stderr
     trace = tmp_path / "out" / "fall__base__fake.mcap"
-    before, inode = digest(trace), trace.stat().st_ino
-    source.write_text(SOURCE.format(name="fall", z=3))  # a different run would give different bytes
+    before = digest(trace)
+    source.write_text(SOURCE.format(name="fall", z=3))  # a different run gives different bytes
     again = scenario("run", str(source), "--backend", "fake", "--out", "out", cwd=tmp_path)
-    assert again.returncode == 2 and "--force" in again.stderr and "Traceback" not in again.stderr
-    assert digest(trace) == before and trace.stat().st_ino == inode
-    forced = scenario("run", str(source), "--backend", "fake", "--out", "out", "--force", cwd=tmp_path)
-    assert forced.returncode == 0, forced.stderr
+    assert again.returncode == 0, again.stderr
     assert digest(trace) != before and read_trace(trace).bodies["ball"].pos[0, 2] == 3.0
-    assert not trace.with_name(trace.name + tf.PARTIAL_SUFFIX).exists()
+    assert sorted(p.name for p in (tmp_path / "out").iterdir()) == ["fall__base__fake.cost.json",
+                                                                    "fall__base__fake.mcap"]  # fmt: skip
 
 
-def test_a_leftover_partial_is_kept_without_force(tmp_path: Path, source: Path) -> None:
+@pytest.mark.parametrize("name", ["fall__base__fake.mcap", "fall__base__fake.mcap.partial",
+                                  "fall__base__fake.cost.json", "fall__base__fake.outcome.json"])  # fmt: skip
+def test_a_file_the_tool_did_not_write_is_refused_without_force(tmp_path: Path, source: Path, name: str) -> None:
     out = tmp_path / "out"
     out.mkdir()
-    partial = out / "fall__base__fake.mcap.partial"
-    partial.write_bytes(b"what a killed run left")
+    (out / name).write_bytes(b"someone's notes")
     done = scenario("run", str(source), "--backend", "fake", "--out", "out", cwd=tmp_path)
-    assert done.returncode == 2 and "--force" in done.stderr
-    assert partial.read_bytes() == b"what a killed run left" and not (out / "fall__base__fake.mcap").exists()
+    assert done.returncode == 2 and "Traceback" not in done.stderr
+    assert f"out/{name} was not written by scenario" in done.stderr and "--force" in done.stderr, done.stderr
+    assert sorted(p.name for p in out.iterdir()) == [name] and (out / name).read_bytes() == b"someone's notes"
     forced = scenario("run", str(source), "--backend", "fake", "--out", "out", "--force", cwd=tmp_path)
-    assert forced.returncode == 0 and not partial.exists() and read_trace(out / "fall__base__fake.mcap").complete
+    assert forced.returncode == 0 and read_trace(out / "fall__base__fake.mcap").complete
+    assert not any((out / n).exists() for n in ("fall__base__fake.mcap.partial", "fall__base__fake.outcome.json"))
+
+
+def test_a_partial_left_by_a_killed_run_is_replaced(tmp_path: Path, source: Path) -> None:
+    """What a killed run left (a .partial of this tool, even cut inside its header) is the tool's own."""
+    first = scenario("run", str(source), "--backend", "fake", "--out", "out", cwd=tmp_path)
+    assert first.returncode == 0, first.stderr
+    out = tmp_path / "out"
+    whole = (out / "fall__base__fake.mcap").read_bytes()
+    for cut in (len(whole) // 2, 30, 5, 0):
+        (out / "fall__base__fake.mcap").unlink()
+        (out / "fall__base__fake.mcap.partial").write_bytes(whole[:cut])
+        done = scenario("run", str(source), "--backend", "fake", "--out", "out", cwd=tmp_path)
+        assert done.returncode == 0, (cut, done.stderr)
+        assert not (out / "fall__base__fake.mcap.partial").exists()
+        assert read_trace(out / "fall__base__fake.mcap").complete
 
 
 def test_two_cases_never_write_the_same_trace(tmp_path: Path) -> None:

@@ -58,9 +58,9 @@ def test_trace_process_sends_every_kind_of_call_in_batches_and_writes_the_same_b
 def test_trace_process_refuses_an_existing_trace_and_finishes_interrupted_runs(tmp_path: Path) -> None:
     loaded = load_scenario(PILE, None, (("world.duration", 0.1),))
     run_loaded(loaded, "pybullet", tmp_path)
-    with pytest.raises(TraceError, match="already exists"):
-        run_loaded(loaded, "pybullet", tmp_path, force=False, trace_process=True)
     meta = TraceMeta("s", "v", "pybullet", "1", {}, 0.01, 1, 1.0, "t", "sha", "p.yaml", 1, (), (), [])
+    with pytest.raises(TraceError, match="already exists"):  # the writer process refuses it, as the in-process one
+        BackgroundTraceWriter(trace_path(tmp_path, loaded, "pybullet"), meta, force=False)
     path = tmp_path / "interrupted.mcap"
     with pytest.raises(KeyboardInterrupt), BackgroundTraceWriter(path, meta) as writer:
         writer.log(0.5, "info", "before the interruption")

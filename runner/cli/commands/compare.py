@@ -1,23 +1,29 @@
-"""`scenario compare`: run scenarios on several backends, each run in its own process, then report.
+"""`scenario compare`: run scenarios on several backends, each backend in its own processes, then report.
 
-compare = run (isolated, in parallel) + report: the report is built from the files the runs left (traces,
-partial traces of crashed runs, outcome and cost files) by the same function as `scenario report`.
+compare = run (in worker processes, in parallel: runner.exec) + report: the report is built from the files
+the runs left (traces, partial traces of crashed runs, outcome and cost files) by the same function as
+`scenario report`. Each row says what `scenario run` says for the same case (runner.exec.exits); the
+command's own exit code is 0 when every backend passes every assertion (and stays within
+--max-divergence), 1 otherwise, 2 for bad input found before anything ran.
 """
 
 from __future__ import annotations
 
 import argparse
+import json
 import math
 import os
-import threading
 from pathlib import Path
+from typing import Any
 
 from rich.console import Console
+from rich.markup import escape
 
 from backends.errors import BackendNotInstalled
 from backends.registry import entry, installed_backends, is_installed
-from runner.errors import ExitCode, UsageError
-from runner.language.load import LoadedScenario, load_files, parse_overrides
+from runner.errors import ExitCode, TraceError, UsageError
+from runner.exec.cases import Case, CaseResult
+from runner.language.load import BASE_CASE, LoadedScenario, load_files, parse_overrides
 
 NAME = "compare"
 HELP = "run scenarios on several backends (each in its own process) and write a comparison report"
@@ -51,9 +57,12 @@ def configure(parser: argparse.ArgumentParser) -> None:
         "truth (the reference backend where no truth is known); also the report's position threshold",
     )  # fmt: skip
     parser.add_argument(
-        "--timeout", type=float, default=DEFAULT_TIMEOUT, metavar="S",
-        help=f"stop a run after S seconds and report it as timed out (default: {DEFAULT_TIMEOUT:g})",
+        "--timeout", type=float, default=None, metavar="S",
+        help="stop a run after S seconds and report it as timed out (default: the scenario's world.budget, "
+        f"else {DEFAULT_TIMEOUT:g})",
     )  # fmt: skip
+    parser.add_argument("--force", action="store_true",
+                        help="also overwrite files under the outputs' names that scenario did not write")  # fmt: skip
     parser.add_argument(
         "--set", action="append", default=[], metavar="KEY=VALUE",
         help="override a value, e.g. world.dt=0.01 (repeatable)",
@@ -84,7 +93,7 @@ def _backends(args: argparse.Namespace) -> list[str]:
 def _check(args: argparse.Namespace) -> None:
     if args.jobs < 1:
         raise UsageError(f"Invalid `-j`. Expected an integer >= 1. Received: {args.jobs}")
-    if not (args.timeout > 0 and math.isfinite(args.timeout)):
+    if args.timeout is not None and not (args.timeout > 0 and math.isfinite(args.timeout)):
         raise UsageError(f"Invalid `--timeout`. Expected a positive number of seconds. Received: {args.timeout}")
     if args.max_divergence is not None and not (args.max_divergence >= 0 and math.isfinite(args.max_divergence)):
         raise UsageError(f"Invalid `--max-divergence`. Expected a number >= 0. Received: {args.max_divergence}")
@@ -92,7 +101,9 @@ def _check(args: argparse.Namespace) -> None:
 
 def execute(args: argparse.Namespace, out: Console, err: Console) -> int:
     from reports.build import ReportError, write_report
-    from runner.exec.isolation import IsolatedRun, run_many
+    from runner.cli.outcomes import print_problem
+    from runner.exec.executors import LocalExecutor, check_outputs
+    from runner.trace.output import write_error
 
     _check(args)
     backends = _backends(args)
@@ -100,29 +111,38 @@ def execute(args: argparse.Namespace, out: Console, err: Console) -> int:
     cases: list[LoadedScenario] = []
     cases.extend(load_files(args.files, args.variant, args.all_variants, overrides))
     work = [(case, b) for case in cases for b in backends]
+    jobs = [_case(args, loaded, b, overrides) for loaded, b in work]
+    check_outputs(jobs, args.force)
+    _check_reports(args.out, args.force)
     out.print(f"comparing {len(cases)} case(s) on {', '.join(backends)}: {len(work)} runs, {args.jobs} at a time")
-    lock = threading.Lock()
 
-    def done(run: IsolatedRun) -> None:
-        colour = "green" if run.label == "passed" else "red"
-        with lock:
-            out.print(f"  [{colour}]{run.label:<20}[/] {run.scenario} · {run.variant} · {run.backend} "
-                      f"({run.wall_seconds:.1f} s)")  # fmt: skip
+    def done(index: int, res: CaseResult) -> None:
+        loaded = work[index][0]
+        colour = "green" if res.passed else "red"
+        where = f"{escape(loaded.model.scenario)} · {escape(loaded.variant)} · {escape(res.case.backend)}"
+        out.print(f"  [{colour}]{escape(res.label):<20}[/] {where} ({res.wall_seconds:.1f} s)")
+        if not res.passed:
+            out.print(f"      {escape(res.headline)} {escape(f'[exit {int(res.exit.code)}]')}", highlight=False)
+        if res.result is None:
+            print_problem(err, res)
 
     from runner.cli.layouts import write_layouts
 
     write_layouts([args.out / "traces"], cases)  # foxglove-layout.json beside the traces
-    runs = run_many(work, args.out / "traces", jobs=args.jobs, timeout=args.timeout, on_done=done)
-    inputs = [r.trace if r.trace is not None else r.outcome_file for r in runs]
+    runs = LocalExecutor(args.jobs, force=args.force).run(jobs, done)
+    inputs = [Path(r.trace) if r.trace is not None else Path(r.outcome_file) if r.outcome_file else None for r in runs]
     try:
         files = write_report(
             [p for p in inputs if p is not None], args.out, reference=args.reference, max_divergence=args.max_divergence
         )
     except ReportError as exc:
-        err.print(f"[bold red]error:[/] {exc}")
+        cause = exc.__cause__
+        if isinstance(cause, OSError):  # a full disk is an output error (74), a bad folder bad input (2)
+            raise write_error(cause, f"the report into {args.out}") from exc
+        err.print(f"[bold red]error:[/] {escape(str(exc))}")
         return ExitCode.BAD_INPUT
     if args.junit is not None:
-        _write_junit(args.junit, runs, cases)
+        _write_junit(args.junit, runs, [loaded for loaded, _ in work])
     s, h = files.document["summary"], files.document["headline"]
     colour = "green" if files.passed else "red"
     out.print(f"[bold {colour}]{s['ok']}/{s['runs']} runs pass[/] (reference {files.document['reference']}): "
@@ -131,26 +151,50 @@ def execute(args: argparse.Namespace, out: Console, err: Console) -> int:
     return ExitCode.OK if files.passed else ExitCode.ASSERTION_FAILED
 
 
-def _write_junit(path: Path, runs: list, cases: list[LoadedScenario]) -> None:  # noqa: ANN001 - IsolatedRun
-    from runner.ci.junit import JUnitCase, from_result, suite_properties, write_junit
+def _case(args: argparse.Namespace, loaded: LoadedScenario, backend: str,
+          overrides: tuple[tuple[str, Any], ...]) -> Case:  # fmt: skip
+    from runner.exec.executors import estimate_cost
+    from runner.sim.run import trace_path
 
-    by_key = {(c.model.scenario, c.variant): c for c in cases}
-    items = []
-    for run in runs:
-        loaded = by_key.get((run.scenario, run.variant))
-        if run.result is not None:
-            items.append(from_result(run.result, loaded))
-        else:
-            items.append(
-                JUnitCase(
-                    run.scenario,
-                    run.variant,
-                    run.backend,
-                    "error",
-                    kind="engine-crash",
-                    message=run.label,
-                    text=run.message or run.label,
-                    properties=suite_properties(run.backend, loaded),
-                )
-            )
-    write_junit(path, items)
+    traces = args.out / "traces"
+    budget = args.timeout if args.timeout is not None else (loaded.model.world.budget or DEFAULT_TIMEOUT)
+    return Case(
+        str(loaded.path), None if loaded.variant == BASE_CASE else loaded.variant, backend, overrides, str(traces),
+        cost=estimate_cost(loaded), budget=budget, sha256=loaded.sha256,
+        trace=str(trace_path(traces, loaded, backend)), scenario=loaded.model.scenario, loaded=loaded,
+    )  # fmt: skip
+
+
+def _own_report(path: Path) -> bool:
+    """A report file `compare` or `report` wrote: this tool's generator (json, html) or heading (md)."""
+    try:
+        text = path.read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError):
+        return False
+    if path.suffix == ".json":
+        try:
+            data = json.loads(text)
+        except json.JSONDecodeError:
+            return False
+        return isinstance(data, dict) and str(data.get("generator", "")).startswith("physics-scenarios")
+    if path.suffix == ".md":
+        return text.startswith("## Backend comparison:")
+    return "physics-scenarios" in text
+
+
+def _check_reports(out: Path, force: bool) -> None:
+    """The report files a comparison replaces must be its own (or --force)."""
+    from reports.build import HTML_NAME, JSON_NAME, MD_NAME
+    from runner.trace.output import refusal
+
+    found = [out / n for n in (JSON_NAME, HTML_NAME, MD_NAME) if (out / n).exists() or (out / n).is_symlink()]
+    left = [p for p in found if p.is_symlink() or not p.is_file() or not _own_report(p)]
+    if left and not force:
+        raise TraceError(refusal(left))
+
+
+def _write_junit(path: Path, runs: list[CaseResult], cases: list[LoadedScenario]) -> None:
+    from runner.ci.junit import write_junit
+    from runner.cli.outcomes import junit_case
+
+    write_junit(path, [junit_case(r, loaded) for r, loaded in zip(runs, cases, strict=True)])

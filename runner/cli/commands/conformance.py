@@ -37,7 +37,7 @@ def _backends(text: str | None) -> list[str]:
 def configure(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--backends", "-b", help="comma-separated backends (default: every installed one)")
     parser.add_argument("--out", type=Path, default=DEFAULT_OUT, help=f"folder for the matrix (default {DEFAULT_OUT})")
-    parser.add_argument("-j", "--jobs", type=int, default=None, help="backends run at once (default: one per core)")
+    parser.add_argument("-j", "--jobs", type=int, default=None, help="worker processes at once (default: one per core)")
     parser.add_argument(
         "--suite", type=Path, default=None, help="folder of conformance scenarios (default: the built-in suite)"
     )

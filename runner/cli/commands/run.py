@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 from pathlib import Path
 from typing import Any
 
@@ -13,11 +14,9 @@ from rich.progress import BarColumn, Progress, TaskID, TextColumn, TimeRemaining
 
 from backends.errors import BackendError, BackendNotInstalled, EngineFailure
 from backends.registry import DEFAULT_BACKEND, entry, is_installed
-from runner.cli.render import verdict_table
-from runner.errors import ExitCode, ScenarioError, ScenarioValidationError, UsageError
-from runner.language.load import LoadedScenario, load_files, parse_overrides
-from runner.sim.run import run_loaded
-from runner.sim.session import RunResult
+from runner.errors import ScenarioError, ScenarioValidationError, TraceError, UsageError
+from runner.exec.cases import Case, CaseResult
+from runner.language.load import BASE_CASE, LoadedScenario, load_files, parse_overrides
 
 NAME = "run"
 HELP = "run scenarios and print verdicts"
@@ -47,19 +46,20 @@ def configure(run: argparse.ArgumentParser) -> None:
     run.add_argument(
         "--junit", type=Path, metavar="FILE", help="also write a JUnit XML report (one testcase per case) to FILE"
     )
-    run.add_argument("--force", action="store_true", help="overwrite traces that already exist")
+    run.add_argument("--force", action="store_true",
+                     help="also overwrite files under the traces' names that scenario did not write")  # fmt: skip
     run.add_argument(
         "--isolate",
         action="store_true",
-        help="run the engine in a child process: a crash (even a "
-        "segfault) is reported as exit 3 with its signal, and the trace up to that point is kept",
+        help="run each case in a process of its own (every case runs in a child process anyway: a crash is "
+        "exit 3 with its signal, and the trace up to that point is kept)",
     )
     run.add_argument(
         "--timeout",
         type=float,
         default=None,
         metavar="S",
-        help="with --isolate: stop a run after S seconds of wall time",
+        help="stop a run after S seconds of wall time (default: the scenario's world.budget, else 3600)",
     )
     run.add_argument(
         "--record-every", type=int, default=1, metavar="K",
@@ -71,12 +71,17 @@ def configure(run: argparse.ArgumentParser) -> None:
     add_arguments(run)
 
 
-def _result_json(r: RunResult) -> dict[str, Any]:
+def _result_json(res: CaseResult, loaded: LoadedScenario) -> dict[str, Any]:
+    r = res.result
+    base: dict[str, Any] = {"scenario": loaded.model.scenario, "variant": loaded.variant, "backend": res.case.backend}
+    if r is None:
+        exit = res.exit
+        return {**base, "status": res.status, "exit_code": int(exit.code), "message": exit.headline,
+                "trace": res.trace, "verdicts": [], "events": []}  # fmt: skip
     return {
-        "scenario": r.scenario,
-        "variant": r.variant,
-        "backend": r.backend,
+        **base,
         "status": r.status,
+        "exit_code": int(res.exit.code),
         "end_time": r.end_time,
         "steps": r.steps,
         "trace": r.trace,
@@ -89,11 +94,11 @@ def _result_json(r: RunResult) -> dict[str, Any]:
 
 
 def execute(args: argparse.Namespace, out: Console, err: Console) -> int:
-    results: list[RunResult] = []
     cases: list[LoadedScenario] = []
+    results: list[CaseResult] = []
     try:
         code = _execute(args, out, err, cases, results)
-    except (ScenarioError, BackendError) as exc:
+    except (ScenarioError, BackendError, TraceError) as exc:
         if args.junit:
             _write_junit(args, cases, results, exc)
         raise
@@ -103,12 +108,14 @@ def execute(args: argparse.Namespace, out: Console, err: Console) -> int:
 
 
 def _write_junit(
-    args: argparse.Namespace, cases: list[LoadedScenario], results: list[RunResult], exc: Exception | None
+    args: argparse.Namespace, cases: list[LoadedScenario], results: list[CaseResult], exc: Exception | None
 ) -> None:
-    """The report of what ran; what stopped the command (bad input, a missing engine) is an error case."""
-    from runner.ci.junit import from_error, from_result, write_junit
+    """The report of what ran; what stopped the command before it ran (bad input, a missing engine) is an
+    error case."""
+    from runner.ci.junit import from_error, write_junit
+    from runner.cli.outcomes import junit_case
 
-    junit = [from_result(r, c) for r, c in zip(results, cases, strict=False)]
+    junit = [junit_case(r, c) for r, c in zip(results, cases, strict=False)]
     if isinstance(exc, ScenarioValidationError):
         by_file: dict[str, list[str]] = {}
         for issue in exc.issues:
@@ -116,25 +123,35 @@ def _write_junit(
         junit += [from_error(f, args.backend, "\n".join(lines)) for f, lines in by_file.items()]
     elif exc is not None:
         kind = "engine-failure" if isinstance(exc, (BackendNotInstalled, EngineFailure)) else "bad-input"
-        case = cases[len(results)] if len(results) < len(cases) else None
-        where = case.path if case is not None else (args.files[0] if args.files else "scenario")
-        junit.append(from_error(where, args.backend, str(exc), kind, case.variant if case is not None else "load"))
+        where = args.files[0] if args.files else "scenario"
+        junit.append(from_error(where, args.backend, str(exc), kind))
     write_junit(args.junit, junit)
 
 
+def _check(args: argparse.Namespace) -> None:
+    if args.record_every < 1:
+        raise UsageError(
+            f"Invalid `--record-every`. Expected a positive number of steps. Received: {args.record_every}"
+        )
+    if args.timeout is not None and not (args.timeout > 0 and math.isfinite(args.timeout)):
+        raise UsageError(f"Invalid `--timeout`. Expected a positive number of seconds. Received: {args.timeout}")
+    if args.isolate and args.executor != "local":
+        raise UsageError("`--isolate` runs each case in a local process of its own; it does not combine with Ray")
+
+
 def _execute(
-    args: argparse.Namespace, out: Console, err: Console, cases: list[LoadedScenario], results: list[RunResult]
+    args: argparse.Namespace, out: Console, err: Console, cases: list[LoadedScenario], results: list[CaseResult]
 ) -> int:
+    from runner.cli.outcomes import print_summary
+    from runner.exec.executors import check_outputs, make_executor, status_code
+
     entry(args.backend)  # an unknown name is bad input (exit 2) before anything runs
     if not is_installed(args.backend):
         raise BackendNotInstalled(
             f"Backend `{args.backend}` is not installed. Install it with: {entry(args.backend).hint}"
         )
     overrides = parse_overrides(args.set)
-    if args.record_every < 1:
-        raise UsageError(
-            f"Invalid `--record-every`. Expected a positive number of steps. Received: {args.record_every}"
-        )
+    _check(args)
     cases.extend(load_files(_expand(args.files), args.variant, args.all_variants, overrides))
     out_dir: Path | None = None if args.no_trace else args.out
     if out_dir is not None:
@@ -143,86 +160,89 @@ def _execute(
             out_dir.mkdir(parents=True, exist_ok=True)
         except OSError as exc:
             raise ScenarioError(f"cannot use {out_dir} as the trace folder: {exc.strerror or exc}") from None
-    if out_dir is not None and not args.force:
-        _refuse_overwrite(out_dir, cases, args.backend)
+    jobs = [_case(args, c, overrides, out_dir) for c in cases]
+    check_outputs(jobs, args.force)  # files the tool did not write: refused before anything runs
     if out_dir is not None:
         from runner.cli.layouts import write_layouts
 
         write_layouts([out_dir], cases)  # foxglove-layout.json: the 3D scene, asserted quantities, events, log
-    show_progress = err.is_terminal and not (args.quiet or args.json) and not args.isolate
-    crashed: list[str] = []
-    parallel = args.jobs > 1 or args.executor != "local"
-    ready, error = _run_parallel(args, err, cases, out_dir, overrides, crashed) if parallel else (None, None)
-    options = {"record_every": args.record_every, "trace_process": args.trace_process}
-    for i, case in enumerate(cases if ready is None else cases[: len(ready)]):
-        if ready is not None:
-            result = ready[i]
-            if result is None:  # crashed: listed in `crashed`
-                continue
-        elif args.isolate:
-            result = _run_isolated(case, args, out_dir, err, crashed)
-            if result is None:
-                continue
-        elif show_progress:
-            with Progress(
-                TextColumn("{task.description}"),
-                BarColumn(),
-                TextColumn("{task.percentage:>3.0f}%"),
-                TimeRemainingColumn(),
-                console=err,
-                transient=True,
-            ) as progress:
-                task = progress.add_task(f"{case.model.scenario} · {case.variant}", total=None)
-
-                def advance(k: int, n: int, task: TaskID = task) -> None:
-                    progress.update(task, completed=k, total=n)
-
-                result = run_loaded(case, args.backend, out_dir, advance, **options)
+    executor = make_executor(args.executor, args.jobs, args.ray_address, isolate=args.isolate, force=args.force)
+    shown = _Shown(args, out, err, cases, results)
+    progress = _progress(err) if err.is_terminal and not (args.quiet or args.json) and args.jobs == 1 else None
+    try:
+        if progress is not None:
+            with progress:
+                executor.run(jobs, shown.add, _advance(progress, cases))
         else:
-            result = run_loaded(case, args.backend, out_dir, **options)
-        results.append(result)
-        if not args.json:
-            _print_result(out, result, args.quiet)
-    if error is not None:
-        error.raise_error()  # bad input or a missing engine, as a serial run would stop on it
+            executor.run(jobs, shown.add, None)
+    finally:
+        executor.close()
     if args.json:
-        out.print_json(json.dumps({"results": [_result_json(r) for r in results]}, allow_nan=False, default=str))
+        body = {"results": [_result_json(r, c) for r, c in zip(results, cases, strict=True)]}
+        out.print_json(json.dumps(body, allow_nan=False, default=str))
     else:
-        _print_summary(out, results, len(crashed))
-    for line in crashed:
-        out.print(f"[bold red]{escape(line)}[/]")
-    if crashed or any(r.status == "engine-failure" for r in results):
-        return ExitCode.ENGINE_FAILURE
-    return ExitCode.OK if all(r.passed for r in results) else ExitCode.ASSERTION_FAILED
+        print_summary(out, results, [(c.model.scenario, c.variant) for c in cases])
+    return status_code(results)
 
 
-def _print_result(out: Console, result: RunResult, quiet: bool) -> None:
-    if result.failure:
-        out.print(
-            f"[bold red]engine failure[/] in {result.scenario} · {result.variant} · {result.backend}: "
-            f"{escape(result.failure)}"
-        )
-        detail = result.extra.get("last_good")
-        if detail:
-            out.print(f"  last good state of `{result.extra.get('body')}`: {escape(json.dumps(detail))}")
-    if result.engine_messages:
-        out.print(f"  {result.engine_messages} engine message(s) from {result.backend}, in the trace's log (`engine`)")
-    if result.verdicts and (not quiet or not result.passed):
-        out.print(verdict_table(result, failures_only=quiet))
-    if result.trace and not quiet:
-        out.print(f"  trace: {escape(result.trace)}")
+def _case(args: argparse.Namespace, loaded: LoadedScenario, overrides: tuple[tuple[str, Any], ...],
+          out_dir: Path | None) -> Case:  # fmt: skip
+    from runner.exec.executors import estimate_cost
+    from runner.sim.budget import DEFAULT_BUDGET
+    from runner.sim.run import trace_path
+
+    budget = args.timeout if args.timeout is not None else (loaded.model.world.budget or DEFAULT_BUDGET)
+    return Case(
+        str(loaded.path), None if loaded.variant == BASE_CASE else loaded.variant, args.backend, overrides,
+        None if out_dir is None else str(out_dir), cost=estimate_cost(loaded), record_every=args.record_every,
+        trace_process=args.trace_process, budget=budget, sha256=loaded.sha256,
+        trace=None if out_dir is None else str(trace_path(out_dir, loaded, args.backend)),
+        scenario=loaded.model.scenario, loaded=loaded,
+    )  # fmt: skip
 
 
-def _print_summary(out: Console, results: list[RunResult], crashed: int = 0) -> None:
-    passed = sum(r.passed for r in results)
-    total = len(results) + crashed
-    checks = sum(len(r.verdicts) for r in results)
-    failed_checks = sum(not v.passed for r in results for v in r.verdicts)
-    colour = "green" if passed == total else "red"
-    out.print(f"[bold {colour}]{passed}/{total} runs passed[/] ({checks - failed_checks}/{checks} assertions)")
-    for r in results:
-        if not r.passed:
-            out.print(f"  [red]{r.status}[/]: {r.scenario} · {r.variant} · {r.backend}")
+class _Shown:
+    """Prints each case as its result arrives, in case order (a parallel run prints what a serial one does)."""
+
+    def __init__(self, args: argparse.Namespace, out: Console, err: Console, cases: list[LoadedScenario],
+                 results: list[CaseResult]) -> None:  # fmt: skip
+        self.args, self.out, self.err, self.cases, self.results = args, out, err, cases, results
+        self.waiting: dict[int, CaseResult] = {}
+
+    def add(self, index: int, res: CaseResult) -> None:
+        from runner.cli.outcomes import print_problem, print_result
+
+        self.waiting[index] = res
+        while len(self.results) in self.waiting:
+            res = self.waiting.pop(len(self.results))
+            self.results.append(res)
+            if res.result is not None:
+                if res.output.strip():
+                    self.err.print(escape(res.output.rstrip()), highlight=False)  # what the engine printed
+                if not self.args.json:
+                    print_result(self.out, res.result, self.args.quiet)
+            else:
+                print_problem(self.err, res)
+
+
+def _progress(err: Console) -> Progress:
+    return Progress(TextColumn("{task.description}"), BarColumn(), TextColumn("{task.percentage:>3.0f}%"),
+                    TimeRemainingColumn(), console=err, transient=True, auto_refresh=False)  # fmt: skip
+
+
+def _advance(progress: Progress, cases: list[LoadedScenario]) -> Any:
+    tasks: dict[int, TaskID] = {}
+
+    def advance(index: int, k: int, n: int) -> None:
+        if index not in tasks:
+            for done in tasks.values():
+                progress.remove_task(done)
+            tasks.clear()
+            tasks[index] = progress.add_task(f"{cases[index].model.scenario} · {cases[index].variant}", total=n)
+        progress.update(tasks[index], completed=k, total=n)
+        progress.refresh()
+
+    return advance
 
 
 def _refuse_duplicates(out_dir: Path, cases: list[LoadedScenario], backend: str) -> None:
@@ -240,96 +260,9 @@ def _refuse_duplicates(out_dir: Path, cases: list[LoadedScenario], backend: str)
         first[path] = case
 
 
-def _refuse_overwrite(out_dir: Path, cases: list[LoadedScenario], backend: str) -> None:
-    """Refuse before anything runs if a trace of these cases is already there (unless --force)."""
-    from runner.sim.run import trace_path
-
-    paths = [trace_path(out_dir, c, backend) for c in cases]
-    existing = [q for p in paths for q in (p, p.with_name(p.name + ".partial")) if q.exists()]
-    if existing:
-        names = ", ".join(str(p) for p in existing[:3]) + (
-            f" and {len(existing) - 3} more" if len(existing) > 3 else ""
-        )
-        raise ScenarioError(
-            f"{names} already exist{'s' if len(existing) == 1 else ''}; pass --force to overwrite, "
-            "or choose another --out folder"
-        )
-
-
-def _run_isolated(
-    case: LoadedScenario, args: argparse.Namespace, out_dir: Path | None, err: Console, crashed: list[str]
-) -> RunResult | None:
-    """One case in a child process; a crash or time-out is recorded in ``crashed`` and gives no result."""
-    from runner.exec.isolation import run_isolated
-
-    run = run_isolated(case, args.backend, out_dir, timeout=args.timeout)
-    if run.result is not None:
-        return run.result
-    where = f" (trace kept: {run.trace})" if run.trace is not None else ""
-    crashed.append(f"{run.label}: {case.model.scenario} · {case.variant} · {args.backend}{where}")
-    if run.message:
-        err.print(escape(run.message))
-    return None
-
-
 def _expand(paths: list[Path]) -> list[Path]:
     """A folder stands for its *.yaml files (not its subfolders), in name order."""
     out: list[Path] = []
     for path in paths:
         out.extend(sorted(path.glob("*.yaml")) if path.is_dir() else [path])
     return out
-
-
-def _run_parallel(
-    args: argparse.Namespace,
-    err: Console,
-    cases: list[LoadedScenario],
-    out_dir: Path | None,
-    overrides: tuple[tuple[str, Any], ...],
-    crashed: list[str],
-) -> tuple[list[RunResult | None], Any]:
-    """Every case at once, ``-j`` at a time (runner.exec.executors; with --isolate, runner.exec.isolation). Returns
-    the results in case order up to the first case that could not run (bad input, a missing engine),
-    with that case, whose error the caller raises; None for a crash (a line in ``crashed``)."""
-    from runner.exec.executors import Case, estimate_cost, make_executor
-
-    label = f"{args.backend}"
-    count = [0]
-
-    def tick(*_: Any) -> None:
-        count[0] += 1
-        if err.is_terminal and not (args.quiet or args.json):
-            err.print(f"  {count[0]}/{len(cases)} cases done", end="\r")
-
-    if args.isolate:
-        if args.executor != "local":
-            raise UsageError("`--isolate` runs each case in a local child process; it does not combine with Ray")
-        from runner.exec.isolation import run_many
-
-        isolated = run_many([(c, args.backend) for c in cases], out_dir, jobs=args.jobs, timeout=args.timeout,
-                            on_done=tick)  # fmt: skip
-        ready: list[RunResult | None] = []
-        for case, run in zip(cases, isolated, strict=True):
-            if run.result is None:
-                where = f" (trace kept: {run.trace})" if run.trace is not None else ""
-                crashed.append(f"{run.label}: {case.model.scenario} · {case.variant} · {label}{where}")
-            ready.append(run.result)
-        return ready, None
-    jobs = [
-        Case(str(c.path), None if c.variant == "base" else c.variant, args.backend, overrides,
-             None if out_dir is None else str(out_dir), cost=estimate_cost(c), record_every=args.record_every)
-        for c in cases
-    ]  # fmt: skip
-    executor = make_executor(args.executor, args.jobs, args.ray_address)
-    try:
-        done = executor.run(jobs, tick)
-    finally:
-        executor.close()
-    ready = []
-    for case, r in zip(cases, done, strict=True):
-        if r.status == "error":
-            return ready, r
-        if r.result is None:
-            crashed.append(f"{r.status}: {case.model.scenario} · {case.variant} · {label} ({r.failure})")
-        ready.append(r.result)
-    return ready, None

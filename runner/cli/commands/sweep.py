@@ -24,6 +24,7 @@ from pathlib import Path
 from typing import Any
 
 from rich.console import Console
+from rich.markup import escape
 from rich.table import Table
 
 from runner.errors import UsageError
@@ -47,6 +48,10 @@ def configure(p: argparse.ArgumentParser) -> None:
                    help="an expression evaluated at each run's end, e.g. 'max(crate.pos.z)' (repeatable)")  # fmt: skip
     p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE", help="a fixed override (repeatable)")
     p.add_argument("--out", type=Path, default=DEFAULT_OUT, help=f"output folder (default {DEFAULT_OUT})")
+    p.add_argument("--timeout", type=float, default=None, metavar="S",
+                   help="stop a run after S seconds of wall time (default: the scenario's world.budget, else 3600)")
+    p.add_argument("--force", action="store_true",
+                   help="also overwrite files under the traces' names that scenario did not write")  # fmt: skip
     out = p.add_mutually_exclusive_group()
     out.add_argument("--quiet", "-q", action="store_true", help="print only the summary")
     out.add_argument("--json", action="store_true", help="print the table as JSON")
@@ -94,10 +99,15 @@ def _slug(values: dict[str, Any]) -> str:
 
 def execute(args: argparse.Namespace, out: Console, err: Console) -> int:
     from backends.registry import DEFAULT_BACKEND, entry, is_installed
+    from runner.cli.outcomes import print_problem
     from runner.errors import BackendNotInstalled
-    from runner.exec.executors import Case, estimate_cost, make_executor, status_code
+    from runner.exec.executors import Case, CaseResult, check_outputs, estimate_cost, make_executor, status_code
     from runner.language.load import load_all, load_scenario, parse_overrides
+    from runner.sim.budget import DEFAULT_BUDGET
+    from runner.sim.run import trace_path
 
+    if args.timeout is not None and not (args.timeout > 0 and math.isfinite(args.timeout)):
+        raise UsageError(f"Invalid `--timeout`. Expected a positive number of seconds. Received: {args.timeout}")
     fixed = parse_overrides(args.set)
     base = load_scenario(args.file, None, fixed)
     grid = parse_params(args.param, set(base.model.params))
@@ -118,13 +128,24 @@ def execute(args: argparse.Namespace, out: Console, err: Console) -> int:
             variant = None if loaded.variant == "base" else loaded.variant
             for b in backends:
                 folder = args.out / "traces" / f"{len(cases):03d}_{_slug(combo)}"
-                cases.append(Case(str(args.file), variant, b, overrides, str(folder), cost=estimate_cost(loaded)))
+                budget = args.timeout if args.timeout is not None else (loaded.model.world.budget or DEFAULT_BUDGET)
+                cases.append(Case(str(args.file), variant, b, overrides, str(folder), cost=estimate_cost(loaded),
+                                  budget=budget, sha256=loaded.sha256, trace=str(trace_path(folder, loaded, b)),
+                                  scenario=loaded.model.scenario, loaded=loaded))  # fmt: skip
                 labels.append({"combo": k, "params": combo, "variant": loaded.variant, "backend": b})
                 loads.append(loaded)
-    executor = make_executor(args.executor, args.jobs, args.ray_address)
+    check_outputs(cases, args.force)
+    executor = make_executor(args.executor, args.jobs, args.ray_address, force=args.force)
+    show = err.is_terminal and not (args.quiet or args.json)
+
+    def done(i: int, r: CaseResult) -> None:
+        if show:
+            err.print(f"  {i + 1}/{len(cases)} {escape(r.label)}")
+        if r.result is None:
+            print_problem(err, r)
+
     try:
-        show = err.is_terminal and not (args.quiet or args.json)
-        results = executor.run(cases, (lambda i, r: err.print(f"  {i + 1}/{len(cases)} {r.status}")) if show else None)
+        results = executor.run(cases, done)
     finally:
         executor.close()
     metrics = [
@@ -142,9 +163,7 @@ def execute(args: argparse.Namespace, out: Console, err: Console) -> int:
         out.print_json(json.dumps(table, allow_nan=False))
     else:
         _print(out, table, args.out, bool(svg), args.quiet)
-    for r in results:
-        r.raise_error()  # bad input or a missing engine in some case: its exit code, after the table
-    return status_code(results)
+    return status_code(results)  # the most severe case: bad input or a missing engine in some case is exit 2/3
 
 
 def final_values(loaded: Any, trace_path: Path, expressions: Sequence[str]) -> dict[str, Any]:

@@ -1,0 +1,232 @@
+"""The exit-code table: each kind of failure on each execution path, by running the real command.
+
+    .venv/bin/python -m tests.exec.exit_table [--ray] [--markdown FILE]
+
+Rows (one scenario each): a runtime expression error, a `send` loop, an engine abort (a 1 ug box on
+ODE: SIGABRT inside the engine), a full disk (a 64 KiB tmpfs as the output folder; without root, a
+64 KiB RLIMIT_FSIZE, the same ENOSPC/EFBIG path), a missing engine (`ghost`: registered by
+``tests/exec/ghost/sitecustomize.py`` in every process, found but not importable) and a failed
+assertion. Columns: ``run`` serially, with ``-j 2``, ``--isolate``, ``--trace-process``, on Ray
+(``--executor ray`` on a cluster started here with ``ray start --head``, stopped after) and as the row
+of ``compare`` (whose own exit code follows its rule, 0 when every run passes, else 1; the row gives
+the code ``run`` gives). A cell is the exit code and the first line of the case's message. The tests in
+``tests/exec/test_exit_codes.py`` run the same cells.
+"""
+
+from __future__ import annotations
+
+import argparse
+import contextlib
+import os
+import re
+import resource
+import shutil
+import signal
+import socket
+import subprocess
+import sys
+import tempfile
+from collections.abc import Iterator
+from dataclasses import dataclass
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[2]
+GHOST = Path(__file__).resolve().parent / "ghost"
+BIN = Path(sys.executable).parent
+
+BOX = """\
+schema_version: 1
+scenario: {name}
+world: {{dt: 0.04, duration: 0.4}}
+bodies:
+  ground: {{plane: {{}}, motion: static}}
+  box: {{box: [0.3, 0.3, 0.3], density: 500, pos: [0, 0, 1]}}
+"""
+
+
+@dataclass(frozen=True)
+class Row:
+    name: str
+    backend: str
+    text: str
+    code: int  # the exit code every path must give (compare: its row)
+    full_disk: bool = False
+
+
+ROWS = [
+    Row("runtime expression error", "pybullet",
+        BOX.format(name="expr") + "assertions:\n  - {name: a, at: end, check: \"box.pos.z + 'a' > 0\"}\n", 2),
+    Row("send loop", "pybullet",
+        BOX.format(name="loop") + "on:\n  start: [{send: ping}]\n  ping: [{send: pong}]\n  pong: [{send: ping}]\n", 2),
+    Row("engine abort (1 ug box on ODE)", "ode",
+        "schema_version: 1\nscenario: tiny\nworld: {dt: 0.01, duration: 0.5}\nbodies:\n"
+        "  ground: {plane: {}, motion: static}\n"
+        "  grain: {box: [0.003, 0.003, 0.003], mass: 1e-9, pos: [0, 0, 0.1]}\n", 3),
+    Row("full disk (64 KiB --out)", "pybullet", (ROOT / "scenarios" / "factory_physics.yaml").read_text(), 74,
+        full_disk=True),
+    Row("missing engine", "ghost", BOX.format(name="ghosted"), 3),
+    Row("failed assertion", "pybullet",
+        BOX.format(name="fails") + "assertions:\n  - {name: flies, at: end, check: box.pos.z > 10}\n", 1),
+]  # fmt: skip
+
+PATHS = ["serial", "-j 2", "--isolate", "--trace-process", "ray", "compare"]
+
+
+@dataclass(frozen=True)
+class Cell:
+    code: int  # the command's exit code (compare: the row's code)
+    line: str  # the first line of the case's message, the output folder written OUT
+    command_code: int  # the command's own exit code
+    output: str
+
+
+def _source(folder: Path, row: Row) -> Path:
+    folder.mkdir(parents=True, exist_ok=True)
+    path = folder / f"{re.sub(r'[^a-z]+', '_', row.name)}.yaml"
+    path.write_text(row.text)
+    return path
+
+
+@contextlib.contextmanager
+def output_folder(base: Path, full: bool) -> Iterator[tuple[Path, dict[str, int]]]:
+    """A folder for --out; for the full-disk row a 64 KiB tmpfs (root), else a 64 KiB file-size limit."""
+    out = base / "out"
+    out.mkdir(parents=True)
+    limits: dict[str, int] = {}
+    mounted = False
+    if full and os.geteuid() == 0 and shutil.which("mount"):
+        mounted = subprocess.run(["mount", "-t", "tmpfs", "-o", "size=64k", "tmpfs", str(out)]).returncode == 0
+    if full and not mounted:
+        limits["fsize"] = 64 * 1024
+    try:
+        yield out, limits
+    finally:
+        if mounted:
+            subprocess.run(["umount", str(out)], check=False)
+
+
+def environment() -> dict[str, str]:
+    """The command's environment: the ghost backend registered, Rich wide enough to keep lines whole, and
+    Ray's token authentication off for the private cluster of :func:`ray_cluster` (listening on 127.0.0.1
+    only; the shared ~/.ray/auth_token may be rewritten by other clusters on the machine)."""
+    env = {**os.environ, "SCENARIO_GHOST_BACKEND": "1", "COLUMNS": "400", "SCENARIO_DEBUG": "0",
+           "RAY_AUTH_MODE": "disabled"}  # fmt: skip
+    env["PYTHONPATH"] = os.pathsep.join(filter(None, [str(GHOST), str(ROOT), os.environ.get("PYTHONPATH")]))
+    env.pop("PYTEST_CURRENT_TEST", None)
+    return env
+
+
+def _limits(limits: dict[str, int]) -> None:
+    if "fsize" in limits:  # in the child, before exec: SIGXFSZ ignored so that writes fail with EFBIG
+        signal.signal(signal.SIGXFSZ, signal.SIG_IGN)
+        resource.setrlimit(resource.RLIMIT_FSIZE, (limits["fsize"], limits["fsize"]))
+
+
+def command(path: str, source: Path, backend: str, out: Path, ray: str = "auto") -> list[str]:
+    cli = [sys.executable, "-m", "runner"]
+    if path == "compare":
+        return [*cli, "compare", str(source), "--backends", backend, "--out", str(out), "-j", "2"]
+    extra = {"serial": [], "-j 2": ["-j", "2"], "--isolate": ["--isolate"], "--trace-process": ["--trace-process"],
+             "ray": ["--executor", "ray", "--ray-address", ray]}[path]  # fmt: skip
+    return [*cli, "run", str(source), "--backend", backend, "--out", str(out), *extra]
+
+
+_ROW_LINE = re.compile(r"^ {6}(.*) \[exit (\d+)\]$")  # compare: "      <first line> [exit N]"
+_CASE_LINE = re.compile(r"^  \S+ · \S+ · \S+: (.*)$")  # run's summary: "  <scenario> · <variant> · <backend>: ..."
+
+
+def run_cell(row: Row, path: str, base: Path, ray: str = "auto") -> Cell:
+    """Run ``row`` on ``path`` in a fresh folder under ``base`` (``ray``: the cluster's address)."""
+    work = base / f"{re.sub(r'[^a-z0-9]+', '_', row.name)}-{re.sub(r'[^a-z0-9]+', '_', path)}"
+    source = _source(work / "src", row)
+    with output_folder(work, row.full_disk) as (out, limits):
+        done = subprocess.run(command(path, source, row.backend, out, ray), capture_output=True, text=True, timeout=600,
+                              env=environment(), cwd=work, preexec_fn=lambda: _limits(limits))  # fmt: skip
+    text = done.stdout + done.stderr
+    code, line = done.returncode, ""
+    for raw in done.stdout.splitlines():
+        match = (_ROW_LINE if path == "compare" else _CASE_LINE).match(raw)
+        if match:
+            line = match.group(1)
+            if path == "compare":
+                code = int(match.group(2))
+            break
+    if not line:  # refused before any case ran: the command's first error line
+        line = next((x for x in done.stderr.splitlines() if x.strip()), "")
+    line = line.replace(str(out / "traces"), "OUT").replace(str(out), "OUT").replace(str(work), "WORK")
+    return Cell(code, line.strip(), done.returncode, text)
+
+
+@contextlib.contextmanager
+def ray_cluster() -> Iterator[str]:
+    """A local Ray cluster for the ``ray`` column (``ray start --head`` on a free port, with the ghost
+    backend's environment); yields its address, named explicitly so that no other cluster on the machine
+    is picked up by ``auto``."""
+    ray = str(BIN / "ray")
+    tmp = tempfile.mkdtemp(prefix="ray-")
+    with socket.socket() as probe:
+        probe.bind(("127.0.0.1", 0))
+        port = probe.getsockname()[1]
+    started = subprocess.run([ray, "start", "--head", "--num-cpus", "2", "--disable-usage-stats", "--temp-dir", tmp,
+                              "--include-dashboard", "false", "--node-ip-address", "127.0.0.1", "--port", str(port)],
+                             env=environment(), capture_output=True, text=True, timeout=300)  # fmt: skip
+    if started.returncode != 0:
+        raise RuntimeError(f"ray start failed: {started.stderr[-2000:]}")
+    try:
+        yield f"127.0.0.1:{port}"
+    finally:
+        subprocess.run([ray, "stop", "--force"], capture_output=True, timeout=300, env=environment())
+        shutil.rmtree(tmp, ignore_errors=True)
+
+
+def table(paths: list[str], threads: int = 2, ray: str = "auto") -> list[tuple[Row, dict[str, Cell]]]:
+    """Every cell, ``threads`` commands at a time."""
+    from concurrent.futures import ThreadPoolExecutor
+
+    with tempfile.TemporaryDirectory(prefix="exit-table-") as tmp, ThreadPoolExecutor(threads) as pool:
+        futures = {(r.name, p): pool.submit(run_cell, r, p, Path(tmp), ray) for r in ROWS for p in paths}
+        return [(r, {p: futures[r.name, p].result() for p in paths}) for r in ROWS]
+
+
+def markdown(rows: list[tuple[Row, dict[str, Cell]]], paths: list[str]) -> str:
+    lines = ["| failure | " + " | ".join(f"`{p}`" for p in paths) + " |", "|---" * (len(paths) + 1) + "|"]
+    for row, cells in rows:
+        lines.append(f"| {row.name} | " + " | ".join(str(cells[p].code) for p in paths) + " |")
+    lines += ["", "First line of the message (the same on every path; `OUT`: the trace folder, `--out` or, for "
+              "`compare`, `--out`/traces):", ""]
+    for row, cells in rows:
+        seen = sorted({c.line for c in cells.values()})
+        lines.append(f"- {row.name}: " + " / ".join(f"`` {x} ``" if "`" in x else f"`{x}`" for x in seen))
+    compare = [f"{row.name} {cells['compare'].command_code}" for row, cells in rows if "compare" in cells]
+    if compare:
+        lines += ["", "`compare`'s own exit code: " + ", ".join(compare) + "."]
+    return "\n".join(lines) + "\n"
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--ray", action="store_true", help="include the Ray column (starts a local cluster)")
+    parser.add_argument("--markdown", type=Path, help="also write the table here")
+    args = parser.parse_args(argv)
+    paths = [p for p in PATHS if args.ray or p != "ray"]
+    if args.ray:
+        with ray_cluster() as address:
+            rows = table(paths, ray=address)
+    else:
+        rows = table(paths)
+    text = markdown(rows, paths)
+    sys.stdout.write(text)
+    if args.markdown:
+        args.markdown.write_text(text)
+    bad = [(r.name, p, c.code) for r, cells in rows for p, c in cells.items() if c.code != r.code]
+    lines = [(r.name, sorted({c.line for c in cells.values()})) for r, cells in rows]
+    for name, p, code in bad:
+        sys.stderr.write(f"{name} on {p}: exit {code}\n")
+    for name, seen in lines:
+        if len(seen) != 1:
+            sys.stderr.write(f"{name}: {len(seen)} different first lines\n")
+    return 1 if bad or any(len(s) != 1 for _, s in lines) else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

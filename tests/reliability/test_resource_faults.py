@@ -1,0 +1,57 @@
+"""A full disk or a write refused while the trace is written (issue 15, item 6): exit 74 ("output error")
+on every path, the trace kept as a .partial that `inspect --recover` reads to its last byte, and no
+temporary file left behind.
+
+Measured before: a traceback and exit 1 serially, exit 3 with -j 2, exit 2 with --trace-process, a stray
+`outcome.json.tmp` and an unreadable tail in the .partial. The disk: a 64 KiB tmpfs mounted as the output
+folder (root), and a 64 KiB file-size limit (RLIMIT_FSIZE: EFBIG, any user); the scenario's trace is
+about 80 KB. The exit codes and first lines on every path, Ray and compare included, are in
+tests/exec/test_exit_codes.py.
+"""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from backends.registry import is_installed
+from reports.trace_reader import read_trace
+from tests.exec.exit_table import ROOT, _limits, environment, output_folder
+
+from .test_interruptions import complete_record_end
+
+FACTORY = ROOT / "scenarios" / "factory_physics.yaml"
+TRACE = "factory-physics__door-stays-closed__pybullet.mcap"
+DISKS = ["tmpfs", "file-size limit"] if os.geteuid() == 0 else ["file-size limit"]
+
+
+@pytest.mark.parametrize("disk", DISKS)
+@pytest.mark.parametrize("path", [[], ["-j", "2"], ["--isolate"], ["--trace-process"]],
+                         ids=["serial", "-j 2", "--isolate", "--trace-process"])  # fmt: skip
+def test_a_full_disk_is_exit_74_and_keeps_a_readable_partial(tmp_path: Path, disk: str, path: list[str]) -> None:
+    if not is_installed("pybullet"):
+        pytest.skip("engine not installed: pybullet")
+    with output_folder(tmp_path, disk == "tmpfs") as (out, limits):
+        if disk != "tmpfs":
+            limits["fsize"] = 64 * 1024
+        done = subprocess.run([sys.executable, "-m", "runner", "run", str(FACTORY), "--out", str(out), *path],
+                              capture_output=True, text=True, timeout=300, env=environment(),
+                              preexec_fn=lambda: _limits(limits))  # fmt: skip
+        assert done.returncode == 74, done.stdout + done.stderr
+        assert "Traceback" not in done.stderr
+        reason = "No space left on device" if disk == "tmpfs" else "File too large"
+        assert f"output error: cannot write trace {out}/{TRACE}.partial: {reason}" in done.stderr
+        left = sorted(p.name for p in out.iterdir())
+        assert left in ([f"{TRACE}.partial"], [f"{TRACE}.partial", TRACE.replace(".mcap", ".outcome.json")]), left
+        partial = out / f"{TRACE}.partial"
+        assert complete_record_end(partial) == partial.stat().st_size  # cut back to the last whole record
+        trace = read_trace(partial, recover=True)  # cut mid-run, or (the limit) only its closing summary lost
+        assert trace.status in ("incomplete", "passed") and trace.scenario["backend"] == "pybullet"
+        assert trace.times[0] == 0 and len(trace.times) > 1
+        inspect = subprocess.run([sys.executable, "-m", "runner", "inspect", "--recover", str(partial)],
+                                 capture_output=True, text=True, timeout=120)  # fmt: skip
+        assert inspect.returncode == 0 and "factory-physics" in inspect.stdout, inspect.stderr
