@@ -92,7 +92,7 @@ def _case(doc: dict[str, Any], case: dict[str, Any], index: int, runs: dict[str,
     charts.update(ev)
     known, against_ref = hc.quantity_tables(case, backends)
     stated = hc.stated_table(case, backends)
-    meta = (f"{escape(case['scenario'])} · {escape(str(case['scenario_file']))} · dt {case['dt']:g} s · "
+    meta = (f"{escape(case['scenario'])} · {escape(str(case['scenario_file']))} · {_dt_text(case['dt'])} · "
             f"{end:g} s simulated · reference <b>{escape(str(case['reference']))}</b>")  # fmt: skip
     parts = [
         f'<section class="case" id="case-{index}"><h2>{escape(case["variant"])} '
@@ -157,6 +157,10 @@ def _audio(runs: dict[str, Run]) -> str:
         out.append(f'<figure><figcaption>{escape(backend)}</figcaption><audio controls preload="metadata" '
                    f'src="data:audio/wav;base64,{data}"></audio></figure>')  # fmt: skip
     return f'<div class="audio">{"".join(out)}</div>' if out else '<p class="muted">No sound played.</p>'
+
+
+def _dt_text(dt: float | None) -> str:
+    return f"dt {dt:g} s" if dt is not None else "no run reached its first step"
 
 
 def render_html(doc: dict[str, Any], runs: list[Run], pictures: list[CasePictures],

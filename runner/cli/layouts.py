@@ -12,16 +12,21 @@ import math
 from collections.abc import Iterable, Sequence
 from pathlib import Path
 
+from rich.console import Console
+from rich.markup import escape
+
 from backends.types import Motion, Shape, ShapeKind
 from reports.trace_format import LAYOUT_FILE, TOPIC_TF
 from runner.compile.program import Program, build_program
-from runner.errors import ScenarioError
+from runner.errors import TraceError
+from runner.exec.exits import classify, most_severe
 from runner.language import model_assertions as A
 from runner.language.expressions import compile_expression
 from runner.language.load import LoadedScenario
 from runner.trace import layout as lt
+from runner.trace.output import write_error
 
-__all__ = ["layout_spec", "write_layouts"]
+__all__ = ["layout_spec", "leave_layout", "write_layouts"]
 
 _EXPRESSION_FIELDS = ("value", "check", "always", "never", "eventually", "max_of", "min_of")
 _GROUP_MEMBERS = 3  # an array's name plots its first copies
@@ -107,11 +112,24 @@ def _number(value: object) -> bool:
 
 
 def write_layouts(folders: Iterable[Path], cases: Sequence[LoadedScenario]) -> None:
-    """``foxglove-layout.json`` in each folder that receives these cases' traces (a folder that cannot be
-    written is bad input, as the traces' folder is)."""
+    """``foxglove-layout.json`` in each folder that received these cases' traces. A write that fails is an
+    :class:`~runner.errors.OutputError` (a full disk, exit 74) or a :class:`~runner.errors.TraceError`
+    (a folder that cannot be used, exit 2), and leaves no file behind."""
     spec = layout_spec(cases)
     for folder in dict.fromkeys(folders):
         try:
             lt.write_layout(folder, spec)
         except OSError as exc:
-            raise ScenarioError(f"cannot write {folder / LAYOUT_FILE}: {exc.strerror or exc}") from None
+            raise write_error(exc, str(folder / LAYOUT_FILE)) from None
+
+
+def leave_layout(err: Console, folders: Iterable[Path], cases: Sequence[LoadedScenario], code: int) -> int:
+    """After the runs: the layout beside their traces. A layout that cannot be written is said on stderr
+    and makes the command's code the more severe of the two; the traces are kept either way."""
+    try:
+        write_layouts(folders, cases)
+    except TraceError as exc:
+        exit = classify(exc)
+        err.print(f"[bold red]{escape(exit.label)}:[/] {escape(exit.message)}", markup=True)
+        return most_severe([code, exit.code])
+    return code

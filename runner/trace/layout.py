@@ -133,6 +133,10 @@ def write_layout(folder: Path, spec: LayoutSpec) -> Path:
     folder.mkdir(parents=True, exist_ok=True)
     target = folder / tf.LAYOUT_FILE
     tmp = target.with_name(f".{target.name}.{os.getpid()}.partial")
-    tmp.write_text(layout_text(spec), encoding="utf-8")
-    os.replace(tmp, target)
+    try:
+        tmp.write_text(layout_text(spec), encoding="utf-8")
+        os.replace(tmp, target)
+    except BaseException:
+        tmp.unlink(missing_ok=True)  # a full disk leaves nothing half-written
+        raise
     return target

@@ -3,8 +3,8 @@
     .venv/bin/python -m tests.exec.exit_table [--ray] [--markdown FILE]
 
 Rows (one scenario each): a runtime expression error, a `send` loop, an engine abort (a 1 ug box on
-ODE: SIGABRT inside the engine), a full disk (a 64 KiB tmpfs as the output folder; without root, a
-64 KiB RLIMIT_FSIZE, the same ENOSPC/EFBIG path), a missing engine (`ghost`: registered by
+ODE: SIGABRT inside the engine), a full disk (a 32 KiB tmpfs as the output folder; without root, a
+32 KiB RLIMIT_FSIZE, the same ENOSPC/EFBIG path), a missing engine (`ghost`: registered by
 ``tests/exec/ghost/sitecustomize.py`` in every process, found but not importable) and a failed
 assertion. Columns: ``run`` serially, with ``-j 2``, ``--isolate``, ``--trace-process``, on Ray
 (``--executor ray`` on a cluster started here with ``ray start --head``, stopped after) and as the row
@@ -62,7 +62,7 @@ ROWS = [
         "schema_version: 1\nscenario: tiny\nworld: {dt: 0.01, duration: 0.5}\nbodies:\n"
         "  ground: {plane: {}, motion: static}\n"
         "  grain: {box: [0.003, 0.003, 0.003], mass: 1e-9, pos: [0, 0, 0.1]}\n", 3),
-    Row("full disk (64 KiB --out)", "pybullet", (ROOT / "scenarios" / "factory_physics.yaml").read_text(), 74,
+    Row("full disk (32 KiB --out)", "pybullet", (ROOT / "scenarios" / "factory_physics.yaml").read_text(), 74,
         full_disk=True),
     Row("missing engine", "ghost", BOX.format(name="ghosted"), 3),
     Row("failed assertion", "pybullet",
@@ -89,15 +89,15 @@ def _source(folder: Path, row: Row) -> Path:
 
 @contextlib.contextmanager
 def output_folder(base: Path, full: bool) -> Iterator[tuple[Path, dict[str, int]]]:
-    """A folder for --out; for the full-disk row a 64 KiB tmpfs (root), else a 64 KiB file-size limit."""
+    """A folder for --out; for the full-disk row a 32 KiB tmpfs (root), else a 32 KiB file-size limit."""
     out = base / "out"
     out.mkdir(parents=True)
     limits: dict[str, int] = {}
     mounted = False
     if full and os.geteuid() == 0 and shutil.which("mount"):
-        mounted = subprocess.run(["mount", "-t", "tmpfs", "-o", "size=64k", "tmpfs", str(out)]).returncode == 0
+        mounted = subprocess.run(["mount", "-t", "tmpfs", "-o", "size=32k", "tmpfs", str(out)]).returncode == 0
     if full and not mounted:
-        limits["fsize"] = 64 * 1024
+        limits["fsize"] = 32 * 1024
     try:
         yield out, limits
     finally:

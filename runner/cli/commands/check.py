@@ -48,10 +48,6 @@ def execute(args: argparse.Namespace, out: Console, err: Console) -> int:
     overrides = parse_tolerance_options(args.atol, args.rtol)
     backends = backends_from(args.backend)
     cases = load_cases(args.files, args.variant)
-    if args.out is not None:
-        from runner.cli.layouts import write_layouts
-
-        write_layouts([args.out], cases)  # foxglove-layout.json beside the traces
     outcomes = []
     for backend in backends:
         for case in cases:
@@ -69,10 +65,16 @@ def execute(args: argparse.Namespace, out: Console, err: Console) -> int:
     colour = "green" if passed == len(outcomes) else "red"
     out.print(f"[bold {colour}]{passed}/{len(outcomes)} cases match their baselines and pass[/]")
     if any(o.error_kind == "engine-failure" for o in outcomes):
-        return ExitCode.ENGINE_FAILURE
-    if any(o.outcome == ERROR for o in outcomes):
-        return ExitCode.BAD_INPUT
-    return ExitCode.OK if passed == len(outcomes) else ExitCode.ASSERTION_FAILED
+        code = ExitCode.ENGINE_FAILURE
+    elif any(o.outcome == ERROR for o in outcomes):
+        code = ExitCode.BAD_INPUT
+    else:
+        code = ExitCode.OK if passed == len(outcomes) else ExitCode.ASSERTION_FAILED
+    if args.out is not None and outcomes:
+        from runner.cli.layouts import leave_layout
+
+        return leave_layout(err, [args.out], cases, code)  # foxglove-layout.json beside the traces
+    return code
 
 
 def _print(out: Console, outcome, quiet: bool) -> None:  # noqa: ANN001 - CaseOutcome

@@ -126,10 +126,11 @@ def execute(args: argparse.Namespace, out: Console, err: Console) -> int:
         if res.result is None:
             print_problem(err, res)
 
-    from runner.cli.layouts import write_layouts
-
-    write_layouts([args.out / "traces"], cases)  # foxglove-layout.json beside the traces
     runs = LocalExecutor(args.jobs, force=args.force).run(jobs, done)
+    if any(r.trace is not None for r in runs):
+        from runner.cli.layouts import write_layouts
+
+        write_layouts([args.out / "traces"], cases)  # foxglove-layout.json beside the traces (the report links it)
     inputs = [Path(r.trace) if r.trace is not None else Path(r.outcome_file) if r.outcome_file else None for r in runs]
     try:
         files = write_report(

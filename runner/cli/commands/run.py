@@ -162,10 +162,6 @@ def _execute(
             raise ScenarioError(f"cannot use {out_dir} as the trace folder: {exc.strerror or exc}") from None
     jobs = [_case(args, c, overrides, out_dir) for c in cases]
     check_outputs(jobs, args.force)  # files the tool did not write: refused before anything runs
-    if out_dir is not None:
-        from runner.cli.layouts import write_layouts
-
-        write_layouts([out_dir], cases)  # foxglove-layout.json: the 3D scene, asserted quantities, events, log
     executor = make_executor(args.executor, args.jobs, args.ray_address, isolate=args.isolate, force=args.force)
     shown = _Shown(args, out, err, cases, results)
     progress = _progress(err) if err.is_terminal and not (args.quiet or args.json) and args.jobs == 1 else None
@@ -182,7 +178,12 @@ def _execute(
         out.print_json(json.dumps(body, allow_nan=False, default=str))
     else:
         print_summary(out, results, [(c.model.scenario, c.variant) for c in cases])
-    return status_code(results)
+    code: int = status_code(results)
+    if out_dir is not None and any(r.trace is not None for r in results):
+        from runner.cli.layouts import leave_layout
+
+        code = leave_layout(err, [out_dir], cases, code)  # the 3D scene, asserted quantities, events, log
+    return code
 
 
 def _case(args: argparse.Namespace, loaded: LoadedScenario, overrides: tuple[tuple[str, Any], ...],
