@@ -4,7 +4,10 @@ VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 
-.PHONY: demo test lint setup clean sounds schema conformance baselines bench bench-quick fuzz
+.PHONY: demo test lint setup clean sounds schema conformance baselines bench bench-quick fuzz editor-tools
+# npm packages used by tests (the editor schema's language-server test), kept outside the repository
+NPM_PREFIX ?= $(or $(XDG_CACHE_HOME),$(HOME)/.cache)/physics-scenarios/npm
+YAML_LANGUAGE_SERVER := yaml-language-server@1.25.0
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -40,6 +43,10 @@ baselines: $(STAMP)
 
 fuzz: $(STAMP)
 	FUZZ_CASES=20000 FUZZ_FAULTS=200 $(BIN)/python -m pytest -q -p no:cacheprovider tests/reliability
+
+editor-tools:
+	mkdir -p $(NPM_PREFIX)
+	npm install --prefix $(NPM_PREFIX) --no-audit --no-fund --no-save $(YAML_LANGUAGE_SERVER)
 
 bench: $(STAMP)
 	$(BIN)/python -m bench

@@ -8,7 +8,8 @@ Per step k, from t_k = k*dt to t_{k+1}:
     motor targets were set by the handlers;
  4. physics step (with substeps if set);
  5. read states; detect contacts and collision-solid overlaps at t_{k+1};
- 6. turn them into in / again / out events, queued for step k+1;
+ 6. turn them into in / again / out events, then evaluate the condition triggers (runner.sim.conditions),
+    all queued for step k+1 (delivered at t_{k+1}, the time of the state that raised them);
  7. record t_{k+1} in the trace; 8. check running assertions at t_{k+1}.
 """
 
@@ -33,6 +34,7 @@ from runner.language.hpr import hpr_to_quat, quat_to_hpr
 from runner.sim.actions import run_actions
 from runner.sim.assertions import AssertionTracker, Verdict
 from runner.sim.collisions import EventHandler, SolidTraverser, quat_matrices
+from runner.sim.conditions import ConditionTriggers, with_zeros
 from runner.sim.intervals import IntervalManager
 from runner.sim.kinematics import KinematicTable
 from runner.sim.resolver import Snapshot, StateResolver
@@ -100,6 +102,7 @@ class Session:
         self.events: list[tuple[float, str, str]] = []
         self.event_counts: dict[str, int] = {}
         self.sound_starts: list[tuple[float, str]] = []
+        self.sound_stops: list[tuple[float, str]] = []
         self.playing_sounds: dict[str, float] = {}
         self.forces: dict[int, np.ndarray] = {}
         self.queue: deque[tuple[str, str]] = deque()
@@ -121,6 +124,9 @@ class Session:
         self.traverser = SolidTraverser(program.nodes, program.colliders)
         c = model.collisions
         self.collision_events = EventHandler(c.in_, c.again, c.out)
+        self.conditions = ConditionTriggers(program.triggers, program.expressions)
+        self._handled: dict[str, float] = {}  # event -> when its handler last ran (once / min_interval)
+        self._zeros = [(self.joint_index[j], offset) for j, offset in program.joint_zeros.items()]
 
     # --- services used by actions and intervals (runner.sim.intervals.IntervalHost) --------------------
     def evaluate(self, text: str) -> Any:
@@ -154,8 +160,10 @@ class Session:
         run_actions(self, actions, at)
 
     def play_sound(self, sound: str, offset: float, volume: float, loop: bool, at: float) -> None:
-        if sound in self.playing_sounds and self.trace is not None:
-            self.trace.sound(at, sound, "stop")  # a replay restarts the sound (OpenAL play() stops first)
+        if sound in self.playing_sounds:
+            self.sound_stops.append((at, sound))
+            if self.trace is not None:
+                self.trace.sound(at, sound, "stop")  # a replay restarts the sound (OpenAL play() stops first)
         length = self.program.sounds[sound].length
         self.playing_sounds[sound] = math.inf if loop else at + max(length - offset, 0.0)
         self.sound_starts.append((at, sound))
@@ -163,8 +171,10 @@ class Session:
             self.trace.sound(at, sound, "start", offset, volume)
 
     def stop_sound(self, sound: str, at: float) -> None:
-        if self.playing_sounds.pop(sound, None) is not None and self.trace is not None:
-            self.trace.sound(at, sound, "stop")
+        if self.playing_sounds.pop(sound, None) is not None:
+            self.sound_stops.append((at, sound))
+            if self.trace is not None:
+                self.trace.sound(at, sound, "stop")
 
     def interval_event(self, ival: str, what: str, at: float) -> None:
         if self.trace is not None:
@@ -212,8 +222,15 @@ class Session:
         if self.trace is not None:
             self.trace.event(at, event, source)
         handler = self.program.handlers.get(event)
-        if handler:
-            run_actions(self, handler, at, depth)
+        if handler is None or not handler.actions:
+            return
+        last = self._handled.get(event)
+        if last is not None and (handler.once or (handler.min_interval or 0.0) > at - last + 1e-9):
+            why = "once" if handler.once else f"min_interval {handler.min_interval:g} s"
+            self.log(at, "debug", f"handler for {event} not run ({why}; it last ran at t={last:.4f})", "handler")
+            return
+        self._handled[event] = at
+        run_actions(self, handler.actions, at, depth)
 
     def end(self, at: float, reason: str) -> None:
         self.ended = True
@@ -269,6 +286,8 @@ class Session:
         self.snapshot.time = t
         self.snapshot.bodies = states
         self.snapshot.joints = self.backend.joint_states()
+        if self._zeros:  # joints whose stated zero is not the start pose (runner.compile.joints)
+            self.snapshot.joints = with_zeros(self.snapshot.joints, self._zeros)
         if contacts or self._contacts_always:
             self._read_contacts(t)
 
@@ -295,6 +314,8 @@ class Session:
                 hits.extend((names[i], names[other], True) for other in touching.get(i, ()))
         for ev in self.collision_events.update(hits):
             self.queue.append((ev.name, f"collision-{ev.kind}"))
+        for event in self.conditions.check(self.resolver):  # after the collision events of the same step
+            self.queue.append((event, "condition"))
 
     def _record(self, t: float, k: int = 0, last: bool = False) -> None:
         """Step ``k`` ends at ``t``: sounds that ended, the trace (every ``record_every``-th step and the
@@ -302,6 +323,7 @@ class Session:
         for name, end in list(self.playing_sounds.items()):
             if end <= t + 1e-9:
                 del self.playing_sounds[name]
+                self.sound_stops.append((end, name))
                 if self.trace is not None:
                     self.trace.sound(end, name, "stop")
         if self.trace is not None and (k % self.record_every == 0 or last):
@@ -326,6 +348,7 @@ class Session:
         steps = self.program.steps
         inputs = deque(self.program.inputs)
         self._read(0.0)
+        self.conditions.start(self.resolver)  # the conditions' values at t=0: a rising edge needs false first
         self._record(0.0)
         self.queue.append(("start", "start"))
         t = 0.0
@@ -362,7 +385,9 @@ class Session:
         if self.trace is not None and self._recorded != t:  # ended between recorded steps: keep the last state
             self._trace_step(t)
         self.tracker.on_step(t, self.resolver, self.in_contact, final=True)
-        verdicts = self.tracker.finish(t, [(e[0], e[1]) for e in self.events], self.sound_starts, self.resolver)
+        verdicts = self.tracker.finish(
+            t, [(e[0], e[1]) for e in self.events], self.sound_starts, self.resolver, self.sound_stops
+        )
         status = "passed" if all(v.passed for v in verdicts) else "failed"
         return RunResult(
             self.program.name,
