@@ -39,7 +39,7 @@ conformance: $(STAMP)
 	$(BIN)/scenario conformance --out traces/conformance --markdown docs/conformance.md
 
 baselines: $(STAMP)
-	$(BIN)/scenario baseline scenarios/*.yaml --backend pybullet,mujoco,dart,ode --dir baselines
+	$(BIN)/scenario baseline scenarios/*.yaml --backend pybullet,mujoco,dart,ode --baseline baselines
 
 fuzz: $(STAMP)
 	FUZZ_CASES=20000 FUZZ_FAULTS=200 $(BIN)/python -m pytest -q -p no:cacheprovider tests/reliability

@@ -19,25 +19,26 @@ def _clean_loc(loc: tuple[Any, ...], data: Any, missing: bool) -> Path:
     markers (`function-after[...]`, a tagged union's tag). A tag can also be a key of the document (`always:`
     in an assertion whose `during` is wrong), so of the readings of the location the one that follows the
     document furthest wins. A missing field keeps its own name at the end."""
-    best: list[str | int] = []
+    best: tuple[tuple[int, int], list[str | int]] = ((0, 0), [])
 
-    def follow(i: int, node: Any, out: list[str | int]) -> None:
+    def follow(i: int, node: Any, out: list[str | int], last: int) -> None:
         nonlocal best
         if i == len(loc):
-            if len(out) > len(best):
-                best = list(out)
+            score = (len(out), last)  # the most parts followed; on a tie, the reading that follows the deepest
+            if score > best[0]:
+                best = (score, list(out))
             return
         part = loc[i]
         if isinstance(node, dict) and part in node:
-            follow(i + 1, node[part], [*out, part])
+            follow(i + 1, node[part], [*out, part], i + 1)
         elif isinstance(node, list) and isinstance(part, int) and 0 <= part < len(node):
-            follow(i + 1, node[part], [*out, part])
+            follow(i + 1, node[part], [*out, part], i + 1)
         elif missing and i == len(loc) - 1 and isinstance(part, str):
-            follow(i + 1, None, [*out, part])
-        follow(i + 1, node, out)  # or read this part as a marker
+            follow(i + 1, None, [*out, part], i + 1)
+        follow(i + 1, node, out, last)  # or read this part as a marker
 
-    follow(0, data, [])
-    return tuple(best)
+    follow(0, data, [], 0)
+    return tuple(best[1])
 
 
 #: What a list-valued field holds, for "expected a list of ..." messages (by the field's name).

@@ -12,7 +12,8 @@ from rich.markup import escape
 from rich.progress import BarColumn, Progress, TaskID, TextColumn, TimeRemainingColumn
 
 from backends.errors import BackendError, BackendNotInstalled, EngineFailure
-from backends.registry import DEFAULT_BACKEND, entry, is_installed
+from backends.registry import DEFAULT_BACKEND
+from runner.cli import options
 from runner.cli.render import verdict_table
 from runner.errors import ExitCode, ScenarioError, ScenarioValidationError, UsageError
 from runner.language.load import LoadedScenario, load_files, parse_overrides
@@ -27,20 +28,12 @@ DEFAULT_OUT = Path("traces")
 def configure(run: argparse.ArgumentParser) -> None:
     from runner.exec.executors import add_arguments
 
-    run.add_argument("files", nargs="+", type=Path, metavar="FILE", help="scenario files, or folders of *.yaml files")
-    run.add_argument("--backend", "-b", default=DEFAULT_BACKEND, help=f"engine to use (default {DEFAULT_BACKEND})")
-    group = run.add_mutually_exclusive_group()
-    group.add_argument("--variant", help="run this variant (default: the file's first variant)")
-    group.add_argument("--all-variants", action="store_true", help="run every variant")
+    options.add_scenario_files(run)
+    options.add_backend(run, DEFAULT_BACKEND)
+    options.add_variant_choice(run)
     run.add_argument("--out", type=Path, default=DEFAULT_OUT, help="folder for the traces (default: traces/)")
     run.add_argument("--no-trace", action="store_true", help="do not write traces")
-    run.add_argument(
-        "--set",
-        action="append",
-        default=[],
-        metavar="KEY=VALUE",
-        help="override a value, e.g. world.dt=0.01 or params.count=50 (repeatable)",
-    )
+    options.add_overrides(run)
     out = run.add_mutually_exclusive_group()
     out.add_argument("--quiet", "-q", action="store_true", help="print only failures and the summary")
     out.add_argument("--json", action="store_true", help="print the results as JSON")
@@ -88,10 +81,16 @@ def _result_json(r: RunResult) -> dict[str, Any]:
 
 
 def execute(args: argparse.Namespace, out: Console, err: Console) -> int:
+    """Every case on each backend asked for, one backend after the other; the worst exit code wins."""
     results: list[RunResult] = []
     cases: list[LoadedScenario] = []
+    backends = options.backend_names(args)
+    crashed: list[str] = []
+    code: int = ExitCode.OK
     try:
-        code = _execute(args, out, err, cases, results)
+        for i, backend in enumerate(backends):
+            args.backend = backend
+            code = _execute(args, out, err, cases, results, crashed, final=i == len(backends) - 1)
     except (ScenarioError, BackendError) as exc:
         if args.junit:
             _write_junit(args, cases, results, exc)
@@ -107,7 +106,7 @@ def _write_junit(
     """The report of what ran; what stopped the command (bad input, a missing engine) is an error case."""
     from runner.ci.junit import from_error, from_result, write_junit
 
-    junit = [from_result(r, c) for r, c in zip(results, cases, strict=False)]
+    junit = [from_result(r, _case_of(r, cases)) for r in results]
     if isinstance(exc, ScenarioValidationError):
         by_file: dict[str, list[str]] = {}
         for issue in exc.issues:
@@ -115,26 +114,35 @@ def _write_junit(
         junit += [from_error(f, args.backend, "\n".join(lines)) for f, lines in by_file.items()]
     elif exc is not None:
         kind = "engine-failure" if isinstance(exc, (BackendNotInstalled, EngineFailure)) else "bad-input"
-        case = cases[len(results)] if len(results) < len(cases) else None
+        case = cases[len(results) % len(cases)] if cases else None
         where = case.path if case is not None else (args.files[0] if args.files else "scenario")
         junit.append(from_error(where, args.backend, str(exc), kind, case.variant if case is not None else "load"))
     write_junit(args.junit, junit)
 
 
+def _case_of(result: RunResult, cases: list[LoadedScenario]) -> LoadedScenario | None:
+    return next((c for c in cases if c.model.scenario == result.scenario and c.variant == result.variant), None)
+
+
 def _execute(
-    args: argparse.Namespace, out: Console, err: Console, cases: list[LoadedScenario], results: list[RunResult]
+    args: argparse.Namespace,
+    out: Console,
+    err: Console,
+    loaded: list[LoadedScenario],
+    results: list[RunResult],
+    crashed: list[str],
+    final: bool = True,
 ) -> int:
-    entry(args.backend)  # an unknown name is bad input (exit 2) before anything runs
-    if not is_installed(args.backend):
-        raise BackendNotInstalled(
-            f"Backend `{args.backend}` is not installed. Install it with: {entry(args.backend).hint}"
-        )
+    """The cases on ``args.backend`` (loaded once, by the first backend's call, into ``loaded``); results and
+    crashes accumulate over the backends; the last backend's call prints the summary and gives the exit code."""
     overrides = parse_overrides(args.set)
     if args.record_every < 1:
         raise UsageError(
             f"Invalid `--record-every`. Expected a positive number of steps. Received: {args.record_every}"
         )
-    cases.extend(load_files(_expand(args.files), args.variant, args.all_variants, overrides))
+    if not loaded:
+        loaded.extend(load_files(options.scenario_files(args.files), args.variant, args.all_variants, overrides))
+    cases = loaded
     out_dir: Path | None = None if args.no_trace else args.out
     if out_dir is not None:
         _refuse_duplicates(out_dir, cases, args.backend)
@@ -145,10 +153,9 @@ def _execute(
     if out_dir is not None and not args.force:
         _refuse_overwrite(out_dir, cases, args.backend)
     show_progress = err.is_terminal and not (args.quiet or args.json) and not args.isolate
-    crashed: list[str] = []
     parallel = args.jobs > 1 or args.executor != "local"
     ready, error = _run_parallel(args, err, cases, out_dir, overrides, crashed) if parallel else (None, None)
-    options = {"record_every": args.record_every, "trace_process": args.trace_process}
+    run_options = {"record_every": args.record_every, "trace_process": args.trace_process}
     for i, case in enumerate(cases if ready is None else cases[: len(ready)]):
         if ready is not None:
             result = ready[i]
@@ -172,14 +179,16 @@ def _execute(
                 def advance(k: int, n: int, task: TaskID = task) -> None:
                     progress.update(task, completed=k, total=n)
 
-                result = run_loaded(case, args.backend, out_dir, advance, **options)
+                result = run_loaded(case, args.backend, out_dir, advance, **run_options)
         else:
-            result = run_loaded(case, args.backend, out_dir, **options)
+            result = run_loaded(case, args.backend, out_dir, **run_options)
         results.append(result)
         if not args.json:
             _print_result(out, result, args.quiet)
     if error is not None:
         error.raise_error()  # bad input or a missing engine, as a serial run would stop on it
+    if not final:
+        return ExitCode.OK
     if args.json:
         out.print_json(json.dumps({"results": [_result_json(r) for r in results]}, allow_nan=False, default=str))
     else:
@@ -263,14 +272,6 @@ def _run_isolated(
     if run.message:
         err.print(escape(run.message))
     return None
-
-
-def _expand(paths: list[Path]) -> list[Path]:
-    """A folder stands for its *.yaml files (not its subfolders), in name order."""
-    out: list[Path] = []
-    for path in paths:
-        out.extend(sorted(path.glob("*.yaml")) if path.is_dir() else [path])
-    return out
 
 
 def _run_parallel(
