@@ -8,6 +8,7 @@ key. A folder stands for every scenario under it, recursively, skipping hidden f
 from __future__ import annotations
 
 import re
+import stat
 from pathlib import Path
 
 from runner.errors import Issue, ScenarioValidationError
@@ -56,3 +57,17 @@ def scenario_files(paths: list[Path]) -> list[Path]:
         else:
             out.append(path)
     return out
+
+
+def special_file_kind(mode: int) -> str:
+    """What a non-regular file is, in words."""
+    for test, kind in (
+        (stat.S_ISDIR, "a folder"),
+        (stat.S_ISFIFO, "a FIFO (named pipe)"),
+        (stat.S_ISSOCK, "a socket"),
+        (stat.S_ISCHR, "a character device"),
+        (stat.S_ISBLK, "a block device"),
+    ):
+        if test(mode):
+            return kind
+    return "a special file"

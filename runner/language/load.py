@@ -20,6 +20,7 @@ from pydantic import ValidationError
 
 from runner.errors import Issue, ScenarioValidationError
 from runner.language.errors_map import issues_from
+from runner.language.files import special_file_kind
 from runner.language.model import Scenario
 from runner.language.refs import check_references
 from runner.language.times import time_context
@@ -82,20 +83,6 @@ def read_source(path: FsPath) -> tuple[str, Any, Positions]:
             [positions.issue((), f"expected a mapping at the top, found {type(data).__name__}")]
         )
     return text, data, positions
-
-
-def special_file_kind(mode: int) -> str:
-    """What a non-regular file is, in words."""
-    for test, kind in (
-        (stat.S_ISDIR, "a folder"),
-        (stat.S_ISFIFO, "a FIFO (named pipe)"),
-        (stat.S_ISSOCK, "a socket"),
-        (stat.S_ISCHR, "a character device"),
-        (stat.S_ISBLK, "a block device"),
-    ):
-        if test(mode):
-            return kind
-    return "a special file"
 
 
 def parse_overrides(items: list[str]) -> tuple[tuple[str, Any], ...]:
