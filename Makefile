@@ -42,7 +42,7 @@ baselines: $(STAMP)
 	$(BIN)/scenario baseline scenarios/*.yaml --backend pybullet,mujoco,dart,ode --baseline baselines
 
 fuzz: $(STAMP)
-	FUZZ_CASES=20000 FUZZ_FAULTS=200 $(BIN)/python -m pytest -q -p no:cacheprovider tests/reliability
+	FUZZ_CASES=20000 FUZZ_STRUCTURED=20000 FUZZ_FAULTS=200 $(BIN)/python -m pytest -q -p no:cacheprovider tests/reliability
 
 editor-tools:
 	mkdir -p $(NPM_PREFIX)

@@ -240,6 +240,9 @@ class Lerp(Strict):
     def _some(self) -> Lerp:
         if self.pos is None and self.hpr is None and self.scale is None:
             raise ValueError("expected at least one of pos, hpr, scale to lerp to, found none")
+        for name in ("pos", "hpr", "scale"):
+            if getattr(self, f"start_{name}") is not None and getattr(self, name) is None:
+                raise ValueError(f"`start_{name}` is given without `{name}` (a start needs an end to lerp to)")
         return self
 
 

@@ -242,6 +242,13 @@ CASES = [
               "is loaded; it may read param.<name>, dt, duration, g, gravity.x|y|z, pi, e, inf"),
     ),
     (
+        "a lerp start without its end (found by the structured fuzzer)",
+        BASE.replace("density: 500, ", "motion: kinematic, ")
+        + "intervals:\n  i: {lerp: {body: box, duration: 1, pos: [0, 0, 2], start_hpr: [0, 0, 0]}}\n",
+        "7:13",
+        exact("intervals.i.lerp: `start_hpr` is given without `hpr` (a start needs an end to lerp to)"),
+    ),
+    (
         "a trigger named start",
         BASE + "triggers: {start: {when: box.pos.z < 0}}\n",
         "6:12",
