@@ -19,6 +19,7 @@ from dataclasses import dataclass
 from typing import Any, Protocol
 
 from runner.errors import ScenarioError
+from runner.language.explain import fmt, group_member
 
 MAX_LENGTH = 2000
 MAX_NODES = 500
@@ -40,17 +41,6 @@ class EvaluationError(ExpressionError, ScenarioError):
 class Resolver(Protocol):
     def value(self, name: str) -> Any: ...  # a dotted name, e.g. "box.pos.z"
     def call(self, func: str, args: Sequence[Any]) -> Any: ...  # runner-level functions (contact, playing...)
-
-
-def fmt(value: Any) -> str:
-    """A value as a failure message shows it."""
-    if isinstance(value, bool) or value is None:
-        return str(value).lower()
-    if isinstance(value, float):
-        return "nan" if math.isnan(value) else f"{value:.6g}"
-    if isinstance(value, list | tuple):
-        return "[" + ", ".join(fmt(v) for v in value[:6]) + (", ..." if len(value) > 6 else "") + "]"
-    return str(value)
 
 
 @dataclass(frozen=True)
@@ -207,7 +197,7 @@ class Expression:
             except (ExpressionError, TypeError, ValueError, ArithmeticError, KeyError):
                 continue
             text = f"{part.text} = {fmt(value)}"
-            member = _member(part, resolver) if part.extremum_of is not None else None
+            member = group_member(part.text, part.extremum_of, resolver) if part.extremum_of is not None else None
             shown.append(text + (f" ({member})" if member else ""))
         return ", ".join(shown)
 
@@ -233,21 +223,6 @@ class Expression:
         if not _is_number(value):
             raise EvaluationError(f"cannot evaluate {self.text!r}: expected a number, found {_kind(value)}")
         return float(value)
-
-
-def _member(part: _Part, resolver: Resolver) -> str | None:
-    """Which member of a group gives `max(group.field)` / `min(...)`."""
-    group = part.extremum_of or ""
-    members = getattr(resolver, "group_members", lambda _: None)(group.partition(".")[0])
-    try:
-        values = resolver.value(group)
-    except (KeyError, ExpressionError):
-        return None
-    if not members or not isinstance(values, list) or len(values) != len(members) or not values:
-        return None
-    pick = max if part.text.startswith("max") else min
-    index = pick(range(len(values)), key=lambda i: values[i])
-    return members[index]
 
 
 def _dotted(node: ast.AST) -> str | None:

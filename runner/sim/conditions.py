@@ -7,7 +7,8 @@ state is read and contacts are detected; its event is queued behind that step's 
 delivered at the start of the next step, stamped with the time of the state that raised it. By default a
 trigger is re-armed when its condition is false again; ``once: true`` fires it at most once.
 
-Also here: reading joint coordinates from a stated zero (``limits: {zero: absolute}``).
+Also here: handlers that run once or not within a minimum interval, and reading joint coordinates from a
+stated zero (``limits: {zero: absolute}``).
 """
 
 from __future__ import annotations
@@ -15,7 +16,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 
 from backends.types import JointStates
-from runner.compile.program import TriggerSpec
+from runner.compile.program import HandlerSpec, TriggerSpec
 from runner.language.expressions import Expression, Resolver
 
 
@@ -45,8 +46,26 @@ class ConditionTriggers:
         return raised
 
 
+class HandlerGate:
+    """Whether a handler runs for a delivery of its event: `once` and `min_interval` (docs/language.md)."""
+
+    def __init__(self) -> None:
+        self.last: dict[str, float] = {}  # event -> when its handler last ran
+
+    def refusal(self, event: str, handler: HandlerSpec, at: float) -> str | None:
+        """None if the handler runs now (and this run is remembered), else why it does not."""
+        last = self.last.get(event)
+        if last is not None and (handler.once or (handler.min_interval or 0.0) > at - last + 1e-9):
+            why = "once" if handler.once else f"min_interval {handler.min_interval:g} s"
+            return f"handler for {event} not run ({why}; it last ran at t={last:.4f})"
+        self.last[event] = at
+        return None
+
+
 def with_zeros(joints: JointStates, zeros: Sequence[tuple[int, float]]) -> JointStates:
-    """``joints`` with the positions of the given joints shifted by their zero offsets."""
+    """``joints`` with the positions of the given joints shifted by their zero offsets (itself if none)."""
+    if not zeros:
+        return joints
     position = joints.position.copy()
     for index, offset in zeros:
         position[index] += offset

@@ -34,7 +34,7 @@ from runner.language.hpr import hpr_to_quat, quat_to_hpr
 from runner.sim.actions import run_actions
 from runner.sim.assertions import AssertionTracker, Verdict
 from runner.sim.collisions import EventHandler, SolidTraverser, quat_matrices
-from runner.sim.conditions import ConditionTriggers, with_zeros
+from runner.sim.conditions import ConditionTriggers, HandlerGate, with_zeros
 from runner.sim.intervals import IntervalManager
 from runner.sim.kinematics import KinematicTable
 from runner.sim.resolver import Snapshot, StateResolver
@@ -125,7 +125,7 @@ class Session:
         c = model.collisions
         self.collision_events = EventHandler(c.in_, c.again, c.out)
         self.conditions = ConditionTriggers(program.triggers, program.expressions)
-        self._handled: dict[str, float] = {}  # event -> when its handler last ran (once / min_interval)
+        self.handler_gate = HandlerGate()
         self._zeros = [(self.joint_index[j], offset) for j, offset in program.joint_zeros.items()]
 
     # --- services used by actions and intervals (runner.sim.intervals.IntervalHost) --------------------
@@ -224,12 +224,10 @@ class Session:
         handler = self.program.handlers.get(event)
         if handler is None or not handler.actions:
             return
-        last = self._handled.get(event)
-        if last is not None and (handler.once or (handler.min_interval or 0.0) > at - last + 1e-9):
-            why = "once" if handler.once else f"min_interval {handler.min_interval:g} s"
-            self.log(at, "debug", f"handler for {event} not run ({why}; it last ran at t={last:.4f})", "handler")
+        refusal = self.handler_gate.refusal(event, handler, at)
+        if refusal is not None:
+            self.log(at, "debug", refusal, "handler")
             return
-        self._handled[event] = at
         run_actions(self, handler.actions, at, depth)
 
     def end(self, at: float, reason: str) -> None:
@@ -285,9 +283,7 @@ class Session:
             )
         self.snapshot.time = t
         self.snapshot.bodies = states
-        self.snapshot.joints = self.backend.joint_states()
-        if self._zeros:  # joints whose stated zero is not the start pose (runner.compile.joints)
-            self.snapshot.joints = with_zeros(self.snapshot.joints, self._zeros)
+        self.snapshot.joints = with_zeros(self.backend.joint_states(), self._zeros)  # stated zeros (compile.joints)
         if contacts or self._contacts_always:
             self._read_contacts(t)
 

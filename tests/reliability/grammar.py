@@ -193,7 +193,8 @@ def cross_ref(draw: st.DrawFn, data: Tree) -> str:
             "pause", "resume", "finish", "loop", "sound", "play_sound", "reset", "send", "event", "joint")]  # fmt: skip
     intervals = names["intervals"]
     if intervals and draw(st.booleans()):  # intervals inlining each other in a ring: cycles through 1 to 3
-        ring = draw(st.lists(st.sampled_from(intervals), min_size=1, max_size=3, unique=True))
+        size = draw(st.integers(min(2, len(intervals)), min(3, len(intervals))))  # 1: a self-reference
+        ring = draw(st.lists(st.sampled_from(intervals), min_size=size, max_size=size, unique=True))
         for source, target in zip(ring, ring[1:] + ring[:1], strict=True):
             step = data["intervals"][source]
             kind = next((k for k in ("sequence", "parallel") if isinstance(step, dict)
