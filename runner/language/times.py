@@ -37,7 +37,10 @@ class _Names:
 def _number(value: Any) -> float | None:
     if isinstance(value, bool) or not isinstance(value, int | float):
         return None
-    return float(value)
+    try:
+        return float(value)
+    except OverflowError:  # an integer beyond a float (10**400): the world's own check refuses it
+        return None
 
 
 def time_context(data: Any) -> dict[str, Any]:

@@ -249,6 +249,13 @@ CASES = [
         exact("intervals.i.lerp: `start_hpr` is given without `hpr` (a start needs an end to lerp to)"),
     ),
     (
+        "an integer beyond a float in the gravity (found by the loader fuzzing)",
+        BASE.replace("world: {dt: 0.04, duration: 1}", "world: {dt: 0.04, duration: 1, gravity: [1" + "0" * 400
+                     + ", 0, -9.81]}"),  # fmt: skip
+        "3:42",
+        r"^world\.gravity\[0\]: input should be a valid number; found 10000",
+    ),
+    (
         "a trigger named start",
         BASE + "triggers: {start: {when: box.pos.z < 0}}\n",
         "6:12",
