@@ -7,7 +7,10 @@ STAMP := $(VENV)/.installed
 CACHE ?= $(or $(XDG_CACHE_HOME),$(HOME)/.cache)/physics-scenarios
 FOXGLOVE_STUDIO := $(CACHE)/foxglove-studio
 
-.PHONY: demo test lint setup clean sounds schema conformance baselines bench bench-quick fuzz proto foxglove
+.PHONY: demo test lint setup clean sounds schema conformance baselines bench bench-quick fuzz proto foxglove editor-tools
+# npm packages used by tests (the editor schema's language-server test), kept outside the repository
+NPM_PREFIX ?= $(or $(XDG_CACHE_HOME),$(HOME)/.cache)/physics-scenarios/npm
+YAML_LANGUAGE_SERVER := yaml-language-server@1.25.0
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -39,10 +42,14 @@ conformance: $(STAMP)
 	$(BIN)/scenario conformance --out traces/conformance --markdown docs/conformance.md
 
 baselines: $(STAMP)
-	$(BIN)/scenario baseline scenarios/*.yaml --backend pybullet,mujoco,dart,ode --dir baselines
+	$(BIN)/scenario baseline scenarios/*.yaml --backend pybullet,mujoco,dart,ode --baseline baselines
 
 fuzz: $(STAMP)
-	FUZZ_CASES=20000 FUZZ_FAULTS=200 FUZZ_CONCURRENT=20 $(BIN)/python -m pytest -q -p no:cacheprovider tests/reliability
+	FUZZ_CASES=20000 FUZZ_STRUCTURED=20000 FUZZ_FAULTS=200 FUZZ_CONCURRENT=20 $(BIN)/python -m pytest -q -p no:cacheprovider tests/reliability
+
+editor-tools:
+	mkdir -p $(NPM_PREFIX)
+	npm install --prefix $(NPM_PREFIX) --no-audit --no-fund --no-save $(YAML_LANGUAGE_SERVER)
 
 bench: $(STAMP)
 	$(BIN)/python -m bench

@@ -71,14 +71,24 @@ class Capability(str, enum.Enum):
     JOINT_UNIVERSAL = "joint:universal"
     JOINT_BETWEEN_BODIES = "joint:between-bodies"  # joints whose `other` is a body, not the environment
     JOINT_LIMITS = "joint:limits"
+    JOINT_STOP_BOUNCE = "joint:stop-bounce"  # stops with restitution (JointSpec.stop_bounce > 0)
+    JOINT_STOP_SOFTNESS = "joint:stop-softness"  # spring-damper stops (JointSpec.stop_stiffness)
     JOINT_MOTOR = "joint:motor"
     KINEMATIC = "motion:kinematic"
     SUBSTEPS = "world:substeps"
 
 
+#: Capabilities that no adapter maps to its engine yet (the stop bounce and softness of the language): no
+#: backend may declare them until its mapping exists and is tested, so a scenario using them is refused up
+#: front with the capability message.
+UNMAPPED_CAPABILITIES: frozenset[Capability] = frozenset(
+    {Capability.JOINT_STOP_BOUNCE, Capability.JOINT_STOP_SOFTNESS}
+)
 #: Every shape; and everything but universal joints (what the pybullet, mujoco and dart adapters offer).
 ALL_SHAPES: frozenset[Capability] = frozenset(c for c in Capability if c.value.startswith("shape:"))
-RIGID_BODY_CAPABILITIES: frozenset[Capability] = frozenset(Capability) - {Capability.JOINT_UNIVERSAL}
+RIGID_BODY_CAPABILITIES: frozenset[Capability] = (
+    frozenset(Capability) - {Capability.JOINT_UNIVERSAL} - UNMAPPED_CAPABILITIES
+)
 
 
 @dataclass(frozen=True)
@@ -127,8 +137,14 @@ class JointSpec:
     axis: Vec3 = (1.0, 0.0, 0.0)  # world frame, unit (slider, hinge; universal: first axis)
     axis2: Vec3 | None = None  # universal: second axis, world frame, unit
     anchor: Vec3 = (0.0, 0.0, 0.0)  # world frame (hinge, ball, universal)
-    lo: float | None = None  # stops: metres (slider) or radians (hinge)
+    lo: float | None = None  # stops: metres (slider) or radians (hinge), from the start pose
     hi: float | None = None
+    #: restitution of the stops, 0..1 (ODE dParamBounce); 0: no bounce
+    stop_bounce: float = 0.0
+    #: a soft stop as a spring-damper (N/m or N m/rad; N s/m or N m s/rad), ODE's dParamStopERP/CFM with
+    #: ERP = h k / (h k + c) and CFM = 1 / (h k + c) for a step h; None: rigid (the engine's default stop)
+    stop_stiffness: float | None = None
+    stop_damping: float | None = None
     motor: Motor | None = None  # initial motor; the runner may change it with set_motor
 
 
@@ -180,6 +196,10 @@ class CompiledWorld:
                 need.add(Capability.JOINT_BETWEEN_BODIES)
             if joint.lo is not None or joint.hi is not None:
                 need.add(Capability.JOINT_LIMITS)
+            if joint.stop_bounce > 0:
+                need.add(Capability.JOINT_STOP_BOUNCE)
+            if joint.stop_stiffness is not None or joint.stop_damping is not None:
+                need.add(Capability.JOINT_STOP_SOFTNESS)
             if joint.motor is not None:
                 need.add(Capability.JOINT_MOTOR)
         if self.substeps > 1:

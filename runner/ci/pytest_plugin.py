@@ -21,7 +21,6 @@ Imports stay light here: the runner is imported only when a scenario file is col
 
 from __future__ import annotations
 
-import re
 import tempfile
 from collections.abc import Iterator
 from pathlib import Path
@@ -30,7 +29,6 @@ from typing import Any
 import pytest
 
 BASE_CASE = "base"  # runner.language.load.BASE_CASE: a file without variants runs as this one case
-_SCENARIO_KEY = re.compile(r"^(schema_version|scenario)\s*:", re.MULTILINE)
 _ROOTS = pytest.StashKey[tuple[list[Path], list[Path], list[Path]]]()
 
 
@@ -86,11 +84,9 @@ def _asked(config: pytest.Config, path: Path) -> bool:
 def pytest_collect_file(file_path: Path, parent: pytest.Collector) -> pytest.Collector | None:
     if file_path.suffix not in (".yaml", ".yml") or not _asked(parent.config, file_path):
         return None
-    try:
-        head = file_path.read_text(encoding="utf-8", errors="replace")
-    except OSError:
-        return None
-    if not _SCENARIO_KEY.search(head):
+    from runner.language.files import is_scenario  # the rule `scenario run FOLDER` follows too
+
+    if not is_scenario(file_path):
         return None
     return ScenarioFile.from_parent(parent, path=file_path)
 

@@ -97,7 +97,7 @@ def check_case(
     """Run a case and compare it with its golden file; failures and errors come back in the outcome."""
     path = golden_path(directory, loaded, backend)
     if not path.exists():
-        hint = f"record it with `scenario baseline {loaded.path} --backend {backend} --dir {directory}`"
+        hint = f"record it with `scenario baseline {loaded.path} --backend {backend} --baseline {directory}`"
         return CaseOutcome(
             loaded, backend, ERROR, path, error=f"no baseline {path}; {hint}", error_kind="missing-baseline"
         )

@@ -12,7 +12,7 @@ import numpy as np
 from backends.types import CompiledWorld, Motion
 from runner.compile.interval_specs import FuncSpec, LerpSpec, ParallelSpec, SequenceSpec, SoundSpec, WaitSpec
 from runner.compile.solids import NodeDef, SolidDef
-from runner.compile.world import compile_world
+from runner.compile.world import compile_world, joint_zeros
 from runner.errors import ScenarioValidationError
 from runner.language import model_behaviour as B
 from runner.language.expressions import Expression, compile_expression
@@ -31,13 +31,32 @@ class TimedInput:
     event: str
 
 
+@dataclass(frozen=True)
+class HandlerSpec:
+    """The actions run for an event, and how often (docs/language.md, "Handlers")."""
+
+    actions: tuple[Any, ...]
+    once: bool = False  # only for the event's first delivery
+    min_interval: float | None = None  # not again within this many seconds of the last run
+
+
+@dataclass(frozen=True)
+class TriggerSpec:
+    """An event raised when ``when`` becomes true (false or unknown at the previous check, true now)."""
+
+    event: str
+    when: str  # the expression's text (a key of Program.expressions)
+    once: bool = False  # never re-armed; otherwise re-armed when the condition is false again
+
+
 @dataclass
 class Program:
     loaded: LoadedScenario
     world: CompiledWorld
     steps: int
     intervals: dict[str, tuple[str, Any]]  # id -> (Panda3D name, IntervalSpec)
-    handlers: dict[str, list[Any]]
+    handlers: dict[str, HandlerSpec]
+    triggers: list[TriggerSpec]
     inputs: list[TimedInput]
     nodes: list[NodeDef]
     colliders: list[str]
@@ -47,6 +66,8 @@ class Program:
     groups: dict[str, list[str]]
     start_hpr: dict[str, tuple[float, float, float]]
     start_scale: dict[str, float]
+    #: joint -> what to add to the backend's reading to read it from the joint's stated zero (nonzero only)
+    joint_zeros: dict[str, float]
 
     @property
     def name(self) -> str:
@@ -175,7 +196,8 @@ def build_program(loaded: LoadedScenario) -> Program:
         world=world,
         steps=steps,
         intervals=intervals,
-        handlers=dict(model.on),
+        handlers={event: HandlerSpec(*_handler(h)) for event, h in model.on.items()},
+        triggers=[TriggerSpec(name, t.when, t.once) for name, t in model.triggers.items()],
         inputs=inputs,
         nodes=nodes,
         colliders=list(model.collisions.from_),
@@ -185,4 +207,10 @@ def build_program(loaded: LoadedScenario) -> Program:
         groups=groups(model),
         start_hpr=start_hpr,
         start_scale=start_scale,
+        joint_zeros=joint_zeros(model, world),
     )
+
+
+def _handler(handler: Any) -> tuple[tuple[Any, ...], bool, float | None]:
+    actions, once, min_interval = B.handler_parts(handler)
+    return tuple(actions), once, min_interval

@@ -22,9 +22,10 @@ from backends.types import (
     ShapeKind,
     Surface,
 )
+from runner.compile.joints import stops, zero_offset
 from runner.language.hpr import hpr_to_quat
 from runner.language.model import Scenario
-from runner.language.model_physics import Body
+from runner.language.model_physics import Body, Limits
 from runner.language.names import BodyInstance, expand_bodies, groups
 
 #: Kinematic bodies get a mass only because some engines need one; it never affects their motion.
@@ -137,6 +138,17 @@ def compile_body(inst: BodyInstance, number: int) -> BodySpec:
     )
 
 
+def joint_zeros(model: Scenario, world: CompiledWorld) -> dict[str, float]:
+    """Per joint whose zero is not the start, what to add to the backend's reading (from the start) to read
+    it from the stated zero (runner.compile.joints)."""
+    by_name = {b.name: b for b in world.bodies}
+    return {
+        name: zero_offset(joint, _unit(joint.axis), by_name)
+        for name, joint in model.joints.items()
+        if isinstance(joint.limits, Limits) and joint.limits.zero == "absolute"
+    }
+
+
 def _unit(v: Sequence[float]) -> tuple[float, float, float]:
     n = math.sqrt(sum(c * c for c in v))
     return (v[0] / n, v[1] / n, v[2] / n)
@@ -146,10 +158,12 @@ def compile_world(model: Scenario, name: str) -> CompiledWorld:
     instances = expand_bodies(model)
     bodies = tuple(compile_body(inst, i) for i, inst in enumerate(instances))
     positions = {b.name: b.pos for b in bodies}
+    by_name = {b.name: b for b in bodies}
     joints = []
     for jname, joint in model.joints.items():
         other = None if joint.bodies[1] == "environment" else joint.bodies[1]
-        lo, hi = joint.limits if joint.limits is not None else (None, None)
+        lo, hi = stops(joint, zero_offset(joint, _unit(joint.axis), by_name))
+        limits = joint.limits if isinstance(joint.limits, Limits) else None
         joints.append(
             JointSpec(
                 name=jname,
@@ -161,6 +175,9 @@ def compile_world(model: Scenario, name: str) -> CompiledWorld:
                 anchor=joint.anchor if joint.anchor is not None else positions[joint.bodies[0]],
                 lo=lo,
                 hi=hi,
+                stop_bounce=limits.bounce if limits is not None else 0.0,
+                stop_stiffness=limits.stiffness if limits is not None else None,
+                stop_damping=limits.damping if limits is not None else None,
                 motor=Motor(joint.motor.vel, joint.motor.fmax) if joint.motor is not None else None,
             )
         )

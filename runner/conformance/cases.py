@@ -24,7 +24,7 @@ class Check:
     """One assertion of a case, as the matrix shows it."""
 
     name: str
-    kind: str  # value, max, min, event, sound, check, always, never, eventually, contact
+    kind: str  # value, max, min, becomes, event, sound, check, always, never, eventually, contact
     measure: str  # what is measured: "box.vel.z at 0.04", "max(abs(...)) over [1, end]", "event s1"
     expected: str  # what is expected of it: a formula, a range, a condition, times
     tolerance: dict[str, str] = field(default_factory=dict)  # backend (or "default") -> tolerance text
@@ -53,6 +53,8 @@ class Case:
 def _text(value: Any) -> str:
     if isinstance(value, float) and value.is_integer():
         return str(int(value))
+    if isinstance(value, float):
+        return f"{value:.6g}"  # a time written as an expression is known here by its value
     return " ".join(str(value).split())
 
 
@@ -90,7 +92,17 @@ def describe(s: Any) -> Check:  # noqa: C901 - one switch over the assertion kin
     if isinstance(s, A.MaxAssertion | A.MinAssertion):
         of = s.max_of if isinstance(s, A.MaxAssertion) else s.min_of
         measure = f"{kind}({_text(of)}){_window(s.during)}"
-        return Check(s.name, kind, measure, _text(s.near), _tolerance(s.tol), description)
+        parts = [_text(s.near)] if s.near is not None else []
+        parts += [f"at t = {_text(s.time)} ± {_text(s.time_tol)}"] if s.time is not None else []
+        parts += [f"at t in [{_text(s.time_within[0])}, {_text(s.time_within[1])}]"] if s.time_within else []
+        return Check(s.name, kind, measure, ", ".join(parts), _tolerance(s.tol) if s.near is not None else {},
+                     description)  # fmt: skip
+    if isinstance(s, A.BecomesAssertion):
+        if s.within is not None:
+            return Check(s.name, kind, f"when {_text(s.becomes)} becomes true",
+                         f"in [{_text(s.within[0])}, {_text(s.within[1])}]", {}, description)  # fmt: skip
+        return Check(s.name, kind, f"when {_text(s.becomes)} becomes true", _text(s.near), _tolerance(s.tol),
+                     description)  # fmt: skip
     if isinstance(s, A.EventAssertion):
         parts = [f"first at {_text(s.first)}"] if s.first is not None else []
         parts += [_times(s.count)] if s.count is not None else []
@@ -100,8 +112,11 @@ def describe(s: Any) -> Check:  # noqa: C901 - one switch over the assertion kin
         return Check(s.name, kind, f"event {s.event}", ", ".join(parts), tol, description)
     if isinstance(s, A.SoundAssertion):
         parts = [f"started at {_text(s.played_at)}"] if s.played_at is not None else []
+        parts += [f"stopped at {_text(s.stopped_at)}"] if s.stopped_at is not None else []
+        parts += [f"lasted {_text(s.duration)} s"] if s.duration is not None else []
         parts += [_times(s.count)] if s.count is not None else []
-        tol = _tolerance(s.tol) if s.played_at is not None else {}
+        timed = any(v is not None for v in (s.played_at, s.stopped_at, s.duration))
+        tol = _tolerance(s.tol) if timed else {}
         return Check(s.name, kind, f"sound {s.sound}", ", ".join(parts), tol, description)
     if isinstance(s, A.CheckAssertion):
         return Check(s.name, kind, f"at {_text(s.at)}", _text(s.check), {}, description)

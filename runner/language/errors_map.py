@@ -15,20 +15,80 @@ from runner.language.yaml_source import Path, Positions
 
 
 def _clean_loc(loc: tuple[Any, ...], data: Any, missing: bool) -> Path:
-    """Keep the parts of a pydantic location that are keys or indices of the document (dropping union and
-    type markers); a missing field keeps its own name at the end."""
-    out: list[str | int] = []
-    node = data
-    for i, part in enumerate(loc):
+    """Keep the parts of a pydantic location that are keys or indices of the document, dropping union and type
+    markers (`function-after[...]`, a tagged union's tag). A tag can also be a key of the document (`always:`
+    in an assertion whose `during` is wrong), so of the readings of the location the one that follows the
+    document furthest wins. A missing field keeps its own name at the end."""
+    best: tuple[tuple[int, int], list[str | int]] = ((0, 0), [])
+
+    def follow(i: int, node: Any, out: list[str | int], last: int) -> None:
+        nonlocal best
+        if i == len(loc):
+            score = (len(out), last)  # the most parts followed; on a tie, the reading that follows the deepest
+            if score > best[0]:
+                best = (score, list(out))
+            return
+        part = loc[i]
         if isinstance(node, dict) and part in node:
-            out.append(part)
-            node = node[part]
+            follow(i + 1, node[part], [*out, part], i + 1)
         elif isinstance(node, list) and isinstance(part, int) and 0 <= part < len(node):
-            out.append(part)
-            node = node[part]
+            follow(i + 1, node[part], [*out, part], i + 1)
         elif missing and i == len(loc) - 1 and isinstance(part, str):
-            out.append(part)
-    return tuple(out)
+            follow(i + 1, None, [*out, part], i + 1)
+        follow(i + 1, node, out, last)  # or read this part as a marker
+
+    follow(0, data, [], 0)
+    return tuple(best[1])
+
+
+#: What a list-valued field holds, for "expected a list of ..." messages (by the field's name).
+LIST_SHAPES = {
+    **dict.fromkeys(
+        ("pos", "vel", "angvel", "gravity", "axis", "axis2", "anchor", "value", "torque", "center", "spacing",
+         "layer_shift", "start_pos"),
+        "3 numbers [x, y, z]",
+    ),
+    **dict.fromkeys(("hpr", "start_hpr"), "3 angles [heading, pitch, roll] in degrees"),
+    **dict.fromkeys(("box", "size"), "3 sizes [x, y, z]"),
+    "quat": "4 numbers [w, x, y, z]",
+    "color": "3 or 4 numbers [r, g, b] or [r, g, b, a]",
+    "limits": "2 numbers [lo, hi] (or a mapping {lo, hi, zero, ...})",
+    **dict.fromkeys(("during", "within", "time_within"), "2 times [start, end]"),
+    "bodies": "2 names [body, other]",
+    "contact": "2 body names [a, b]",
+    "count": "3 counts [nx, ny, nz] (or one number)",
+}  # fmt: skip
+
+
+def _value_at(data: Any, path: Path) -> Any:
+    node = data
+    for part in path:
+        node = node[part]
+    return node
+
+
+def _list_message(path: Path, value: Any, err: Any) -> str | None:
+    """'expected a list of 3 numbers [x, y, z]; found 2' for a list of the wrong length, else None."""
+    if not isinstance(value, list) or err["type"] not in ("missing", "too_long", "too_short"):
+        return None
+    field = next((p for p in reversed(path) if isinstance(p, str)), "")
+    shape = LIST_SHAPES.get(field)
+    if shape is None:
+        wanted = (err.get("ctx") or {}).get("max_length") or (err.get("ctx") or {}).get("min_length")
+        shape = f"{wanted} values" if wanted is not None else None
+    if shape is None:
+        return None
+    return f"expected a list of {shape}; found {len(value)} item{'s' if len(value) != 1 else ''}"
+
+
+def _length_message(path: Path, err: Any, value: Any) -> str | None:
+    if err["type"] != "string_too_long" or not isinstance(value, str):
+        return None
+    limit = (err.get("ctx") or {}).get("max_length")
+    what = "characters"
+    if len(path) == 2 and path[0] == "variants" or path == ("scenario",):
+        what = "characters (the name is part of trace file names)"
+    return f"expected at most {limit} {what}; found {len(value)}"
 
 
 def _found(value: Any) -> str:
@@ -44,6 +104,7 @@ def issues_from(error: ValidationError, positions: Positions, data: Any, root: t
         kind = err["type"]
         path = _clean_loc(tuple(err["loc"]), data, kind == "missing")
         value = err.get("input")
+        is_key = "[key]" in err["loc"]
         if kind == "extra_forbidden":
             key = str(path[-1]) if path else ""
             allowed = keys_at(root, data, path[:-1])
@@ -67,19 +128,31 @@ def issues_from(error: ValidationError, positions: Positions, data: Any, root: t
             if guess:
                 message += f"; did you mean `{guess}`?"
             issue = positions.issue(path, message)
+        elif (listed := _list_message(path, _value_or_none(data, path), err)) is not None:
+            issue = positions.issue(path, listed)
         elif kind == "missing":
             issue = positions.issue(path[:-1], f"missing required field `{path[-1]}`")
             issue = Issue(issue.file, issue.line, issue.column, _join(path), issue.message)
+        elif (length := _length_message(path, err, path[-1] if is_key else _value_or_none(data, path))) is not None:
+            issue = positions.issue(path, length, at_key=is_key)
         else:
             msg = err["msg"]
-            msg = msg[len("Value error, ") :] if msg.startswith("Value error, ") else msg
-            if "found" not in msg:
+            if msg.startswith("Value error, "):  # our own validators' messages say what was found
+                msg = msg[len("Value error, ") :]
+            elif "found" not in msg:
                 msg = f"{msg[0].lower()}{msg[1:]}; found {_found(value)}"
             issue = positions.issue(path, msg)
         if path not in seen:  # one issue per place: the first alternative of a union speaks for it
             seen.add(path)
             issues.append(issue)
     return issues
+
+
+def _value_or_none(data: Any, path: Path) -> Any:
+    try:
+        return _value_at(data, path)
+    except (KeyError, IndexError, TypeError):
+        return None
 
 
 def _join(path: Path) -> str:

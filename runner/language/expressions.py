@@ -19,6 +19,7 @@ from dataclasses import dataclass
 from typing import Any, Protocol
 
 from runner.errors import ScenarioError
+from runner.language.explain import fmt, group_member
 
 MAX_LENGTH = 2000
 MAX_NODES = 500
@@ -40,6 +41,15 @@ class EvaluationError(ExpressionError, ScenarioError):
 class Resolver(Protocol):
     def value(self, name: str) -> Any: ...  # a dotted name, e.g. "box.pos.z"
     def call(self, func: str, args: Sequence[Any]) -> Any: ...  # runner-level functions (contact, playing...)
+
+
+@dataclass(frozen=True)
+class _Part:
+    """A sub-expression shown when a condition fails: its text and how to evaluate it."""
+
+    text: str
+    fn: Callable[[Resolver], Any]
+    extremum_of: str | None = None  # `max(crate.speed)`: the group's dotted name, to name the member
 
 
 def _aggregate(f: Callable[..., Any]) -> Callable[..., Any]:
@@ -128,6 +138,18 @@ PURE_FUNCTIONS: dict[str, Callable[..., Any]] = {
     "len": lambda v: len(v),
     "clamp": lambda x, lo, hi: max(lo, min(hi, x)),
 }
+#: How many arguments each function takes: (least, most); None: any number from the least.
+ARITY: dict[str, tuple[int, int | None, str]] = {
+    **{name: (1, 1, "x") for name in ("abs", "sqrt", "sin", "cos", "tan", "asin", "acos", "atan", "exp",
+                                      "radians", "degrees", "floor", "ceil", "sign")},
+    "atan2": (2, 2, "y, x"),
+    "log": (1, 2, "x[, base]"),
+    "round": (1, 2, "x[, digits]"),
+    "hypot": (1, None, "x, y, ..."),
+    **{name: (1, None, "a list, or values") for name in ("min", "max", "sum", "mean", "all", "any")},
+    "len": (1, 1, "a list"),
+    "clamp": (3, 3, "x, lo, hi"),
+}  # fmt: skip
 #: Functions the runner resolves (they need the run's state): contact(a, b), playing('ival'), count('event').
 RUNNER_FUNCTIONS = frozenset({"contact", "playing", "count"})
 RUNNER_ARITY = {"contact": 2, "playing": 1, "count": 1}
@@ -163,6 +185,21 @@ class Expression:
     calls: frozenset[str]  # runner functions it calls
     _fn: Evaluator
     call_args: frozenset[tuple[str, tuple[str, ...]]] = frozenset()  # (function, literal arguments)
+    parts: tuple[_Part, ...] = ()  # sub-expressions, for explain()
+
+    def explain(self, resolver: Resolver, limit: int = 8) -> str:
+        """The values of the sub-expressions now, like pytest's assertion rewriting: `box.pos.z = 0.12,
+        max(crate.speed) = 0.031 (crate_4)`; parts that cannot be evaluated are left out."""
+        shown: list[str] = []
+        for part in self.parts[:limit]:
+            try:
+                value = part.fn(resolver)
+            except (ExpressionError, TypeError, ValueError, ArithmeticError, KeyError):
+                continue
+            text = f"{part.text} = {fmt(value)}"
+            member = group_member(part.text, part.extremum_of, resolver) if part.extremum_of is not None else None
+            shown.append(text + (f" ({member})" if member else ""))
+        return ", ".join(shown)
 
     def evaluate(self, resolver: Resolver) -> Any:
         try:
@@ -206,6 +243,14 @@ class _Compiler:
         self.calls: set[str] = set()
         self.call_args: set[tuple[str, tuple[str, ...]]] = set()
         self.count = 0
+        self.parts: dict[str, _Part] = {}
+
+    def shown(self, node: ast.AST, fn: Evaluator, extremum_of: str | None = None) -> Evaluator:
+        """Remember a sub-expression for explain() (by its text, once)."""
+        text = ast.get_source_segment(self.text, node)
+        if text and text not in self.parts:
+            self.parts[text] = _Part(text, fn, extremum_of)
+        return fn
 
     def fail(self, node: ast.AST, what: str) -> ExpressionError:
         col = getattr(node, "col_offset", None)
@@ -231,10 +276,10 @@ class _Compiler:
                 constant = CONSTANTS[name]
                 return lambda r: constant
             self.names.add(name)
-            return lambda r: r.value(name)
+            return self.shown(node, lambda r: r.value(name))
         if isinstance(node, ast.BinOp) and type(node.op) in _BIN:
             op, left, right = _BIN[type(node.op)], self.compile(node.left), self.compile(node.right)
-            return lambda r: op(left(r), right(r))
+            return self.shown(node, lambda r: op(left(r), right(r)))
         if isinstance(node, ast.UnaryOp):
             operand = self.compile(node.operand)
             if isinstance(node.op, ast.USub):
@@ -274,9 +319,17 @@ class _Compiler:
             raise self.fail(node, "only plain calls of known functions are allowed")
         fname = node.func.id
         if fname in PURE_FUNCTIONS:
+            least, most, signature = ARITY[fname]
+            if len(node.args) < least or (most is not None and len(node.args) > most):
+                count = str(least) if least == most else f"{least} or more" if most is None else f"{least} to {most}"
+                raise self.fail(
+                    node, f"{fname}() takes {count} argument{'s' if most != 1 else ''} ({signature}), "
+                    f"found {len(node.args)}",
+                )
             args = [self.compile(a) for a in node.args]
             fn = _nan_on_math_error(PURE_FUNCTIONS[fname])
-            return lambda r: fn(*(a(r) for a in args))
+            group = _dotted(node.args[0]) if fname in ("max", "min") and len(node.args) == 1 else None
+            return self.shown(node, lambda r: fn(*(a(r) for a in args)), group)
         if fname in RUNNER_FUNCTIONS:
             self.calls.add(fname)
             if len(node.args) != RUNNER_ARITY[fname]:
@@ -290,7 +343,7 @@ class _Compiler:
                     raise self.fail(a, f"name `{value}` not allowed (underscore)")
                 literal.append(value)
             self.call_args.add((fname, tuple(literal)))
-            return lambda r: r.call(fname, literal)
+            return self.shown(node, lambda r: r.call(fname, literal))
         known = ", ".join(sorted([*PURE_FUNCTIONS, *RUNNER_FUNCTIONS]))
         raise self.fail(node, f"unknown function `{fname}` (known: {known})")
 
@@ -313,10 +366,12 @@ def compile_expression(text: str) -> Expression:
         fn = compiler.compile(tree.body)
     except RecursionError:
         raise ExpressionError(f"expression nested too deeply: {text!r}") from None
+    whole = ast.get_source_segment(source, tree.body)
     return Expression(
         text=source,
         names=frozenset(compiler.names),
         calls=frozenset(compiler.calls),
         _fn=fn,
         call_args=frozenset(compiler.call_args),
+        parts=tuple(p for t, p in compiler.parts.items() if t != whole),
     )

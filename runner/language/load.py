@@ -7,20 +7,33 @@ expected and what was found. Nothing here runs user text: parameters are substit
 from __future__ import annotations
 
 import copy
+import difflib
 import hashlib
+import os
 import re
+import stat
 from dataclasses import dataclass
 from pathlib import Path as FsPath
 from typing import Any
 
-import yaml
 from pydantic import ValidationError
 
 from runner.errors import Issue, ScenarioValidationError
 from runner.language.errors_map import issues_from
+from runner.language.files import special_file_kind
 from runner.language.model import Scenario
 from runner.language.refs import check_references
-from runner.language.yaml_source import Path, Positions, format_path, load_yaml
+from runner.language.times import time_context
+from runner.language.yaml_source import (
+    COMMAND_LINE,
+    MAX_FILE_BYTES,
+    MAX_TEXT,
+    Path,
+    Positions,
+    format_path,
+    load_value,
+    load_yaml,
+)
 
 _PARAM = re.compile(r"^\$\{([A-Za-z_][A-Za-z0-9_]*)\}$")
 _PARAM_ANYWHERE = re.compile(r"\$\{([A-Za-z_][A-Za-z0-9_]*)\}")
@@ -41,18 +54,30 @@ class LoadedScenario:
 
 
 def read_source(path: FsPath) -> tuple[str, Any, Positions]:
+    file = str(path)
     try:
-        raw = path.read_bytes()
+        info = os.stat(path)  # never open what is not a regular file: a FIFO or a device could block forever
     except OSError as exc:
-        raise ScenarioValidationError([Issue(str(path), 0, 0, "", f"cannot read the file: {exc.strerror}")]) from None
+        raise ScenarioValidationError([Issue(file, 0, 0, "", f"cannot read the file: {exc.strerror}")]) from None
+    if not stat.S_ISREG(info.st_mode):
+        kind = special_file_kind(info.st_mode)
+        raise ScenarioValidationError([Issue(file, 0, 0, "", f"expected a scenario file, found {kind}")])
+    if info.st_size > MAX_FILE_BYTES:
+        message = f"file larger than {MAX_FILE_BYTES} bytes ({info.st_size} bytes); refused"
+        raise ScenarioValidationError([Issue(file, 1, 1, "", message)])
+    try:
+        with open(path, "rb") as handle:
+            raw = handle.read(MAX_FILE_BYTES + 1)
+    except OSError as exc:
+        raise ScenarioValidationError([Issue(file, 0, 0, "", f"cannot read the file: {exc.strerror}")]) from None
     try:
         text = raw.decode("utf-8")
     except UnicodeDecodeError as exc:
         line = raw.count(b"\n", 0, exc.start) + 1
         col = exc.start - (raw.rfind(b"\n", 0, exc.start) + 1) + 1
         message = f"expected UTF-8 text, found a byte 0x{raw[exc.start]:02x} at offset {exc.start}"
-        raise ScenarioValidationError([Issue(str(path), line, col, "", message)]) from None
-    data, positions = load_yaml(text, str(path))
+        raise ScenarioValidationError([Issue(file, line, col, "", message)]) from None
+    data, positions = load_yaml(text, file)
     if not isinstance(data, dict):
         raise ScenarioValidationError(
             [positions.issue((), f"expected a mapping at the top, found {type(data).__name__}")]
@@ -61,70 +86,121 @@ def read_source(path: FsPath) -> tuple[str, Any, Positions]:
 
 
 def parse_overrides(items: list[str]) -> tuple[tuple[str, Any], ...]:
-    """`--set key=value` items; the value is read as a YAML scalar or flow collection."""
+    """`--set key=value` items; the value is read as a YAML scalar or flow collection (plain data only).
+    A refused item is an issue naming the argument."""
     out = []
+    issues = []
     for item in items:
         key, sep, value = item.partition("=")
         if not sep or not key.strip():
-            raise ScenarioValidationError(
-                [Issue("<command line>", 0, 0, "--set", f"expected key=value, found {item!r}")]
-            )
+            issues.append(Issue(COMMAND_LINE, 0, 0, f"--set {item}", "expected KEY=VALUE, e.g. world.dt=0.01"))
+            continue
         try:
-            parsed = yaml.safe_load(value) if value.strip() else ""
-        except yaml.YAMLError:
-            parsed = value
+            parsed = load_value(value)
+        except ValueError as exc:
+            issues.append(Issue(COMMAND_LINE, 0, 0, f"--set {item[:80]}", str(exc)))
+            continue
         out.append((key.strip(), parsed))
+    if issues:
+        raise ScenarioValidationError(issues)
     return tuple(out)
 
 
-def _set_path(data: dict[str, Any], dotted: str, value: Any, file: str, origin: Path) -> Path:
+#: Maps of user-chosen names: a dotted path may replace one of their entries, never create one (a typo in
+#: `--set params.cont=3` must not add a parameter nobody reads).
+NAME_MAPS: dict[tuple[str, ...], str] = {
+    ("params",): "parameter",
+    ("state",): "state variable",
+    ("bodies",): "body",
+    ("joints",): "joint",
+    ("sounds",): "sound",
+    ("intervals",): "interval",
+    ("triggers",): "trigger",
+    ("on",): "handler",
+    ("variants",): "variant",
+    ("collisions", "nodes"): "collision node",
+}
+
+
+class _SetError(Exception):
+    """A dotted path that cannot be set; the caller locates it."""
+
+
+def _set_path(data: dict[str, Any], dotted: str, value: Any) -> Path:
     parts: list[str | int] = [int(p) if p.isdigit() else p for p in dotted.split(".")]
+    if any(p == "" for p in parts):
+        raise _SetError(f"expected a dotted path such as world.dt, found `{dotted}`")
     node: Any = data
-    for i, part in enumerate(parts[:-1]):
+    for i, part in enumerate(parts):
+        kind = NAME_MAPS.get(tuple(str(p) for p in parts[:i]))
+        if kind is not None and isinstance(node, dict) and part not in node:
+            raise _SetError(_unknown_name(kind, str(part), [str(k) for k in node], _NOT_DECLARED))
+        last = i == len(parts) - 1
         if isinstance(node, dict):
-            node = node.setdefault(part, {}) if parts[i + 1] != 0 else node.setdefault(part, [])
+            if last:
+                node[part] = value
+            else:
+                node = node.setdefault(part, {})
         elif isinstance(node, list) and isinstance(part, int) and part < len(node):
-            node = node[part]
+            if last:
+                node[part] = value
+            else:
+                node = node[part]
         else:
-            raise ScenarioValidationError(
-                [
-                    Issue(
-                        file,
-                        0,
-                        0,
-                        dotted,
-                        f"cannot set `{dotted}`: `{format_path(tuple(parts[: i + 1]))}` is not a mapping",
-                    )
-                ]
-            )
-    last = parts[-1]
-    if isinstance(node, dict):
-        node[last] = value
-    elif isinstance(node, list) and isinstance(last, int) and last < len(node):
-        node[last] = value
-    else:
-        raise ScenarioValidationError([Issue(file, 0, 0, dotted, f"cannot set `{dotted}`")])
+            where = format_path(tuple(parts[:i])) or "the top"
+            if isinstance(node, list) and isinstance(part, int):
+                problem = f"is a list of {len(node)} items, which has no index {part}"
+            elif isinstance(node, list):
+                problem = "is a list, not a mapping"
+            else:
+                problem = f"is {node!r}"[:60] + ", not a mapping"
+            raise _SetError(f"cannot set `{dotted}`: `{where}` {problem}")
     return tuple(parts)
 
 
-def _substitute(value: Any, params: dict[str, Any], path: Path, positions: Positions, issues: list[Issue]) -> Any:
+def _unknown_name(kind: str, name: str, known: list[str], note: str = "") -> str:
+    close = difflib.get_close_matches(name, known, n=1, cutoff=0.6)
+    hint = f"did you mean `{close[0]}`?" if close else f"declared: {', '.join(sorted(known)) or 'none'}"
+    return f"unknown {kind} `{name}`{note}; {hint}"
+
+
+_NOT_DECLARED = " (a dotted path replaces a value, it does not declare one)"
+
+
+class _Budget:
+    """Characters that parameter substitution may still produce (MAX_TEXT minus the document's own text)."""
+
+    def __init__(self, used: int) -> None:
+        self.left = MAX_TEXT - used
+
+    def take(self, size: int, path: Path, positions: Positions) -> None:
+        self.left -= size
+        if self.left < 0:
+            message = (
+                f"parameter substitution makes the document hold more than {MAX_TEXT} characters of text; "
+                "refused (a long parameter used many times?)"
+            )
+            raise ScenarioValidationError([positions.issue(path, message)])
+
+
+def _substitute(
+    value: Any, params: dict[str, Any], path: Path, positions: Positions, issues: list[Issue], budget: _Budget
+) -> Any:
     if isinstance(value, dict):
-        return {k: _substitute(v, params, path + (k,), positions, issues) for k, v in value.items()}
+        return {k: _substitute(v, params, path + (k,), positions, issues, budget) for k, v in value.items()}
     if isinstance(value, list):
-        return [_substitute(v, params, path + (i,), positions, issues) for i, v in enumerate(value)]
+        return [_substitute(v, params, path + (i,), positions, issues, budget) for i, v in enumerate(value)]
     if isinstance(value, str) and "${" in value:
         whole = _PARAM.match(value)
         names = _PARAM_ANYWHERE.findall(value)
         missing = [n for n in names if n not in params]
         if missing:
-            issues.append(
-                positions.issue(
-                    path, f"unknown parameter `{missing[0]}`; declared: {', '.join(sorted(params)) or 'none'}"
-                )
-            )
+            issues.append(positions.issue(path, _unknown_name("parameter", missing[0], list(params))))
             return value
         if whole:
+            budget.take(len(str(params[whole.group(1)])), path, positions)
             return params[whole.group(1)]
+        budget.take(sum(len(str(params[n])) for n in names), path, positions)  # checked before it is built
         return _PARAM_ANYWHERE.sub(lambda m: str(params[m.group(1)]), value)
     return value
 
@@ -141,10 +217,13 @@ def load_scenario(
     """Load ``path`` as the given variant (``None``: the base case)."""
     text, data, positions = read_source(path)
     data = copy.deepcopy(data)
-    file = str(path)
     for key, value in overrides:
-        dotted = key
-        _set_path(data, dotted, value, "<command line>", ())
+        argument = f"--set {key}"
+        try:
+            target = _set_path(data, key, value)
+        except _SetError as exc:
+            raise ScenarioValidationError([Issue(COMMAND_LINE, 0, 0, argument, str(exc))]) from None
+        positions.overridden[target] = argument
     variants = data.get("variants") if isinstance(data.get("variants"), dict) else {}
     chosen = variant if variant not in (None, BASE_CASE) else None
     if chosen is not None:
@@ -153,14 +232,14 @@ def load_scenario(
             raise ScenarioValidationError(
                 [positions.issue(("variants",), f"unknown variant `{chosen}`; this file has: {names}", at_key=True)]
             )
-        _apply_variant(data, variants[chosen], ("variants", chosen), positions, file)
+        _apply_variant(data, variants[chosen], ("variants", chosen), positions)
     params = data.get("params") if isinstance(data.get("params"), dict) else {}
     issues: list[Issue] = []
-    data = _substitute(data, params, (), positions, issues)
+    data = _substitute(data, params, (), positions, issues, _Budget(positions.text_size))
     if issues:
         raise ScenarioValidationError(issues)
     try:
-        model = Scenario.model_validate(data)
+        model = Scenario.model_validate(data, context=time_context(data))
     except ValidationError as exc:
         raise ScenarioValidationError(issues_from(exc, positions, data, Scenario)) from None
     check_references(model, positions, path.parent)
@@ -175,12 +254,19 @@ def load_scenario(
     )
 
 
-def _apply_variant(data: dict[str, Any], variant: Any, vpath: Path, positions: Positions, file: str) -> None:
+def _apply_variant(data: dict[str, Any], variant: Any, vpath: Path, positions: Positions) -> None:
     if not isinstance(variant, dict):
         return  # the model validation reports it
+    issues = []
     for key, value in (variant.get("set") or {}).items() if isinstance(variant.get("set"), dict) else []:
-        target = _set_path(data, str(key), copy.deepcopy(value), file, vpath)
+        try:
+            target = _set_path(data, str(key), copy.deepcopy(value))
+        except _SetError as exc:
+            issues.append(positions.issue(vpath + ("set", key), str(exc), at_key=True))
+            continue
         positions.remap(vpath + ("set", key), target)
+    if issues:
+        raise ScenarioValidationError(issues)
     if "inputs" in variant and variant["inputs"] is not None:
         data["inputs"] = copy.deepcopy(variant["inputs"])
         positions.remap(vpath + ("inputs",), ("inputs",))

@@ -8,8 +8,22 @@ from pydantic import Field
 
 from runner.language.model_assertions import Assertion
 from runner.language.model_base import SCHEMA_VERSION, EventName, Name, Strict, Surface
-from runner.language.model_behaviour import Action, Collisions, Input, IntervalDef, IntervalId, StateValue
+from runner.language.model_behaviour import (
+    Action,
+    Collisions,
+    Handler,
+    Input,
+    IntervalDef,
+    IntervalId,
+    StateValue,
+    Trigger,
+)
 from runner.language.model_physics import Body, Joint, PairSurface, World
+
+#: A scenario's and a variant's names make a trace's file name `<scenario>__<variant>__<backend>.mcap.partial`:
+#: 128 + 64 characters keep it (and the `.cost.json.partial` beside it) under the 255 bytes of a file name.
+MAX_SCENARIO_NAME = 128
+MAX_VARIANT_NAME = 64
 
 
 class Variant(Strict):
@@ -26,7 +40,7 @@ class Variant(Strict):
 
 class Scenario(Strict):
     schema_version: Literal[1] = Field(description=f"The language version; this runner reads {SCHEMA_VERSION}.")
-    scenario: Annotated[str, Field(min_length=1, max_length=128, pattern=r"^[A-Za-z0-9_.-]+$")] = Field(
+    scenario: Annotated[str, Field(min_length=1, max_length=MAX_SCENARIO_NAME, pattern=r"^[A-Za-z0-9_.-]+$")] = Field(
         description="The scenario's name."
     )
     description: str | None = Field(None, max_length=5000)
@@ -43,12 +57,20 @@ class Scenario(Strict):
     state: dict[Name, StateValue] = Field(default_factory=dict, description="State variables and initial values.")
     collisions: Collisions = Field(default_factory=Collisions)
     intervals: dict[IntervalId, IntervalDef] = Field(default_factory=dict)
-    on: dict[EventName, list[Action]] = Field(
-        default_factory=dict, description="Event handlers. `start` is sent before the first step."
+    triggers: dict[EventName, Trigger] = Field(
+        default_factory=dict,
+        description="Events raised when a condition becomes true: event name -> {when, once}.",
+    )
+    on: dict[EventName, list[Action] | Handler] = Field(
+        default_factory=dict,
+        description="Event handlers: event -> [actions], or {do: [actions], once, min_interval}. "
+        "`start` is sent before the first step.",
     )
     inputs: list[Input] = Field(default_factory=list, description="Timed input events.")
     assertions: list[Assertion] = Field(default_factory=list)
-    variants: dict[Annotated[str, Field(pattern=r"^[A-Za-z0-9_.-]+$")], Variant] = Field(default_factory=dict)
+    variants: dict[Annotated[str, Field(pattern=r"^[A-Za-z0-9_.-]+$", max_length=MAX_VARIANT_NAME)], Variant] = Field(
+        default_factory=dict, description="Named cases (names: letters, digits, `_ . -`; part of trace file names)."
+    )
     backend_options: dict[Name, dict[str, Any]] = Field(
         default_factory=dict, description="Per-backend engine options (see `scenario backends`)."
     )

@@ -4,27 +4,18 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING, Annotated, Any, Literal, Union
 
-from pydantic import Discriminator, Field, Tag, field_validator, model_validator
+from pydantic import Discriminator, Field, Tag, model_validator
 
-from runner.language.model_base import EventName, Expr, Name, NonNegFloat, Strict, check_time_or_end
+from runner.language.model_base import EventName, Expr, Name, NonNegFloat, Seconds, Strict, TimeOrEnd, Window
 from runner.language.model_behaviour import tag_of
 
 Tolerance = Annotated[float, Field(ge=0, allow_inf_nan=False)] | Expr | dict[str, Annotated[float, Field(ge=0)] | Expr]
 Number = float | Expr  # a number, or an expression evaluated when the assertion is checked
-TimeOrEnd = Annotated[float | Literal["end"], Field(description="Seconds, or `end`.")]
-Window = tuple[TimeOrEnd, TimeOrEnd]
 
 
 class AssertionBase(Strict):
     name: Annotated[str, Field(min_length=1, max_length=128)]
     description: str | None = Field(None, max_length=2000)
-
-    @field_validator("*", mode="before")
-    @classmethod
-    def _times(cls, v: Any, info: Any) -> Any:
-        if info.field_name in ("at", "first"):
-            return check_time_or_end(v)
-        return v
 
 
 def _tol_check(tol: Any) -> None:
@@ -72,20 +63,52 @@ class EventuallyAssertion(AssertionBase):
     during: Window = (0.0, "end")
 
 
-class MaxAssertion(AssertionBase):
+class ExtremumBase(AssertionBase):
+    """The largest (smallest) value of an expression over a window: its value near a number, and/or the time
+    at which it is reached near a time or within a window (the first such time if it is reached twice)."""
+
+    during: Window = (0.0, "end")
+    near: Number | None = Field(None, description="The extremum's value should be near this.")
+    tol: Tolerance = 0.0
+    time: TimeOrEnd | None = Field(None, description="The time of the extremum should be near this.")
+    time_tol: Tolerance = Field(0.0, description="Tolerance on `time`, seconds.")
+    time_within: Window | None = Field(None, description="The time of the extremum should be in this window.")
+
+    @model_validator(mode="after")
+    def _how(self) -> ExtremumBase:
+        if self.near is None and self.time is None and self.time_within is None:
+            raise ValueError("expected `near` (the value), `time` or `time_within` (when); found none")
+        _tol_check(self.tol)
+        return self
+
+
+class MaxAssertion(ExtremumBase):
     """The largest value of an expression over a window."""
 
     max_of: Expr = Field(alias="max")
-    during: Window = (0.0, "end")
-    near: Number
-    tol: Tolerance = 0.0
 
 
-class MinAssertion(AssertionBase):
+class MinAssertion(ExtremumBase):
+    """The smallest value of an expression over a window."""
+
     min_of: Expr = Field(alias="min")
-    during: Window = (0.0, "end")
-    near: Number
-    tol: Tolerance = 0.0
+
+
+class BecomesAssertion(AssertionBase):
+    """The time a condition first becomes true (false before, true at a step: a crossing, an apex, a stop),
+    near a time or within a window."""
+
+    becomes: Expr
+    near: TimeOrEnd | None = Field(None, description="It should become true near this time.")
+    tol: Tolerance = Field(0.0, description="Tolerance on `near`, seconds.")
+    within: Window | None = Field(None, description="It should become true in this window.")
+
+    @model_validator(mode="after")
+    def _how(self) -> BecomesAssertion:
+        if (self.near is None) == (self.within is None):
+            raise ValueError("expected exactly one of `near` (with `tol`) or `within`")
+        _tol_check(self.tol)
+        return self
 
 
 class CountRange(Strict):
@@ -111,17 +134,20 @@ class EventAssertion(AssertionBase):
 
 
 class SoundAssertion(AssertionBase):
-    """A sound started at a time (within tol), or a number of times."""
+    """A sound started (or stopped) at a time, played for a duration, or a number of times; `tol` applies to
+    each time given."""
 
     sound: Name
-    played_at: NonNegFloat | None = None
+    played_at: Seconds | None = Field(None, description="One of its plays started at this time.")
+    stopped_at: Seconds | None = Field(None, description="One of its plays stopped at this time.")
+    duration: Seconds | None = Field(None, description="Every play lasted this long (start to stop).")
     tol: Tolerance = 0.0
     count: Annotated[int, Field(ge=0)] | CountRange | None = None
 
     @model_validator(mode="after")
     def _how(self) -> SoundAssertion:
-        if self.played_at is None and self.count is None:
-            raise ValueError("expected played_at or count, found neither")
+        if all(v is None for v in (self.played_at, self.stopped_at, self.duration, self.count)):
+            raise ValueError("expected played_at, stopped_at, duration or count; found none")
         return self
 
 
@@ -148,6 +174,7 @@ ASSERTION_TAGS: dict[str, type[Strict]] = {
     "eventually": EventuallyAssertion,
     "max": MaxAssertion,
     "min": MinAssertion,
+    "becomes": BecomesAssertion,
     "event": EventAssertion,
     "sound": SoundAssertion,
     "contact": ContactAssertion,
@@ -163,7 +190,7 @@ def _assertion_tag(v: Any) -> str | None:
 if TYPE_CHECKING:  # the static view of the tagged union built below from ASSERTION_TAGS
     Assertion = (
         ValueAssertion | CheckAssertion | AlwaysAssertion | NeverAssertion | EventuallyAssertion | MaxAssertion |
-        MinAssertion | EventAssertion | SoundAssertion | ContactAssertion
+        MinAssertion | BecomesAssertion | EventAssertion | SoundAssertion | ContactAssertion
     )
 else:
     Assertion = Annotated[
@@ -171,4 +198,4 @@ else:
         Discriminator(_assertion_tag),
     ]
 
-__all__ = ["ASSERTION_TAGS", "Assertion", "NonNegFloat"]
+__all__ = ["ASSERTION_TAGS", "Assertion", "NonNegFloat", "TimeOrEnd", "Window"]

@@ -3,9 +3,11 @@
 from __future__ import annotations
 
 import math
-from typing import Annotated, Any
+from typing import Annotated, Any, Literal
 
-from pydantic import BaseModel, ConfigDict, Field, field_validator
+from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, ValidationInfo, WithJsonSchema, field_validator
+
+from runner.language.times import evaluate_time
 
 SCHEMA_VERSION = 1
 #: Every physical number stays within +-MAX_MAGNITUDE (SI units), so that the masses, inertias, poses and
@@ -49,6 +51,45 @@ def finite_vec(v: Any) -> Any:
     return v
 
 
+def _time(value: Any, info: ValidationInfo) -> Any:
+    """A time written as an expression becomes its value (runner.language.times); `end` stays as it is."""
+    if isinstance(value, str) and value != "end":
+        return evaluate_time(value, info.context)
+    return value
+
+
+_TIME_TEXT = {
+    "type": "string",
+    "minLength": 1,
+    "description": "An expression of params and constants (param.<name>, dt, duration, g, gravity.x|y|z, pi), "
+    "evaluated once when the scenario is loaded.",
+}
+
+
+def _time_schema(minimum: str, end: bool = False) -> WithJsonSchema:
+    number: dict[str, Any] = {"type": "number", minimum: 0, "maximum": MAX_MAGNITUDE}
+    options: list[dict[str, Any]] = [number, _TIME_TEXT] + ([{"const": "end"}] if end else [])
+    return WithJsonSchema({"anyOf": options})
+
+
+#: Seconds >= 0: a number or an expression evaluated at load (docs/language.md, "Times").
+Seconds = Annotated[
+    float, Field(ge=0, le=MAX_MAGNITUDE, allow_inf_nan=False), BeforeValidator(_time), _time_schema("minimum")
+]
+#: Seconds > 0, as :data:`Seconds`.
+PositiveSeconds = Annotated[
+    float, Field(gt=0, le=MAX_MAGNITUDE, allow_inf_nan=False), BeforeValidator(_time), _time_schema("exclusiveMinimum")
+]
+#: Seconds >= 0 or `end` (the run's last step), as :data:`Seconds`.
+TimeOrEnd = Annotated[
+    Annotated[float, Field(ge=0, le=MAX_MAGNITUDE, allow_inf_nan=False)] | Literal["end"],
+    BeforeValidator(_time),
+    _time_schema("minimum", end=True),
+]
+#: A window [start, end] of times (either may be `end`).
+Window = tuple[TimeOrEnd, TimeOrEnd]
+
+
 class Surface(Strict):
     """An ODE contact surface."""
 
@@ -68,12 +109,3 @@ class Surface(Strict):
         return v
 
 
-TimeOrEnd = float | str  # "end" or seconds
-
-
-def check_time_or_end(v: Any) -> Any:
-    if isinstance(v, str) and v != "end":
-        raise ValueError(f"expected a time in seconds or `end`, found {v!r}")
-    if isinstance(v, float) and (not math.isfinite(v) or v < 0):
-        raise ValueError(f"expected a time >= 0, found {v}")
-    return v

@@ -13,7 +13,9 @@ from runner.language.model_base import (
     Name,
     NonNegFloat,
     PositiveFloat,
+    PositiveSeconds,
     Quat,
+    Seconds,
     Strict,
     Vec3,
     finite_vec,
@@ -225,7 +227,7 @@ IfAction.model_rebuild()
 # --- intervals ------------------------------------------------------------------------------------
 class Lerp(Strict):
     body: Name
-    duration: NonNegFloat
+    duration: Seconds
     blend: Blend = "noBlend"
     pos: Vec3 | None = None
     hpr: Vec3 | None = Field(None, description="Degrees, per component, no wrap.")
@@ -238,15 +240,18 @@ class Lerp(Strict):
     def _some(self) -> Lerp:
         if self.pos is None and self.hpr is None and self.scale is None:
             raise ValueError("expected at least one of pos, hpr, scale to lerp to, found none")
+        for name in ("pos", "hpr", "scale"):
+            if getattr(self, f"start_{name}") is not None and getattr(self, name) is None:
+                raise ValueError(f"`start_{name}` is given without `{name}` (a start needs an end to lerp to)")
         return self
 
 
 class SoundStep(Strict):
     sound: Name
-    duration: PositiveFloat | None = Field(None, description="Default: the sound's length minus start_time.")
+    duration: PositiveSeconds | None = Field(None, description="Default: the sound's length minus start_time.")
     volume: Annotated[float, Field(ge=0, le=1)] = 1.0
     loop: bool = False
-    start_time: NonNegFloat = 0.0
+    start_time: Seconds = 0.0
 
 
 class Step(Strict):
@@ -255,11 +260,13 @@ class Step(Strict):
     lerp: Lerp | None = None
     sequence: list[Step] | None = None
     parallel: list[Step] | None = None
-    wait: NonNegFloat | None = None
+    wait: Seconds | None = None
     sound: Name | SoundStep | None = None
     func: list[Action] | None = Field(None, description="An action step (Panda3D Func): actions run at once.")
     interval: IntervalId | None = Field(None, description="Another named interval, inlined here.")
-    duration: PositiveFloat | None = Field(None, description="Sequence/parallel only: a fixed ('phony') duration.")
+    duration: PositiveSeconds | None = Field(
+        None, description="Sequence/parallel only: a fixed ('phony') duration."
+    )
 
     @model_validator(mode="after")
     def _one(self) -> Step:
@@ -289,14 +296,62 @@ class IntervalDef(Step):
 
 # --- timed inputs ---------------------------------------------------------------------------------
 class Repeat(Strict):
-    every: PositiveFloat
+    every: PositiveSeconds
     count: Annotated[int, Field(ge=1, le=100_000)]
 
 
 class Input(Strict):
-    at: NonNegFloat = Field(description="Simulated time in seconds.")
+    at: Seconds = Field(description="Simulated time in seconds (a number or an expression of params).")
     event: EventName
     repeat: Repeat | None = None
 
 
-__all__ = ["ACTION_TAGS", "Action", "Collisions", "Input", "IntervalDef", "Step", "tag_of"]
+# --- handlers and condition triggers --------------------------------------------------------------
+class Handler(Strict):
+    """A handler with options: the actions under `do`, run at most once, or not again within `min_interval`."""
+
+    do: list[Action] = Field(description="The actions, as in the short form `event: [actions]`.")
+    once: bool = Field(False, description="Run only for the event's first delivery (Panda3D's acceptOnce).")
+    min_interval: Seconds | None = Field(
+        None,
+        description="Skip deliveries less than this many seconds after the last one the handler ran for "
+        "(chattering contacts); the events still happen and count.",
+    )
+
+    @model_validator(mode="after")
+    def _one_rule(self) -> Handler:
+        if self.once and self.min_interval is not None:
+            raise ValueError("expected `once` or `min_interval`, found both")
+        return self
+
+
+class Trigger(Strict):
+    """An event raised when a condition becomes true (edge-triggered), checked after every step."""
+
+    when: Expr = Field(description="A condition (docs/language.md#expressions).")
+    once: bool = Field(
+        False, description="Raise the event only the first time; by default it is re-armed when the condition "
+        "becomes false again.",
+    )
+    description: str | None = Field(None, max_length=2000)
+
+
+def handler_parts(handler: list[Any] | Handler) -> tuple[list[Any], bool, float | None]:
+    """(actions, once, min_interval) of a handler written either way."""
+    if isinstance(handler, Handler):
+        return handler.do, handler.once, handler.min_interval
+    return handler, False, None
+
+
+__all__ = [
+    "ACTION_TAGS",
+    "Action",
+    "Collisions",
+    "Handler",
+    "Input",
+    "IntervalDef",
+    "Step",
+    "Trigger",
+    "handler_parts",
+    "tag_of",
+]

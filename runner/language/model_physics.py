@@ -118,25 +118,59 @@ class Motor(Strict):
     )
 
 
+class Limits(Strict):
+    """Stops on a slider or hinge coordinate, with a stated zero and (optionally) a bouncy or soft stop."""
+
+    lo: FiniteFloat = Field(description="Low stop: metres (slider) or radians (hinge), from `zero`.")
+    hi: FiniteFloat = Field(description="High stop, as lo.")
+    zero: Literal["start", "absolute"] = Field(
+        "start",
+        description="Where the coordinate is 0: `start` (the start pose) or `absolute` (hinge: the body's "
+        "orientation equal to the other's; slider: the body's origin at `anchor`, by default the other body's "
+        "origin or the world origin). `<joint>.position` reads from the same zero.",
+    )
+    bounce: Annotated[float, Field(ge=0, le=1, allow_inf_nan=False)] = Field(
+        0.0, description="Restitution of the stops, 0..1 (ODE dParamBounce)."
+    )
+    stiffness: PositiveFloat | None = Field(
+        None, description="A soft stop: spring stiffness, N/m or N m/rad (ODE dParamStopERP/CFM); default rigid."
+    )
+    damping: NonNegFloat | None = Field(
+        None, description="A soft stop: damping, N s/m or N m s/rad (with stiffness; default 0)."
+    )
+
+    @model_validator(mode="after")
+    def _check(self) -> Limits:
+        if self.lo > self.hi:
+            raise ValueError(f"expected lo <= hi, found lo {self.lo} and hi {self.hi}")
+        if self.damping is not None and self.stiffness is None:
+            raise ValueError("a soft stop needs `stiffness` (damping alone is not a stop)")
+        return self
+
+
 class Joint(Strict):
     type: Literal["slider", "hinge", "ball", "fixed", "universal"]
     bodies: tuple[Name, Name] = Field(description="[body, other]; other may be `environment`.")
     axis: Vec3 = Field((1.0, 0.0, 0.0), description="World-frame axis at the start (slider, hinge, universal).")
     axis2: Vec3 | None = Field(None, description="Second axis of a universal joint.")
     anchor: Vec3 | None = Field(None, description="World-frame anchor; default: the first body's position.")
-    limits: tuple[FiniteFloat, FiniteFloat] | None = Field(
-        None, description="[lo, hi] stops: metres (slider) or radians (hinge)."
+    limits: tuple[FiniteFloat, FiniteFloat] | Limits | None = Field(
+        None,
+        description="Stops: [lo, hi] in metres (slider) or radians (hinge) from the start pose, or "
+        "{lo, hi, zero, bounce, stiffness, damping}.",
     )
     motor: Motor | None = None
 
     _v = field_validator("axis", "axis2", "anchor", mode="before")(finite_vec)
 
     @model_validator(mode="after")
-    def _check(self) -> Joint:
+    def _check(self) -> Joint:  # noqa: C901 - one list of rules
         if sum(c * c for c in self.axis) < 1e-12:
             raise ValueError("expected a non-zero axis, found (0, 0, 0)")
-        if self.limits is not None and self.limits[0] > self.limits[1]:
+        if isinstance(self.limits, tuple) and self.limits[0] > self.limits[1]:
             raise ValueError(f"expected limits [lo, hi] with lo <= hi, found {list(self.limits)}")
+        if isinstance(self.limits, Limits) and self.limits.zero == "absolute" and self.type not in ("slider", "hinge"):
+            raise ValueError(f"`zero: absolute` is defined for sliders and hinges, not a {self.type} joint")
         if self.type in ("ball", "fixed") and (self.limits is not None or self.motor is not None):
             raise ValueError(f"a {self.type} joint takes no limits or motor")
         if self.type == "universal" and self.axis2 is None:
@@ -155,4 +189,4 @@ class PairSurface(Surface):
     bodies: tuple[Name, Name] = Field(description="The two bodies (or body groups) this surface is for.")
 
 
-__all__ = ["Body", "BodyArray", "Cylinder", "Joint", "Motor", "NonNegFloat", "PairSurface", "Plane", "World"]
+__all__ = ["Body", "BodyArray", "Cylinder", "Joint", "Limits", "Motor", "NonNegFloat", "PairSurface", "Plane", "World"]

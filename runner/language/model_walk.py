@@ -47,6 +47,8 @@ def _pick(candidates: list[type[BaseModel]], value: Any) -> type[BaseModel] | No
         return None
     if set(candidates) >= set(ACTION_TAGS.values()):
         tag = tag_of(value, ACTION_TAGS)
+        if tag is None and B.Handler in candidates and isinstance(value, dict):
+            return B.Handler  # `on: {event: {do: [...], once: true}}`
         return ACTION_TAGS.get(tag) if tag else None
     if set(candidates) >= set(ASSERTION_TAGS.values()):
         tag = _assertion_tag(value)
@@ -103,8 +105,11 @@ def walk_steps(step: B.Step, path: Path) -> Iterator[tuple[B.Step, Path]]:
 
 
 def all_actions(model: Scenario) -> Iterator[tuple[Any, Path]]:
-    for event, actions in model.on.items():
-        yield from walk_actions(actions, ("on", event))
+    for event, handler in model.on.items():
+        if isinstance(handler, B.Handler):
+            yield from walk_actions(handler.do, ("on", event, "do"))
+        else:
+            yield from walk_actions(handler, ("on", event))
     for ival, definition in model.intervals.items():
         for step, path in walk_steps(definition, ("intervals", ival)):
             if step.func is not None:

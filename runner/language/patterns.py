@@ -30,7 +30,7 @@ def possible_events(model: Scenario) -> set[str]:
     from runner.language.model_walk import all_actions
     from runner.language.names import expand_bodies
 
-    events = {"start"}
+    events = {"start", *model.triggers}
     for item in model.inputs:
         events.add(item.event)
     for variant in model.variants.values():

@@ -2,9 +2,8 @@
 
 from __future__ import annotations
 
-import difflib
 import math
-from collections.abc import Iterable, Iterator
+from collections.abc import Iterator
 from pathlib import Path as FsPath
 from typing import Any
 
@@ -18,6 +17,13 @@ from runner.language.model import Scenario
 from runner.language.model_walk import all_actions, walk_steps
 from runner.language.names import RESERVED, array_counts, check_name, expand_bodies, groups, readable_names
 from runner.language.patterns import possible_events
+from runner.language.semantics import (
+    check_backend_options,
+    check_handlers,
+    check_interval_cycles,
+    check_times,
+    unknown,
+)
 from runner.language.sounds import SoundFileError, read_info
 from runner.language.yaml_source import Path, Positions
 
@@ -46,11 +52,7 @@ def _size_issues(model: Scenario, positions: Positions) -> list[Issue]:
     ]
 
 
-def _unknown(kind: str, name: str, known: Iterable[str]) -> str:
-    known = sorted(known)
-    close = difflib.get_close_matches(name, known, n=1, cutoff=0.6)
-    hint = f"did you mean `{close[0]}`?" if close else f"defined: {', '.join(known) or 'none'}"
-    return f"unknown {kind} `{name}`; {hint}"
+_unknown = unknown
 
 
 def polygon_problem(vertices: list[tuple[float, float, float]]) -> str | None:
@@ -161,14 +163,15 @@ def check_references(model: Scenario, positions: Positions, base_dir: FsPath) ->
                 ref = step.sound if isinstance(step.sound, str) else step.sound.sound
                 if ref not in model.sounds:
                     bad(path + ("sound",), _unknown("sound", ref, model.sounds))
-            if step.interval is not None:
-                if step.interval not in model.intervals:
-                    bad(path + ("interval",), _unknown("interval", step.interval, model.intervals))
-                elif step.interval == ival:
-                    bad(path + ("interval",), f"interval `{ival}` contains itself")
+            if step.interval is not None and step.interval not in model.intervals:
+                bad(path + ("interval",), _unknown("interval", step.interval, model.intervals))
+    check_interval_cycles(model, bad)
     _check_actions(model, bad, body_names, sound_lengths)
     _check_expressions(model, bad, body_names | group_names)
     _check_events(model, bad)
+    check_handlers(model, bad, possible_events(model))
+    check_times(model, bad)
+    check_backend_options(model, bad)
     if issues:
         raise ScenarioValidationError(issues)
 
@@ -227,6 +230,8 @@ def expressions_in(model: Scenario) -> Iterator[tuple[str, Path]]:
         if isinstance(action, B.CalcAction):
             for var, text in action.calc.items():
                 yield text, path + ("calc", var)
+    for name, trigger in model.triggers.items():
+        yield trigger.when, ("triggers", name, "when")
     for i, a in enumerate(model.assertions):
         for field in (
             "value",
@@ -236,10 +241,12 @@ def expressions_in(model: Scenario) -> Iterator[tuple[str, Path]]:
             "eventually",
             "max_of",
             "min_of",
+            "becomes",
             "near",
             "min",
             "max",
             "tol",
+            "time_tol",
         ):
             value = getattr(a, field, None)
             alias = {"max_of": "max", "min_of": "min"}.get(field, field)

@@ -2,9 +2,12 @@
 
 from __future__ import annotations
 
+import stat
 import wave
 from dataclasses import dataclass
 from pathlib import Path
+
+from runner.language.files import special_file_kind
 
 MAX_SOUND_SECONDS = 600.0
 MAX_SOUND_BYTES = 50_000_000  # every sound is attached to every trace
@@ -25,11 +28,14 @@ class SoundFileError(ValueError):
 
 def read_info(path: Path) -> SoundInfo:
     try:
-        size = path.stat().st_size
+        status = path.stat()
     except FileNotFoundError:
         raise SoundFileError("file not found") from None
-    except OSError as exc:
+    except (OSError, ValueError) as exc:
         raise SoundFileError(f"not a WAV file ({exc})") from None
+    if not stat.S_ISREG(status.st_mode):  # never opened: reading a FIFO or a device could block forever
+        raise SoundFileError(f"expected a regular file, found {special_file_kind(status.st_mode)}")
+    size = status.st_size
     if size > MAX_SOUND_BYTES:
         raise SoundFileError(f"larger than {MAX_SOUND_BYTES} bytes ({size} bytes)")
     try:

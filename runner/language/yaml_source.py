@@ -20,6 +20,10 @@ Path = tuple[str | int, ...]
 MAX_FILE_BYTES = 1_000_000
 MAX_NODES = 200_000  # values built, counting every alias expansion (a "billion laughs" stops here)
 MAX_DEPTH = 64
+#: Characters of text (keys and values) the loaded document may hold, every alias use and every `${param}`
+#: substitution counted: later stages copy and check text per use, so memory follows this, not the file size.
+MAX_TEXT = 4_000_000
+COMMAND_LINE = "<command line>"
 
 
 @dataclass
@@ -29,6 +33,10 @@ class Positions:
     file: str
     values: dict[Path, tuple[int, int]] = field(default_factory=dict)
     keys: dict[Path, tuple[int, int]] = field(default_factory=dict)
+    #: paths whose value came from the command line (`--set`), with the argument; issues there name it
+    overridden: dict[Path, str] = field(default_factory=dict)
+    #: characters of text in the document as built (aliases expanded); see MAX_TEXT
+    text_size: int = 0
 
     def locate(self, path: Path, at_key: bool = False) -> tuple[int, int]:
         table = self.keys if at_key else self.values
@@ -42,6 +50,12 @@ class Positions:
         return self.values.get((), (1, 1))
 
     def issue(self, path: Path, message: str, at_key: bool = False) -> Issue:
+        for i in range(len(path), 0, -1):
+            argument = self.overridden.get(tuple(path[:i]))
+            if argument is not None:
+                field = format_path(path)
+                where = "" if i == len(path) else f"{field}: "
+                return Issue(COMMAND_LINE, 0, 0, argument, where + message)
         line, col = self.locate(path, at_key)
         return Issue(self.file, line, col, format_path(path), message)
 
@@ -70,6 +84,7 @@ class _Builder:
         self.loader = loader
         self.positions = Positions(file)
         self.count = 0
+        self.text = 0
 
     def fail(self, node: yaml.Node, path: Path, message: str) -> ScenarioValidationError:
         mark = node.start_mark
@@ -111,12 +126,28 @@ class _Builder:
     def scalar(self, node: yaml.ScalarNode, path: Path) -> Any:
         if node.tag not in _SCALAR_TAGS:
             raise self.fail(node, path, f"unsupported YAML tag {node.tag!r} (only plain data is allowed)")
+        self.text += len(node.value)
+        self.positions.text_size = self.text
+        if self.text > MAX_TEXT:
+            message = f"the document holds more than {MAX_TEXT} characters of text, aliases expanded; refused"
+            raise self.fail(node, path, message)
+        control = _CONTROL.search(node.value)
+        if control is not None:  # an escape in a quoted scalar ("\0", "\a"): the reader saw only its text
+            char = ord(control.group())
+            name = "a NUL character" if char == 0 else f"the control character #x{char:02x}"
+            raise self.fail(node, path, f"{name} in text (written as an escape); control characters are refused")
         try:
             return self.loader.construct_object(node)
         except (yaml.constructor.ConstructorError, ValueError, ArithmeticError, KeyError) as exc:
             # `!!int abc`, `!!bool maybe`, an integer past Python's 4300-digit conversion limit...
             problem = exc.problem if isinstance(exc, yaml.constructor.ConstructorError) else exc
+            if "integer string conversion" in str(problem):
+                problem = f"an integer of {sum(c.isdigit() for c in node.value)} digits; at most 4300 are read"
             raise self.fail(node, path, f"unsupported YAML value ({problem})") from None
+
+
+#: C0 control characters other than tab, line feed and carriage return (what YAML's reader refuses as text)
+_CONTROL = re.compile("[\x00-\x08\x0b\x0c\x0e-\x1f\x7f]")
 
 
 class _Loader(yaml.SafeLoader):
@@ -178,3 +209,28 @@ def load_yaml(text: str, file: str) -> tuple[Any, Positions]:
     finally:
         loader.dispose()
     return data, builder.positions
+
+
+def load_value(text: str) -> Any:
+    """A command-line value (`--set key=value`): a YAML scalar or flow collection, plain data only, with the
+    document's limits. Text that is not valid YAML stays text; anything refused raises :class:`ValueError`
+    with the reason (the caller names the argument)."""
+    if len(text) > MAX_FILE_BYTES:
+        raise ValueError(f"a value longer than {MAX_FILE_BYTES} characters; refused")
+    if not text.strip():
+        return ""
+    try:
+        loader = _Loader(text)
+    except yaml.reader.ReaderError as exc:
+        raise ValueError(f"character #x{exc.character:04x} is not allowed (control characters are refused)") from None
+    try:
+        node = loader.get_single_node()
+        return "" if node is None else _Builder(COMMAND_LINE, loader).build(node, ())
+    except ScenarioValidationError as exc:
+        raise ValueError(exc.issues[0].message) from None
+    except yaml.YAMLError:
+        return text  # not YAML (`a: b: c`, `x[`): the text itself
+    except RecursionError:
+        raise ValueError(f"nesting deeper than {MAX_DEPTH} levels; refused") from None
+    finally:
+        loader.dispose()

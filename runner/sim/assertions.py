@@ -1,75 +1,30 @@
-"""Assertion checking: running checks at every recorded step, and the verdicts at the end."""
+"""Assertion checking: running checks at every recorded step, and the verdicts at the end.
+
+A verdict carries what was measured, in numbers: the value and the time of an extremum, the time a condition
+became true, a sound's start and stop times; a failing condition carries the values of its sub-expressions at
+the failing time (:meth:`runner.language.expressions.Expression.explain`), naming the member of a group.
+"""
 
 from __future__ import annotations
 
 import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
+from functools import partial
 from typing import Any
 
 from runner.language import model_assertions as A
-from runner.language.expressions import Expression, Resolver
+from runner.language.expressions import Expression, Resolver, fmt
+from runner.sim.verdicts import Verdict, event_verdict, sound_verdict, tolerance
+
+__all__ = ["AssertionTracker", "Verdict", "fmt", "tolerance"]
 
 TIME_EPS = 1e-9
-
-
-@dataclass
-class Verdict:
-    name: str
-    kind: str
-    passed: bool
-    measured: str
-    expected: str
-    time: float | None = None  # when it was decided (first failure, first success, or the sample time)
-    message: str = ""
-    #: the numbers behind a numeric verdict, unformatted (None where the check is not numeric)
-    value: float | None = None
-    target: float | None = None
-    tolerance: float | None = None
-
-    def as_dict(self) -> dict[str, Any]:
-        return {
-            "name": self.name,
-            "kind": self.kind,
-            "passed": self.passed,
-            "measured": self.measured,
-            "expected": self.expected,
-            "time": self.time,
-            "message": self.message,
-            "value": _finite(self.value),
-            "target": _finite(self.target),
-            "tolerance": _finite(self.tolerance),
-        }
-
-
-def _finite(x: float | None) -> float | None:
-    return x if x is not None and math.isfinite(x) else None
-
-
-def fmt(value: Any) -> str:
-    if isinstance(value, bool) or value is None:
-        return str(value).lower()
-    if isinstance(value, float):
-        return "nan" if math.isnan(value) else f"{value:.6g}"
-    if isinstance(value, list):
-        return "[" + ", ".join(fmt(v) for v in value[:6]) + (", ..." if len(value) > 6 else "") + "]"
-    return str(value)
-
-
-def tolerance(tol: Any, backend: str) -> Any:
-    """The tolerance for ``backend``: a number, or an expression's text (evaluated by the caller)."""
-    if isinstance(tol, dict):
-        return tol.get(backend, tol.get("default", 0.0))
-    return tol
 
 
 def _window(during: tuple[Any, Any]) -> tuple[float, float]:
     lo, hi = during
     return (0.0 if lo == "end" else float(lo)), (math.inf if hi == "end" else float(hi))
-
-
-def _time(at: Any) -> float:
-    return math.inf if at == "end" else float(at)
 
 
 @dataclass
@@ -82,6 +37,7 @@ class _Check:
     best: float | None = None
     best_time: float | None = None
     seen: bool = False
+    previous: bool | None = None  # becomes: the condition at the last step
     extra: dict[str, Any] = field(default_factory=dict)
 
 
@@ -101,6 +57,9 @@ class AssertionTracker:
     def _number(self, value: Any, r: Resolver) -> float:
         return self.expr[value].number(r) if isinstance(value, str) else float(value)
 
+    def _tolerance(self, tol: Any, r: Resolver) -> float:
+        return self._number(tolerance(tol, self.backend), r)
+
     def _near(self, measured: float, near: Any, tol: Any, r: Resolver) -> tuple[bool, str, float, float]:
         target = self._number(near, r)
         t = self._number(tolerance(tol, self.backend), r)
@@ -112,6 +71,11 @@ class AssertionTracker:
             return final
         # the recorded step nearest to `at` (ties go to the later step, as Panda3D's frame would show it)
         return math.floor(t / self.dt + 0.5) == math.floor(float(at) / self.dt + 0.5 + 1e-9)
+
+    def _why(self, text: str, t: float, r: Resolver, value: str) -> str:
+        """`false at t=4.0000: box.pos.z = 0.05, ...`: the sub-expressions' values when a condition failed."""
+        detail = self.expr[text].explain(r)
+        return f"{value} at t={t:.4f}" + (f": {detail}" if detail else "")
 
     def on_step(self, t: float, r: Resolver, contact: Callable[[str, str], bool], final: bool = False) -> None:
         pending = [c for c in self.checks if c.done is None]
@@ -131,26 +95,7 @@ class AssertionTracker:
                     c.done = self._sample(s, t, r, contact)
                 continue
             if isinstance(s, A.AlwaysAssertion | A.NeverAssertion | A.EventuallyAssertion | A.ContactAssertion):
-                lo, hi = _window(s.during)
-                if t < lo - TIME_EPS or t > hi + TIME_EPS:
-                    continue
-                c.seen = True
-                if isinstance(s, A.ContactAssertion):
-                    value = contact(*s.contact)
-                    mode = s.when
-                else:
-                    mode = (
-                        "always"
-                        if isinstance(s, A.AlwaysAssertion)
-                        else ("never" if isinstance(s, A.NeverAssertion) else "eventually")
-                    )
-                    value = self.expr[getattr(s, mode)].truth(r)
-                if mode == "always" and not value:
-                    c.done = Verdict(s.name, c.kind, False, "false", "always true", t, f"false at t={t:.4f}")
-                elif mode == "never" and value:
-                    c.done = Verdict(s.name, c.kind, False, "true", "never true", t, f"true at t={t:.4f}")
-                elif mode == "eventually" and value:
-                    c.done = Verdict(s.name, c.kind, True, "true", "eventually true", t, f"true at t={t:.4f}")
+                self._over_window(c, t, r, contact)
             elif isinstance(s, A.MaxAssertion | A.MinAssertion):
                 lo, hi = _window(s.during)
                 if lo - TIME_EPS <= t <= hi + TIME_EPS:
@@ -159,178 +104,158 @@ class AssertionTracker:
                     number = self.expr[of].number(r)
                     if c.best is None or (number > c.best if is_max else number < c.best) or math.isnan(number):
                         c.best, c.best_time = number, t
-                    c.extra["r_time"] = t
                     if c.best is not None and hi <= t + TIME_EPS:
                         c.done = self._extremum(c, r)
+            elif isinstance(s, A.BecomesAssertion):
+                self._becomes(c, t, r)
+
+    def _over_window(self, c: _Check, t: float, r: Resolver, contact: Callable[[str, str], bool]) -> None:
+        s = c.spec
+        lo, hi = _window(s.during)
+        if t < lo - TIME_EPS or t > hi + TIME_EPS:
+            return
+        c.seen = True
+        text: str | None = None
+        if isinstance(s, A.ContactAssertion):
+            value, mode = contact(*s.contact), str(s.when)
+        else:
+            mode = c.kind
+            text = str(getattr(s, mode))
+            value = self.expr[text].truth(r)
+        if mode == "always" and not value:
+            why = self._why(text, t, r, "false") if text else f"not touching at t={t:.4f}"
+            c.done = Verdict(s.name, c.kind, False, "false", "always true", t, why)
+        elif mode == "never" and value:
+            why = self._why(text, t, r, "true") if text else f"touching at t={t:.4f}"
+            c.done = Verdict(s.name, c.kind, False, "true", "never true", t, why)
+        elif mode == "eventually" and value:
+            c.done = Verdict(s.name, c.kind, True, "true", "eventually true", t, f"true at t={t:.4f}")
+
+    def _becomes(self, c: _Check, t: float, r: Resolver) -> None:
+        s: A.BecomesAssertion = c.spec
+        now = self.expr[s.becomes].truth(r)
+        if c.previous is None:  # the first state: a rising edge needs false first
+            c.previous = now
+            c.extra["true_from_start"] = now
+            return
+        if now and not c.previous:
+            c.done = self._became(s, t, r)
+        c.previous = now
+        if not now:
+            c.extra["true_from_start"] = False
+
+    def _became(self, s: A.BecomesAssertion, t: float, r: Resolver) -> Verdict:
+        if s.within is not None:
+            lo, hi = _window(s.within)
+            ok = lo - TIME_EPS <= t <= hi + TIME_EPS
+            expected = f"becomes true in [{fmt(lo)}, {fmt(hi) if math.isfinite(hi) else 'end'}]"
+            return Verdict(s.name, "becomes", ok, f"became true at t={t:.6g}", expected, t, value=t)
+        target = math.inf if s.near == "end" else float(s.near)  # type: ignore[arg-type]
+        tol = self._number(tolerance(s.tol, self.backend), r)
+        ok = abs(t - target) <= tol + TIME_EPS
+        expected = f"becomes true at {fmt(target)} ± {fmt(tol)}"
+        return Verdict(s.name, "becomes", ok, f"became true at t={t:.6g}", expected, t, value=t, target=target,
+                       tolerance=tol)  # fmt: skip
 
     def _sample(self, s: Any, t: float, r: Resolver, contact: Callable[[str, str], bool]) -> Verdict:
         kind = type(s).__name__.removesuffix("Assertion").lower()
         if isinstance(s, A.CheckAssertion):
             ok = self.expr[s.check].truth(r)
-            return Verdict(s.name, kind, ok, fmt(ok), "true", t)
+            return Verdict(s.name, kind, ok, fmt(ok), "true", t, "" if ok else self._why(s.check, t, r, "false"))
         if isinstance(s, A.ContactAssertion):
             ok = contact(*s.contact)
             return Verdict(s.name, kind, ok, fmt(ok), "touching", t)
         measured = self.expr[s.value].evaluate(r)
         value = math.nan if isinstance(measured, list) else self.expr[s.value].number(r)
+        detail = self.expr[s.value].explain(r)
         if s.near is not None:
             ok, expected, target, tol = self._near(value, s.near, s.tol, r)
-            return Verdict(s.name, kind, ok, fmt(value), expected, t, value=value, target=target, tolerance=tol)
+            why = "" if ok else detail
+            return Verdict(s.name, kind, ok, fmt(value), expected, t, why, value=value, target=target, tolerance=tol)
         lo = self._number(s.min, r) if s.min is not None else -math.inf
         hi = self._number(s.max, r) if s.max is not None else math.inf
         ok = lo <= value <= hi
-        return Verdict(s.name, kind, ok, fmt(value), f"in [{fmt(lo)}, {fmt(hi)}]", t, value=value)
+        return Verdict(s.name, kind, ok, fmt(value), f"in [{fmt(lo)}, {fmt(hi)}]", t, "" if ok else detail, value=value)
 
     def _extremum(self, c: _Check, r: Resolver) -> Verdict:
         s = c.spec
+        which = "max" if isinstance(s, A.MaxAssertion) else "min"
         best = c.best if c.best is not None else math.nan
-        ok, expected, target, tol = self._near(best, s.near, s.tol, r)
-        return Verdict(
-            s.name,
-            c.kind,
-            ok,
-            fmt(c.best),
-            expected,
-            c.best_time,
-            f"{'max' if isinstance(s, A.MaxAssertion) else 'min'} at t={c.best_time:.4f}"
-            if c.best_time is not None
-            else "",
-            value=best,
-            target=target,
-            tolerance=tol,
-        )
+        when = c.best_time
+        measured = fmt(c.best)
+        ok, expected_parts, problems = True, [], []
+        target = tol = None
+        if s.near is not None:
+            near_ok, expected, target, tol = self._near(best, s.near, s.tol, r)
+            ok &= near_ok
+            expected_parts.append(expected)
+            if not near_ok:
+                problems.append(f"{which} {fmt(best)}")
+        if s.time is not None:
+            goal = math.inf if s.time == "end" else float(s.time)
+            within = self._number(tolerance(s.time_tol, self.backend), r)
+            time_ok = when is not None and abs(when - goal) <= within + TIME_EPS
+            ok &= time_ok
+            expected_parts.append(f"at t={fmt(goal)} ± {fmt(within)}")
+            if not time_ok:
+                problems.append(f"reached at t={fmt(when)}")
+        if s.time_within is not None:
+            lo, hi = _window(s.time_within)
+            time_ok = when is not None and lo - TIME_EPS <= when <= hi + TIME_EPS
+            ok &= time_ok
+            expected_parts.append(f"at t in [{fmt(lo)}, {fmt(hi) if math.isfinite(hi) else 'end'}]")
+            if not time_ok:
+                problems.append(f"reached at t={fmt(when)}")
+        message = f"{which} at t={when:.4f}" if when is not None else ""
+        if problems:
+            message = "; ".join(problems)
+        value = best if s.near is not None else (when if when is not None else math.nan)
+        return Verdict(s.name, c.kind, ok, measured, ", ".join(expected_parts), when, message, value=value,
+                       target=target, tolerance=tol)  # fmt: skip
 
     def finish(
-        self, t_end: float, events: Sequence[tuple[float, str]], sounds: Sequence[tuple[float, str]], r: Resolver
+        self,
+        t_end: float,
+        events: Sequence[tuple[float, str]],
+        sounds: Sequence[tuple[float, str]],
+        r: Resolver,
+        sound_stops: Sequence[tuple[float, str]] = (),
     ) -> list[Verdict]:
         out = []
         for c in self.checks:
             s = c.spec
             if c.done is not None:
                 out.append(c.done)
-            elif isinstance(s, A.EventAssertion):
-                out.append(self._event(s, events, r))
-            elif isinstance(s, A.SoundAssertion):
-                out.append(self._sound(s, sounds, r))
+            elif isinstance(s, A.EventAssertion | A.SoundAssertion):
+                tol = partial(self._tolerance, s.tol, r)
+                if isinstance(s, A.EventAssertion):
+                    out.append(event_verdict(s, events, tol))
+                else:
+                    out.append(sound_verdict(s, sounds, sound_stops, tol, t_end))
             elif isinstance(s, A.MaxAssertion | A.MinAssertion):
                 out.append(
                     self._extremum(c, r)
                     if c.best is not None
-                    else Verdict(
-                        s.name,
-                        c.kind,
-                        False,
-                        "no sample",
-                        "a sample in the window",
-                        None,
-                        "the run ended before the window",
-                    )
+                    else Verdict(s.name, c.kind, False, "no sample", "a sample in the window", None,
+                                 "the run ended before the window")  # fmt: skip
                 )
+            elif isinstance(s, A.BecomesAssertion):
+                never = "true from the start and never false" if c.extra.get("true_from_start") else "never true"
+                out.append(Verdict(s.name, c.kind, False, never, "becomes true (false before)", None,
+                                   f"{never} up to t={t_end:.4f}"))  # fmt: skip
             elif isinstance(s, A.AlwaysAssertion | A.NeverAssertion) or (
                 isinstance(s, A.ContactAssertion) and s.when in ("always", "never")
             ):
                 ok = c.seen
-                out.append(
-                    Verdict(
-                        s.name,
-                        c.kind,
-                        ok,
-                        "held" if ok else "no sample",
-                        "held over the window",
-                        t_end,
-                        "" if ok else "the run ended before the window",
-                    )
-                )
+                out.append(Verdict(s.name, c.kind, ok, "held" if ok else "no sample", "held over the window", t_end,
+                                   "" if ok else "the run ended before the window"))  # fmt: skip
             elif isinstance(s, A.EventuallyAssertion) or isinstance(s, A.ContactAssertion) and s.when == "eventually":
                 out.append(
                     Verdict(s.name, c.kind, False, "never true", "eventually true", None, "never true in the window")
                 )
             else:
                 at = getattr(s, "at", None)
-                out.append(
-                    Verdict(
-                        s.name,
-                        c.kind,
-                        False,
-                        "not reached",
-                        f"a sample at t={at}",
-                        None,
-                        f"the run ended at t={t_end:.4f} before t={at}",
-                    )
-                )
+                out.append(Verdict(s.name, c.kind, False, "not reached", f"a sample at t={at}", None,
+                                   f"the run ended at t={t_end:.4f} before t={at}"))  # fmt: skip
         self.decided += [v for v, c in zip(out, self.checks, strict=True) if c.done is None]  # decided now
         return out
-
-    def _event(self, s: A.EventAssertion, events: Sequence[tuple[float, str]], r: Resolver) -> Verdict:
-        times = [t for t, name in events if name == s.event]
-        first = times[0] if times else None
-        problems, measured, expected = [], [f"count {len(times)}", f"first {fmt(first)}"], []
-        numbers: tuple[float | None, float | None, float | None] = (None, None, None)
-        if isinstance(s.count, int):
-            numbers = (float(len(times)), float(s.count), 0.0)
-        if s.count is not None:
-            lo, hi = (s.count, s.count) if isinstance(s.count, int) else (s.count.min, s.count.max)
-            expected.append(f"count {lo}" if lo == hi else f"count in [{lo}, {hi if hi is not None else '∞'}]")
-            if len(times) < lo or (hi is not None and len(times) > hi):
-                problems.append(f"happened {len(times)} times")
-        if s.first is not None:
-            within = self._number(tolerance(s.tol, self.backend), r)
-            first_at = _time(s.first)
-            expected.append(f"first {fmt(first_at)} ± {fmt(within)}")
-            numbers = (first, first_at, within)
-            if first is None or abs(first - first_at) > within + TIME_EPS:
-                problems.append("first time off" if first is not None else "never happened")
-        for field_name, other in (("before", s.before), ("after", s.after)):
-            if other is None:
-                continue
-            other_times = [t for t, name in events if name == other]
-            expected.append(f"{field_name} {other}")
-            if first is None or not other_times:
-                problems.append(f"{'it' if first is None else other} never happened")
-            elif (first >= other_times[0]) if field_name == "before" else (first <= other_times[0]):
-                problems.append(f"first at {fmt(first)}, {other} first at {fmt(other_times[0])}")
-        value, target, tol = numbers
-        return Verdict(
-            s.name,
-            "event",
-            not problems,
-            ", ".join(measured),
-            ", ".join(expected),
-            first,
-            "; ".join(problems),
-            value=value,
-            target=target,
-            tolerance=tol,
-        )
-
-    def _sound(self, s: A.SoundAssertion, sounds: Sequence[tuple[float, str]], r: Resolver) -> Verdict:
-        times = [t for t, name in sounds if name == s.sound]
-        problems, expected = [], []
-        numbers: tuple[float | None, float | None, float | None] = (None, None, None)
-        if isinstance(s.count, int):
-            numbers = (float(len(times)), float(s.count), 0.0)
-        if s.played_at is not None:
-            tol = self._number(tolerance(s.tol, self.backend), r)
-            played_at = float(s.played_at)
-            nearest = min(times, key=lambda t: abs(t - played_at)) if times else None
-            numbers = (nearest, played_at, tol)
-            expected.append(f"played at {fmt(played_at)} ± {fmt(tol)}")
-            if not any(abs(t - played_at) <= tol + TIME_EPS for t in times):
-                problems.append("not played at that time")
-        if s.count is not None:
-            lo, hi = (s.count, s.count) if isinstance(s.count, int) else (s.count.min, s.count.max)
-            expected.append(f"count {lo}" if lo == hi else f"count in [{lo}, {hi}]")
-            if len(times) < lo or (hi is not None and len(times) > hi):
-                problems.append(f"played {len(times)} times")
-        return Verdict(
-            s.name,
-            "sound",
-            not problems,
-            f"started at {fmt(times)}",
-            ", ".join(expected),
-            times[0] if times else None,
-            "; ".join(problems),
-            value=numbers[0],
-            target=numbers[1],
-            tolerance=numbers[2],
-        )

@@ -41,6 +41,7 @@ class StateResolver:
         self.body_index = {b.name: i for i, b in enumerate(world.bodies)}
         self.joint_index = {j.name: i for i, j in enumerate(world.joints)}
         self.groups = {g: [self.body_index[n] for n in names] for g, names in groups.items()}
+        self.members = {g: list(names) for g, names in groups.items()}
         self.state = state
         self.params = params
         self.snap = snapshot
@@ -64,6 +65,10 @@ class StateResolver:
 
     def call(self, func: str, args: Sequence[Any]) -> Any:
         return self.functions[func](args)
+
+    def group_members(self, name: str) -> list[str] | None:
+        """The bodies of array ``name``, in the order a group's values are listed (for failure messages)."""
+        return self.members.get(name)
 
     def _build(self, name: str) -> Callable[[], Any]:  # noqa: C901 - one switch over the name forms
         snap = self.snap

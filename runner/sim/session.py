@@ -8,7 +8,8 @@ Per step k, from t_k = k*dt to t_{k+1}:
     motor targets were set by the handlers;
  4. physics step (with substeps if set);
  5. read states; detect contacts and collision-solid overlaps at t_{k+1};
- 6. turn them into in / again / out events, queued for step k+1;
+ 6. turn them into in / again / out events, then evaluate the condition triggers (runner.sim.conditions),
+    all queued for step k+1 (delivered at t_{k+1}, the time of the state that raised them);
  7. record t_{k+1} in the trace; 8. check running assertions at t_{k+1}.
 """
 
@@ -34,6 +35,7 @@ from runner.sim.actions import run_actions
 from runner.sim.assertions import AssertionTracker, Verdict
 from runner.sim.budget import Watchdog
 from runner.sim.collisions import EventHandler, SolidTraverser, quat_matrices
+from runner.sim.conditions import ConditionTriggers, HandlerGate, with_zeros
 from runner.sim.intervals import IntervalManager
 from runner.sim.kinematics import KinematicTable
 from runner.sim.resolver import Snapshot, StateResolver
@@ -108,6 +110,7 @@ class Session:
         self.engine_messages = 0
         self.event_counts: dict[str, int] = {}
         self.sound_starts: list[tuple[float, str]] = []
+        self.sound_stops: list[tuple[float, str]] = []
         self.playing_sounds: dict[str, float] = {}
         self.forces: dict[int, np.ndarray] = {}
         self.queue: deque[tuple[str, str]] = deque()
@@ -130,6 +133,9 @@ class Session:
         self.traverser = SolidTraverser(program.nodes, program.colliders)
         c = model.collisions
         self.collision_events = EventHandler(c.in_, c.again, c.out)
+        self.conditions = ConditionTriggers(program.triggers, program.expressions)
+        self.handler_gate = HandlerGate()
+        self._zeros = [(self.joint_index[j], offset) for j, offset in program.joint_zeros.items()]
 
     # --- services used by actions and intervals (runner.sim.intervals.IntervalHost) --------------------
     def evaluate(self, text: str) -> Any:
@@ -163,8 +169,10 @@ class Session:
         run_actions(self, actions, at)
 
     def play_sound(self, sound: str, offset: float, volume: float, loop: bool, at: float) -> None:
-        if sound in self.playing_sounds and self.trace is not None:
-            self.trace.sound(at, sound, "stop")  # a replay restarts the sound (OpenAL play() stops first)
+        if sound in self.playing_sounds:
+            self.sound_stops.append((at, sound))
+            if self.trace is not None:
+                self.trace.sound(at, sound, "stop")  # a replay restarts the sound (OpenAL play() stops first)
         length = self.program.sounds[sound].length
         self.playing_sounds[sound] = math.inf if loop else at + max(length - offset, 0.0)
         self.sound_starts.append((at, sound))
@@ -172,8 +180,10 @@ class Session:
             self.trace.sound(at, sound, "start", offset, volume)
 
     def stop_sound(self, sound: str, at: float) -> None:
-        if self.playing_sounds.pop(sound, None) is not None and self.trace is not None:
-            self.trace.sound(at, sound, "stop")
+        if self.playing_sounds.pop(sound, None) is not None:
+            self.sound_stops.append((at, sound))
+            if self.trace is not None:
+                self.trace.sound(at, sound, "stop")
 
     def interval_event(self, ival: str, what: str, at: float) -> None:
         if self.trace is not None:
@@ -221,8 +231,13 @@ class Session:
         if self.trace is not None:
             self.trace.event(at, event, source)
         handler = self.program.handlers.get(event)
-        if handler:
-            run_actions(self, handler, at, depth)
+        if handler is None or not handler.actions:
+            return
+        refusal = self.handler_gate.refusal(event, handler, at)
+        if refusal is not None:
+            self.log(at, "debug", refusal, "handler")
+            return
+        run_actions(self, handler.actions, at, depth)
 
     def end(self, at: float, reason: str) -> None:
         self.ended = True
@@ -285,7 +300,7 @@ class Session:
             )
         self.snapshot.time = t
         self.snapshot.bodies = states
-        self.snapshot.joints = self.backend.joint_states()
+        self.snapshot.joints = with_zeros(self.backend.joint_states(), self._zeros)  # stated zeros (compile.joints)
         if contacts or self._contacts_always:
             self._read_contacts(t)
 
@@ -312,6 +327,8 @@ class Session:
                 hits.extend((names[i], names[other], True) for other in touching.get(i, ()))
         for ev in self.collision_events.update(hits):
             self.queue.append((ev.name, f"collision-{ev.kind}"))
+        for event in self.conditions.check(self.resolver):  # after the collision events of the same step
+            self.queue.append((event, "condition"))
 
     def _record(self, t: float, k: int = 0, last: bool = False) -> None:
         """Step ``k`` ends at ``t``: sounds that ended, the trace (every ``record_every``-th step and the
@@ -319,6 +336,7 @@ class Session:
         for name, end in list(self.playing_sounds.items()):
             if end <= t + 1e-9:
                 del self.playing_sounds[name]
+                self.sound_stops.append((end, name))
                 if self.trace is not None:
                     self.trace.sound(end, name, "stop")
         if self.trace is not None and (k % self.record_every == 0 or last):
@@ -368,6 +386,7 @@ class Session:
         inputs = deque(self.program.inputs)
         self._log_engine_messages(0.0)
         self._read(0.0)
+        self.conditions.start(self.resolver)  # the conditions' values at t=0: a rising edge needs false first
         self._record(0.0)
         self.queue.append(("start", "start"))
         t = 0.0
@@ -410,7 +429,9 @@ class Session:
         if self.trace is not None and self._recorded != t:  # ended between recorded steps: keep the last state
             self._trace_step(t)
         self.tracker.on_step(t, self.resolver, self.in_contact, final=True)
-        verdicts = self.tracker.finish(t, [(e[0], e[1]) for e in self.events], self.sound_starts, self.resolver)
+        verdicts = self.tracker.finish(
+            t, [(e[0], e[1]) for e in self.events], self.sound_starts, self.resolver, self.sound_stops
+        )
         self._log_verdicts(t)
         status = "passed" if all(v.passed for v in verdicts) else "failed"
         return RunResult(

@@ -66,12 +66,22 @@ def test_failing_assertion_exits_one_with_the_verdict_table(tmp_path: Path) -> N
         "--variant",
         "door-closed",
         "--set",
-        "world.duration=1.0",
+        "bodies.box.pos=[1, 0, 1.5]",
         "--out",
         str(tmp_path),
     )
     assert done.returncode == 1
     assert "FAIL" in done.stdout and "collision-fires-once" in done.stdout
+
+
+def test_a_time_after_the_end_is_bad_input_naming_it(tmp_path: Path) -> None:
+    """Shortening the run below the times its assertions name is refused up front, not failed at the end."""
+    path = ROOT / "scenarios" / "factory_intervals.yaml"
+    done = scenario("run", str(path), "--variant", "door-closed", "--set", "world.duration=1.0", "--out",
+                    str(tmp_path))  # fmt: skip
+    assert done.returncode == 2, done.stdout
+    assert "is after the end of the run (world.duration 1 s)" in done.stderr
+    assert f"{path}:" in done.stderr and "Traceback" not in done.stderr
 
 
 def test_unknown_backend_and_variant_are_bad_input(tmp_path: Path) -> None:

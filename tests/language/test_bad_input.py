@@ -19,6 +19,11 @@ bodies:
   box: {box: [0.3, 0.3, 0.3], density: 500, pos: [0, 0, 1]}
 """
 
+def exact(message: str) -> str:
+    """A pattern matching exactly this message (after the location)."""
+    return "^" + re.escape(message) + "$"
+
+
 # (name, yaml appended to or replacing BASE, expected line:col, regex the message must match)
 CASES = [
     (
@@ -133,18 +138,170 @@ CASES = [
         r"variants\.v\.expect: unknown key `expect`; expected one of: assertions, description, inputs, set",
     ),
     ("nan", BASE.replace("pos: [0, 0, 1]", "pos: [0, 0, .nan]"), "5:50", r"bodies\.box\.pos: expected finite numbers"),
+    # --- issue 18's silent mistakes and misleading messages, with their exact messages --------------------
+    (
+        "handler for an event that can never happen",
+        BASE + "inputs: [{at: 0.5, event: space}]\non:\n  spaec: [{log: hi}]\n",
+        "8:3",
+        exact("on.spaec: a handler for an event that can never happen: unknown event `spaec`; did you mean `space`?"),
+    ),
+    (
+        "assertion time after the end",
+        BASE + "assertions:\n  - {name: a, at: 20, check: box.pos.z > 0}\n",
+        "7:19",
+        exact("assertions[0].at: a time at 20 s is after the end of the run (world.duration 1 s)"),
+    ),
+    (
+        "input after the end",
+        BASE + "inputs: [{at: 9, event: space}]\non: {space: [{log: hi}]}\n",
+        "6:15",
+        exact("inputs[0].at: an input at 9 s is after the end of the run (world.duration 1 s)"),
+    ),
+    (
+        "window after the end",
+        BASE + "assertions:\n  - {name: a, always: box.pos.z > 0, during: [0.5, 2]}\n",
+        "7:52",
+        exact("assertions[0].during[1]: a time at 2 s is after the end of the run (world.duration 1 s)"),
+    ),
+    (
+        "window backwards",
+        BASE + "assertions:\n  - {name: a, always: box.pos.z > 0, during: [0.8, 0.2]}\n",
+        "7:46",
+        exact("assertions[0].during: expected a window [start, end] with start <= end, found [0.8, 0.2]"),
+    ),
+    (
+        "unknown backend option, as `run` refuses it",
+        BASE + "backend_options: {pybullet: {solver_iteration: 10}}\n",
+        "6:30",
+        exact("backend_options.pybullet.solver_iteration: unknown option `solver_iteration` of backend `pybullet`; "
+              "did you mean `solver_iterations`?"),
+    ),
+    (
+        "unknown backend in backend_options",
+        BASE + "backend_options: {pybulet: {}}\n",
+        "6:19",
+        exact("backend_options.pybulet: unknown backend `pybulet`; did you mean `pybullet`?"),
+    ),
+    (
+        "an expression in a window is reported at the window",
+        BASE + "assertions:\n  - {name: a, always: box.pos.z > 0, during: [0, box.pos.z]}\n",
+        "7:50",
+        exact("assertions[0].during[1]: cannot use `box.pos.z` in the time 'box.pos.z': a time is fixed when the "
+              "scenario is loaded; it may read param.<name>, dt, duration, g, gravity.x|y|z, pi, e, inf"),
+    ),
+    (
+        "two numbers for a position",
+        BASE.replace("pos: [0, 0, 1]", "pos: [-0.8, -0.125]"),
+        "5:50",
+        exact("bodies.box.pos: expected a list of 3 numbers [x, y, z]; found 2 items"),
+    ),
+    (
+        "two sizes for a box",
+        BASE.replace("box: [0.3, 0.3, 0.3]", "box: [0.2, 0.2]"),
+        "5:14",
+        exact("bodies.box.box: expected a list of 3 sizes [x, y, z]; found 2 items"),
+    ),
+    (
+        "four numbers for a position",
+        BASE.replace("pos: [0, 0, 1]", "pos: [0, 0, 1, 2]"),
+        "5:50",
+        exact("bodies.box.pos: expected a list of 3 numbers [x, y, z]; found 4 items"),
+    ),
+    (
+        "a function with too few arguments",
+        BASE + "assertions:\n  - {name: a, at: end, check: clamp(1) > 0}\n",
+        "7:31",
+        exact("assertions[0].check: clamp() takes 3 arguments (x, lo, hi), found 1 at character 1 in expression "
+              "'clamp(1) > 0'"),
+    ),
+    (
+        "interval cycle through two intervals",
+        BASE + "intervals:\n  ia: {parallel: [{interval: ib}]}\n  ib: {sequence: [{interval: ia}]}\n",
+        "8:30",
+        exact("intervals.ib.sequence[0].interval: intervals `ia` -> `ib` -> `ia` form a cycle; an interval cannot "
+              "inline itself"),
+    ),
+    (
+        "NUL in a sound path",
+        BASE + 'sounds: {s: "sounds/thud.wav\\0"}\n',
+        "6:13",
+        exact("sounds.s: a NUL character in text (written as an escape); control characters are refused"),
+    ),
+    (
+        "over-long variant name",
+        BASE + "variants:\n  " + "v" * 300 + ": {}\n",
+        "7:3",
+        exact("variants." + "v" * 300 + ": expected at most 64 characters (the name is part of trace file names); "
+              "found 300"),
+    ),
+    (
+        "a time reading the state",
+        BASE + "inputs: [{at: 0.5*box.pos.z, event: go}]\non: {go: [{log: x}]}\n",
+        "6:15",
+        exact("inputs[0].at: cannot use `box.pos.z` in the time '0.5*box.pos.z': a time is fixed when the scenario "
+              "is loaded; it may read param.<name>, dt, duration, g, gravity.x|y|z, pi, e, inf"),
+    ),
+    (
+        "a lerp start without its end (found by the structured fuzzer)",
+        BASE.replace("density: 500, ", "motion: kinematic, ")
+        + "intervals:\n  i: {lerp: {body: box, duration: 1, pos: [0, 0, 2], start_hpr: [0, 0, 0]}}\n",
+        "7:13",
+        exact("intervals.i.lerp: `start_hpr` is given without `hpr` (a start needs an end to lerp to)"),
+    ),
+    (
+        "an integer beyond a float in the gravity (found by the loader fuzzing)",
+        BASE.replace("world: {dt: 0.04, duration: 1}", "world: {dt: 0.04, duration: 1, gravity: [1" + "0" * 400
+                     + ", 0, -9.81]}"),  # fmt: skip
+        "3:42",
+        r"^world\.gravity\[0\]: input should be a valid number; found 10000",
+    ),
+    (
+        "a trigger named start",
+        BASE + "triggers: {start: {when: box.pos.z < 0}}\n",
+        "6:12",
+        exact("triggers.start: `start` is the event sent before the first step; name the trigger otherwise"),
+    ),
+]
+
+
+# (name, yaml, expected line:col, pattern) of cases loaded as their variant `v`
+VARIANT_CASES = [
+    (
+        "a variant sets into a list",
+        BASE.replace("world: {dt: 0.04, duration: 1}", "world: [1, 0, 0]")
+        + "variants:\n  v: {set: {world.dt: 0.01}}\n",
+        "7:13",
+        exact("variants.v.set.world.dt: cannot set `world.dt`: `world` is a list, not a mapping"),
+    ),
+    (
+        "a variant sets an undeclared parameter",
+        BASE + "params: {count: 3}\nvariants:\n  v: {set: {params.cont: 4}}\n",
+        "8:13",
+        exact("variants.v.set.params.cont: unknown parameter `cont` (a dotted path replaces a value, it does not "
+              "declare one); did you mean `count`?"),
+    ),
 ]
 
 
 @pytest.mark.parametrize("name,text,where,pattern", CASES, ids=[c[0] for c in CASES])
 def test_bad_file_is_located(tmp_path: Path, name: str, text: str, where: str, pattern: str) -> None:
+    check_located(tmp_path, text, where, pattern, None)
+
+
+@pytest.mark.parametrize("name,text,where,pattern", VARIANT_CASES, ids=[c[0] for c in VARIANT_CASES])
+def test_bad_variant_is_located(tmp_path: Path, name: str, text: str, where: str, pattern: str) -> None:
+    check_located(tmp_path, text, where, pattern, "v")
+
+
+def check_located(tmp_path: Path, text: str, where: str, pattern: str, variant: str | None) -> None:
     path = tmp_path / "t.yaml"
     path.write_text(text)
     with pytest.raises(ScenarioValidationError) as info:
-        load_scenario(path, None)
+        load_scenario(path, variant)
     lines = str(info.value).splitlines()
     expected_prefix = f"{path}:{where}:"
-    assert any(line.startswith(expected_prefix) and re.search(pattern, line) for line in lines), (
+    assert any(line.startswith(expected_prefix) and re.search(pattern, line[len(expected_prefix):].strip())
+               for line in lines), (
         f"wanted {expected_prefix} ... /{pattern}/, got:\n" + "\n".join(lines)
     )
 

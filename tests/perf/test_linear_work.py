@@ -50,7 +50,7 @@ collisions:
   from: [{names}]
   contacts_from: [{crates}]
 on:
-  n0-into-ground: [{{calc: {{hits: "state.hits + 1"}}}}]
+  crate_0-into-ground: [{{calc: {{hits: "state.hits + 1"}}}}]
 assertions:
   - {{name: slow, always: max(crate.speed) < 100}}
   - {{name: low, at: end, value: min(crate.pos.z), max: 1}}

@@ -1,9 +1,11 @@
 """The switch between the bounded run (``make test``) and the long run (``make fuzz``).
 
 ``FUZZ_CASES`` sets how many hostile documents the loader fuzzing generates (default 200, about 5 s);
+``FUZZ_STRUCTURED`` how many grammar-aware mutants of valid scenarios it generates (default 200);
 ``FUZZ_FAULTS`` how many signals are sent at random moments to running ``scenario run`` processes
 (default 2); ``FUZZ_SEED`` varies the generated cases (default: hypothesis's fixed derandomized seed,
-so that a run is reproducible). ``make fuzz`` sets ``FUZZ_CASES=20000 FUZZ_FAULTS=200``. The counts
+so that a run is reproducible). ``make fuzz`` sets ``FUZZ_CASES=20000 FUZZ_STRUCTURED=20000
+FUZZ_FAULTS=200``. The counts
 are printed at the end of the session.
 """
 
@@ -18,6 +20,7 @@ import pytest
 from hypothesis import HealthCheck, seed, settings
 
 FUZZ_CASES = int(os.environ.get("FUZZ_CASES", "200"))
+FUZZ_STRUCTURED = int(os.environ.get("FUZZ_STRUCTURED", "200"))
 FUZZ_FAULTS = int(os.environ.get("FUZZ_FAULTS", "2"))
 FUZZ_SEED = os.environ.get("FUZZ_SEED")
 

@@ -174,7 +174,9 @@ def test_a_scenario_that_tries_to_run_a_command_runs_nothing(tmp_path: Path) -> 
     override = f"description=!!python/object/apply:os.system ['touch {marker}']"
     done = subprocess.run([*cli, "run", str(ok), "--backend", "fake", "--no-trace", "--set", override],
                           capture_output=True, text=True, cwd=tmp_path, timeout=120)  # fmt: skip
-    assert done.returncode == 0, done.stderr  # the value is kept as text: a description
+    assert done.returncode == 2, done.stderr  # a tag is refused on the command line as in a file, naming it
+    assert "error: <command line>: --set description=!!python/object" in done.stderr
+    assert "unsupported YAML tag" in done.stderr and "Traceback" not in done.stderr
     assert not marker.exists()
 
 

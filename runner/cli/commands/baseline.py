@@ -8,28 +8,24 @@ from pathlib import Path
 from rich.console import Console
 
 from backends.registry import DEFAULT_BACKEND
+from runner.cli import options
 
 NAME = "baseline"
 HELP = "record golden files for `scenario check` (per scenario x variant x backend)"
-DEFAULT_DIR = Path("baselines")
+DEFAULT_DIR = options.DEFAULT_BASELINE_DIR
 
 
 def add_case_options(parser: argparse.ArgumentParser) -> None:
     """Options shared with `scenario check`."""
-    parser.add_argument("files", nargs="+", type=Path, metavar="FILE")
-    parser.add_argument(
-        "--backend",
-        "-b",
-        action="append",
-        metavar="NAME",
-        help=f"engine(s), repeatable or comma-separated; `installed` = every installed one (default {DEFAULT_BACKEND})",
-    )
-    parser.add_argument("--variant", help="only this variant (default: every variant)")
+    options.add_scenario_files(parser)
+    options.add_backend(parser, DEFAULT_BACKEND)
+    parser.add_argument("--variant", metavar="NAME", help="only this variant (default: every variant)")
+    options.add_overrides(parser)
+    options.add_baseline_dir(parser)
 
 
 def configure(parser: argparse.ArgumentParser) -> None:
     add_case_options(parser)
-    parser.add_argument("--dir", type=Path, default=DEFAULT_DIR, help="folder of the golden files (default baselines/)")
     parser.add_argument(
         "--period",
         type=float,
@@ -40,31 +36,16 @@ def configure(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--out", type=Path, help="keep the recorded runs' traces in this folder (default: not kept)")
 
 
-def backends_from(values: list[str] | None) -> list[str]:
-    """Backend names from repeated/comma-separated options, checked and installed (else bad input / exit 3)."""
-    from backends.errors import BackendNotInstalled
-    from backends.registry import entry, installed_backends, is_installed
-
-    names: list[str] = []
-    for value in values or [DEFAULT_BACKEND]:
-        for name in (n.strip() for n in value.split(",")):
-            chosen = installed_backends() if name == "installed" else [name] if name else []
-            names += [n for n in chosen if n not in names]
-    for name in names:
-        entry(name)  # unknown -> UnknownBackend (exit 2)
-        if not is_installed(name):
-            raise BackendNotInstalled(f"Backend `{name}` is not installed. Install it with: {entry(name).hint}")
-    return names
-
-
-def load_cases(files: list[Path], variant: str | None) -> list:  # noqa: ANN401 - LoadedScenario, imported late
+def load_cases(files: list[Path], variant: str | None, sets: list[str] | None = None) -> list:  # noqa: ANN401
+    """Every variant (or one) of every scenario file (folders expanded), with `--set` applied."""
     from runner.errors import ScenarioValidationError
-    from runner.language.load import load_all
+    from runner.language.load import load_all, parse_overrides
 
+    overrides = parse_overrides(sets or [])
     cases, problems = [], []
-    for path in files:
+    for path in options.scenario_files(files):
         try:
-            cases.extend(load_all(path, variant, variant is None, ()))
+            cases.extend(load_all(path, variant, variant is None, overrides))
         except ScenarioValidationError as exc:
             problems.extend(exc.issues)
     if problems:
@@ -78,12 +59,12 @@ def execute(args: argparse.Namespace, out: Console, err: Console) -> int:
 
     if args.period is not None and not args.period >= 0:
         raise UsageError(f"--period {args.period}: expected seconds >= 0")
-    backends = backends_from(args.backend)
-    cases = load_cases(args.files, args.variant)
+    backends = options.backend_names(args)
+    cases = load_cases(args.files, args.variant, args.set)
     failed = 0
     for backend in backends:
         for case in cases:
-            result, path, rec = record_case(case, backend, args.dir, args.out, args.period)
+            result, path, rec = record_case(case, backend, args.baseline, args.out, args.period)
             every = int(rec.header["every"])
             note = "" if result.passed else f" [yellow](recorded with status {result.status})[/]"
             out.print(
@@ -92,7 +73,7 @@ def execute(args: argparse.Namespace, out: Console, err: Console) -> int:
                 f"{len(rec.verdicts)} verdicts){note}"
             )
             failed += not result.passed
-    out.print(f"{len(cases) * len(backends)} baseline(s) written to {args.dir}")
+    out.print(f"{len(cases) * len(backends)} baseline(s) written to {args.baseline}")
     if failed:
         err.print(f"[yellow]warning:[/] {failed} run(s) did not pass; their goldens record that status")
     return ExitCode.OK

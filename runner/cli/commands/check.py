@@ -8,7 +8,8 @@ from pathlib import Path
 from rich.console import Console
 from rich.markup import escape
 
-from runner.cli.commands.baseline import DEFAULT_DIR, add_case_options, backends_from, load_cases
+from runner.cli import options
+from runner.cli.commands.baseline import add_case_options, load_cases
 
 NAME = "check"
 HELP = "run scenarios and compare them with their recorded baselines"
@@ -16,13 +17,6 @@ HELP = "run scenarios and compare them with their recorded baselines"
 
 def configure(parser: argparse.ArgumentParser) -> None:
     add_case_options(parser)
-    parser.add_argument(
-        "--baseline",
-        type=Path,
-        default=DEFAULT_DIR,
-        metavar="DIR",
-        help="folder of the golden files (default baselines/)",
-    )
     parser.add_argument(
         "--out", type=Path, default=Path("traces"), help="folder for traces and divergence plots (default traces/)"
     )
@@ -46,8 +40,8 @@ def execute(args: argparse.Namespace, out: Console, err: Console) -> int:
     from runner.errors import ExitCode
 
     overrides = parse_tolerance_options(args.atol, args.rtol)
-    backends = backends_from(args.backend)
-    cases = load_cases(args.files, args.variant)
+    backends = options.backend_names(args)
+    cases = load_cases(args.files, args.variant, args.set)
     outcomes = []
     for backend in backends:
         for case in cases:

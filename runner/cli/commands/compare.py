@@ -19,8 +19,7 @@ from typing import Any
 from rich.console import Console
 from rich.markup import escape
 
-from backends.errors import BackendNotInstalled
-from backends.registry import entry, installed_backends, is_installed
+from runner.cli import options
 from runner.errors import ExitCode, TraceError, UsageError
 from runner.exec.cases import Case, CaseResult
 from runner.language.load import BASE_CASE, LoadedScenario, load_files, parse_overrides
@@ -32,13 +31,9 @@ DEFAULT_TIMEOUT = 600.0
 
 
 def configure(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("files", nargs="+", type=Path, metavar="FILE")
-    parser.add_argument(
-        "--backends", "-b", metavar="A,B,...", help="comma-separated backends (default: every installed backend)"
-    )
-    group = parser.add_mutually_exclusive_group()
-    group.add_argument("--variant", help="compare this variant (default: the file's first variant)")
-    group.add_argument("--all-variants", action="store_true", help="compare every variant")
+    options.add_scenario_files(parser)
+    options.add_backend(parser, options.ALL)
+    options.add_variant_choice(parser)
     parser.add_argument(
         "--reference", metavar="NAME",
         help="the backend the others are measured against (default: ode if compared, else the first compared "
@@ -63,10 +58,7 @@ def configure(parser: argparse.ArgumentParser) -> None:
     )  # fmt: skip
     parser.add_argument("--force", action="store_true",
                         help="also overwrite files under the outputs' names that scenario did not write")  # fmt: skip
-    parser.add_argument(
-        "--set", action="append", default=[], metavar="KEY=VALUE",
-        help="override a value, e.g. world.dt=0.01 (repeatable)",
-    )  # fmt: skip
+    options.add_overrides(parser)
     parser.add_argument(
         "--junit",
         type=Path,
@@ -77,16 +69,9 @@ def configure(parser: argparse.ArgumentParser) -> None:
 
 
 def _backends(args: argparse.Namespace) -> list[str]:
-    names = [n.strip() for n in args.backends.split(",") if n.strip()] if args.backends else installed_backends()
-    if args.reference and args.reference not in names:
-        names.insert(0, args.reference)
-    names = list(dict.fromkeys(names))
-    if not names:
-        raise UsageError("no backend to compare: none is installed and none was named with --backends")
-    for name in names:
-        entry(name)  # an unknown name is bad input (exit 2)
-        if not is_installed(name):
-            raise BackendNotInstalled(f"Backend `{name}` is not installed. Install it with: {entry(name).hint}")
+    names = options.backend_names(args)
+    if args.reference and args.reference not in names:  # the reference is compared too, first
+        names.insert(0, options.backend_names(argparse.Namespace(backend=[args.reference], backend_default=None))[0])
     return names
 
 
@@ -109,7 +94,7 @@ def execute(args: argparse.Namespace, out: Console, err: Console) -> int:
     backends = _backends(args)
     overrides = parse_overrides(args.set)
     cases: list[LoadedScenario] = []
-    cases.extend(load_files(args.files, args.variant, args.all_variants, overrides))
+    cases.extend(load_files(options.scenario_files(args.files), args.variant, args.all_variants, overrides))
     work = [(case, b) for case in cases for b in backends]
     jobs = [_case(args, loaded, b, overrides) for loaded, b in work]
     check_outputs(jobs, args.force)

@@ -9,8 +9,8 @@ from pathlib import Path
 
 from rich.console import Console
 
-from backends.errors import BackendNotInstalled
-from backends.registry import DEFAULT_BACKEND, entry, installed_backends, is_installed
+from backends.registry import DEFAULT_BACKEND
+from runner.cli import options
 from runner.errors import ExitCode, UsageError
 
 NAME = "conformance"
@@ -18,24 +18,8 @@ HELP = "run the conformance suite on every installed backend and print the matri
 DEFAULT_OUT = Path("traces") / "conformance"
 
 
-def _backends(text: str | None) -> list[str]:
-    if text is None:
-        names = installed_backends()
-        if not names:
-            raise BackendNotInstalled("No backend is installed. Install one with: pip install 'physics-scenarios[ode]'")
-        return names
-    names = [n.strip() for n in text.split(",") if n.strip()]
-    if not names:
-        raise UsageError("--backends expects names separated by commas, e.g. --backends ode,pybullet")
-    for name in names:
-        entry(name)  # an unknown name is bad input (exit 2)
-        if not is_installed(name):
-            raise BackendNotInstalled(f"Backend `{name}` is not installed. Install it with: {entry(name).hint}")
-    return list(dict.fromkeys(names))
-
-
 def configure(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("--backends", "-b", help="comma-separated backends (default: every installed one)")
+    options.add_backend(parser, options.ALL)
     parser.add_argument("--out", type=Path, default=DEFAULT_OUT, help=f"folder for the matrix (default {DEFAULT_OUT})")
     parser.add_argument("-j", "--jobs", type=int, default=None, help="worker processes at once (default: one per core)")
     parser.add_argument(
@@ -64,7 +48,7 @@ def execute(args: argparse.Namespace, out: Console, err: Console) -> int:
         raise UsageError(f"-j expects a number of processes >= 1, found {args.jobs}")
     if args.timeout <= 0:
         raise UsageError(f"--timeout expects seconds > 0, found {args.timeout:g}")
-    backends = _backends(args.backends)
+    backends = options.backend_names(args)
     first = [b for b in (REFERENCE, DEFAULT_BACKEND) if b in backends]  # the reference's column, then the default
     backends = first + [b for b in backends if b not in first]
     suite = (args.suite or DEFAULT_SUITE).resolve()

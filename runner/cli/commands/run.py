@@ -13,7 +13,8 @@ from rich.markup import escape
 from rich.progress import BarColumn, Progress, TaskID, TextColumn, TimeRemainingColumn
 
 from backends.errors import BackendError, BackendNotInstalled, EngineFailure
-from backends.registry import DEFAULT_BACKEND, entry, is_installed
+from backends.registry import DEFAULT_BACKEND
+from runner.cli import options
 from runner.errors import ScenarioError, ScenarioValidationError, TraceError, UsageError
 from runner.exec.cases import Case, CaseResult
 from runner.language.load import BASE_CASE, LoadedScenario, load_files, parse_overrides
@@ -26,20 +27,12 @@ DEFAULT_OUT = Path("traces")
 def configure(run: argparse.ArgumentParser) -> None:
     from runner.exec.executors import add_arguments
 
-    run.add_argument("files", nargs="+", type=Path, metavar="FILE", help="scenario files, or folders of *.yaml files")
-    run.add_argument("--backend", "-b", default=DEFAULT_BACKEND, help=f"engine to use (default {DEFAULT_BACKEND})")
-    group = run.add_mutually_exclusive_group()
-    group.add_argument("--variant", help="run this variant (default: the file's first variant)")
-    group.add_argument("--all-variants", action="store_true", help="run every variant")
+    options.add_scenario_files(run)
+    options.add_backend(run, DEFAULT_BACKEND)
+    options.add_variant_choice(run)
     run.add_argument("--out", type=Path, default=DEFAULT_OUT, help="folder for the traces (default: traces/)")
     run.add_argument("--no-trace", action="store_true", help="do not write traces")
-    run.add_argument(
-        "--set",
-        action="append",
-        default=[],
-        metavar="KEY=VALUE",
-        help="override a value, e.g. world.dt=0.01 or params.count=50 (repeatable)",
-    )
+    options.add_overrides(run)
     out = run.add_mutually_exclusive_group()
     out.add_argument("--quiet", "-q", action="store_true", help="print only failures and the summary")
     out.add_argument("--json", action="store_true", help="print the results as JSON")
@@ -120,12 +113,17 @@ def _write_junit(
         by_file: dict[str, list[str]] = {}
         for issue in exc.issues:
             by_file.setdefault(issue.file, []).append(str(issue))
-        junit += [from_error(f, args.backend, "\n".join(lines)) for f, lines in by_file.items()]
+        junit += [from_error(f, _backend_text(args), "\n".join(lines)) for f, lines in by_file.items()]
     elif exc is not None:
         kind = "engine-failure" if isinstance(exc, (BackendNotInstalled, EngineFailure)) else "bad-input"
         where = args.files[0] if args.files else "scenario"
-        junit.append(from_error(where, args.backend, str(exc), kind))
+        junit.append(from_error(where, _backend_text(args), str(exc), kind))
     write_junit(args.junit, junit)
+
+
+def _backend_text(args: argparse.Namespace) -> str:
+    """The backends as the command line named them (for a JUnit error before they were checked)."""
+    return ",".join(args.backend or [args.backend_default])
 
 
 def _check(args: argparse.Namespace) -> None:
@@ -142,25 +140,26 @@ def _check(args: argparse.Namespace) -> None:
 def _execute(
     args: argparse.Namespace, out: Console, err: Console, cases: list[LoadedScenario], results: list[CaseResult]
 ) -> int:
+    """Every case on each backend asked for, one backend after the other; ``cases`` receives the case of
+    each run, in run order, and ``results`` its result. The most severe exit code wins."""
     from runner.cli.outcomes import print_summary
     from runner.exec.executors import check_outputs, make_executor, status_code
 
-    entry(args.backend)  # an unknown name is bad input (exit 2) before anything runs
-    if not is_installed(args.backend):
-        raise BackendNotInstalled(
-            f"Backend `{args.backend}` is not installed. Install it with: {entry(args.backend).hint}"
-        )
+    backends = options.backend_names(args)  # unknown: bad input (exit 2); missing: exit 3; before anything runs
     overrides = parse_overrides(args.set)
     _check(args)
-    cases.extend(load_files(_expand(args.files), args.variant, args.all_variants, overrides))
+    loaded = load_files(options.scenario_files(args.files), args.variant, args.all_variants, overrides)
+    work = [(case, backend) for backend in backends for case in loaded]
+    cases.extend(case for case, _ in work)
     out_dir: Path | None = None if args.no_trace else args.out
     if out_dir is not None:
-        _refuse_duplicates(out_dir, cases, args.backend)
+        for backend in backends:
+            _refuse_duplicates(out_dir, loaded, backend)
         try:
             out_dir.mkdir(parents=True, exist_ok=True)
         except OSError as exc:
             raise ScenarioError(f"cannot use {out_dir} as the trace folder: {exc.strerror or exc}") from None
-    jobs = [_case(args, c, overrides, out_dir) for c in cases]
+    jobs = [_case(args, c, b, overrides, out_dir) for c, b in work]
     check_outputs(jobs, args.force)  # files the tool did not write: refused before anything runs
     executor = make_executor(args.executor, args.jobs, args.ray_address, isolate=args.isolate, force=args.force)
     shown = _Shown(args, out, err, cases, results)
@@ -186,7 +185,7 @@ def _execute(
     return code
 
 
-def _case(args: argparse.Namespace, loaded: LoadedScenario, overrides: tuple[tuple[str, Any], ...],
+def _case(args: argparse.Namespace, loaded: LoadedScenario, backend: str, overrides: tuple[tuple[str, Any], ...],
           out_dir: Path | None) -> Case:  # fmt: skip
     from runner.exec.executors import estimate_cost
     from runner.sim.budget import DEFAULT_BUDGET
@@ -194,10 +193,10 @@ def _case(args: argparse.Namespace, loaded: LoadedScenario, overrides: tuple[tup
 
     budget = args.timeout if args.timeout is not None else (loaded.model.world.budget or DEFAULT_BUDGET)
     return Case(
-        str(loaded.path), None if loaded.variant == BASE_CASE else loaded.variant, args.backend, overrides,
+        str(loaded.path), None if loaded.variant == BASE_CASE else loaded.variant, backend, overrides,
         None if out_dir is None else str(out_dir), cost=estimate_cost(loaded), record_every=args.record_every,
         trace_process=args.trace_process, budget=budget, sha256=loaded.sha256,
-        trace=None if out_dir is None else str(trace_path(out_dir, loaded, args.backend)),
+        trace=None if out_dir is None else str(trace_path(out_dir, loaded, backend)),
         scenario=loaded.model.scenario, loaded=loaded,
     )  # fmt: skip
 
@@ -260,10 +259,3 @@ def _refuse_duplicates(out_dir: Path, cases: list[LoadedScenario], backend: str)
             )
         first[path] = case
 
-
-def _expand(paths: list[Path]) -> list[Path]:
-    """A folder stands for its *.yaml files (not its subfolders), in name order."""
-    out: list[Path] = []
-    for path in paths:
-        out.extend(sorted(path.glob("*.yaml")) if path.is_dir() else [path])
-    return out

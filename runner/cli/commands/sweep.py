@@ -27,6 +27,8 @@ from rich.console import Console
 from rich.markup import escape
 from rich.table import Table
 
+from backends.registry import DEFAULT_BACKEND
+from runner.cli import options
 from runner.errors import UsageError
 
 NAME = "sweep"
@@ -39,14 +41,12 @@ def configure(p: argparse.ArgumentParser) -> None:
 
     p.add_argument("file", type=Path, metavar="FILE")
     p.add_argument("--param", action="append", default=[], required=True, metavar="NAME=v1,v2,...",
-                   help="a --set path (or a declared parameter's name) and its values; repeat for a grid")  # fmt: skip
-    p.add_argument("--backends", default=None, help="comma-separated backends (default: the default backend)")
-    group = p.add_mutually_exclusive_group()
-    group.add_argument("--variant", help="run this variant (default: the file's first variant)")
-    group.add_argument("--all-variants", action="store_true", help="run every variant")
+                   help="a declared parameter's name (or a --set path) and its values; repeat for a grid")  # fmt: skip
+    options.add_backend(p, DEFAULT_BACKEND)
+    options.add_variant_choice(p)
     p.add_argument("--metric", action="append", default=[], metavar="EXPR",
                    help="an expression evaluated at each run's end, e.g. 'max(crate.pos.z)' (repeatable)")  # fmt: skip
-    p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE", help="a fixed override (repeatable)")
+    options.add_overrides(p)
     p.add_argument("--out", type=Path, default=DEFAULT_OUT, help=f"output folder (default {DEFAULT_OUT})")
     p.add_argument("--timeout", type=float, default=None, metavar="S",
                    help="stop a run after S seconds of wall time (default: the scenario's world.budget, else 3600)")
@@ -75,15 +75,24 @@ def split_values(text: str) -> list[str]:
 
 
 def parse_params(items: list[str], declared: set[str]) -> list[tuple[str, list[Any]]]:
-    """``--param`` items -> [(--set path, values)]; the name of a parameter the file declares means params.NAME."""
-    from runner.language.load import parse_overrides
+    """``--param`` items -> [(--set path, values)]; the name of a parameter the file declares means params.NAME;
+    another name without a dot (not a top-level key either) is an error naming the closest declared parameter."""
+    import difflib
 
+    from runner.language.load import parse_overrides
+    from runner.language.model import Scenario
+
+    top = {f.alias or n for n, f in Scenario.model_fields.items()}
     grid: list[tuple[str, list[Any]]] = []
     for item in items:
         name, sep, values = item.partition("=")
         name = name.strip()
         if not sep or not name:
             raise UsageError(f"Invalid `--param {item}`. Expected NAME=v1,v2,...")
+        if "." not in name and name not in declared and name not in top:
+            close = difflib.get_close_matches(name, sorted(declared), n=1, cutoff=0.6)
+            hint = f"did you mean `{close[0]}`?" if close else f"declared: {', '.join(sorted(declared)) or 'none'}"
+            raise UsageError(f"`--param {item}`: unknown parameter `{name}`; {hint}")
         if name in declared:
             name = f"params.{name}"
         if name in (g[0] for g in grid):
@@ -92,15 +101,28 @@ def parse_params(items: list[str], declared: set[str]) -> list[tuple[str, list[A
     return grid
 
 
+def _probe(file: Path, fixed: tuple[tuple[str, Any], ...], grid: list[tuple[str, list[Any]]]) -> None:
+    """Each --param path set to its first value: a path the file does not declare is refused naming `--param`."""
+    from runner.errors import Issue, ScenarioValidationError
+    from runner.language.load import load_scenario
+
+    try:
+        load_scenario(file, None, fixed + tuple((name, values[0]) for name, values in grid))
+    except ScenarioValidationError as exc:
+        names = {f"--set {name}" for name, _ in grid}
+        raise ScenarioValidationError([
+            Issue(i.file, i.line, i.column, "--param" + i.path.removeprefix("--set"), i.message) if i.path in names
+            else i for i in exc.issues
+        ]) from None  # fmt: skip
+
+
 def _slug(values: dict[str, Any]) -> str:
     text = "_".join(f"{k.removeprefix('params.')}={v}" for k, v in values.items())
     return re.sub(r"[^A-Za-z0-9_.=-]+", "-", text)[:80]
 
 
 def execute(args: argparse.Namespace, out: Console, err: Console) -> int:
-    from backends.registry import DEFAULT_BACKEND, entry, is_installed
     from runner.cli.outcomes import print_problem
-    from runner.errors import BackendNotInstalled
     from runner.exec.executors import Case, CaseResult, check_outputs, estimate_cost, make_executor, status_code
     from runner.language.load import load_all, load_scenario, parse_overrides
     from runner.sim.budget import DEFAULT_BUDGET
@@ -111,11 +133,8 @@ def execute(args: argparse.Namespace, out: Console, err: Console) -> int:
     fixed = parse_overrides(args.set)
     base = load_scenario(args.file, None, fixed)
     grid = parse_params(args.param, set(base.model.params))
-    backends = [b.strip() for b in (args.backends or DEFAULT_BACKEND).split(",") if b.strip()]
-    for b in backends:
-        entry(b)  # unknown: bad input before anything runs
-        if not is_installed(b):
-            raise BackendNotInstalled(f"Backend `{b}` is not installed. Install it with: {entry(b).hint}")
+    _probe(args.file, fixed, grid)
+    backends = options.backend_names(args)
     check_metrics(args.metric, base.model)
     names = [n for n, _ in grid]
     combos = [dict(zip(names, values, strict=True)) for values in itertools.product(*(v for _, v in grid))]
