@@ -45,7 +45,8 @@ def _walk(folder: Path) -> list[Path]:
 
 def scenario_files(paths: list[Path]) -> list[Path]:
     """Files as given (a file named twice runs twice), folders expanded; a folder without any scenario is bad
-    input."""
+    input. A file a folder brings that is already on the list is not added again (``scenarios
+    scenarios/conformance`` names each conformance file once)."""
     out: list[Path] = []
     for path in paths:
         if path.is_dir():
@@ -53,7 +54,8 @@ def scenario_files(paths: list[Path]) -> list[Path]:
             if not found:
                 message = "expected scenario files (*.yaml with `schema_version:`) in this folder, found none"
                 raise ScenarioValidationError([Issue(str(path), 0, 0, "", message)])
-            out += found
+            seen = {p.resolve() for p in out}
+            out += [p for p in found if p.resolve() not in seen]
         else:
             out.append(path)
     return out

@@ -20,6 +20,7 @@ from typing import Any
 
 from runner.language import model_assertions as A
 from runner.language import model_behaviour as B
+from runner.language.buttons import is_button_event
 from runner.language.model import Scenario
 from runner.language.model_walk import walk_steps
 from runner.language.yaml_source import Path
@@ -71,7 +72,7 @@ def check_interval_cycles(model: Scenario, bad: Bad) -> None:
 # ---- events ----------------------------------------------------------------------------------------
 def check_handlers(model: Scenario, bad: Bad, events: set[str]) -> None:
     for event in model.on:
-        if event not in events:
+        if event not in events and not is_button_event(event):  # a key or click in `scenario view` can send it
             bad(("on", event), f"a handler for an event that can never happen: {unknown('event', event, events)}", True)
     for name in model.triggers:
         if name == "start":

@@ -94,6 +94,10 @@ def test_folders_are_taken_by_every_command_recursing_like_pytest(
 ) -> None:
     everything = sorted((ROOT / "scenarios").rglob("*.yaml"))
     assert scenario_files([ROOT / "scenarios"]) == everything and len(everything) == 17
+    # a folder and its subfolder: each file once; a file named twice: twice (as given)
+    assert scenario_files([ROOT / "scenarios", ROOT / "scenarios" / "conformance"]) == everything
+    twice = ROOT / "scenarios" / "factory_physics.yaml"
+    assert scenario_files([twice, twice]) == [twice, twice]
     code, out, _ = run(capsys, "validate", ROOT / "scenarios")
     assert code == 0 and out.count("ok ") == len(everything)
     folder = tmp_path / "cases" / "deeper"
