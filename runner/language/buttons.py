@@ -38,5 +38,6 @@ def is_button_event(event: str) -> bool:
     base = event[:-7] if event.endswith("-repeat") and len(event) > 7 else event
     if _button(base):
         return True
-    rest = base[_MODIFIERS.match(base).end():]  # type: ignore[union-attr] - the pattern always matches
+    modifiers = _MODIFIERS.match(base)
+    rest = base[modifiers.end() :] if modifiers else base
     return rest != base and _button(rest)
