@@ -20,6 +20,7 @@ from pathlib import Path
 import pytest
 
 from tests.paths import ROOT
+from tests.reliability.memory import MEASURED
 
 SMALL = """\
 schema_version: 1
@@ -33,13 +34,7 @@ COMMAND_LINE = re.compile(r"^error: <command line>: --(set|param) \S")
 
 
 #: `scenario ARGS`, then the process's own peak RSS on stderr
-MEASURED = (
-    "import resource, sys\n"
-    "from runner.cli.main import main\n"
-    "code = main(sys.argv[1:])\n"
-    "print('peak-rss-kib', resource.getrusage(resource.RUSAGE_SELF).ru_maxrss, file=sys.stderr)\n"
-    "sys.exit(code)\n"
-)
+
 
 
 def scenario(*args: object, cwd: Path, timeout: float = 60) -> subprocess.CompletedProcess[str]:
