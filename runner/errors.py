@@ -11,7 +11,8 @@ The whole tree (the root and the backend branch live in :mod:`backends.errors`):
     │   ├── BackendNotInstalled       engine missing (install hint)   exit 3
     │   ├── UnsupportedFeature        capability missing              exit 2
     │   └── EngineFailure             NaN, inf, blow-up, engine error exit 3
-    │       └── BudgetExceeded        over its wall-clock budget      exit 3
+    │       ├── BudgetExceeded        over its wall-clock budget      exit 3
+    │       └── EnergyGain            energy from nowhere             exit 3
     ├── TraceError                    an output path cannot be used   exit 2
     │   ├── OutputInUse               another run is writing it       exit 2
     │   └── OutputError               disk full, I/O error            exit 74
@@ -43,6 +44,7 @@ __all__ = [
     "BackendNotInstalled",
     "BudgetExceeded",
     "ContractViolation",
+    "EnergyGain",
     "EngineFailure",
     "ExitCode",
     "InternalError",
@@ -125,3 +127,8 @@ class OutputError(TraceError):
 class BudgetExceeded(EngineFailure):
     """A run went over its wall-clock budget (``world.budget`` or ``--timeout``), or its cost per step
     says it would; stopped at a step boundary, the trace finished."""
+
+
+class EnergyGain(EngineFailure):
+    """The bodies' mechanical energy rose beyond the bound with no work done on them (runner.sim.energy);
+    stopped at the step that showed it, the trace finished."""

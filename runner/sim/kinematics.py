@@ -46,19 +46,25 @@ class KinematicTable:
         backend.set_kinematic(k.index, pos, hpr_to_quat(hpr), (0.0, 0.0, 0.0), (0.0, 0.0, 0.0))
         k.moving = False
 
-    def drive(self, backend: Backend, dt: float) -> None:
-        """Give the engine each kinematic body's motion over the coming step (target reached at its end)."""
+    def drive(self, backend: Backend, dt: float) -> bool:
+        """Give the engine each kinematic body's motion over the coming step (target reached at its end).
+        True if a kinematic body moves, stops or changes scale over it (it may push what it touches)."""
+        changed = False
         for k in self.driven:
             if k.target_scale != k.scale:
                 k.scale = k.target_scale
                 self.scale_changed.add(self.world.bodies[k.index].name)
+                changed = True
             if k.target_pos == k.pos and k.target_hpr == k.hpr:
                 if k.moving:
                     backend.set_kinematic(k.index, k.pos, hpr_to_quat(k.hpr), (0.0, 0.0, 0.0), (0.0, 0.0, 0.0))
                     k.moving = False
+                    changed = True
                 continue
+            changed = True
             q0, q1 = hpr_to_quat(k.hpr), hpr_to_quat(k.target_hpr)
             lin = tuple((k.target_pos[c] - k.pos[c]) / dt for c in range(3))
             ang = tuple(c / dt for c in rotation_vector(q0, q1))
             backend.set_kinematic(k.index, k.pos, q0, lin, ang)  # type: ignore[arg-type]
             k.pos, k.hpr, k.moving = k.target_pos, k.target_hpr, True
+        return changed

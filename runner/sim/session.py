@@ -36,6 +36,7 @@ from runner.sim.assertions import AssertionTracker, Verdict
 from runner.sim.budget import Watchdog
 from runner.sim.collisions import EventHandler, SolidTraverser, quat_matrices
 from runner.sim.conditions import ConditionTriggers, HandlerGate, with_zeros
+from runner.sim.energy import EnergyWatch
 from runner.sim.intervals import IntervalManager
 from runner.sim.kinematics import KinematicTable
 from runner.sim.resolver import Snapshot, StateResolver
@@ -136,6 +137,7 @@ class Session:
         self.conditions = ConditionTriggers(program.triggers, program.expressions)
         self.handler_gate = HandlerGate()
         self._zeros = [(self.joint_index[j], offset) for j, offset in program.joint_zeros.items()]
+        self.energy = EnergyWatch(self.world, backend.name)  # energy from nowhere: exit 3 (runner.sim.energy)
 
     # --- services used by actions and intervals (runner.sim.intervals.IntervalHost) --------------------
     def evaluate(self, text: str) -> Any:
@@ -197,6 +199,7 @@ class Session:
     def add_force(self, body: str, force: Sequence[float], torque: Sequence[float], scale: float) -> None:
         i = self.body_index[body]
         acc = self.forces.setdefault(i, np.zeros(6))
+        self.energy.driven()  # a force's work is not booked: the energy check starts afresh after this step
         acc[:3] += np.asarray(force, float) * scale
         acc[3:] += np.asarray(torque, float) * scale
 
@@ -204,6 +207,7 @@ class Session:
         """The lab's reset: a dynamic body teleported with new velocities, a kinematic one moved to a pose."""
         index = self.body_index[command.body]
         body = self.world.bodies[index]
+        self.energy.driven()
         pos = command.pos if command.pos is not None else body.pos
         if command.quat is not None:
             quat = command.quat
@@ -298,9 +302,15 @@ class Session:
                 time=t,
                 last_good=self._last_good(i),
             )
+        joints = with_zeros(self.backend.joint_states(), self._zeros)  # stated zeros (compile.joints)
+        try:
+            self.energy.check(t, states, joints)
+        except EngineFailure as exc:
+            exc.last_good = self._last_good(self.body_index[exc.body]) if exc.body in self.body_index else None
+            raise
         self.snapshot.time = t
         self.snapshot.bodies = states
-        self.snapshot.joints = with_zeros(self.backend.joint_states(), self._zeros)  # stated zeros (compile.joints)
+        self.snapshot.joints = joints
         if contacts or self._contacts_always:
             self._read_contacts(t)
 
@@ -408,7 +418,8 @@ class Session:
                 break
             t_next = (k + 1) * self.dt
             self.intervals.step(t_next)
-            self.kinematics.drive(self.backend, self.dt)
+            if self.kinematics.drive(self.backend, self.dt):
+                self.energy.driven()  # a moving kinematic body pushes what it touches: unbooked work
             for i, f in self.forces.items():
                 self.backend.apply_force(i, tuple(f[:3]), tuple(f[3:]))
             self.forces.clear()

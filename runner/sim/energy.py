@@ -1,0 +1,140 @@
+"""The energy watchdog: a run whose bodies gain mechanical energy that nothing gave them stops (exit 3).
+
+Nothing in a scene does work on its dynamic bodies except what the scenario drives (gravity is in the
+energy), so their total mechanical energy
+
+    E = sum over dynamic bodies of  1/2 m |v|^2  +  1/2 w^T I_world w  -  m g.p
+
+(``I_world = R diag(I) R^T``: the compiled principal inertia turned by the body's orientation) cannot
+rise: restitution <= 1 gives back at most what an impact took, friction and damping only remove energy,
+ideal joints do no work. An engine that creates energy (the MuJoCo pile of 100 boxes throws its top box
+up at 29.5 m/s) is an engine failure, reported like a blow-up.
+
+What the scenario drives (docs/semantics.md, "Energy watchdog"):
+
+* motors: their work is booked, as an upper bound, ``|motor_force * joint velocity| * dt`` per joint and
+  step (the step's mean force times the velocity at its end), and the check compares ``E - booked work``;
+* one-step forces, resets, and kinematic bodies moving (or changing scale) over a step: the work they
+  do through contacts is not known, so the check starts afresh from the state after such a step.
+
+The reference and the bound. Energy may sink for a while and come back without anything being wrong:
+a contact's penetration holds energy that position correction (ERP, 0.2 per step in the ODE mapping every
+backend follows) gives back, 1 - 0.8^25 = 99.6 % of it within ``WINDOW_STEPS`` = 25 steps; the
+integrators (semi-implicit Euler on all four engines) make the true energy of a motion of angular
+frequency w oscillate between C/(1+a) and C/(1-a), a = w h / 2, around the energy C they conserve. So the
+reference is the largest energy of the last 25 steps, and it only ever goes down (``R = min(R, max of the
+window)``): a dip shorter than the window does not lower it, and energy lost for good lowers it 25
+steps later. A motion whose period is shorter than the window has its maximum inside it and never rises
+above the reference; a slower one (w h < 2 pi / 25, a < pi / 25) may, by at most 2a / (1 + a) < 0.223 of
+its energy C, which its kinetic energy reaches at its fastest: hence ``GAIN_FRACTION`` = 0.25 of the
+largest kinetic energy since the check (re)started, ``K_peak``. Bodies at rest carry none, but their
+contacts and joints still correct a step's fall, ``g h^2``, each step, worth ``m |g|^2 h^2``; over the
+window that is the floor ``sum(m) |g|^2 h * (25 h)``. Rounding adds ``4 N eps sum |E_i|``.
+
+A rise of ``E - booked work`` above the reference by more than ``GAIN_FRACTION * K_peak + floor +
+rounding`` raises :class:`~runner.errors.EnergyGain`, naming the body whose energy rose most since the
+reference was taken. The check is a sum and a few products over the bodies: vectorised, a few
+microseconds per step for tens of bodies.
+"""
+
+from __future__ import annotations
+
+from collections import deque
+
+import numpy as np
+
+from backends.types import BodyStates, CompiledWorld, JointStates, Motion
+from runner.errors import EnergyGain
+from runner.sim.collisions import quat_matrices
+
+__all__ = ["GAIN_FRACTION", "WINDOW_STEPS", "EnergyWatch", "body_energies"]
+
+#: steps the reference looks back: ERP 0.2 corrects 1 - 0.8^25 = 99.6 % of a penetration within them
+WINDOW_STEPS = 25
+#: a slow motion's integrator error above the window's maximum: 2a/(1+a) with a = pi/25, < 0.223
+GAIN_FRACTION = 0.25
+_ROUNDING = 4 * float(np.finfo(float).eps)
+
+
+def body_energies(
+    states: BodyStates, index: np.ndarray, mass: np.ndarray, inertia: np.ndarray, gravity: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """(kinetic, total) mechanical energy of the bodies ``index`` (J): translational and rotational
+    kinetic energy, plus the gravitational -m g.p."""
+    rot = quat_matrices(states.quat[index])
+    w_body = np.einsum("nji,nj->ni", rot, states.ang_vel[index])  # R^T w: the body-frame angular velocity
+    v = states.lin_vel[index]
+    kinetic = 0.5 * mass * np.einsum("ni,ni->n", v, v) + 0.5 * np.einsum("ni,ni->n", inertia, w_body * w_body)
+    return kinetic, kinetic - mass * (states.pos[index] @ gravity)
+
+
+class EnergyWatch:
+    """Checks one run's energy after each step (see the module docstring)."""
+
+    def __init__(self, world: CompiledWorld, backend: str) -> None:
+        self.backend = backend
+        self.names = [b.name for b in world.bodies]
+        self.index = np.array([i for i, b in enumerate(world.bodies) if b.motion is Motion.DYNAMIC], dtype=int)
+        self.mass = np.array([world.bodies[i].mass for i in self.index], float)
+        self.inertia = np.array([world.bodies[i].inertia for i in self.index], float).reshape(-1, 3)
+        self.gravity = np.asarray(world.gravity, float)
+        self.motors = np.array([k for k, j in enumerate(world.joints) if j.motor is not None], dtype=int)
+        self.dt = world.dt
+        g2 = float(self.gravity @ self.gravity)
+        self.floor = float(self.mass.sum()) * g2 * world.dt * (WINDOW_STEPS * world.dt)
+        self.work = 0.0  # booked motor work so far (J)
+        self._driven = True  # the first state is the first reference
+        self._window: deque[tuple[float, np.ndarray]] = deque(maxlen=WINDOW_STEPS + 1)
+        self._k_peak = 0.0  # the largest kinetic energy since the check (re)started
+        self._reference = 0.0
+        self._reference_at = 0.0
+        self._reference_bodies = np.zeros(0)
+
+    def driven(self) -> None:
+        """Something did work of unknown amount during this step: the next check starts afresh."""
+        self._driven = True
+
+    def check(self, t: float, states: BodyStates, joints: JointStates) -> None:
+        """The state after the step ending at ``t``; raises EnergyGain on a rise beyond the bound."""
+        if not self.index.size:
+            return
+        if self.motors.size:
+            power = np.nan_to_num(joints.motor_force[self.motors] * joints.velocity[self.motors])
+            self.work += float(np.abs(power).sum()) * self.dt
+        kinetic, energy = body_energies(states, self.index, self.mass, self.inertia, self.gravity)
+        total = float(energy.sum()) - self.work
+        entry = (total, energy)
+        if self._driven:
+            self._driven = False
+            self._window.clear()
+            self._window.append(entry)
+            self._reference, self._reference_at, self._reference_bodies = total, t, energy
+            self._k_peak = float(kinetic.sum())
+            return
+        self._k_peak = max(self._k_peak, float(kinetic.sum()))
+        rise = total - self._reference
+        if rise > 0.0:
+            bound = self.bound(energy)
+            if rise > bound:
+                self._raise(t, rise, bound, energy)
+        self._window.append(entry)
+        back, top = max(enumerate(reversed(self._window)), key=lambda e: e[1][0])  # steps back, entry
+        if top[0] < self._reference:
+            self._reference, self._reference_at, self._reference_bodies = top[0], t - back * self.dt, top[1]
+
+    def bound(self, energy: np.ndarray) -> float:
+        """The rise allowed now (J): integrator error on the motion, position correction at rest, rounding."""
+        return GAIN_FRACTION * self._k_peak + self.floor + _ROUNDING * len(energy) * float(np.abs(energy).sum())
+
+    def _raise(self, t: float, rise: float, bound: float, energy: np.ndarray) -> None:
+        gains = energy - self._reference_bodies
+        k = int(np.argmax(gains))
+        name = self.names[int(self.index[k])]
+        raise EnergyGain(
+            f"energy gain: body `{name}` gained {gains[k]:.4g} J at t = {t:.4f} s on {self.backend} (the bodies' "
+            f"energy rose {rise:.4g} J above its level at t = {self._reference_at:.4f} s with no work done on "
+            f"them, beyond the bound of {bound:.4g} J; docs/semantics.md, \"Energy watchdog\")",
+            backend=self.backend,
+            body=name,
+            time=t,
+        )

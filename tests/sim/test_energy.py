@@ -1,0 +1,156 @@
+"""The energy watchdog (runner.sim.energy): energy from nowhere stops a run with exit 3; what the scenario
+drives (motors, forces, resets) and what physics removes (restitution < 1) never trips it.
+
+The pure-Python backend has no contacts; ``BouncingBackend`` adds the simplest one, a floor at z = 0 that
+turns a falling ball's vertical velocity v into -e v (an impulse, as ODE's dContactBounce). With e < 1 the
+impact removes (1 - e^2) of the ball's kinetic energy; with e = 2 it is the engine fault the watchdog is
+for: it triples the kinetic energy at impact, K -> 4 K.
+
+The ball (1 kg) falls from 1 m at dt = 0.01 s: it reaches the floor with K = m g h = 9.81 J (semi-implicit
+Euler loses 1/2 m g^2 dt^2 per step, 4.8e-3 J per step, ~0.2 J over the 45 steps: K ~ 9.6 J). At e = 2 the
+rise is 3 K ~ 29 J against the bound 0.25 K_peak + floor, where K_peak = 4 K ~ 38 J and the floor is
+m g^2 dt (25 dt) = 0.24 J: 29 J > 9.9 J, so the watchdog fires at the first impact, t ~ 0.45 s.
+"""
+
+from __future__ import annotations
+
+import math
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from backends.fake import FakeBackend
+from backends.registry import entry, is_installed
+from runner.compile.program import build_program
+from runner.errors import EnergyGain
+from runner.exec.exits import classify
+from runner.language.load import load_scenario
+from runner.sim import run as run_module
+from runner.sim.energy import GAIN_FRACTION, WINDOW_STEPS, EnergyWatch
+from runner.sim.run import run_loaded
+from runner.sim.session import RunResult, Session
+from tests.paths import ROOT
+
+G, DT, H0 = 9.81, 0.01, 1.0
+
+
+class BouncingBackend(FakeBackend):
+    """The fake backend with a floor at z = 0 that reverses a falling body's vertical velocity times
+    ``restitution`` (the body's centre is its lowest point: a point mass)."""
+
+    restitution = 0.5
+
+    def _step(self) -> None:
+        super()._step()
+        for d in np.flatnonzero(self.moves):
+            if self.pos[d, 2] < 0.0 and self.vel[d, 2] < 0.0:
+                self.vel[d, 2] *= -self.restitution
+
+
+def bouncing(e: float) -> type[BouncingBackend]:
+    return type("Bouncing", (BouncingBackend,), {"restitution": e})
+
+
+def run(tmp_path: Path, text: str, backend: type[FakeBackend], monkeypatch: pytest.MonkeyPatch) -> RunResult:
+    path = tmp_path / "t.yaml"
+    path.write_text(text)
+    monkeypatch.setattr(run_module, "get_backend", lambda name: backend)
+    return run_loaded(load_scenario(path, None), "fake", None)
+
+
+DROP = f"""\
+schema_version: 1
+scenario: drop
+world: {{gravity: [0, 0, -{G}], dt: {DT}, duration: 3}}
+bodies:
+  ball: {{sphere: 0.05, mass: 1, pos: [0, 0, {H0}]}}
+"""
+
+
+def test_an_impact_that_adds_energy_stops_the_run(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    result = run(tmp_path, DROP, bouncing(2.0), monkeypatch)
+    assert result.status == "engine-failure"
+    assert result.failure is not None and result.failure.startswith("energy gain: body `ball` gained ")
+    # semi-implicit Euler: z_n = H0 - g dt^2 n (n + 1) / 2 < 0 first at n = 45 (t = 0.45 s), the step whose
+    # end the floor turns around
+    n = next(n for n in range(1, 1000) if H0 - G * DT**2 * n * (n + 1) / 2 < 0)
+    assert result.extra["time"] == pytest.approx(n * DT)
+    assert f"at t = {result.extra['time']:.4f} s on fake" in result.failure
+    gained = float(result.failure.split("gained ")[1].split(" J")[0])
+    # the ball's energy rose by 3 K, K = m g H0 less the integrator's loss (< 0.5 J, module docstring)
+    assert 3 * (G * H0 - 0.5) <= gained <= 3 * G * H0
+    assert result.extra["last_good"]["vel"][2] < 0  # the state before the impact: still falling
+
+
+@pytest.mark.parametrize("e", [0.0, 0.5, 0.9, 1.0])
+def test_bouncing_with_restitution_up_to_one_never_trips(
+    e: float, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    result = run(tmp_path, DROP, bouncing(e), monkeypatch)
+    assert result.status == "passed", result.failure
+
+
+def test_a_motor_lifting_a_body_does_work_that_is_booked(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """A slider motor lifts 10 kg at 1 m/s for 2 s: +196 J of potential energy, far beyond the bound
+    (0.25 * 5 J + 10 * 9.81^2 * 0.01 * 0.25 = 3.7 J), all of it booked as the motor's work."""
+    text = f"""\
+schema_version: 1
+scenario: lift
+world: {{gravity: [0, 0, -{G}], dt: {DT}, duration: 2}}
+bodies:
+  box: {{box: [0.2, 0.2, 0.2], mass: 10, pos: [0, 0, 1]}}
+joints:
+  lift: {{type: slider, bodies: [box, environment], axis: [0, 0, 1], motor: {{vel: 1, fmax: 1000}}}}
+"""
+    path = tmp_path / "t.yaml"
+    path.write_text(text)
+    program = build_program(load_scenario(path, None))
+    session = Session(program, FakeBackend(program.world))
+    assert session.run().status == "passed"
+    gain = 10 * G * (session.snapshot.bodies.pos[0, 2] - 1.0) + 0.5 * 10 * 1.0**2
+    assert gain > 190 and session.energy.work >= gain
+
+
+@pytest.mark.parametrize(
+    "action",
+    [
+        "{force: {body: ball, value: [0, 0, 2000]}}",  # one step: dv = 20 m/s, +200 J
+        "{reset: {body: ball, vel: [0, 0, 20]}}",  # +200 J at once
+    ],
+)
+def test_forces_and_resets_restart_the_check(action: str, tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    text = DROP + f"on:\n  start: [{action}]\n"
+    assert run(tmp_path, text, FakeBackend, monkeypatch).status == "passed"
+    # the same energy coming from the engine trips the watchdog: the bouncing test above
+
+
+def test_the_bound_is_the_documented_one(tmp_path: Path) -> None:
+    path = tmp_path / "t.yaml"
+    path.write_text(DROP)
+    world = build_program(load_scenario(path, None)).world
+    watch = EnergyWatch(world, "fake")
+    assert watch.floor == pytest.approx(1.0 * G**2 * DT * WINDOW_STEPS * DT)
+    a = math.pi / WINDOW_STEPS  # the fastest motion whose period is longer than the window: w h = 2 pi / 25
+    assert 2 * a / (1 + a) < GAIN_FRACTION
+
+
+def test_an_energy_gain_exits_3_on_every_path() -> None:
+    exit_ = classify(EnergyGain("energy gain: body `ball` gained 29 J at t = 0.4600 s on fake"))
+    assert exit_.code == 3 and exit_.message.startswith("energy gain: body `ball`")
+
+
+def test_the_mujoco_pile_of_100_is_caught() -> None:
+    """issue 17: MuJoCo throws the top box of the 100-box pile up at 29.5 m/s at t = 1.2 s (a run of
+    about 1 s)."""
+    if not is_installed("mujoco"):
+        pytest.skip(f"engine not installed: {entry('mujoco').hint}")
+    proc = subprocess.run(
+        [sys.executable, "-m", "runner", "run", str(ROOT / "scenarios/box_pile.yaml"), "--backend", "mujoco",
+         "--set", "params.count=100", "--no-trace"],
+        capture_output=True, text=True, cwd=ROOT, timeout=300,
+    )  # fmt: skip
+    assert proc.returncode == 3, proc.stdout + proc.stderr
+    assert "energy gain: body `crate_99` gained " in proc.stdout + proc.stderr
