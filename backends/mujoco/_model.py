@@ -371,9 +371,10 @@ def _add_pairs(
     where the bodies could touch: not both driven, not one rigid group, not joined.
     """
     joined = {frozenset((j.body, j.other)) for j in world.joints if j.other is not None}
+    order = {b.name: i for i, b in enumerate(world.bodies)}
     seen: set[frozenset[str]] = set()
     for pair in world.pair_surfaces:  # the first one naming a pair is the pair's (CompiledWorld.surface)
-        a, b = pair.a, pair.b
+        a, b = sorted((pair.a, pair.b), key=order.__getitem__)  # geom1 first in the world: its contact frame
         key = frozenset((a, b))
         if key in seen:
             continue
