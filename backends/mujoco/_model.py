@@ -210,10 +210,7 @@ def build(world: CompiledWorld, opts: MujocoOptions, h: float) -> Layout:
     _add_motors(spec, world, heavy, h)
     _add_excludes(spec, world, group, moving)
     _add_pairs(spec, world, group, moving, default, h, opts)
-    try:
-        model = spec.compile()
-    except ValueError as exc:  # MjSpec reports a model it refuses as ValueError("Error: ...")
-        raise EngineFailure(f"mujoco: MjSpec.compile refused the model: {exc}", backend="mujoco") from exc
+    model = _compile(spec, len(world.bodies))
     _rescale_solver(model, [b.name for b in world.bodies if b.motion is Motion.DYNAMIC])
     index = {f"body:{b.name}": i for i, b in enumerate(world.bodies)}
     geom_body = [index[model.body(model.geom_bodyid[g]).name] for g in range(model.ngeom)]
@@ -235,6 +232,27 @@ def build(world: CompiledWorld, opts: MujocoOptions, h: float) -> Layout:
         ),
         friction_damping=_friction_damping(default),
     )
+
+
+#: Arena (MjData's contacts, constraints and scratch stack) when MuJoCo's default cannot be allocated:
+#: this per body, plus 8 bytes per pair of bodies (mj_collision's broadphase keeps two int arrays of
+#: N(N-1)/2 pairs on the stack: 4 bytes per pair of bodies, doubled for the margin), plus a floor.
+ARENA_PER_BODY, ARENA_FLOOR = 64 * 1024, 64 * 1024 * 1024
+
+
+def _compile(spec: Any, bodies: int) -> mujoco.MjModel:
+    """``spec.compile()``; MuJoCo's default arena grows faster than the bodies (1.7 GB at 1,000 boxes, only
+    reserved) and cannot be allocated at 10,000, so such a model gets an arena sized by ``ARENA_*``."""
+    try:
+        return spec.compile()
+    except ValueError as exc:  # MjSpec reports a model it refuses as ValueError("Error: ...")
+        if "allocate memory" not in str(exc):
+            raise EngineFailure(f"mujoco: MjSpec.compile refused the model: {exc}", backend="mujoco") from exc
+    spec.memory = ARENA_FLOOR + ARENA_PER_BODY * bodies + 8 * bodies * bodies
+    try:
+        return spec.compile()
+    except ValueError as exc:
+        raise EngineFailure(f"mujoco: MjSpec.compile refused the model: {exc}", backend="mujoco") from exc
 
 
 def _friction_damping(default: ContactParams) -> float | None:
