@@ -11,13 +11,13 @@ from pathlib import Path
 
 from backends.registry import DEFAULT_BACKEND, is_installed, list_backends
 
-from . import batch, encoding, memory, overhead, scaling
+from . import batch, build, encoding, memory, overhead, scaling
 from .instrument import wrapper_cost
 from .report import Results, append_notes, render
 
 #: Every engine the registry lists (a fifth engine joins the benchmarks by its registry line).
 ENGINES = tuple(e.name for e in list_backends())
-SECTIONS = ("overhead", "scaling", "memory", "batch", "encoding")
+SECTIONS = ("overhead", "scaling", "memory", "batch", "encoding", "build")
 
 
 def _ints(text: str) -> list[int]:
@@ -53,6 +53,8 @@ def parser() -> argparse.ArgumentParser:
     p.add_argument("--encoding-backends", type=_names, default=None, help="encoding: engines (default: installed)")
     p.add_argument("--encoding-duration", type=float, default=10.0, help="encoding: simulated seconds of the pile")
     p.add_argument("--encoding-reps", type=int, default=3, help="encoding: interleaved repetitions (median)")
+    p.add_argument("--build-backends", type=_names, default=None, help="build: engines (default: all installed)")
+    p.add_argument("--build-sizes", type=_ints, default=[100, 1000, 10000], help="build: body counts")
     return p
 
 
@@ -62,6 +64,7 @@ def _quick(a: argparse.Namespace) -> None:
     a.memory_durations, a.memory_pile = [1.0, 4.0], [2, 1, 1]
     a.batch_reps = 1
     a.encoding_duration, a.encoding_reps = 0.4, 1
+    a.build_sizes = [10, 40]
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -85,6 +88,7 @@ def main(argv: list[str] | None = None) -> int:
         f"{','.join(args.memory_backends)}",
         "batch": f"-j {args.batch_jobs}, {args.batch_reps} reps, {args.batch_backend}",
         "encoding": f"{'x'.join(map(str, args.pile))} boxes, {args.encoding_duration:g} s, {args.encoding_reps} reps",
+        "build": f"{args.build_sizes} bodies, {','.join(args.build_backends or installed)}",
     }
     results = Results(command=shlex.join(["python", "-m", "bench", *(argv if argv is not None else sys.argv[1:])]),
                       sizes={k: v for k, v in sizes.items() if k in args.sections})  # fmt: skip
@@ -113,6 +117,10 @@ def main(argv: list[str] | None = None) -> int:
         log(f"encoding: {sizes['encoding']}, {','.join(chosen)}")
         results.encoding = encoding.run(chosen, tuple(args.pile), args.encoding_duration,  # type: ignore[arg-type]
                                         args.encoding_reps, log)  # fmt: skip
+    if "build" in args.sections:
+        log(f"build: {sizes['build']}")
+        chosen = [b for b in (args.build_backends or installed) if b in installed]
+        results.build = build.run(chosen, args.build_sizes, log)
     results.load = (results.load[0], os.getloadavg()[0])
     results.wall_seconds = time.perf_counter() - started
     if args.quick:

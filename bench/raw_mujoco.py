@@ -1,7 +1,9 @@
 """The pile on MuJoCo, written by hand with the adapter's settings (backends/mujoco, its settings()).
 
-Every pair that can touch gets an explicit contact pair with the ODE-style solref, as the adapter
-builds it (docs/backends/mujoco.md), so the physics is the same. The loop is one ``mj_step`` per step,
+Every geom carries the ODE-style contact parameters of the world's surface and MuJoCo's own filtering
+makes the contacts (only the dynamic boxes have a contype, so the static plane meets every box), as the
+adapter builds it (docs/backends/mujoco.md), with the friction rows' reference of a bouncing surface
+set by the adapter's engine step function, so the physics is the same. The loop is one ``mj_step`` per step,
 or, when the adapter's settings say its friction is "Coulomb" (sliding contacts' normal reference
 corrected, several constraint solves per step), the adapter's own engine step function for that: it
 is the physics, not the runner's overhead.
@@ -10,7 +12,7 @@ is the physics, not the runner's overhead.
 from __future__ import annotations
 
 import re
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from typing import Any
 
 import mujoco
@@ -31,12 +33,7 @@ class MujocoLoop:
             raise ValueError(f"unexpected MuJoCo settings: {dict(s)}")
         erp, bounce_erp = float(erp_text[1]), float(erp_text[2])
         friction_rate = min(float(capped[1]), float(capped[2]) / h) if capped else float(plain[1]) / h  # type: ignore[index]
-        self.advance = mujoco.mj_step
-        if "Coulomb" in str(s.get("friction", "")):
-            from backends.mujoco import _coulomb
-
-            self.advance = _coulomb.step
-        impedance, mu_max = s["impedance"], s["mu_max"]
+        coulomb = "Coulomb" in str(s.get("friction", ""))
         spec = mujoco.MjSpec()
         spec.compiler.degree = False
         spec.option.timestep = h
@@ -46,6 +43,13 @@ class MujocoLoop:
         spec.option.tolerance = s["tolerance"]
         spec.option.iterations = s["iterations"]
         spec.option.disableflags |= mujoco.mjtDisableBit.mjDSBL_AUTORESET
+        spec.option.disableflags |= mujoco.mjtDisableBit.mjDSBL_FILTERPARENT
+        impedance, mu_max = s["impedance"], s["mu_max"]
+        surface = world.default_surface
+        e = surface.bounce
+        solref = [-(erp if e == 0.0 else bounce_erp) / h**2, -(1.0 + e) / h]
+        mu = min(surface.mu, mu_max)
+        solimp = [impedance, impedance, 0.001, 0.5, 2.0]
         # static bodies first, then the dynamic ones (the adapter's tree order)
         order = [b for b in world.bodies if b.motion is Motion.STATIC] + [
             b for b in world.bodies if b.motion is Motion.DYNAMIC
@@ -61,23 +65,16 @@ class MujocoLoop:
             else:
                 kind, size = mujoco.mjtGeom.mjGEOM_BOX, [x / 2.0 for x in b.shape.size]
             geom = body.add_geom(name=f"geom:{b.name}", type=kind, size=size, rgba=list(b.color))
-            geom.contype = geom.conaffinity = 0
-        surface = world.default_surface
-        e = surface.bounce
-        solref = [-(erp if e == 0.0 else bounce_erp) / h**2, -(1.0 + e) / h]
-        solreffriction = [-1.0, -friction_rate]
-        mu = min(surface.mu, mu_max)
-        solimp = [impedance, impedance, 0.001, 0.5, 2.0]
+            geom.contype, geom.conaffinity = (1 if b.motion is Motion.DYNAMIC else 0), 1
+            geom.condim, geom.friction, geom.solref, geom.solimp = 3, [mu, 0.005, 0.0001], solref, solimp
+        # a geom's friction rows take its (normal) solref; the adapter's friction reference is (-1, -rate)
+        damping = None if solref[1] == -friction_rate else friction_rate / impedance
         names = [b.name for b in world.bodies]
-        dynamic = [b.motion is Motion.DYNAMIC for b in world.bodies]
-        for i, a in enumerate(names):
-            for j in range(i + 1, len(names)):
-                if dynamic[i] or dynamic[j]:
-                    spec.add_pair(
-                        geomname1=f"geom:{a}", geomname2=f"geom:{names[j]}", condim=3,
-                        friction=[mu, mu, 0.005, 0.0001, 0.0001], solref=solref, solreffriction=solreffriction,
-                        solimp=solimp,
-                    )  # fmt: skip
+        self.advance: Callable[[mujoco.MjModel, mujoco.MjData], object] = mujoco.mj_step
+        if coulomb:
+            from backends.mujoco import _coulomb
+
+            self.advance = lambda m, d: _coulomb.step(m, d, damping)
         self.m = spec.compile()
         self.d = mujoco.MjData(self.m)
         mujoco.mj_forward(self.m, self.d)  # the adapter bases the solver's scale on the dynamic bodies' inertia

@@ -132,6 +132,7 @@ class MujocoBackend(Backend):
 
     def _step(self) -> None:
         m, d, nsteps, motors = self._m, self._d, self._nsteps, self._helper_dof.size > 0
+        friction = self._layout.friction_damping
         forced = bool(self.forces)
         if forced:  # held for every engine step of this step, then cleared
             for i, acc in self.forces.items():
@@ -145,7 +146,7 @@ class MujocoBackend(Backend):
                     self._put(i, pose, self._times[k - 1])
             if motors:
                 d.qvel[self._helper_dof] = self._target
-            _coulomb.step(m, d)
+            _coulomb.step(m, d, friction)
             if motors:
                 self._motor_mean.add(-d.qfrc_constraint[self._helper_dof])  # the helper feels -(motor force)
             if k + 1 < nsteps:  # the last engine step's contacts stay in MjData until contacts() asks

@@ -37,9 +37,16 @@ TOLERANCE = 1e-6
 MU_COULOMB = 20.0
 
 
-def step(m: mujoco.MjModel, d: mujoco.MjData) -> int:
-    """``mj_step`` with the sliding contacts' normal reference corrected; returns the solves made."""
+def step(m: mujoco.MjModel, d: mujoco.MjData, friction_damping: float | None = None) -> int:
+    """``mj_step`` with the sliding contacts' normal reference corrected; returns the solves made.
+
+    ``friction_damping``: when given, the friction rows of contacts made from geoms (which take MuJoCo's
+    normal solref, having no friction solref of their own) ask for ``aref = -friction_damping * v``, what
+    a contact pair's ``solreffriction`` gives (``_model.Layout.friction_damping``).
+    """
     mujoco.mj_step1(m, d)
+    if friction_damping is not None and d.ncon:
+        _friction_reference(d, friction_damping)
     mujoco.mj_fwdActuation(m, d)
     mujoco.mj_fwdAcceleration(m, d)
     mujoco.mj_fwdConstraint(m, d)
@@ -51,12 +58,25 @@ def step(m: mujoco.MjModel, d: mujoco.MjData) -> int:
         keep = mu <= MU_COULOMB
         if keep.any():  # else no contact is corrected (cheapest test first)
             adr = con.efc_address[:n]
-            keep &= (adr >= 0) & (con.dim[:n] == 3)  # the adapter's pairs: condim 3 or 1
+            keep &= (adr >= 0) & (con.dim[:n] == 3)  # the adapter's contacts: condim 3 or 1
             if keep.any():
                 solves += _correct(m, d, adr[keep], mu[keep], con.mu[:n][keep])
     mujoco.mj_checkAcc(m, d)
     mujoco.mj_implicit(m, d)  # mj_step's integrator for implicitfast
     return solves
+
+
+def _friction_reference(d: mujoco.MjData, b: float) -> None:
+    """Redo ``mj_referenceConstraint``'s ``aref = -B*v - K*I*(pos - margin)`` with ``B = b`` on the friction
+    rows of the contacts without a friction solref of their own (those from geoms, not from pairs)."""
+    n, con = d.ncon, d.contact
+    adr = con.efc_address[:n]
+    own = con.solreffriction[:n]
+    geoms = adr[(adr >= 0) & (con.dim[:n] == 3) & (own[:, 0] == 0.0) & (own[:, 1] == 0.0)]
+    if geoms.size:
+        rows = np.concatenate([geoms + 1, geoms + 2])  # elliptic cone: the normal row, then the friction rows
+        kbip = d.efc_KBIP[rows]
+        d.efc_aref[rows] = -b * d.efc_vel[rows] - kbip[:, 0] * kbip[:, 2] * (d.efc_pos[rows] - d.efc_margin[rows])
 
 
 def _correct(m: mujoco.MjModel, d: mujoco.MjData, normal: np.ndarray, mu: np.ndarray, mu_r: np.ndarray) -> int:

@@ -6,15 +6,20 @@ body is that body's child; every other dynamic body, and every kinematic body, i
 attached to whichever end the tree reaches second, so its MuJoCo coordinate may be the negative of the
 world's (``Edge.sign``). Closed loops are not representable and are refused.
 
-Every pair of bodies that can touch gets an explicit contact pair (geoms collide through nothing else),
-so each pair has its own surface and its own friction reference. The normal row follows ODE's
+Contacts come from MuJoCo's own collision filtering, so building costs O(bodies), not O(bodies^2):
+bodies that can touch (a dynamic rigid group and anything not in it) pass the geoms' contype/conaffinity
+bits, joined bodies are excluded pairs (parent filtering off, so a body also touches its parent's rigid
+group, as in ODE), and every geom carries the world's surface, which MuJoCo's combination of two equal
+geoms (max, solmix mean of equal values, min of direct solrefs) leaves exactly as it is. Only a pair with
+a surface of its own gets an explicit contact pair. The normal row follows ODE's
 velocity-level contact rather than MuJoCo's spring-damper default: with a constant impedance ``d`` a
 row reaches ``a = -B*v - K*r + (1-d)*a0`` (``solref = (-K, -B)``), so ``B = (1+e)/h`` turns the approach
 speed ``v`` into ``-e*v`` in one engine step ``h`` (ODE's bounce) and ``K = erp/h**2`` removes ``erp`` of
 the penetration per step (ODE's ERP). Friction rows (``solreffriction = (-1, -1/h)``) remove the slip in
-one step, as ODE's friction rows do; ``_coulomb.step`` keeps MuJoCo's convex cone from turning the slip a
-sliding contact cannot remove into a separating push. docs/backends/mujoco.md gives the measured
-consequences.
+one step, as ODE's friction rows do; a geom's contacts have no friction solref of their own (MuJoCo
+uses the normal one), so when it differs (bounce) ``_coulomb.step`` sets their friction rows' reference
+(``Layout.friction_damping``), and it keeps MuJoCo's convex cone from turning the slip a sliding contact
+cannot remove into a separating push. docs/backends/mujoco.md gives the measured consequences.
 """
 
 from __future__ import annotations
@@ -79,6 +84,19 @@ class Layout:
     joint_id: np.ndarray  # world joint index -> MuJoCo joint id, -1 for a fixed joint
     motor_id: np.ndarray  # world joint index -> MuJoCo tendon id of its motor, -1 when it has none
     helper_dof: np.ndarray  # world joint index -> dof of its motor's helper slide, -1 when none
+    #: B of the friction rows of contacts made from geoms (``aref = -B*v``), or None when the geoms'
+    #: solref already gives it (no bounce): see ``_coulomb.step``
+    friction_damping: float | None = None
+
+
+@dataclass(frozen=True)
+class ContactParams:
+    """A surface as MuJoCo contact parameters at one engine step."""
+
+    condim: int
+    friction: tuple[float, float, float]  # slide, torsion, rolling (a pair repeats slide and rolling)
+    solref: tuple[float, float]
+    solreffriction: tuple[float, float]
 
 
 def plan_tree(world: CompiledWorld) -> dict[str, Edge]:
@@ -126,13 +144,13 @@ def plan_tree(world: CompiledWorld) -> dict[str, Edge]:
 def _rigid_groups(world: CompiledWorld, edges: dict[str, Edge]) -> dict[str, str]:
     """Body -> the first body up its chain of fixed joints ("" when the chain ends at the world)."""
     group: dict[str, str] = {}
+    motion = {b.name: b.motion for b in world.bodies}
     for name, edge in edges.items():  # parents come first
         fixed = edge.joint is not None and world.joints[edge.joint].kind is JointKind.FIXED
         if fixed:
             group[name] = group[edge.parent] if edge.parent is not None else ""
         else:
-            static = world.bodies[world.body_index(name)].motion is Motion.STATIC
-            group[name] = "" if static else name
+            group[name] = "" if motion[name] is Motion.STATIC else name
     return group
 
 
@@ -147,6 +165,13 @@ def _mu(surface: Surface) -> float:
     return min(surface.mu, MU_MAX)
 
 
+def contact_params(surface: Surface, h: float, opts: MujocoOptions) -> ContactParams:
+    solref, solreffriction = contact_solref(surface, h, opts)
+    mu = _mu(surface)
+    return ContactParams(3 if mu > 0.0 else 1, (mu, 0.005, 0.0001), (solref[0], solref[1]),
+                         (solreffriction[0], solreffriction[1]))  # fmt: skip
+
+
 def build(world: CompiledWorld, opts: MujocoOptions, h: float) -> Layout:
     """Compile ``world`` with engine step ``h``."""
     edges = plan_tree(world)
@@ -158,9 +183,13 @@ def build(world: CompiledWorld, opts: MujocoOptions, h: float) -> Layout:
     spec.option.cone = mujoco.mjtCone.mjCONE_ELLIPTIC
     spec.option.tolerance = 1e-10  # motors settle to 1e-6 of their target rate (default 1e-8: 2e-4)
     spec.option.disableflags |= mujoco.mjtDisableBit.mjDSBL_AUTORESET  # a blow-up must surface
+    spec.option.disableflags |= mujoco.mjtDisableBit.mjDSBL_FILTERPARENT  # joined pairs are excluded instead
     specs = {b.name: b for b in world.bodies}
     heavy = KINEMATIC_MASS_RATIO * max([1.0] + [b.mass for b in world.bodies if b.motion is Motion.DYNAMIC])
     mj_bodies: dict[str, Any] = {}
+    group = _rigid_groups(world, edges)
+    moving = {b.name for b in world.bodies if b.motion is Motion.DYNAMIC}  # rigid groups that move freely
+    default = contact_params(world.default_surface, h, opts)
     for name, edge in edges.items():
         body = specs[name]
         parent = specs[edge.parent] if edge.parent is not None else None
@@ -177,22 +206,19 @@ def build(world: CompiledWorld, opts: MujocoOptions, h: float) -> Layout:
             mj.add_freejoint()
         elif edge.joint is not None:
             _add_joint(mj, body, world, edge, h, opts)
-        _add_geom(mj, body)
+        _add_geom(mj, body, default, group[name] in moving)
     _add_motors(spec, world, heavy, h)
-    _add_pairs(spec, world, edges, h, opts)
-    try:
-        model = spec.compile()
-    except ValueError as exc:  # MjSpec reports a model it refuses as ValueError("Error: ...")
-        raise EngineFailure(f"mujoco: MjSpec.compile refused the model: {exc}", backend="mujoco") from exc
+    _add_excludes(spec, world, group, moving)
+    _add_pairs(spec, world, group, moving, default, h, opts)
+    model = _compile(spec, len(world.bodies))
     _rescale_solver(model, [b.name for b in world.bodies if b.motion is Motion.DYNAMIC])
+    index = {f"body:{b.name}": i for i, b in enumerate(world.bodies)}
+    geom_body = [index[model.body(model.geom_bodyid[g]).name] for g in range(model.ngeom)]
     return Layout(
         model=model,
         edges=edges,
         body_id=np.array([model.body(f"body:{b.name}").id for b in world.bodies], dtype=np.int64),
-        geom_body=np.array(
-            [world.body_index(model.body(model.geom_bodyid[g]).name[5:]) for g in range(model.ngeom)],
-            dtype=np.int64,
-        ),
+        geom_body=np.array(geom_body, dtype=np.int64),
         joint_id=np.array(
             [model.joint(f"joint:{j.name}").id if j.kind in _JOINT else -1 for j in world.joints], dtype=np.int64
         ),
@@ -204,7 +230,37 @@ def build(world: CompiledWorld, opts: MujocoOptions, h: float) -> Layout:
             [model.jnt_dofadr[model.joint(f"helper:{j.name}").id] if _motorised(j.kind) else -1 for j in world.joints],
             dtype=np.int64,
         ),
+        friction_damping=_friction_damping(default),
     )
+
+
+#: Arena (MjData's contacts, constraints and scratch stack) when MuJoCo's default cannot be allocated:
+#: this per body, plus 8 bytes per pair of bodies (mj_collision's broadphase keeps two int arrays of
+#: N(N-1)/2 pairs on the stack: 4 bytes per pair of bodies, doubled for the margin), plus a floor.
+ARENA_PER_BODY, ARENA_FLOOR = 64 * 1024, 64 * 1024 * 1024
+
+
+def _compile(spec: Any, bodies: int) -> mujoco.MjModel:
+    """``spec.compile()``; MuJoCo's default arena grows faster than the bodies (1.7 GB at 1,000 boxes, only
+    reserved) and cannot be allocated at 10,000, so such a model gets an arena sized by ``ARENA_*``."""
+    try:
+        return spec.compile()
+    except ValueError as exc:  # MjSpec reports a model it refuses as ValueError("Error: ...")
+        if "allocate memory" not in str(exc):
+            raise EngineFailure(f"mujoco: MjSpec.compile refused the model: {exc}", backend="mujoco") from exc
+    spec.memory = ARENA_FLOOR + ARENA_PER_BODY * bodies + 8 * bodies * bodies
+    try:
+        return spec.compile()
+    except ValueError as exc:
+        raise EngineFailure(f"mujoco: MjSpec.compile refused the model: {exc}", backend="mujoco") from exc
+
+
+def _friction_damping(default: ContactParams) -> float | None:
+    """``Layout.friction_damping``: MuJoCo's ``B = -solref[1]/dmax`` of the friction solref, when the
+    geoms' (normal) solref gives the friction rows another one."""
+    if default.solref[1] == default.solreffriction[1]:
+        return None  # the K terms differ but act on the friction rows' position, which is 0
+    return -default.solreffriction[1] / IMPEDANCE
 
 
 def _rescale_solver(model: mujoco.MjModel, dynamic: list[str]) -> None:
@@ -258,7 +314,9 @@ def _add_joint(mj: Any, body: BodySpec, world: CompiledWorld, edge: Edge, h: flo
     mj_joint.solimp_limit = _SOLIMP
 
 
-def _add_geom(mj: Any, body: BodySpec) -> None:
+def _add_geom(mj: Any, body: BodySpec, params: ContactParams, moving: bool) -> None:
+    """The body's geom with the world's surface; only a geom of a moving rigid group has a contype, so
+    two driven (static, kinematic) geoms never collide, as the contract says."""
     shape = body.shape
     if shape.kind is ShapeKind.PLANE and body.motion is not Motion.STATIC:
         raise UnsupportedFeature(f"mujoco: plane `{body.name}` must be static")
@@ -270,7 +328,9 @@ def _add_geom(mj: Any, body: BodySpec) -> None:
         ShapeKind.PLANE: [0.0, 0.0, 1.0],  # infinite
     }[shape.kind]
     geom = mj.add_geom(name=f"geom:{body.name}", type=_GEOM[shape.kind], size=size, rgba=list(body.color))
-    geom.contype = geom.conaffinity = 0  # every contact comes from an explicit pair
+    geom.contype, geom.conaffinity = (1 if moving else 0), 1
+    geom.condim, geom.friction = params.condim, list(params.friction)
+    geom.solref, geom.solimp = list(params.solref), _SOLIMP
 
 
 def _add_motors(spec: Any, world: CompiledWorld, heavy: float, h: float) -> None:
@@ -297,29 +357,58 @@ def _add_motors(spec: Any, world: CompiledWorld, heavy: float, h: float) -> None
         tendon.frictionloss = 0.0  # fmax; the backend sets it (0: off)
 
 
-def _add_pairs(spec: Any, world: CompiledWorld, edges: dict[str, Edge], h: float, opts: MujocoOptions) -> None:
-    """One contact pair per pair of bodies that can touch, with that pair's surface.
+def _touch(a: str, b: str, group: dict[str, str], moving: set[str]) -> bool:
+    """Whether MuJoCo's filtering lets bodies ``a`` and ``b`` collide (before excludes): different rigid
+    groups (MuJoCo's weld bodies), one of them moving freely (contype bits)."""
+    return group[a] != group[b] and bool({group[a], group[b]} & moving)
 
-    Bodies touch unless both are welded to the world or driven (static, kinematic), or they are joined
-    (ODE programs skip connected bodies), or a fixed joint makes them one rigid group.
+
+def _add_excludes(spec: Any, world: CompiledWorld, group: dict[str, str], moving: set[str]) -> None:
+    """Joined bodies never touch (ODE programs skip connected bodies)."""
+    done: set[frozenset[str]] = set()
+    for joint in world.joints:
+        pair = frozenset((joint.body, joint.other)) if joint.other is not None else None
+        if pair is None or pair in done or not _touch(joint.body, joint.other, group, moving):  # type: ignore[arg-type]
+            continue
+        done.add(pair)
+        spec.add_exclude(bodyname1=f"body:{joint.body}", bodyname2=f"body:{joint.other}")
+
+
+def _add_pairs(
+    spec: Any,
+    world: CompiledWorld,
+    group: dict[str, str],
+    moving: set[str],
+    default: ContactParams,
+    h: float,
+    opts: MujocoOptions,
+) -> None:
+    """An explicit contact pair for each pair of bodies whose own surface the geoms cannot give.
+
+    A pair overrides MuJoCo's filtering and its own geom pair (MuJoCo merges the two), so it is made only
+    where the bodies could touch: not both driven, not one rigid group, not joined.
     """
-    group = _rigid_groups(world, edges)
-    dynamic = {b.name for b in world.bodies if b.motion is Motion.DYNAMIC}
     joined = {frozenset((j.body, j.other)) for j in world.joints if j.other is not None}
-    names = [b.name for b in world.bodies]
-    for i, a in enumerate(names):
-        for b in names[i + 1 :]:
-            if group[a] == group[b] or not {group[a], group[b]} & dynamic or frozenset((a, b)) in joined:
-                continue
-            surface = world.surface(a, b)
-            solref, solreffriction = contact_solref(surface, h, opts)
-            mu = _mu(surface)
-            spec.add_pair(
-                geomname1=f"geom:{a}",
-                geomname2=f"geom:{b}",
-                condim=3 if mu > 0.0 else 1,
-                friction=[mu, mu, 0.005, 0.0001, 0.0001],
-                solref=solref,
-                solreffriction=solreffriction,
-                solimp=_SOLIMP,
-            )
+    order = {b.name: i for i, b in enumerate(world.bodies)}
+    seen: set[frozenset[str]] = set()
+    for pair in world.pair_surfaces:  # the first one naming a pair is the pair's (CompiledWorld.surface)
+        a, b = sorted((pair.a, pair.b), key=order.__getitem__)  # geom1 first in the world: its contact frame
+        key = frozenset((a, b))
+        if key in seen:
+            continue
+        seen.add(key)
+        if a == b or key in joined or not _touch(a, b, group, moving):
+            continue
+        params = contact_params(pair.surface, h, opts)
+        if params == default:
+            continue
+        mu, spin, roll = params.friction
+        spec.add_pair(
+            geomname1=f"geom:{a}",
+            geomname2=f"geom:{b}",
+            condim=params.condim,
+            friction=[mu, mu, spin, roll, roll],
+            solref=list(params.solref),
+            solreffriction=list(params.solreffriction),
+            solimp=_SOLIMP,
+        )

@@ -339,7 +339,7 @@ def test_without_sliding_contacts_a_step_is_mj_step(monkeypatch: pytest.MonkeyPa
             return np.concatenate([sim._d.qpos, sim._d.qvel])  # type: ignore[attr-defined]
 
     corrected = run()
-    monkeypatch.setattr(coulomb, "step", lambda m, d: mujoco.mj_step(m, d) or 1)
+    monkeypatch.setattr(coulomb, "step", lambda m, d, friction_damping=None: mujoco.mj_step(m, d) or 1)
     assert np.array_equal(run(), corrected)
 
 
