@@ -23,6 +23,7 @@ from ..types import (
     RIGID_BODY_CAPABILITIES,
     BodyStates,
     Capability,
+    CompiledWorld,
     Contact,
     JointKind,
     JointStates,
@@ -32,7 +33,7 @@ from ..types import (
 )
 from . import _contacts, _surfaces
 from ._build import BodyHandle, JointHandle, build, place_free
-from ._options import DartOptions
+from ._options import MAX_CONE_MU, DartOptions
 
 _NAME = "dart"
 
@@ -60,7 +61,8 @@ class DartBackend(Backend):
             coefficients, self._surface_conflict = _surfaces.solve(world), ""
         except UnsupportedFeature as exc:  # no fixed values exist: solve for the touching pairs each step
             coefficients, self._surface_conflict = _surfaces.solve(world, []), str(exc)
-        built = build(world, self._detector, coefficients, self._engine_steps)
+        self._friction = _friction_model(world, self.options.friction)
+        built = build(world, self._detector, coefficients, self._engine_steps, self._friction)
         self._dart: Any = built.world
         self._bodies: list[BodyHandle] = built.bodies
         self._joints: list[JointHandle] = built.joints
@@ -93,7 +95,10 @@ class DartBackend(Backend):
             "collision_detector": self._detector,
             "engine_dt": self.world.dt / self._engine_steps,
             "engine_steps_per_step": self._engine_steps,
-            "constraint_solver": "BoxedLcpConstraintSolver (Dantzig, PGS fallback)",
+            "constraint_solver": "BoxedLcpConstraintSolver ("
+            + ("NsgsFrictionSolver, Coulomb cone" if self._friction == "cone" else "Dantzig, friction pyramid")
+            + ", PGS fallback)",
+            "friction": self._friction,
             "deactivation": False,
             "mu_inf_as": _surfaces.finite_mu(self.world),
             "surfaces": "per step, for the touching pairs" if self._surface_conflict else "fixed per shape",
@@ -215,6 +220,28 @@ class DartBackend(Backend):
 
     def _close(self) -> None:
         self._dart.removeAllSkeletons()
+
+
+def _friction_model(world: CompiledWorld, option: str) -> str:
+    """``cone`` or ``pyramid`` for the ``friction`` option: ``auto`` takes the cone where DART can solve it.
+
+    NsgsFrictionSolver fails above :data:`MAX_CONE_MU` (``_options``); a pair with such a mu (or inf) slides
+    only under a tangential force 100 times its normal load, where the pyramid's direction hardly matters.
+    """
+    if option == "pyramid":
+        return option
+    names = [b.name for b in world.bodies]
+    for a, b in _surfaces.touching_pairs(world):
+        mu = world.surface(names[a], names[b]).mu
+        if mu > MAX_CONE_MU:
+            if option == "auto":
+                return "pyramid"
+            raise UnsupportedFeature(
+                f"Backend `dart` with `friction: cone` solves friction with DART's NsgsFrictionSolver, which "
+                f"fails above mu {MAX_CONE_MU:g} (NaN impulses: bodies fall through); the pair "
+                f"`{names[a]}`-`{names[b]}` has mu={mu:g}. Use `friction: pyramid` or a smaller mu."
+            )
+    return "cone"
 
 
 def _split(step: float, longest: float | None) -> int:

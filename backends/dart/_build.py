@@ -5,6 +5,10 @@ root, a kinematic body a FreeJoint driven by a VELOCITY actuator; joints become 
 Ball / Weld joints whose frames sit at the anchor with world-aligned axes at the start, so that every
 slider and hinge coordinate starts at 0 and its axis is the world axis. Shapes use full sizes and DART's
 z-aligned capsules and cylinders (``height`` = the cylindrical part for a capsule, as ODE's ``length``).
+With ``friction: cone`` the constraint solver's LCP solver is DART's ``NsgsFrictionSolver`` with its
+exact Coulomb law (a friction cone per contact, DART's default PGS as the fallback when it does not
+converge); DART's own Dantzig solver bounds each of two tangent rows by mu*N, a pyramid whose edges
+follow the contact normal's basis (world x and y on a floor).
 """
 
 from __future__ import annotations
@@ -112,7 +116,10 @@ def check_conventions() -> None:
         )
 
 
-def build(world: CompiledWorld, detector: str, coefficients: _surfaces.ShapeCoefficients, engine_steps: int) -> Built:
+def build(
+    world: CompiledWorld, detector: str, coefficients: _surfaces.ShapeCoefficients, engine_steps: int,
+    friction: str = "pyramid",
+) -> Built:
     check_conventions()
     dw = dart.simulation.World(world.name)
     dw.setGravity(np.asarray(world.gravity, dtype=float))
@@ -120,7 +127,12 @@ def build(world: CompiledWorld, detector: str, coefficients: _surfaces.ShapeCoef
     sleep = dw.getDeactivationOptions()
     sleep.mEnabled = False  # DART puts slow bodies to sleep by default; ODE's auto-disable is off
     dw.setDeactivationOptions(sleep)
-    dw.getConstraintSolver().setCollisionDetector(DETECTORS[detector]())
+    solver = dw.getConstraintSolver()
+    solver.setCollisionDetector(DETECTORS[detector]())
+    if friction == "cone":
+        options = dart.constraint.NsgsFrictionSolver.Options()
+        options.law = dart.constraint.NsgsFrictionSolver.Law.Coulomb
+        solver.setBoxedLcpSolver(dart.constraint.NsgsFrictionSolver(options))
     built = Built(dw, [None] * len(world.bodies), [None] * len(world.joints), coefficients)  # type: ignore[list-item]
     for tree in _trees.plan(world):
         built.skeletons.append(_build_tree(world, tree, built))

@@ -60,7 +60,8 @@ class OdeBackend(Backend):
         world = self.world
         self._scene = build_scene(world, self.options)
         self._collider = Collider(
-            self._scene, self.options.collide, self.options.contact_forces, f"ode-contacts-{id(self):x}"
+            self._scene, self.options.collide, self.options.contact_forces, f"ode-contacts-{id(self):x}",
+            follow_slip=self.options.friction_pyramid == "slip",
         )
         self._fudge = [j.joint.getParamFudgeFactor(*axis_arg(j)) if j.feedback else 1.0 for j in self._scene.joints]
         n = len(world.bodies)
@@ -87,7 +88,9 @@ class OdeBackend(Backend):
             "cfm": o.cfm,
             "space": o.space,
             "collide": self._collider.mode,
-            "contact_mode": "dContactBounce | dContactApprox1 (mu is a Coulomb coefficient)",
+            "contact_mode": "dContactBounce | dContactApprox1 (mu is a Coulomb coefficient)"
+            + (" | dContactFDir1 along the slip" if o.friction_pyramid == "slip" else ""),
+            "friction_pyramid": o.friction_pyramid,
             "contact_forces": o.contact_forces,
             "kinematic": "body with gravity off and 1e6 x the heaviest mass, re-placed after each step",
         }

@@ -12,9 +12,17 @@ Two ways, selected by the ``collide`` option, that make the same contact joints:
   (150 contacts at most) and an ``OdeContactJoint`` per contact, mode ``dContactBounce | dContactApprox1``.
 
 ``dContactApprox1`` makes ODE bound friction by mu times the normal force (a Coulomb coefficient, the
-scenario language's meaning) instead of by mu newtons. A reported collide's pairs (points, depth) are
-those its contact joints used in the step that follows; with ``contact_forces`` the normal force is read
-from joint feedback.
+scenario language's meaning) instead of by mu newtons. Each bound holds for one friction row, and ODE's
+two rows default to directions fixed by the contact normal (``dPlaneSpace``: the world's x and y on a
+floor), so a box sliding along a floor's diagonal meets sqrt(2)*mu*N. With ``friction_pyramid: slip``
+(the default) each contact with a finite mu > 0 gets ``dContactFDir1`` along the two bodies' relative
+velocity at the contact point, projected on the contact plane: the first row then opposes the slip and
+the box decelerates at mu*g whatever its direction (the pyramid turns with the slip each substep).
+Below :data:`SLIP_SPEED` there is no slip to follow and ODE's default directions are kept. panda3d's
+surface table fixes the mode of autoCollide's contacts, so such worlds use the callback.
+
+A reported collide's pairs (points, depth) are those its contact joints used in the step that follows;
+with ``contact_forces`` the normal force is read from joint feedback.
 
 Per step only what arming feedback needs is done (one tuple per touching pair); the contact geoms,
 depths and forces are read through panda3d only when ``contacts()`` is called.
@@ -41,6 +49,11 @@ from ._build import MAX_SURFACE_CLASSES, Scene
 
 CALLBACK_MAX_CONTACTS = 150  # PyODE's ode.collide() default, as the lab calls it
 _MODE = OdeSurfaceParameters.MFContactBounce | OdeSurfaceParameters.MFContactApprox1
+_MODE_FDIR1 = _MODE | OdeSurfaceParameters.MFContactFDir1
+#: Slip speed (m/s) below which a contact keeps ODE's default friction directions: a body held by
+#: friction creeps at CFM * F per contact row (1.75e-5 m/s for 7 N on 4 contacts at CFM 1e-5), a
+#: direction ODE also resists fully; below 1e-6 m/s the float32 velocities carry no usable direction.
+SLIP_SPEED = 1e-6
 _JT_CONTACT = OdeJoint.JTContact
 
 #: One touching pair of the reported substep: (a, b, entry, first) with a < b its bodies, entry its
@@ -52,7 +65,9 @@ _Record = tuple[int, int, Any, int]
 class Collider:
     """Makes the contact joints of one substep and remembers the last reported one."""
 
-    def __init__(self, scene: Scene, mode: str, contact_forces: bool, event_name: str) -> None:
+    def __init__(
+        self, scene: Scene, mode: str, contact_forces: bool, event_name: str, follow_slip: bool = True
+    ) -> None:
         self.scene = scene
         self.contact_forces = contact_forces
         self._event = event_name
@@ -65,8 +80,10 @@ class Collider:
         self._report: list[Contact] | None = []
         self._reported: list[_Record] = []
         classes = max(scene.surface_class, default=0) + 1
-        # autoCollide's table is indexed by a byte; beyond that, the callback does every pair.
-        self.mode = mode if classes <= MAX_SURFACE_CLASSES else "callback"
+        #: Surface classes pairs whose contacts follow the slip (finite mu > 0; 0 and inf have no direction).
+        self._slipping = {key for key, s in scene.surfaces.items() if follow_slip and 0.0 < s.mu < math.inf}
+        # autoCollide's table is indexed by a byte, and its mode has no dContactFDir1: the callback then.
+        self.mode = mode if classes <= MAX_SURFACE_CLASSES and not self._slipping else "callback"
         self._auto = self.mode == "auto"
         self._event_set: str | None = None  # the collision event last given to the space ("": none)
         if self._auto:
@@ -81,7 +98,8 @@ class Collider:
             for geom, cls in zip(scene.geoms, scene.surface_class, strict=True):
                 space.setSurfaceType(geom, cls)
         else:
-            self._params = {key: _surface_parameters(s) for key, s in scene.surfaces.items()}
+            self._params = {key: _surface_parameters(s, _MODE) for key, s in scene.surfaces.items()}
+            self._params_fdir1 = {key: _surface_parameters(scene.surfaces[key], _MODE_FDIR1) for key in self._slipping}
 
     # --- per substep ---------------------------------------------------------------------------------
 
@@ -188,14 +206,21 @@ class Collider:
             return
         scene = self.scene
         i, j = scene.geom_index[hash(geom1.getId())], scene.geom_index[hash(geom2.getId())]
-        params = self._params[(scene.surface_class[i], scene.surface_class[j])]
+        key = (scene.surface_class[i], scene.surface_class[j])
+        params = self._params[key]
         body1, body2 = scene.bodies[i], scene.bodies[j]
+        follow = key in self._slipping
         arm = report and self.contact_forces
         first = self._used if arm else -1
         for geom in entry.getContactGeoms():
             contact = OdeContact()
             contact.setGeom(geom)
-            contact.setSurface(params)
+            slip = _slip(body1, body2, geom) if follow else None
+            if slip is None:
+                contact.setSurface(params)
+            else:
+                contact.setSurface(self._params_fdir1[key])
+                contact.setFdir1(slip)
             joint = OdeContactJoint(scene.world, scene.contact_group, contact)
             joint.attach(body1, body2)
             if arm:
@@ -240,9 +265,26 @@ def _mu(surface: Surface) -> float:
     return OdeUtil.getInfinity() if math.isinf(surface.mu) else surface.mu
 
 
-def _surface_parameters(surface: Surface) -> OdeSurfaceParameters:
+def _slip(body1: Any, body2: Any, geom: Any) -> Any:
+    """The unit direction of body 1's velocity relative to body 2 at the contact, in its plane; None if ~0.
+
+    A static geom has no body (None) and no velocity.
+    """
+    pos, normal = geom.getPos(), geom.getNormal()
+    if body1 is not None:
+        rel = body1.getPointVel(pos)
+        if body2 is not None:
+            rel -= body2.getPointVel(pos)
+    else:
+        rel = -body2.getPointVel(pos)
+    rel -= normal * rel.dot(normal)
+    speed = rel.length()
+    return rel / speed if speed > SLIP_SPEED else None
+
+
+def _surface_parameters(surface: Surface, mode: int) -> OdeSurfaceParameters:
     params = OdeSurfaceParameters()
-    params.setMode(_MODE)
+    params.setMode(mode)
     params.setMu(_mu(surface))
     params.setBounce(surface.bounce)
     params.setBounceVel(surface.bounce_vel)

@@ -35,6 +35,12 @@ class OdeOptions(BackendOptions):
         "auto", "auto (contacts made in C++ by OdeSpace.autoCollide, the default) or callback (the lab's Python "
         "near-callback with OdeUtil.collide; slower, same contacts)", choices=("auto", "callback"),
     )  # fmt: skip
+    friction_pyramid: str = option(
+        "slip", "slip (default): each contact's first friction direction along its slip, so a sliding body "
+        "decelerates at mu*g in every direction (forces collide=callback when a surface has a finite mu > 0); "
+        "axes: ODE's default directions, a pyramid fixed to the contact normal's basis (sqrt(2)*mu*g on the "
+        "diagonal of a floor)", choices=("slip", "axes"),
+    )  # fmt: skip
     contact_forces: bool = option(
         True, "true (default): joint feedback on the contact joints gives Contact.normal_force; false: NaN, and no "
         "per-contact Python work",

@@ -207,9 +207,12 @@ def _cylinder_on_box() -> CompiledWorld:
 
 @pytest.mark.parametrize("make", [lambda: lab_scene(), w.busy, _cylinder_on_box, lambda: _stack()])
 def test_autocollide_equals_the_callback(make: Any) -> None:
-    """autoCollide's table (16 contacts max) makes the same joints as the lab's callback (150): bit-equal."""
+    """autoCollide's table (16 contacts max) makes the same joints as the lab's callback (150): bit-equal.
+
+    With ODE's own friction directions (``friction_pyramid: axes``): following the slip needs the callback.
+    """
     world = make()
-    opts: Mapping[str, Any] = world.options_for("ode")
+    opts: Mapping[str, Any] = {**world.options_for("ode"), "friction_pyramid": "axes"}
     with make_backend("ode", _opts(world, **opts)) as auto, \
             make_backend("ode", _opts(world, **{**opts, "collide": "callback"})) as callback:
         assert auto.settings()["collide"] == "auto" and callback.settings()["collide"] == "callback"
@@ -231,7 +234,8 @@ def test_pair_surfaces_reach_the_surface_table() -> None:
     world = w.world("pairs", [w.ground(), a, b], surface=Surface(mu=0.5), pairs=pairs)
     ends = []
     for collide in ("auto", "callback"):
-        with make_backend("ode", _opts(world, collide=collide)) as sim:
+        with make_backend("ode", _opts(world, collide=collide, friction_pyramid="axes")) as sim:
+            assert sim.settings()["collide"] == collide
             for _ in range(100):
                 sim.step()
             ends.append(sim.body_states().pos[1:, 0])
@@ -395,7 +399,7 @@ def test_odes_messages_are_drained_not_printed(capfd: pytest.CaptureFixture[str]
     """CFM 1e-10 (double-precision ODE's default, refused as an option) makes this build's LCP fail on the
     lab's door and box: ODE says "LCP internal error" through dMessage. The adapter keeps the lines for
     drain_messages(), each once, and nothing reaches the process's stderr (fd 2)."""
-    with make_backend("ode", lab_scene()) as sim:
+    with make_backend("ode", _opts(lab_scene(), friction_pyramid="axes")) as sim:  # the LCP failure as measured
         sim._scene.world.setCfm(1e-10)  # type: ignore[attr-defined]
         lines: list[str] = []
         for _ in range(50):
