@@ -1,0 +1,97 @@
+"""Coulomb friction is isotropic: the same deceleration whatever the direction of the slip (issue 17).
+
+The language's ``mu`` bounds the friction force by mu times the normal force, in whatever direction the
+contact slips: the friction cone. A box launched on a floor at v0 along any horizontal direction feels
+-mu*m*g along its velocity, so it decelerates at mu*g along a straight line and stops after
+v0^2/(2*mu*g) (2 m/s, mu 0.3: 0.6796 m). With semi-implicit Euler (v -= mu*g*dt, then x += v*dt) the
+engines stop after the discrete sum ``_coulomb_stop`` (0.6785 m at dt 1 ms), which is what is compared.
+A friction pyramid whose edges are the world's x and y (ODE's and DART's default contact directions)
+brakes each velocity component at mu*g: along the diagonal the deceleration is sqrt(2)*mu*g and the box
+stops after 0.4795 m, 29 % short, and off the axes and diagonals it also turns.
+
+On a plane tilted by theta whose downhill direction points at azimuth phi, a box sliding downhill
+accelerates at g*(sin(theta) - mu*cos(theta)) along the fall line (30 deg, mu 0.2: 3.206 m/s^2) with no
+sideways motion; semi-implicit Euler is exact for a constant acceleration, so the speed gain after t is
+a*t exactly. Tolerances: ``friction`` of tolerances.py for the deceleration and the gain (3 %, the
+issue's acceptance figure); the sideways drift must stay within the same 3 % of the distance (a path
+turned by at most 0.03 rad), where the axis-aligned pyramid turns a 22.5 degree launch by 0.1 rad.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from backends.types import Motion, Shape, ShapeKind, Surface
+
+from . import worlds as w
+from .tolerances import tol
+from .worlds import G, make_backend
+
+V0, MU, DT = 2.0, 0.3, 0.001
+
+
+def _coulomb_stop(v0: float, mu: float, dt: float) -> float:
+    v, x = v0, 0.0
+    while True:
+        v -= mu * G * dt
+        if v <= 0.0:
+            return x
+        x += v * dt
+
+
+def _quat_mul(a: tuple[float, ...], b: tuple[float, ...]) -> tuple[float, float, float, float]:
+    w1, x1, y1, z1 = a
+    w2, x2, y2, z2 = b
+    return (
+        w1 * w2 - x1 * x2 - y1 * y2 - z1 * z2,
+        w1 * x2 + x1 * w2 + y1 * z2 - z1 * y2,
+        w1 * y2 - x1 * z2 + y1 * w2 + z1 * x2,
+        w1 * z2 + x1 * y2 - y1 * x2 + z1 * w2,
+    )
+
+
+@pytest.mark.parametrize("degrees", [0.0, 22.5, 45.0, 67.5, 90.0, 135.0])
+def test_sliding_box_stops_after_the_same_distance_in_every_direction(backend_name: str, degrees: float) -> None:
+    direction = np.array([math.cos(math.radians(degrees)), math.sin(math.radians(degrees)), 0.0])
+    # resting 1e-5 m deep, as conformance 8: a box exactly touching gets its first contact a step late
+    box = w.box("box", (0.2, 0.2, 0.2), (0.0, 0.0, 0.09999), density=500.0, lin_vel=tuple(V0 * direction))
+    world = w.world("slide", [w.ground(), box], surface=Surface(bounce=0.0, mu=MU), dt=DT, steps=800)
+    with make_backend(backend_name, world) as sim:
+        for _ in range(800):  # stops at 0.68 s
+            sim.step()
+        s = sim.body_states()
+    along = float(s.pos[1] @ direction)
+    sideways = float(np.linalg.norm(s.pos[1, :2] - along * direction[:2]))
+    expected = _coulomb_stop(V0, MU, DT)
+    assert along == pytest.approx(expected, rel=tol("friction", backend_name))
+    assert sideways < tol("friction", backend_name) * expected
+    assert float(np.linalg.norm(s.lin_vel[1])) < 1e-3
+
+
+@pytest.mark.parametrize("azimuth", [0.0, 45.0, 135.0, 250.0])
+def test_box_slides_down_a_tilted_plane_at_the_coulomb_rate(backend_name: str, azimuth: float) -> None:
+    if backend_name == "pybullet" and azimuth % 90.0:
+        # Measured (issue 17, not fixed here): on a fall line off the world axes Bullet's gain is +3.2 %
+        # (45 deg) and +3.1 % (135 deg) with a sideways speed of 0.05-0.07 m/s; on the axes it is exact.
+        pytest.xfail("pybullet: friction on a tilted plane off the world axes, +3.2 % and a sideways drift")
+    tilt, phi, mu, v0, steps = math.radians(30.0), math.radians(azimuth), 0.2, 0.5, 500
+    turn_z = (math.cos(phi / 2), 0.0, 0.0, math.sin(phi / 2))
+    tilt_y = (math.cos(tilt / 2), 0.0, math.sin(tilt / 2), 0.0)
+    q = _quat_mul(turn_z, tilt_y)  # tilt about +y (downhill +x), then turn the fall line to the azimuth
+    normal = np.array([math.sin(tilt) * math.cos(phi), math.sin(tilt) * math.sin(phi), math.cos(tilt)])
+    downhill = np.array([math.cos(tilt) * math.cos(phi), math.cos(tilt) * math.sin(phi), -math.sin(tilt)])
+    plane = w.body("ramp", Shape(ShapeKind.PLANE), w.ZERO, motion=Motion.STATIC, quat=q)
+    cube = w.box("cube", (0.2, 0.2, 0.2), tuple(0.09999 * normal), density=500.0, quat=q, lin_vel=tuple(v0 * downhill))
+    world = w.world("ramp", [plane, cube], surface=Surface(bounce=0.0, mu=mu), dt=DT, steps=steps)
+    with make_backend(backend_name, world) as sim:
+        for _ in range(steps):
+            sim.step()
+        v = sim.body_states().lin_vel[1]
+    gain = G * (math.sin(tilt) - mu * math.cos(tilt)) * steps * DT  # 1.603 m/s
+    along = float(v @ downhill)
+    sideways = float(np.linalg.norm(v - along * downhill - float(v @ normal) * normal))
+    assert along - v0 == pytest.approx(gain, rel=tol("friction", backend_name))
+    assert sideways < tol("friction", backend_name) * gain
