@@ -8,6 +8,8 @@ engines stop after the discrete sum ``_coulomb_stop`` (0.6785 m at dt 1 ms), whi
 A friction pyramid whose edges are the world's x and y (ODE's and DART's default contact directions)
 brakes each velocity component at mu*g: along the diagonal the deceleration is sqrt(2)*mu*g and the box
 stops after 0.4795 m, 29 % short, and off the axes and diagonals it also turns.
+The friction of a box does not depend on how the box is turned either: a box yawed about z stops
+after the same distance on its line.
 
 On a plane tilted by theta whose downhill direction points at azimuth phi, a box sliding downhill
 accelerates at g*(sin(theta) - mu*cos(theta)) along the fall line (30 deg, mu 0.2: 3.206 m/s^2) with no
@@ -71,12 +73,46 @@ def test_sliding_box_stops_after_the_same_distance_in_every_direction(backend_na
     assert float(np.linalg.norm(s.lin_vel[1])) < 1e-3
 
 
+#: Bullet's implicit friction cone (btMultiBodyConstraintSolver::resolveConeFrictionConstraintRows) solves
+#: the two friction rows of a contact each with its own diagonal effective mass and then scales the pair
+#: onto the cone. Its friction axes are btPlaneSpace1(normal) (world x/y on a floor). Where the rows'
+#: effective masses differ (a box corner whose edges are turned from those axes) the clipped impulse is
+#: not opposite the slip unless the slip lies along an axis (docs/backends/pybullet.md, deviation 6).
+_BULLET_CONE = "pybullet: implicit cone with per-row effective masses (deviation 6 of docs/backends/pybullet.md)"
+
+
+@pytest.mark.parametrize(("yaw", "degrees"), [(30.0, 0.0), (30.0, 45.0), (45.0, 30.0)])
+def test_a_box_turned_about_z_stops_after_the_same_distance(
+    backend_name: str, yaw: float, degrees: float, request: pytest.FixtureRequest
+) -> None:
+    """Friction must not depend on the box's own orientation: a box yawed by ``yaw`` slides as above."""
+    if backend_name == "pybullet" and degrees % 90.0:
+        # measured: +4.53 % and 18.3 mm sideways (yaw 30, 45 deg); +4.58 % and 55.3 mm (yaw 45, 30 deg)
+        request.applymarker(pytest.mark.xfail(strict=True, reason=_BULLET_CONE))  # runs; must still miss
+    direction = np.array([math.cos(math.radians(degrees)), math.sin(math.radians(degrees)), 0.0])
+    half = math.radians(yaw) / 2
+    box = w.box("box", (0.2, 0.2, 0.2), (0.0, 0.0, 0.09999), density=500.0, lin_vel=tuple(V0 * direction),
+                quat=(math.cos(half), 0.0, 0.0, math.sin(half)))  # fmt: skip
+    world = w.world("slide", [w.ground(), box], surface=Surface(bounce=0.0, mu=MU), dt=DT, steps=800)
+    with make_backend(backend_name, world) as sim:
+        for _ in range(800):
+            sim.step()
+        s = sim.body_states()
+    along = float(s.pos[1] @ direction)
+    sideways = float(np.linalg.norm(s.pos[1, :2] - along * direction[:2]))
+    expected = _coulomb_stop(V0, MU, DT)
+    assert along == pytest.approx(expected, rel=tol("friction", backend_name))
+    assert sideways < tol("friction", backend_name) * expected
+
+
 @pytest.mark.parametrize("azimuth", [0.0, 45.0, 135.0, 250.0])
-def test_box_slides_down_a_tilted_plane_at_the_coulomb_rate(backend_name: str, azimuth: float) -> None:
-    if backend_name == "pybullet" and azimuth % 90.0:
-        # Measured (issue 17, not fixed here): on a fall line off the world axes Bullet's gain is +3.2 %
-        # (45 deg) and +3.1 % (135 deg) with a sideways speed of 0.05-0.07 m/s; on the axes it is exact.
-        pytest.xfail("pybullet: friction on a tilted plane off the world axes, +3.2 % and a sideways drift")
+def test_box_slides_down_a_tilted_plane_at_the_coulomb_rate(
+    backend_name: str, azimuth: float, request: pytest.FixtureRequest
+) -> None:
+    if backend_name == "pybullet" and azimuth in (45.0, 135.0):
+        # measured: gain +3.15 % (45 deg), +3.24 % (135 deg), sideways 0.047 and 0.068 m/s; exact at 0 deg,
+        # where the fall line is one of btPlaneSpace1's axes; 250 deg passes (+0.39 %, 0.0065 m/s).
+        request.applymarker(pytest.mark.xfail(strict=True, reason=_BULLET_CONE))  # runs; must still miss
     tilt, phi, mu, v0, steps = math.radians(30.0), math.radians(azimuth), 0.2, 0.5, 500
     turn_z = (math.cos(phi / 2), 0.0, 0.0, math.sin(phi / 2))
     tilt_y = (math.cos(tilt / 2), 0.0, math.sin(tilt / 2), 0.0)
