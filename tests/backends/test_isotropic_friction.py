@@ -77,8 +77,8 @@ def test_sliding_box_stops_after_the_same_distance_in_every_direction(backend_na
 #: the two friction rows of a contact each with its own diagonal effective mass and then scales the pair
 #: onto the cone. Its friction axes are btPlaneSpace1(normal) (world x/y on a floor). Where the rows'
 #: effective masses differ (a box corner whose edges are turned from those axes) the clipped impulse is
-#: not opposite the slip unless the slip lies along an axis (docs/backends/pybullet.md, deviation 6).
-_BULLET_CONE = "pybullet: implicit cone with per-row effective masses (deviation 6 of docs/backends/pybullet.md)"
+#: not opposite the slip unless the slip lies along an axis (docs/backends/pybullet.md, deviation 8).
+_BULLET_CONE = "pybullet: implicit cone with per-row effective masses (deviation 8 of docs/backends/pybullet.md)"
 
 
 @pytest.mark.parametrize(("yaw", "degrees"), [(30.0, 0.0), (30.0, 45.0), (45.0, 30.0)])
