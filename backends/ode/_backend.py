@@ -61,7 +61,7 @@ class OdeBackend(Backend):
         self._scene = build_scene(world, self.options)
         self._collider = Collider(
             self._scene, self.options.collide, self.options.contact_forces, f"ode-contacts-{id(self):x}",
-            follow_slip=self.options.friction_pyramid == "slip",
+            follow_slip=self.options.friction_pyramid == "slip", step=world.dt / world.substeps,
         )
         self._fudge = [j.joint.getParamFudgeFactor(*axis_arg(j)) if j.feedback else 1.0 for j in self._scene.joints]
         n = len(world.bodies)
@@ -103,6 +103,7 @@ class OdeBackend(Backend):
         h = world.dt / n
         joints = scene.joints
         forces = list(self.forces.items())
+        pushed = dict(forces)
         every = n > 1  # with substeps, every substep's contacts are kept (the kit merges them)
         if joints:
             self._motor_mean.start()
@@ -110,7 +111,7 @@ class OdeBackend(Backend):
             self._substep_contacts.start()
         for sub, t in enumerate(self._times):
             report = every or sub == n - 1
-            collider.collide(report=report)
+            collider.collide(report=report, forces=pushed)  # the friction directions predict the slip
             for i, acc in forces:
                 body = scene.bodies[i]
                 body.addForce(*acc[:3])  # type: ignore[union-attr]

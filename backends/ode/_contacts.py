@@ -18,8 +18,14 @@ floor), so a box sliding along a floor's diagonal meets sqrt(2)*mu*N. With ``fri
 (the default) each contact with a finite mu > 0 gets ``dContactFDir1`` along the two bodies' relative
 velocity at the contact point, projected on the contact plane: the first row then opposes the slip and
 the box decelerates at mu*g whatever its direction (the pyramid turns with the slip each substep).
-Below :data:`SLIP_SPEED` there is no slip to follow and ODE's default directions are kept. panda3d's
-surface table fixes the mode of autoCollide's contacts, so such worlds use the callback.
+The slip followed is the one the substep would make without friction: the relative velocity plus h times
+the two bodies' relative acceleration from gravity and the applied forces (so a box at rest on a tilted
+plane, or pushed, gets its first row along the load before it moves). Below :data:`SLIP_SPEED` the slip
+is numerical creep with no meaningful direction, and the contact keeps the direction it had the substep
+before (hysteresis; ODE's default directions if it never had one): rows turned by noise every substep
+made a resting column of boxes jitter and break loose (conformance 12). A sticking contact is inside the
+pyramid, where its direction does not matter; it matters only at the limit. panda3d's surface table
+fixes the mode of autoCollide's contacts, so such worlds use the callback.
 
 A reported collide's pairs (points, depth) are those its contact joints used in the step that follows;
 with ``contact_forces`` the normal force is read from joint feedback.
@@ -31,9 +37,10 @@ depths and forces are read through panda3d only when ``contacts()`` is called.
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping, Sequence
 from typing import Any
 
-from panda3d.core import EventQueue
+from panda3d.core import EventQueue, Vec3
 from panda3d.ode import (
     OdeContact,
     OdeContactJoint,
@@ -50,10 +57,13 @@ from ._build import MAX_SURFACE_CLASSES, Scene
 CALLBACK_MAX_CONTACTS = 150  # PyODE's ode.collide() default, as the lab calls it
 _MODE = OdeSurfaceParameters.MFContactBounce | OdeSurfaceParameters.MFContactApprox1
 _MODE_FDIR1 = _MODE | OdeSurfaceParameters.MFContactFDir1
-#: Slip speed (m/s) below which a contact keeps ODE's default friction directions: a body held by
-#: friction creeps at CFM * F per contact row (1.75e-5 m/s for 7 N on 4 contacts at CFM 1e-5), a
-#: direction ODE also resists fully; below 1e-6 m/s the float32 velocities carry no usable direction.
-SLIP_SPEED = 1e-6
+#: Predicted slip speed (m/s) below which a contact keeps its previous friction direction. A body held by
+#: friction creeps at CFM * F per contact row (1.75e-5 m/s for 7 N on 4 contacts at CFM 1e-5) and the
+#: float32 noise of a resting 4-box column reaches 5.2e-6 m/s (conformance 12, measured): neither has a
+#: direction worth following, so the threshold is several times the creep. A tangential load a (m/s^2)
+#: shows as h*a in the predicted slip: 1e-4 m/s is a = 0.01 m/s^2 at h 0.01 s (a 0.06 deg tilt), below
+#: which the pyramid's direction changes the friction limit only for mu < 1e-3.
+SLIP_SPEED = 1e-4
 _JT_CONTACT = OdeJoint.JTContact
 
 #: One touching pair of the reported substep: (a, b, entry, first) with a < b its bodies, entry its
@@ -66,7 +76,8 @@ class Collider:
     """Makes the contact joints of one substep and remembers the last reported one."""
 
     def __init__(
-        self, scene: Scene, mode: str, contact_forces: bool, event_name: str, follow_slip: bool = True
+        self, scene: Scene, mode: str, contact_forces: bool, event_name: str, follow_slip: bool = True,
+        step: float = 0.0,
     ) -> None:
         self.scene = scene
         self.contact_forces = contact_forces
@@ -100,11 +111,23 @@ class Collider:
         else:
             self._params = {key: _surface_parameters(s, _MODE) for key, s in scene.surfaces.items()}
             self._params_fdir1 = {key: _surface_parameters(scene.surfaces[key], _MODE_FDIR1) for key in self._slipping}
+            #: Per body: h / mass (0 for a static geom) and h * gravity (None with gravity off) for ``_slip``.
+            self._step = step
+            self._per_mass = [0.0 if b is None else step / b.getMass().getMagnitude() for b in scene.bodies]
+            gravity = scene.world.getGravity() * step
+            self._gravity = [None if b is None or not b.getGravityMode() else gravity for b in scene.bodies]
+            self._forces: Mapping[int, Sequence[float]] = {}
+            #: Friction direction per contact (geom i, geom j, k-th contact) of the last collide and this one.
+            self._directions: dict[tuple[int, int, int], Any] = {}
+            self._next_directions: dict[tuple[int, int, int], Any] = {}
 
     # --- per substep ---------------------------------------------------------------------------------
 
-    def collide(self, report: bool) -> None:
-        """Make this substep's contact joints; with ``report``, record the pairs (and arm feedback)."""
+    def collide(self, report: bool, forces: Mapping[int, Sequence[float]] | None = None) -> None:
+        """Make this substep's contact joints; with ``report``, record the pairs (and arm feedback).
+
+        ``forces``: body index -> the force (and torque) applied this substep, for the predicted slip.
+        """
         self._used = 0
         space = self.scene.space
         if self._auto:
@@ -116,6 +139,8 @@ class Collider:
             self._pairs = self._drain_events() if report else []
         else:
             self._pairs = []
+            self._directions, self._next_directions = self._next_directions, {}
+            self._forces = forces or {}
             space.collide(report, self._near_callback)
 
     def after_step(self, report: bool) -> None:
@@ -212,10 +237,10 @@ class Collider:
         follow = key in self._slipping
         arm = report and self.contact_forces
         first = self._used if arm else -1
-        for geom in entry.getContactGeoms():
+        for k, geom in enumerate(entry.getContactGeoms()):
             contact = OdeContact()
             contact.setGeom(geom)
-            slip = _slip(body1, body2, geom) if follow else None
+            slip = self._direction((i, j, k), body1, body2, geom) if follow else None
             if slip is None:
                 contact.setSurface(params)
             else:
@@ -227,6 +252,25 @@ class Collider:
                 joint.setFeedback(self._feedback())
         if report:
             self._pairs.append(_record(i, j, entry, first))
+
+    def _direction(self, key: tuple[int, int, int], body1: Any, body2: Any, geom: Any) -> Any:
+        """The contact's first friction direction: its predicted slip, else the last one it had, else None."""
+        slip = _slip(body1, body2, geom, self._kick(key[0]), self._kick(key[1]))
+        if slip is None:
+            slip = self._directions.get(key)
+            if slip is None:
+                return None
+        self._next_directions[key] = slip
+        return slip
+
+    def _kick(self, i: int) -> Any:
+        """h * (F/m + g) for body ``i``: the velocity the substep adds to it before contacts (None: none)."""
+        kick = self._gravity[i]
+        force = self._forces.get(i)
+        if force is not None:
+            push = Vec3(force[0], force[1], force[2]) * self._per_mass[i]
+            kick = push if kick is None else kick + push
+        return kick
 
     def _feedback(self) -> OdeJointFeedback:
         if self._used == len(self._pool):
@@ -265,18 +309,23 @@ def _mu(surface: Surface) -> float:
     return OdeUtil.getInfinity() if math.isinf(surface.mu) else surface.mu
 
 
-def _slip(body1: Any, body2: Any, geom: Any) -> Any:
-    """The unit direction of body 1's velocity relative to body 2 at the contact, in its plane; None if ~0.
+def _slip(body1: Any, body2: Any, geom: Any, kick1: Any, kick2: Any) -> Any:
+    """The unit direction of body 1's predicted velocity relative to body 2 at the contact, in its plane.
 
-    A static geom has no body (None) and no velocity.
+    Predicted: the point velocity plus the substep's kick h * (F/m + g), what the substep would add
+    without contacts (applied torques are left out). None below :data:`SLIP_SPEED`. A static geom has
+    no body.
     """
     pos, normal = geom.getPos(), geom.getNormal()
+    rel = Vec3(0.0, 0.0, 0.0)
     if body1 is not None:
-        rel = body1.getPointVel(pos)
-        if body2 is not None:
-            rel -= body2.getPointVel(pos)
-    else:
-        rel = -body2.getPointVel(pos)
+        rel += body1.getPointVel(pos)
+        if kick1 is not None:
+            rel += kick1
+    if body2 is not None:
+        rel -= body2.getPointVel(pos)
+        if kick2 is not None:
+            rel -= kick2
     rel -= normal * rel.dot(normal)
     speed = rel.length()
     return rel / speed if speed > SLIP_SPEED else None

@@ -131,3 +131,44 @@ def test_box_slides_down_a_tilted_plane_at_the_coulomb_rate(
     sideways = float(np.linalg.norm(v - along * downhill - float(v @ normal) * normal))
     assert along - v0 == pytest.approx(gain, rel=tol("friction", backend_name))
     assert sideways < tol("friction", backend_name) * gain
+
+
+@pytest.mark.parametrize("azimuth", [0.0, 45.0])
+@pytest.mark.parametrize("ratio", [0.95, 1.05])
+def test_box_at_rest_on_a_tilted_plane_sticks_below_mu_and_slides_above(
+    backend_name: str, azimuth: float, ratio: float, request: pytest.FixtureRequest
+) -> None:
+    """A box released at rest on a plane tilted by 30 deg sticks when tan(30 deg) < mu and slides when above.
+
+    ``ratio`` = tan(theta)/mu: 0.95 (mu 0.608) must stick, 1.05 (mu 0.550) must slide at g*(sin - mu*cos)
+    (0.233 m/s^2: 0.117 m/s after 0.5 s). A pyramid with edges along x and y holds a diagonal load up to
+    sqrt(2)*mu*N, so at azimuth 45 deg it would hold the 1.05 box too. The sticking box may only creep: its
+    speed stays below 1e-3 m/s (conformance 12's bound for a body at rest; the sliding one gains 0.117 m/s).
+    """
+    if backend_name == "pybullet" and ratio > 1.0 and azimuth == 45.0:
+        # measured: 0.2513 m/s for 0.1168 (+115 %); exact at 0 deg
+        request.applymarker(pytest.mark.xfail(strict=True, reason=_BULLET_CONE))  # runs; must still miss
+    if backend_name == "mujoco" and ratio > 1.0:
+        # measured: 0.11765 m/s for 0.11679 (+0.74 %, mujoco's bound 0.3 %) at 0 and 45 deg alike: not
+        # the direction; the start from rest on a soft contact (cause not measured further)
+        request.applymarker(pytest.mark.xfail(strict=True, reason="mujoco: +0.74 % gain from rest, any azimuth"))
+    tilt, phi, steps = math.radians(30.0), math.radians(azimuth), 500
+    mu = math.tan(tilt) / ratio
+    q = _quat_mul((math.cos(phi / 2), 0.0, 0.0, math.sin(phi / 2)), (math.cos(tilt / 2), 0.0, math.sin(tilt / 2), 0.0))
+    normal = np.array([math.sin(tilt) * math.cos(phi), math.sin(tilt) * math.sin(phi), math.cos(tilt)])
+    downhill = np.array([math.cos(tilt) * math.cos(phi), math.cos(tilt) * math.sin(phi), -math.sin(tilt)])
+    plane = w.body("ramp", Shape(ShapeKind.PLANE), w.ZERO, motion=Motion.STATIC, quat=q)
+    cube = w.box("cube", (0.2, 0.2, 0.2), tuple(0.09999 * normal), density=500.0, quat=q)
+    world = w.world("ramp", [plane, cube], surface=Surface(bounce=0.0, mu=mu), dt=DT, steps=steps)
+    with make_backend(backend_name, world) as sim:
+        for _ in range(steps):
+            sim.step()
+        v = sim.body_states().lin_vel[1]
+    if ratio < 1.0:
+        assert float(np.linalg.norm(v)) < 1e-3
+    else:
+        gain = G * (math.sin(tilt) - mu * math.cos(tilt)) * steps * DT
+        along = float(v @ downhill)
+        sideways = float(np.linalg.norm(v - along * downhill - float(v @ normal) * normal))
+        assert along == pytest.approx(gain, rel=tol("friction", backend_name))
+        assert sideways < tol("friction", backend_name) * gain
