@@ -25,6 +25,7 @@ import numpy as np
 from ..errors import BackendNotInstalled, UnsupportedFeature
 from ..types import BodySpec, CompiledWorld, JointKind, JointSpec, Motion, Shape, ShapeKind
 from . import _surfaces, _trees
+from ._options import CONE_MAX_SWEEPS
 
 #: The detector of each ``collision_detector`` option value (``_options.DETECTOR_NAMES``, in that order).
 DETECTORS: dict[str, Any] = {
@@ -132,6 +133,7 @@ def build(
     if friction == "cone":
         options = dart.constraint.NsgsFrictionSolver.Options()
         options.law = dart.constraint.NsgsFrictionSolver.Law.Coulomb
+        options.maxSweeps = CONE_MAX_SWEEPS
         solver.setBoxedLcpSolver(dart.constraint.NsgsFrictionSolver(options))
     built = Built(dw, [None] * len(world.bodies), [None] * len(world.joints), coefficients)  # type: ignore[list-item]
     for tree in _trees.plan(world):
