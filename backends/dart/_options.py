@@ -32,7 +32,8 @@ class DartOptions(BackendOptions):
     friction: str = option(
         "auto", "auto (default): cone when every pair that can touch has mu <= 100, else pyramid; cone: DART's "
         "NsgsFrictionSolver (1000 sweeps at most) with the exact Coulomb cone, mu*g in every direction "
-        "(iterative: a body held by friction creeps ~1e-4 m/s), refused above mu 100 (its impulses turn NaN); pyramid: DART's Dantzig LCP, "
+        "(iterative: a body held by friction creeps ~1e-4 m/s), refused above mu 100 (its impulses turn NaN); "
+        "pyramid: DART's Dantzig LCP, "
         "a friction box per tangent direction fixed to the contact normal's basis (sqrt(2)*mu*g on the "
         "diagonal of a floor)", choices=("auto", "cone", "pyramid"),
     )  # fmt: skip
