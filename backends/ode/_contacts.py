@@ -37,7 +37,7 @@ depths and forces are read through panda3d only when ``contacts()`` is called.
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Mapping
 from typing import Any
 
 from panda3d.core import EventQueue, Vec3
@@ -116,14 +116,14 @@ class Collider:
             self._per_mass = [0.0 if b is None else step / b.getMass().getMagnitude() for b in scene.bodies]
             gravity = scene.world.getGravity() * step
             self._gravity = [None if b is None or not b.getGravityMode() else gravity for b in scene.bodies]
-            self._forces: Mapping[int, Sequence[float]] = {}
+            self._forces: Mapping[int, Any] = {}
             #: Friction direction per contact (geom i, geom j, k-th contact) of the last collide and this one.
             self._directions: dict[tuple[int, int, int], Any] = {}
             self._next_directions: dict[tuple[int, int, int], Any] = {}
 
     # --- per substep ---------------------------------------------------------------------------------
 
-    def collide(self, report: bool, forces: Mapping[int, Sequence[float]] | None = None) -> None:
+    def collide(self, report: bool, forces: Mapping[int, Any] | None = None) -> None:
         """Make this substep's contact joints; with ``report``, record the pairs (and arm feedback).
 
         ``forces``: body index -> the force (and torque) applied this substep, for the predicted slip.
