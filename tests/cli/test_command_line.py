@@ -93,7 +93,7 @@ def test_folders_are_taken_by_every_command_recursing_like_pytest(
     capsys: pytest.CaptureFixture[str], tmp_path: Path
 ) -> None:
     everything = sorted((ROOT / "scenarios").rglob("*.yaml"))
-    assert scenario_files([ROOT / "scenarios"]) == everything and len(everything) == 17
+    assert scenario_files([ROOT / "scenarios"]) == everything and len(everything) > 15
     # a folder and its subfolder: each file once; a file named twice: twice (as given)
     assert scenario_files([ROOT / "scenarios", ROOT / "scenarios" / "conformance"]) == everything
     twice = ROOT / "scenarios" / "factory_physics.yaml"

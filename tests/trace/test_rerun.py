@@ -19,6 +19,8 @@ import numpy as np
 import pytest
 
 from reports.trace_reader import read_trace
+from runner.language.files import scenario_files
+from runner.language.load import load_files
 from tests.paths import ROOT
 
 REQUIRED = os.environ.get("SCENARIO_REQUIRE_RERUN") == "1"
@@ -43,7 +45,8 @@ def traces(tmp_path_factory: pytest.TempPathFactory) -> list[Path]:
     )  # fmt: skip
     assert done.returncode in (0, 1), done.stderr[-3000:]
     found = sorted(out.glob("*.mcap"))
-    assert len(found) == 31
+    cases = load_files(scenario_files([ROOT / "scenarios"]), None, True, ())
+    assert len(found) == len(cases) > 30  # every variant of every scenario, conformance included
     return found
 
 
