@@ -34,7 +34,7 @@ from backends.types import (
 
 from . import worlds as w
 from .tolerances import tol
-from .worlds import ZERO, G, make_backend, require
+from .worlds import ZERO, G, coulomb_stop, make_backend, require
 
 
 def _same_rotation(q: np.ndarray, expected: tuple[float, ...]) -> np.ndarray:
@@ -477,16 +477,6 @@ def test_bouncy_surface_rests(backend_name: str) -> None:
 # 12. friction ----------------------------------------------------------------------------------------
 
 
-def _coulomb_stop(v0: float, mu: float, dt: float) -> float:
-    """Distance of a box decelerating at mu*g under semi-implicit Euler (0.408 m continuous for 2, 0.5)."""
-    v, x = v0, 0.0
-    while True:
-        v -= mu * G * dt
-        if v <= 0.0:
-            return x
-        x += v * dt
-
-
 def test_friction_stop_distance(backend_name: str) -> None:
     v0, mu = 2.0, 0.5
     world = w.sliding_box(v0, mu)
@@ -494,7 +484,7 @@ def test_friction_stop_distance(backend_name: str) -> None:
         for _ in range(60):  # stops at 0.41 s
             sim.step()
         s = sim.body_states()
-    expected = _coulomb_stop(v0, mu, world.dt)
+    expected = coulomb_stop(v0, mu, world.dt)
     assert s.pos[1, 0] == pytest.approx(expected, rel=tol("friction", backend_name))
     assert abs(s.lin_vel[1, 0]) < 1e-3
 
@@ -511,8 +501,8 @@ def test_pair_surfaces(backend_name: str) -> None:
             sim.step()
         s = sim.body_states()
     rel = tol("friction", backend_name)
-    assert s.pos[1, 0] == pytest.approx(_coulomb_stop(v0, 0.8, world.dt), rel=rel)
-    assert s.pos[2, 0] == pytest.approx(_coulomb_stop(v0, 0.25, world.dt), rel=rel)
+    assert s.pos[1, 0] == pytest.approx(coulomb_stop(v0, 0.8, world.dt), rel=rel)
+    assert s.pos[2, 0] == pytest.approx(coulomb_stop(v0, 0.25, world.dt), rel=rel)
 
 
 def test_tilted_plane(backend_name: str) -> None:

@@ -4,7 +4,7 @@ The language's ``mu`` bounds the friction force by mu times the normal force, in
 contact slips: the friction cone. A box launched on a floor at v0 along any horizontal direction feels
 -mu*m*g along its velocity, so it decelerates at mu*g along a straight line and stops after
 v0^2/(2*mu*g) (2 m/s, mu 0.3: 0.6796 m). With semi-implicit Euler (v -= mu*g*dt, then x += v*dt) the
-engines stop after the discrete sum ``_coulomb_stop`` (0.6785 m at dt 1 ms), which is what is compared.
+engines stop after the discrete sum ``coulomb_stop`` (0.6785 m at dt 1 ms), which is what is compared.
 A friction pyramid whose edges are the world's x and y (ODE's and DART's default contact directions)
 brakes each velocity component at mu*g: along the diagonal the deceleration is sqrt(2)*mu*g and the box
 stops after 0.4795 m, 29 % short, and off the axes and diagonals it also turns.
@@ -26,33 +26,14 @@ import math
 import numpy as np
 import pytest
 
+from backends.geometry import quat_mul
 from backends.types import BodyStates, Motion, Shape, ShapeKind, Surface
 
 from . import worlds as w
 from .tolerances import tol
-from .worlds import G, make_backend
+from .worlds import G, coulomb_stop, make_backend
 
 V0, MU, DT = 2.0, 0.3, 0.001
-
-
-def _coulomb_stop(v0: float, mu: float, dt: float) -> float:
-    v, x = v0, 0.0
-    while True:
-        v -= mu * G * dt
-        if v <= 0.0:
-            return x
-        x += v * dt
-
-
-def _quat_mul(a: tuple[float, ...], b: tuple[float, ...]) -> tuple[float, float, float, float]:
-    w1, x1, y1, z1 = a
-    w2, x2, y2, z2 = b
-    return (
-        w1 * w2 - x1 * x2 - y1 * y2 - z1 * z2,
-        w1 * x2 + x1 * w2 + y1 * z2 - z1 * y2,
-        w1 * y2 - x1 * z2 + y1 * w2 + z1 * x2,
-        w1 * z2 + x1 * y2 - y1 * x2 + z1 * w2,
-    )
 
 
 @pytest.mark.parametrize("degrees", [0.0, 22.5, 45.0, 67.5, 90.0, 135.0])
@@ -76,7 +57,7 @@ def _slide(backend_name: str, degrees: float, yaw: float) -> BodyStates:
         s = sim.body_states()
     along = float(s.pos[1] @ direction)
     sideways = float(np.linalg.norm(s.pos[1, :2] - along * direction[:2]))
-    expected = _coulomb_stop(V0, MU, DT)
+    expected = coulomb_stop(V0, MU, DT)
     assert along == pytest.approx(expected, rel=tol("friction", backend_name))
     assert sideways < tol("friction", backend_name) * expected
     return s
@@ -112,7 +93,7 @@ def test_box_slides_down_a_tilted_plane_at_the_coulomb_rate(
     tilt, phi, mu, v0, steps = math.radians(30.0), math.radians(azimuth), 0.2, 0.5, 500
     turn_z = (math.cos(phi / 2), 0.0, 0.0, math.sin(phi / 2))
     tilt_y = (math.cos(tilt / 2), 0.0, math.sin(tilt / 2), 0.0)
-    q = _quat_mul(turn_z, tilt_y)  # tilt about +y (downhill +x), then turn the fall line to the azimuth
+    q = quat_mul(turn_z, tilt_y)  # tilt about +y (downhill +x), then turn the fall line to the azimuth
     normal = np.array([math.sin(tilt) * math.cos(phi), math.sin(tilt) * math.sin(phi), math.cos(tilt)])
     downhill = np.array([math.cos(tilt) * math.cos(phi), math.cos(tilt) * math.sin(phi), -math.sin(tilt)])
     plane = w.body("ramp", Shape(ShapeKind.PLANE), w.ZERO, motion=Motion.STATIC, quat=q)
@@ -150,7 +131,7 @@ def test_box_at_rest_on_a_tilted_plane_sticks_below_mu_and_slides_above(
         request.applymarker(pytest.mark.xfail(strict=True, reason="mujoco: +0.74 % gain from rest, any azimuth"))
     tilt, phi, steps = math.radians(30.0), math.radians(azimuth), 500
     mu = math.tan(tilt) / ratio
-    q = _quat_mul((math.cos(phi / 2), 0.0, 0.0, math.sin(phi / 2)), (math.cos(tilt / 2), 0.0, math.sin(tilt / 2), 0.0))
+    q = quat_mul((math.cos(phi / 2), 0.0, 0.0, math.sin(phi / 2)), (math.cos(tilt / 2), 0.0, math.sin(tilt / 2), 0.0))
     normal = np.array([math.sin(tilt) * math.cos(phi), math.sin(tilt) * math.sin(phi), math.cos(tilt)])
     downhill = np.array([math.cos(tilt) * math.cos(phi), math.cos(tilt) * math.sin(phi), -math.sin(tilt)])
     plane = w.body("ramp", Shape(ShapeKind.PLANE), w.ZERO, motion=Motion.STATIC, quat=q)

@@ -271,3 +271,13 @@ def turntable(mu: float = 1.0) -> CompiledWorld:
     table = box("table", (2.0, 2.0, 0.1), (0.0, 0.0, 0.5), motion=Motion.KINEMATIC)
     cube = box("cube", (0.2, 0.2, 0.2), (0.5, 0.0, 0.65), density=500.0)
     return world("turntable", [table, cube], surface=Surface(mu=mu), dt=0.01)
+
+
+def coulomb_stop(v0: float, mu: float, dt: float) -> float:
+    """Distance of a box decelerating at mu*g under semi-implicit Euler (0.408 m continuous for 2, 0.5)."""
+    v, x = v0, 0.0
+    while True:
+        v -= mu * G * dt
+        if v <= 0.0:
+            return x
+        x += v * dt
