@@ -68,7 +68,9 @@ def _words(h: dict[str, Any]) -> dict[str, Any]:
             when = f" in {g['cases_diverging']} of {h['cases']} cases" + when
         said.append(f"{_plural(g['diverging'], 'quantity', 'quantities')} diverge{'s' if g['diverging'] == 1 else ''}"
                     f"{when}")  # fmt: skip
-    else:
+    elif g["quantities"]:
         said.append("quantities agree")
+    else:
+        said.append("no quantity compared")
     ok = a["passed"] and g["agrees"]
     return {**h, "badge": "PASS" if ok else "FAIL", "text": " · ".join(said)}

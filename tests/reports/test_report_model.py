@@ -50,7 +50,7 @@ def test_the_headline_says_assertions_and_agreement_apart() -> None:
     assert drift["assertions"]["passed"] and not drift["agreement"]["agrees"]
     assert drift["agreement"]["backends"] == ["dart"]
     broken = headline([_run("ode", failed=1), _run("crash", status="crashed")], [])
-    assert broken["text"] == "1 assertion fails · 1 run crashed (signal 11) · quantities agree"
+    assert broken["text"] == "1 assertion fails · 1 run crashed (signal 11) · no quantity compared"
     both = merge([good, drift, broken])
     assert both["badge"] == "FAIL"
     assert both["text"] == ("1 assertion fails · 1 run crashed (signal 11) · 2 quantities diverge in 1 of 3 cases "
