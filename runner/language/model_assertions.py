@@ -13,9 +13,35 @@ Tolerance = Annotated[float, Field(ge=0, allow_inf_nan=False)] | Expr | dict[str
 Number = float | Expr  # a number, or an expression evaluated when the assertion is checked
 
 
+class KnownLimit(Strict):
+    """An engine that cannot meet the assertion: its check runs at the default tolerance and fails there, and
+    the conformance matrix shows the measured deviation with its cause instead of passing it silently."""
+
+    measured: Annotated[float, Field(ge=0, allow_inf_nan=False)] = Field(
+        description="The largest deviation |measured - expected| measured on this engine (the docs' figure)."
+    )
+    cause: Annotated[str, Field(min_length=1, max_length=300)] = Field(description="Why, in one line.")
+    doc: Annotated[str, Field(min_length=1, max_length=300)] = Field(
+        description="The document (path#anchor from the repository root) that explains it."
+    )
+
+
 class AssertionBase(Strict):
     name: Annotated[str, Field(min_length=1, max_length=128)]
     description: str | None = Field(None, max_length=2000)
+    known_limits: dict[Name, KnownLimit] = Field(
+        default_factory=dict,
+        description="Engines that cannot meet this assertion (engine -> measured deviation, cause, doc); "
+        "`scenario run` judges them as written, the conformance matrix shows them as known limits.",
+    )
+
+    @model_validator(mode="after")
+    def _limits_keep_the_default(self) -> AssertionBase:
+        tol = getattr(self, "tol", None)
+        both = sorted(set(self.known_limits) & set(tol)) if isinstance(tol, dict) else []
+        if both:
+            raise ValueError(f"{', '.join(both)}: a known limit is judged at the default tolerance; remove its `tol`")
+        return self
 
 
 def _tol_check(tol: Any) -> None:
