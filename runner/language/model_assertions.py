@@ -14,8 +14,9 @@ Number = float | Expr  # a number, or an expression evaluated when the assertion
 
 
 class KnownLimit(Strict):
-    """An engine that cannot meet the assertion: its check runs at the default tolerance and fails there, and
-    the conformance matrix shows the measured deviation with its cause instead of passing it silently."""
+    """An engine that cannot meet the assertion: an expected failure. Its check runs at the default tolerance;
+    failing there is the verdict ``known limit`` (shown with the measured deviation and the cause, not
+    failing the run), passing fails the run (the entry is no longer needed)."""
 
     measured: Annotated[float, Field(ge=0, allow_inf_nan=False)] = Field(
         description="The largest deviation |measured - expected| measured on this engine (the docs' figure)."
@@ -32,7 +33,8 @@ class AssertionBase(Strict):
     known_limits: dict[Name, KnownLimit] = Field(
         default_factory=dict,
         description="Engines that cannot meet this assertion (engine -> measured deviation, cause, doc); "
-        "`scenario run` judges them as written, the conformance matrix shows them as known limits.",
+        "an expected failure on every execution path (run, CI, pytest, reports, the conformance matrix), "
+        "and a failure when it passes.",
     )
 
     @model_validator(mode="after")
