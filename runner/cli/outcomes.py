@@ -88,7 +88,8 @@ def print_summary(out: Console, results: list[CaseResult], names: list[tuple[str
     failed_checks = sum(not v.passed for r in completed for v in r.verdicts)
     limits = sum(v.status == KNOWN_LIMIT for r in completed for v in r.verdicts)
     colour = "green" if passed == len(results) else "red"
-    shown = f"{checks - failed_checks - limits}/{checks} assertions" + (f", {limits} known limit{'s' * (limits > 1)}" if limits else "")
+    shown = f"{checks - failed_checks - limits}/{checks} assertions"
+    shown += f", {limits} known limit{'s' * (limits > 1)}" if limits else ""
     out.print(f"[bold {colour}]{passed}/{len(results)} runs passed[/] ({shown})")
     for res, (scenario, variant) in zip(results, names, strict=True):
         if not res.passed:
