@@ -94,6 +94,18 @@ def print_summary(out: Console, results: list[CaseResult], names: list[tuple[str
     for res, (scenario, variant) in zip(results, names, strict=True):
         if not res.passed:
             out.print(summary_line(res, scenario, variant))
+        for text in known_limits(res):
+            where = f"{escape(scenario)} · {escape(variant)} · {escape(res.case.backend)}"
+            out.print(f"  {where}: [yellow]{escape(text)}[/]", highlight=False)
+
+
+def known_limits(res: CaseResult) -> list[str]:
+    """``known limit: <assertion> on <engine>: measured ...`` for each expected failure of a passed run
+    (the same line on every path: `run`, `-j`, `--isolate`, Ray, `compare`)."""
+    if not res.passed or res.result is None:
+        return []
+    return [f"known limit: {v.name} {v.message.removeprefix('known limit ')}" for v in res.result.verdicts
+            if v.status == KNOWN_LIMIT]  # fmt: skip
 
 
 _KINDS = {
