@@ -104,7 +104,8 @@ so the deviation is the largest over the run). Below it, Δode is the signed dif
 backend's measured value (real ODE, the reference). A **known limit** (⚠️) is an engine that cannot meet a
 check: the case file says so (`known_limits:` with the measured deviation, its cause and the doc that
 explains it), the check runs at the default tolerance and fails there, and the cell shows the measured
-deviation and its cause instead of a tick; it is counted apart. The suite fails when a known limit passes
+deviation and its cause instead of a tick; it is counted apart. It is an expected failure on every path
+(`scenario run`, `pytest scenarios/`, JUnit, reports: docs/language.md). The suite fails when a known limit passes
 (no longer needed) or measures worse than its documented figure, and when a per-backend tolerance override
 is stale (the default tolerance would pass the measured error) or more than 3 times the measured error.
 Regenerate with `scenario conformance --markdown docs/conformance.md` (exit 0 only when every case passes

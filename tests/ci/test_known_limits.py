@@ -10,12 +10,14 @@ import json
 import xml.etree.ElementTree as ET
 from pathlib import Path
 
+import jsonschema
 import pytest
 import xmlschema
 
 from reports.trace_reader import read_trace
 from runner.language.load import load_scenario
 from runner.sim.run import run_loaded
+from tests.paths import ROOT
 
 from .conftest import SCHEMA, cli
 from .test_pytest_plugin import PLUGIN, pytest_run
@@ -114,6 +116,7 @@ def test_compare_report_shows_the_figure(drop: Path, tmp_path: Path, capsys: pyt
     assert code == 0, output
     assert "known limit: height on fake: measured 0.01" in output
     doc = json.loads((tmp_path / "c" / "report.json").read_text())
+    jsonschema.Draft202012Validator(json.loads((ROOT / "docs" / "report.schema.json").read_text())).validate(doc)
     run = doc["cases"][0]["runs"][0]
     assert run["assertions"] == {"total": 2, "passed": 1, "failed": 0, "known_limits": 1}
     assert doc["cases"][0]["verdicts"]["cells"]["height"]["fake"]["status"] == "known limit"
