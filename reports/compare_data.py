@@ -95,8 +95,8 @@ def _cost(run: Run) -> dict[str, float | None]:
 def _verdicts(run: Run) -> list[dict[str, Any]]:
     if run.trace is None:
         return []
-    keep = ("passed", "measured", "expected", "time", "message", "kind")
-    return [{"name": v.name, **{k: v.data.get(k) for k in keep}} for v in run.trace.verdicts]
+    keep = ("passed", "measured", "expected", "time", "message", "kind", "known_limit")
+    return [{"name": v.name, "status": v.status, **{k: v.data.get(k) for k in keep}} for v in run.trace.verdicts]
 
 
 def _verdict_matrix(runs: Sequence[Run]) -> dict[str, Any]:
@@ -107,7 +107,8 @@ def _verdict_matrix(runs: Sequence[Run]) -> dict[str, Any]:
             if v["name"] not in cells:
                 names.append(v["name"])
                 cells[v["name"]] = {r.backend: None for r in runs}
-            cells[v["name"]][run.backend] = {k: v[k] for k in ("passed", "measured", "expected", "time", "message")}
+            keys = ("passed", "status", "measured", "expected", "time", "message", "known_limit")
+            cells[v["name"]][run.backend] = {k: v[k] for k in keys}
     return {"assertions": names, "cells": cells}
 
 
@@ -139,6 +140,7 @@ def _within(backend: str, qs: list[dict[str, Any]], max_divergence: float | None
 def _run_entry(run: Run, qs: list[dict[str, Any]], max_divergence: float | None) -> dict[str, Any]:
     verdicts = _verdicts(run)
     failed = sum(v["passed"] is not True for v in verdicts)
+    limits = sum(v["status"] == "known limit" for v in verdicts)  # expected failures: not passes, not failures
     within = _within(run.backend, qs, max_divergence)
     diverging = [q["id"] for q in qs if run.backend in q["diverging"]]
     firsts = [q["deviation"][run.backend]["first_over"] for q in qs if run.backend in q["diverging"]]
@@ -151,7 +153,12 @@ def _run_entry(run: Run, qs: list[dict[str, Any]], max_divergence: float | None)
         "label": run.label,
         "detail": run.detail,
         "passed": run.passed,
-        "assertions": {"total": len(verdicts), "passed": len(verdicts) - failed, "failed": failed},
+        "assertions": {
+            "total": len(verdicts),
+            "passed": len(verdicts) - failed - limits,
+            "failed": failed,
+            "known_limits": limits,
+        },
         "agreement": {"diverging": diverging, "first_over": min(firsts) if firsts else None},
         "end_time": round9(run.trace.times[-1]) if run.has_steps and run.trace is not None else None,
         "outcome": run.outcome.to_json() if run.outcome is not None else None,

@@ -102,8 +102,9 @@ def _verdicts(trace: Trace) -> Table:
     table.add_column("measured", overflow="fold")
     table.add_column("expected", overflow="fold")
     for v in trace.verdicts:
-        passed = v.passed
-        result = Text("pass", "green") if passed else Text("FAIL", "bold red") if passed is False else Text("?")
+        status = v.status
+        result = {"passed": Text("pass", "green"), "failed": Text("FAIL", "bold red"),
+                  "known limit": Text("known limit", "yellow")}.get(status or "", Text("?"))  # fmt: skip
         measured = _short(v.data[tf.VERDICT_MEASURED]) if tf.VERDICT_MEASURED in v.data else ""
         expected = _short(v.data[tf.VERDICT_EXPECTED]) if tf.VERDICT_EXPECTED in v.data else ""
         decided = v.data.get("time")

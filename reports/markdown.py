@@ -106,11 +106,16 @@ def render_markdown(doc: dict[str, Any], images: dict[str, bytes], links: list[d
             a = r["assertions"]
             ok = r["status"] == "passed"
             agree = "agrees" if not r["agreement"]["diverging"] else f"diverges from {r['agreement']['first_over']:g} s"
-            cells.append(_cell(f"{'✅' if ok else '❌'} {a['passed']}/{a['total']}{'' if ok else ' ' + r['label']}"
-                               f" · {agree}"))  # fmt: skip
+            limits = (
+                f", ⚠️ {a['known_limits']} known limit{'s' * (a['known_limits'] > 1)}" if a.get("known_limits") else ""
+            )
+            cells.append(_cell(f"{'✅' if ok else '❌'} {a['passed']}/{a['total']}{limits}"
+                               f"{'' if ok else ' ' + r['label']} · {agree}"))  # fmt: skip
             for name in case["verdicts"]["assertions"]:
                 v = case["verdicts"]["cells"][name].get(b)
-                if v is not None and v["passed"] is not True:
+                if v is not None and v.get("status") == "known limit":
+                    lines.append(f"- `{case['variant']}` · {b}: **{name}** ⚠️ {_cell(v['message'])}")
+                elif v is not None and v["passed"] is not True:
                     lines.append(f"- `{case['variant']}` · {b}: **{name}** measured {v['measured']}, "
                                  f"expected {v['expected']}")  # fmt: skip
             if r["outcome"] is not None or r["status"] not in ("passed", "failed"):

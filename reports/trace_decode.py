@@ -152,6 +152,9 @@ class MessageDecoder:
             }  # fmt: skip
             for key in _VERDICT_NUMBERS:
                 data[key] = getattr(v, key) if v.HasField(key) else None
+            if v.HasField("known_limit"):  # an expected failure (the assertion's known_limits)
+                data["known_limit"] = {"measured": v.known_limit.measured, "cause": v.known_limit.cause,
+                                       "doc": v.known_limit.doc}  # fmt: skip
             self.out.verdicts.append((t, data))
 
     _handlers: dict[str, Callable[[MessageDecoder, float, Any], None]] = {

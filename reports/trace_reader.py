@@ -130,6 +130,14 @@ class Verdict:
         value = self.data.get(tf.VERDICT_PASSED)
         return value if isinstance(value, bool) else None
 
+    @property
+    def status(self) -> str | None:
+        """passed, failed, ``known limit`` (an expected failure: passed, with its ``known_limit``), or None."""
+        passed = self.passed
+        if passed is None:
+            return None
+        return "known limit" if passed and self.data.get("known_limit") else "passed" if passed else "failed"
+
 
 @dataclass
 class AttachmentInfo:
@@ -333,8 +341,10 @@ def read_trace(path: str | Path, recover: bool = False) -> Trace:
         start_time=None if first is None else first / 1e9,
         end_time=None if last is None else last / 1e9,
         times=times,
-        bodies={name: BodySeries(rows[:, i, 0:3], rows[:, i, 3:7], rows[:, i, 7:10], rows[:, i, 10:13])
-                for i, name in enumerate(bodies)},  # fmt: skip
+        bodies={
+            name: BodySeries(rows[:, i, 0:3], rows[:, i, 3:7], rows[:, i, 7:10], rows[:, i, 10:13])
+            for i, name in enumerate(bodies)
+        },  # fmt: skip
         joint_times=np.array(decoded.joint_times),
         joints={name: JointSeries(jrows[:, i, 0], jrows[:, i, 1], jrows[:, i, 2]) for i, name in enumerate(joints)},
         state_times=np.array(decoded.state_times),

@@ -5,7 +5,9 @@ read (committed as tests/ci/junit.xsd): ``<testsuites>`` holds one ``<testsuite>
 backend, whose properties carry the backend, the engine's and the tool's versions and the scenario file, with
 one ``<testcase name="VARIANT[BACKEND]" classname="SCENARIO">`` per variant. An assertion failure or a
 divergence from a baseline is a ``<failure>``; bad input, a missing baseline or an engine failure is an
-``<error>`` (the convention of scenario-testing tools). The schema allows properties on suites only.
+``<error>`` (the convention of scenario-testing tools); a run that passed with known limits (expected
+failures, ``known_limits`` in the scenario) is ``<skipped message="known limit: ...">``. The schema allows
+properties on suites only.
 
 Times are the runs' wall-clock seconds and the timestamp the moment of writing (``SOURCE_DATE_EPOCH`` when
 set): this file is a CI report, the one output with wall-clock figures; traces and golden files have none.
@@ -82,7 +84,18 @@ def from_result(result: RunResult, loaded: LoadedScenario | None = None) -> JUni
         case.outcome, case.kind = "failure", "assertion"
         case.message = f"{len(failed)} assertion(s) failed: {', '.join(failed)}"
         case.text = verdict_text(result)
+    else:
+        _known_limits(case, result)
     return case
+
+
+def _known_limits(case: JUnitCase, result: RunResult) -> None:
+    """A run that passed only because of known limits (expected failures) is ``<skipped>`` with them named:
+    CI reports show it apart from a pass, and it does not fail the build."""
+    limits = [v for v in result.verdicts if v.status == "known limit"]
+    if limits:
+        case.outcome, case.kind = "skipped", "known-limit"
+        case.message = "; ".join(f"known limit: {v.name} {v.message.removeprefix('known limit ')}" for v in limits)
 
 
 def from_outcome(outcome: CaseOutcome) -> JUnitCase:
@@ -109,6 +122,8 @@ def from_outcome(outcome: CaseOutcome) -> JUnitCase:
             reasons.append(f"{sum(not v.passed for v in result.verdicts)} assertion(s) failed")
         case.message = "; ".join(reasons)
         case.text = outcome_text(outcome)
+    elif result is not None:
+        _known_limits(case, result)
     return case
 
 
@@ -162,7 +177,7 @@ def to_xml(cases: Sequence[JUnitCase], timestamp: str | None = None, hostname: s
                 )
                 child.text = _clean(case.text)
             elif case.outcome == "skipped":
-                ET.SubElement(element, "skipped")
+                ET.SubElement(element, "skipped", {"message": _clean(case.message)} if case.message else {})
         ET.SubElement(suite, "system-out").text = _clean("\n".join(c.output for c in members if c.output))
         ET.SubElement(suite, "system-err").text = ""
     ET.indent(root)

@@ -21,6 +21,7 @@ from runner.errors import ExitCode
 from runner.exec.cases import CaseResult
 from runner.language.load import LoadedScenario
 from runner.sim.session import RunResult
+from runner.sim.verdicts import KNOWN_LIMIT
 
 __all__ = ["debug", "in_tests", "junit_case", "print_problem", "print_result", "print_summary", "summary_line"]
 
@@ -48,7 +49,8 @@ def print_result(out: Console, result: RunResult, quiet: bool) -> None:
             out.print(f"  last good state of `{escape(str(result.extra.get('body')))}`: {escape(json.dumps(detail))}")
     if result.engine_messages:
         out.print(f"  {result.engine_messages} engine message(s) from {result.backend}, in the trace's log (`engine`)")
-    if result.verdicts and (not quiet or not result.passed):
+    limits = any(v.status == KNOWN_LIMIT for v in result.verdicts)
+    if result.verdicts and (not quiet or not result.passed or limits):
         out.print(verdict_table(result, failures_only=quiet))
     if result.trace and not quiet:
         out.print(f"  trace: {escape(result.trace)}")
@@ -84,11 +86,26 @@ def print_summary(out: Console, results: list[CaseResult], names: list[tuple[str
     completed = [r.result for r in results if r.result is not None]
     checks = sum(len(r.verdicts) for r in completed)
     failed_checks = sum(not v.passed for r in completed for v in r.verdicts)
+    limits = sum(v.status == KNOWN_LIMIT for r in completed for v in r.verdicts)
     colour = "green" if passed == len(results) else "red"
-    out.print(f"[bold {colour}]{passed}/{len(results)} runs passed[/] ({checks - failed_checks}/{checks} assertions)")
+    shown = f"{checks - failed_checks - limits}/{checks} assertions"
+    shown += f", {limits} known limit{'s' * (limits > 1)}" if limits else ""
+    out.print(f"[bold {colour}]{passed}/{len(results)} runs passed[/] ({shown})")
     for res, (scenario, variant) in zip(results, names, strict=True):
         if not res.passed:
             out.print(summary_line(res, scenario, variant))
+        for text in known_limits(res):
+            where = f"{escape(scenario)} · {escape(variant)} · {escape(res.case.backend)}"
+            out.print(f"  {where}: [yellow]{escape(text)}[/]", highlight=False)
+
+
+def known_limits(res: CaseResult) -> list[str]:
+    """``known limit: <assertion> on <engine>: measured ...`` for each expected failure of a passed run
+    (the same line on every path: `run`, `-j`, `--isolate`, Ray, `compare`)."""
+    if not res.passed or res.result is None:
+        return []
+    return [f"known limit: {v.name} {v.message.removeprefix('known limit ')}" for v in res.result.verdicts
+            if v.status == KNOWN_LIMIT]  # fmt: skip
 
 
 _KINDS = {

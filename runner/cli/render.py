@@ -8,6 +8,10 @@ from rich.markup import escape
 from rich.table import Table
 
 from runner.sim.session import RunResult
+from runner.sim.verdicts import FAILED, KNOWN_LIMIT, PASSED
+
+#: a known limit (an expected failure, with its measured figure and cause in the message) stands apart
+_MARKS = {PASSED: "[green]pass[/]", FAILED: "[bold red]FAIL[/]", KNOWN_LIMIT: "[yellow]known limit[/]"}
 
 
 def verdict_table(result: RunResult, failures_only: bool = False) -> Table:
@@ -17,10 +21,10 @@ def verdict_table(result: RunResult, failures_only: bool = False) -> Table:
     for col in ("assertion", "result", "measured", "expected", "time"):
         table.add_column(col, overflow="fold")
     for v in result.verdicts:
-        if failures_only and v.passed:
+        if failures_only and v.status == PASSED:
             continue
-        mark = "[green]pass[/]" if v.passed else "[bold red]FAIL[/]"
+        mark = _MARKS[v.status]
         when = "" if v.time is None or math.isinf(v.time) else f"{v.time:.3f}"
-        measured = v.measured + (f" ({v.message})" if v.message and not v.passed else "")
+        measured = v.measured + (f" ({v.message})" if v.message and v.status != PASSED else "")
         table.add_row(escape(v.name), mark, escape(measured), escape(v.expected), when)
     return table

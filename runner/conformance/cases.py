@@ -7,7 +7,7 @@ them. The suite lives in ``scenarios/conformance/`` of the source tree; ``--suit
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
@@ -29,6 +29,8 @@ class Check:
     expected: str  # what is expected of it: a formula, a range, a condition, times
     tolerance: dict[str, str] = field(default_factory=dict)  # backend (or "default") -> tolerance text
     description: str = ""
+    #: backend -> {measured, cause, doc}: engines that cannot meet the check (judged at the default tolerance)
+    known_limits: dict[str, dict[str, Any]] = field(default_factory=dict)
 
 
 @dataclass(frozen=True)
@@ -80,8 +82,14 @@ def _window(during: Any) -> str:
     return "" if tuple(during) == (0.0, "end") else f" over [{_text(during[0])}, {_text(during[1])}]"
 
 
-def describe(s: Any) -> Check:  # noqa: C901 - one switch over the assertion kinds
-    """The matrix's view of an assertion: what is measured, and what is expected of it."""
+def describe(s: Any) -> Check:
+    """The matrix's view of an assertion: what is measured, what is expected of it, its known limits."""
+    check = _describe(s)
+    limits = {b: limit.model_dump() for b, limit in s.known_limits.items()}
+    return replace(check, known_limits=limits) if limits else check
+
+
+def _describe(s: Any) -> Check:  # noqa: C901 - one switch over the assertion kinds
     kind = type(s).__name__.removesuffix("Assertion").lower()
     description = " ".join((s.description or "").split())
     if isinstance(s, A.ValueAssertion):

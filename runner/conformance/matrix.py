@@ -3,9 +3,12 @@ against the reference backend (``ode``), as plain JSON-ready data.
 
 A cell holds the raw measured value, the analytic target and the tolerance the case states for that
 backend, the error ``measured - target`` and the difference ``measured - reference's measured``; its
-status is the runner's verdict (pass / fail), or ``not run`` when the case did not complete on the backend
-(crash, time-out, engine failure, unsupported feature). The matrix passes only when every case passed on
-every backend.
+status is the runner's verdict (pass / fail), ``known limit`` (an engine that cannot meet the check, failing
+at the default tolerance as its case file says), or ``not run`` when the case did not complete on the backend
+(crash, time-out, engine failure, unsupported feature). A case whose only failures are known limits has the
+status ``known limit``. :mod:`runner.conformance.audit` checks the tolerances themselves (stale or too wide
+overrides, known limits no longer needed); its problems are in ``audit``. The matrix passes only when
+every case passed (or failed at its known limits only) on every backend and the audit found nothing.
 """
 
 from __future__ import annotations
@@ -16,7 +19,8 @@ from collections.abc import Mapping, Sequence
 from typing import Any
 
 from backends.registry import REFERENCE_BACKEND
-from runner.conformance.cases import Case
+from runner.conformance import audit
+from runner.conformance.cases import Case, Check
 from runner.conformance.pool import BackendRun
 from runner.version import tool_version
 
@@ -44,6 +48,7 @@ def _cell(check: dict[str, Any] | None, reference: dict[str, Any] | None) -> dic
         "expected_text": check.get("expected_text", ""),
         "time": check.get("time"),
         "message": check.get("message", ""),
+        "default_tol": check.get("default_tol"),
     }
 
 
@@ -62,13 +67,15 @@ def build_matrix(
     backends = list(runs)
     reference = REFERENCE if REFERENCE in runs else None
     out_cases: list[dict[str, Any]] = []
+    problems: list[dict[str, str]] = []
     for case in cases:
         results = {b: runs[b].results.get(case.id) for b in backends}
         per_backend = {b: _checks_by_index(results[b], len(case.checks)) for b in backends}
-        checks = []
+        checks: list[dict[str, Any]] = []
         for i, check in enumerate(case.checks):
             ref = per_backend[reference][i] if reference else None
             cells = {b: _cell(per_backend[b][i], ref if b != reference else None) for b in backends}
+            problems += _audit(case.id, check, cells)
             checks.append(
                 {
                     "name": check.name,
@@ -77,6 +84,7 @@ def build_matrix(
                     "expected": check.expected,
                     "tolerance": check.tolerance,
                     "description": check.description,
+                    "known_limits": check.known_limits,
                     "cells": cells,
                 }
             )
@@ -90,7 +98,7 @@ def build_matrix(
                 "description": case.variant_description,
                 "runs": {
                     b: {
-                        "status": (results[b] or {}).get("status", "not run"),
+                        "status": _status((results[b] or {}).get("status", "not run"), [c["cells"][b] for c in checks]),
                         "message": (results[b] or {}).get("message", ""),
                         "wall_seconds": round(float((results[b] or {}).get("wall_seconds", 0.0)), 3),
                     }
@@ -111,13 +119,38 @@ def build_matrix(
                 "engine_version": runs[b].engine_version,
                 "wall_seconds": round(runs[b].wall_seconds, 2),
                 "passed": sum(c["runs"][b]["status"] == "passed" for c in out_cases),
+                "known_limits": sum(c["runs"][b]["status"] == audit.KNOWN_LIMIT for c in out_cases),
                 "cases": len(out_cases),
             }
             for b in backends
         ],
         "cases": out_cases,
-        "passed": bool(out_cases) and all(r["status"] == "passed" for c in out_cases for r in c["runs"].values()),
+        "audit": problems,
+        "passed": bool(out_cases)
+        and not problems
+        and all(r["status"] in ("passed", audit.KNOWN_LIMIT) for c in out_cases for r in c["runs"].values()),
     }
+
+
+def _audit(case: str, check: Check, cells: Mapping[str, dict[str, Any]]) -> list[dict[str, str]]:
+    """The tolerance problems of one check's cells (marking its known limits' cells on the way)."""
+    out = []
+    for b, cell in cells.items():
+        if b in check.known_limits:
+            problem = audit.known_limit(cell, check.known_limits[b])
+        else:
+            problem = audit.override(cell) if b in check.tolerance else None
+        if problem:
+            out.append({"case": case, "check": check.name, "backend": b, "problem": problem})
+    return out
+
+
+def _status(status: str, cells: Sequence[Mapping[str, Any]]) -> str:
+    """The case's status from the runner's, which already judged known limits (an expected failure passes
+    the run, an unexpected pass fails it): a passed case with a known limit's cell is a ``known limit``."""
+    if status == "passed" and any(c["status"] == audit.KNOWN_LIMIT for c in cells):
+        return audit.KNOWN_LIMIT
+    return status
 
 
 def run_statuses(matrix: Mapping[str, Any]) -> set[str]:

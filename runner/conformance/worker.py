@@ -29,11 +29,24 @@ def _num(value: Any) -> float | None:
     return float(value) if math.isfinite(value) else None
 
 
-def _checks(result: RunResult) -> list[dict[str, Any]]:
+def _default_tolerance(spec: Any, session: Session) -> float | None:
+    """The default tolerance of an assertion whose `tol` names backends (None otherwise): what the
+    matrix compares a backend's override and its measured error with."""
+    tol = getattr(spec, "tol", None)
+    if not isinstance(tol, dict):
+        return None
+    default = tol.get("default", 0.0)
+    if isinstance(default, str):
+        return _num(session.program.expressions[default].number(session.resolver))
+    return float(default)
+
+
+def _checks(result: RunResult, session: Session) -> list[dict[str, Any]]:
+    specs = {a.name: a for a in session.program.loaded.model.assertions}
     return [
         {
             "name": v.name,
-            "passed": v.passed,
+            "passed": v.passed != (v.known_limit is not None),  # the check itself, at its tolerance
             "measured": _num(v.value),
             "target": _num(v.target),
             "tol": _num(v.tolerance),
@@ -41,6 +54,7 @@ def _checks(result: RunResult) -> list[dict[str, Any]]:
             "expected_text": v.expected,
             "time": _num(v.time),
             "message": v.message,
+            "default_tol": _default_tolerance(specs.get(v.name), session),
         }
         for v in result.verdicts
     ]
@@ -73,8 +87,9 @@ def run_case(path: Path, variant: str | None, backend_name: str) -> dict[str, An
     except Exception as exc:  # an adapter's bug must not lose the other cases: it shows in the matrix
         return _status("error", f"{type(exc).__name__}: {exc}", start)
     try:
-        result = Session(program, backend).run()
-        return _status(result.status, "", start, _checks(result))
+        session = Session(program, backend)
+        result = session.run()
+        return _status(result.status, "", start, _checks(result, session))
     except EngineFailure as exc:
         return _status("engine-failure", str(exc), start)
     except Exception as exc:  # as above

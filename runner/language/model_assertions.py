@@ -13,9 +13,37 @@ Tolerance = Annotated[float, Field(ge=0, allow_inf_nan=False)] | Expr | dict[str
 Number = float | Expr  # a number, or an expression evaluated when the assertion is checked
 
 
+class KnownLimit(Strict):
+    """An engine that cannot meet the assertion: an expected failure. Its check runs at the default tolerance;
+    failing there is the verdict ``known limit`` (shown with the measured deviation and the cause, not
+    failing the run), passing fails the run (the entry is no longer needed)."""
+
+    measured: Annotated[float, Field(ge=0, allow_inf_nan=False)] = Field(
+        description="The largest deviation |measured - expected| measured on this engine (the docs' figure)."
+    )
+    cause: Annotated[str, Field(min_length=1, max_length=300)] = Field(description="Why, in one line.")
+    doc: Annotated[str, Field(min_length=1, max_length=300)] = Field(
+        description="The document (path#anchor from the repository root) that explains it."
+    )
+
+
 class AssertionBase(Strict):
     name: Annotated[str, Field(min_length=1, max_length=128)]
     description: str | None = Field(None, max_length=2000)
+    known_limits: dict[Name, KnownLimit] = Field(
+        default_factory=dict,
+        description="Engines that cannot meet this assertion (engine -> measured deviation, cause, doc); "
+        "an expected failure on every execution path (run, CI, pytest, reports, the conformance matrix), "
+        "and a failure when it passes.",
+    )
+
+    @model_validator(mode="after")
+    def _limits_keep_the_default(self) -> AssertionBase:
+        tol = getattr(self, "tol", None)
+        both = sorted(set(self.known_limits) & set(tol)) if isinstance(tol, dict) else []
+        if both:
+            raise ValueError(f"{', '.join(both)}: a known limit is judged at the default tolerance; remove its `tol`")
+        return self
 
 
 def _tol_check(tol: Any) -> None:

@@ -15,7 +15,7 @@ from typing import Any
 
 from runner.language import model_assertions as A
 from runner.language.expressions import Expression, Resolver, fmt
-from runner.sim.verdicts import Verdict, event_verdict, sound_verdict, tolerance
+from runner.sim.verdicts import Verdict, apply_known_limit, event_verdict, sound_verdict, tolerance
 
 __all__ = ["AssertionTracker", "Verdict", "fmt", "tolerance"]
 
@@ -80,7 +80,13 @@ class AssertionTracker:
     def on_step(self, t: float, r: Resolver, contact: Callable[[str, str], bool], final: bool = False) -> None:
         pending = [c for c in self.checks if c.done is None]
         self._on_step(t, r, contact, final)
-        self.decided += [c.done for c in pending if c.done is not None]
+        for c in pending:
+            if c.done is not None:
+                c.done = self._limited(c.done, c.spec)
+                self.decided.append(c.done)
+
+    def _limited(self, v: Verdict, spec: Any) -> Verdict:
+        return apply_known_limit(v, getattr(spec, "known_limits", {}), self.backend)
 
     def _on_step(self, t: float, r: Resolver, contact: Callable[[str, str], bool], final: bool) -> None:
         for c in self.checks:
@@ -257,5 +263,6 @@ class AssertionTracker:
                 at = getattr(s, "at", None)
                 out.append(Verdict(s.name, c.kind, False, "not reached", f"a sample at t={at}", None,
                                    f"the run ended at t={t_end:.4f} before t={at}"))  # fmt: skip
+        out = [v if c.done is not None else self._limited(v, c.spec) for v, c in zip(out, self.checks, strict=True)]
         self.decided += [v for v, c in zip(out, self.checks, strict=True) if c.done is None]  # decided now
         return out

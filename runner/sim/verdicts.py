@@ -1,10 +1,19 @@
-"""Verdicts, and the assertions decided at the end of a run from its events and sounds."""
+"""Verdicts, and the assertions decided at the end of a run from its events and sounds.
+
+A **known limit** (an assertion's ``known_limits`` entry for the backend that runs it) is an expected
+failure: the check runs at the default tolerance, and :func:`apply_known_limit` turns its outcome round.
+A failure becomes a verdict that does not fail the run (status ``known limit``, with the measured figure
+and the cause in its message); a pass fails the run, because the entry is no longer needed. Every
+execution path (run, batch, sweep, pytest, Ray, conformance) gets the same verdicts, hence the same exit
+code; only the rendering differs (JUnit ``skipped``, pytest ``xfail``, reports and the trace say "known
+limit").
+"""
 
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Sequence
-from dataclasses import dataclass
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, replace
 from typing import Any
 
 from runner.language import model_assertions as A
@@ -12,12 +21,14 @@ from runner.language.expressions import fmt
 
 TIME_EPS = 1e-9
 
+PASSED, FAILED, KNOWN_LIMIT = "passed", "failed", "known limit"
+
 
 @dataclass
 class Verdict:
     name: str
     kind: str
-    passed: bool
+    passed: bool  # the verdict does not fail the run (a known limit's expected failure does not)
     measured: str
     expected: str
     time: float | None = None  # when it was decided (first failure, first success, or the sample time)
@@ -26,8 +37,25 @@ class Verdict:
     value: float | None = None
     target: float | None = None
     tolerance: float | None = None
+    #: the backend's known limit for this assertion (measured, cause, doc), when it has one
+    known_limit: dict[str, Any] | None = None
+
+    @property
+    def status(self) -> str:
+        """``passed``, ``failed``, or ``known limit`` (an expected failure that does not fail the run)."""
+        if self.known_limit is not None and self.passed:
+            return KNOWN_LIMIT
+        return PASSED if self.passed else FAILED
+
+    @property
+    def deviation(self) -> float | None:
+        """|value - target| of a numeric check, None otherwise."""
+        if self.value is None or self.target is None or not math.isfinite(self.value - self.target):
+            return None
+        return abs(self.value - self.target)
 
     def as_dict(self) -> dict[str, Any]:
+        limit = {"known_limit": dict(self.known_limit)} if self.known_limit is not None else {}
         return {
             "name": self.name,
             "kind": self.kind,
@@ -39,7 +67,28 @@ class Verdict:
             "value": _finite(self.value),
             "target": _finite(self.target),
             "tolerance": _finite(self.tolerance),
+            **limit,  # only on a known limit's verdict: every other verdict (and trace) is as before
         }
+
+
+def apply_known_limit(v: Verdict, limits: Mapping[str, Any], backend: str) -> Verdict:
+    """The verdict of an assertion with ``known_limits`` on ``backend`` (unchanged if it has none there).
+
+    A check that fails as its case file says passes as ``known limit``; one that passes fails: the entry is
+    no longer needed."""
+    limit = limits.get(backend)
+    if limit is None:
+        return v
+    entry = limit.model_dump() if hasattr(limit, "model_dump") else dict(limit)
+    shown = fmt(v.deviation) if v.deviation is not None else v.measured
+    if v.passed:
+        message = f"known limit no longer needed: {v.name} on {backend} now passes; remove it"
+        return replace(v, passed=False, message=message, known_limit=entry)
+    message = (
+        f"known limit on {backend}: measured {shown} (documented {fmt(entry['measured'])}); {entry['cause']}"
+        f" ({entry['doc']})" + (f"; {v.message}" if v.message else "")
+    )
+    return replace(v, passed=True, message=message, known_limit=entry)
 
 
 def _finite(x: float | None) -> float | None:

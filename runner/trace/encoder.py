@@ -100,9 +100,7 @@ class TraceEncoder:
             (tf.TOPIC_AUDIO, fx.RawAudio),
             (tf.TOPIC_VERDICTS, pb.Verdicts),
         ]
-        return [
-            Channel(topic, cls.DESCRIPTOR.full_name, pb.schema_data(cls)) for topic, cls in out if cls is not None
-        ]
+        return [Channel(topic, cls.DESCRIPTOR.full_name, pb.schema_data(cls)) for topic, cls in out if cls is not None]
 
     def state_channel(self, initial: Mapping[str, Any]) -> Channel:
         """/state, typed by the variables' first values (the writer registers it at the first step)."""
@@ -195,6 +193,10 @@ class TraceEncoder:
                 number = _optional(v.get(key))
                 if number is not None:
                     setattr(item, key, number)
+            limit = v.get("known_limit")
+            if isinstance(limit, Mapping):  # an expected failure; absent otherwise (the bytes stay as they were)
+                item.known_limit.measured = float(limit.get("measured", 0.0))
+                item.known_limit.cause, item.known_limit.doc = str(limit.get("cause", "")), str(limit.get("doc", ""))
         return bytes(msg.SerializeToString(deterministic=True))
 
     @staticmethod
@@ -213,8 +215,9 @@ class TraceEncoder:
 def verdict_text(v: Mapping[str, Any]) -> tuple[str, str]:
     """(level, log text) of one verdict: ``PASS kick: measured 2.57 (expected 2.57 ± 0.001)``."""
     passed = v.get(tf.VERDICT_PASSED)
-    level = "info" if passed is True else "error" if passed is False else "warning"
-    label = "PASS" if passed is True else "FAIL" if passed is False else "????"
+    limit = passed is True and isinstance(v.get("known_limit"), Mapping)  # an expected failure
+    level = "warning" if limit else "info" if passed is True else "error" if passed is False else "warning"
+    label = "KNOWN LIMIT" if limit else "PASS" if passed is True else "FAIL" if passed is False else "????"
     text = f"{label} {v.get(tf.VERDICT_NAME, '?')}"
     if tf.VERDICT_MEASURED in v:
         text += f": measured {plain(v[tf.VERDICT_MEASURED])}"

@@ -324,9 +324,13 @@ class TraceWriter:
         """Every verdict of the run on /verdicts, and a summary line on /log."""
         ns = self._ns(t)
         self._write(tf.TOPIC_VERDICTS, ns, self._encoder.verdicts(t, verdicts))
-        passed = sum(v.get(tf.VERDICT_PASSED) is True for v in verdicts)
+        limits = [
+            str(v.get(tf.VERDICT_NAME, "?")) for v in verdicts if v.get("known_limit") and v.get(tf.VERDICT_PASSED)
+        ]
+        passed = sum(v.get(tf.VERDICT_PASSED) is True for v in verdicts) - len(limits)
         failed = [str(v.get(tf.VERDICT_NAME, "?")) for v in verdicts if v.get(tf.VERDICT_PASSED) is not True]
         text = f"{passed}/{len(verdicts)} assertions passed" + (f"; failed: {', '.join(failed)}" if failed else "")
+        text += f"; known limits: {', '.join(limits)}" if limits else ""
         self._log(ns, tf.LOG_LEVELS["error" if failed else "info"], text, tf.LOGGER_VERDICT)
 
     # ---- finishing -------------------------------------------------------------------------------

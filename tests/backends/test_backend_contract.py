@@ -485,7 +485,7 @@ def test_friction_stop_distance(backend_name: str) -> None:
             sim.step()
         s = sim.body_states()
     expected = coulomb_stop(v0, mu, world.dt)
-    assert s.pos[1, 0] == pytest.approx(expected, rel=tol("friction", backend_name))
+    assert s.pos[1, 0] == pytest.approx(expected, rel=tol("friction_stop", backend_name))
     assert abs(s.lin_vel[1, 0]) < 1e-3
 
 
@@ -500,7 +500,7 @@ def test_pair_surfaces(backend_name: str) -> None:
         for _ in range(100):  # b stops at 0.82 s
             sim.step()
         s = sim.body_states()
-    rel = tol("friction", backend_name)
+    rel = tol("friction_stop", backend_name)
     assert s.pos[1, 0] == pytest.approx(coulomb_stop(v0, 0.8, world.dt), rel=rel)
     assert s.pos[2, 0] == pytest.approx(coulomb_stop(v0, 0.25, world.dt), rel=rel)
 

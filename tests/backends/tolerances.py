@@ -20,17 +20,22 @@ _TOLERANCES: dict[str, dict[str, float]] = {
     # Spin-up, relative error of tau*dt/I per axis.
     # pybullet: 1.5e-16 for box, rotated box and sphere (localInertiaDiagonal set exactly).
     "inertia": {"default": 1e-3},
-    # Slider motor velocity, relative (issue 3: acceleration = fmax/m within 1 %).
-    # pybullet: 0 error at every step (0.0100, 0.1000, 0.2500, 0.3000 at 0.04, 0.4, 1.0, 1.2 s).
-    # With 4 substeps, asked for 0.004 m/s (test_motor_force_with_substeps_is_the_mean): pybullet, dart
-    # 0.004 exactly, mujoco +3.7e-9; ode 0.0039650 (-0.87 %): CFM softens the unsaturated motor row, each
-    # substep gives lambda = (dv/h)/(1/m + CFM/h) (test_ode.py), 42.9, 12.2 and 3.5 N after the 100 N one.
-    "motor_velocity": {"default": 0.01},
-    # Motor force while accelerating, relative to fmax; and |force| allowed once at speed, in N.
-    # pybullet: exactly 100.0 for steps 1-29, exactly 0.0 from step 32.
-    # With 4 substeps (mean of 100, 60, 0, 0 = 40 N): pybullet, dart 40.0, mujoco 40.00000015, ode 39.650
-    # (-0.87 %, the soft row above: 100 + 42.9 + 12.2 + 3.5 over 4).
-    "motor_force": {"default": 0.01},
+    # Motor velocity, relative: a velocity row met exactly (v = min(target, fmax/m*t) step by step).
+    # Derived (was 1 %, issue 3's figure): a rigid row (Bullet, DART) is solved to float64 rounding; the
+    # softest float64 row is MuJoCo's, impedance 0.9999, which leaves 1e-4 of each step's velocity change
+    # unresolved, at most 1e-4 of the velocity: default 1e-4.
+    # ode: its CFM softens the unsaturated row: a step that should bring dv gets lambda =
+    # (dv/h)/(1/m + CFM/h) (test_ode.py), so the substep test (door 400 kg, h 0.0025 s, asked for
+    # 0.004 m/s) reaches 0.004*(1 - 0.87 %) by that formula (42.9, 12.2, 3.5 N after the 100 N substep),
+    # and between two bodies (1/m = 1/8 + 1/4, h 0.01) the deficit per step is CFM/(h/m_eff + CFM) = 0.27 %:
+    # the formula's largest, 0.87 %, rounded up: 1e-2.
+    # Measured: pybullet 0 at every step, dart 0, mujoco +3.7e-9 (substeps), ode -0.87 % (substeps).
+    "motor_velocity": {"default": 1e-4, "ode": 1e-2},
+    # Motor force while accelerating, relative to fmax (100, 60, 0, 0 N over 4 substeps: mean 40 N).
+    # Derived as motor_velocity: the force is the row's impulse over the step, so the same relative bound
+    # (MuJoCo's 1e-4 impedance gap; ode's CFM formula, 100 + 42.9 + 12.2 + 3.5 over 4 = -0.87 %).
+    # Measured: pybullet exactly 100.0 then 0.0, dart 40.0, mujoco 40.00000015, ode 39.650.
+    "motor_force": {"default": 1e-4, "ode": 1e-2},
     # Mean motor force against m*v/dt when the motor is the only force along the axis, relative: float64
     # rounding; ode reads float32 velocities (ulp 2.4e-7 relative at worst), measured 4.6e-8.
     "momentum": {"default": 1e-9, "ode": 5e-7},
@@ -49,10 +54,19 @@ _TOLERANCES: dict[str, dict[str, float]] = {
     # are velocity constraints with ERP correction, so the anchor drifts with omega^2*r*h^2; at rest
     # (hinge stop) it holds to 1e-5.
     "pivot_distance": {"default": 1e-3, "ode": 4e-3},
-    # Passive hinge / ball pendulum angle after 0.3 s, relative to a semi-implicit Euler integration
-    # of the physical pendulum at the same dt (0.8825 rad). pybullet: 2.5e-16 relative, hinge and ball
-    # (its multibody integrates joint coordinates by exactly that scheme).
-    "pendulum": {"default": 0.02},
+    # Passive hinge / ball pendulum angle and rate after 0.3 s, relative to a semi-implicit Euler integration
+    # of the physical pendulum at the same dt (0.8825 rad; the exact solution is 0.8554: the scheme's own
+    # error, 3.2 %, is not what is tested). Derived (was 2 %):
+    # default: reduced-coordinate engines (PyBullet's multibody, MuJoCo, DART) integrate the joint
+    # coordinate by that very scheme, so only float64 rounding over 30 steps separates them (~1e-14):
+    # 1e-6 leaves room for the inertia each engine computes from the box.
+    # ode: maximal coordinates. Each step moves the bob along the tangent, so its angle advances by
+    # atan(w*h), not w*h: (w*h)^3/3 short per step, with w <= 5.43 rad/s at most 30*(0.0543)^3/3 = 1.6e-3
+    # rad (0.18 % of 0.8825); and the bob drifts outward by r*(w*h)^2/2 per step, which ERP 0.2 corrects by
+    # a fifth per step, a steady excess of 4 * 0.5*0.0029/2 = 2.9e-3 m (0.6 % of r) at the top speed, which
+    # lowers the angular acceleration g*r/(k^2 + r^2) by up to 0.6 %. Sum 0.78 %, rounded up: 1e-2.
+    # Measured: pybullet 2.5e-16; ode 0.45 % (the worst of the four engines).
+    "pendulum": {"default": 1e-6, "ode": 1e-2},
     # Carried distance of a cube on a kinematic platform, relative to 0.3 m (brief: 5 %).
     # pybullet: 0.29605 m (-1.3 %: the cube slips while friction, mu*g, brings it to 0.3 m/s;
     # notes §4: ODE 0.297). Also the turntable's carried cube (speed against omega*r, spin against omega;
@@ -63,9 +77,13 @@ _TOLERANCES: dict[str, dict[str, float]] = {
     "kinematic_carry": {"default": 0.05},
     # Kinematic pose after a step, m and quaternion components: the contract says "exactly".
     "kinematic_pose": {"default": 1e-9},
-    # Summed contact normal force of a resting 13.5 kg box, relative to m*g.
-    # pybullet: 132.4350 N of 132.4350 N, 4 points, depth 2.0e-5 m, after 1 s of rest.
-    "contact_force": {"default": 0.05},
+    # Summed contact normal force of a resting 13.5 kg box, relative to m*g. Derived (was 5 %): at rest the
+    # box's velocity does not change from step to step, so the contact impulse is m*g*h exactly; what is
+    # left is rounding and the solver's stopping rule: float64 engines (MuJoCo's Newton solver stops at a
+    # relative improvement of 1e-8) well under 1e-6; ODE stores float32 (2^-24 = 6e-8 relative per
+    # operation), over the sum of 4 points and the impulse-to-force division, ~10 operations: 6e-7.
+    # Default 1e-6. Measured: pybullet 132.4350 N of 132.4350 N (4 points, depth 2.0e-5 m); worst 2e-7.
+    "contact_force": {"default": 1e-6},
     # Resting height of a shape's centre above a plane, m.
     # pybullet: -1.2e-5 to -1.7e-5 m for box, sphere, capsule, cylinder (and the 30 degree ramp).
     # dart: -3.77 mm for all four shapes after 1 s: the 1 cm drop lands 4.7 mm deep in one 0.01 s step,
@@ -91,13 +109,26 @@ _TOLERANCES: dict[str, dict[str, float]] = {
     # pybullet: 1.8e-5 with the adapter's restitution threshold of bounce_vel + 1.5 g h; with threshold
     # 0 the box bounced at 0.32 m/s every step (Bullet's approach speed includes the step's gravity).
     "rest_jitter": {"default": 0.01},
-    # Stop distance of a sliding box, relative to the semi-implicit Coulomb distance (0.3978 m at
-    # dt 0.01; 0.408 m continuous); also the pair-surface and ramp checks.
+    # The ramp (test_tilted_plane) and the isotropy tests (test_isotropic_friction.py), relative: 3 %, the
+    # issue's acceptance figure, NOT derived and not tightened here: a box released at rest may hold by
+    # static friction for its first step, up to mu*g*cos(theta)*h of speed (1.06 % of the ramp's gain at
+    # dt 0.01, 4 % of the 1.05 box's at dt 1 ms), and the isotropy file's strict xfails rely on mujoco's
+    # measured 3e-3 line. The stop distances have their derived ``friction_stop`` below. Figures measured
+    # on the stop distance (0.3978 m at dt 0.01; 0.408 m continuous) before the split:
     # pybullet: +9e-6 (0.39779 m), pair surfaces < 1e-4, ramp speed 7e-9. Needs the adapter's plane as
     # a box: on Bullet's GEOM_PLANE a sliding box keeps 1-2 points, rocks, sinks 1.9 cm, +3.7 %.
     # mujoco: stop -4e-7, pair surfaces +1.4e-5 / -1e-7, ramp +1.5e-3 (ODE +2.0e-3: the cube starts exactly
     # touching and lands 1 mm deep in step 1 on both); before the Coulomb correction +0.11 % and +2.1 %.
     "friction": {"default": 0.03, "mujoco": 3e-3},
+    # Stop distance of a box sliding on a plane (test_friction_stop_distance, test_pair_surfaces), relative to
+    # the semi-implicit Coulomb distance. Derived (these used ``friction``, 3 %): while the box slides, the
+    # friction is mu*N along -x and N = m*(g + dv_z/dt), so x(stop) = v0^2/(2 mu g) - mu*dz exactly, dz being
+    # the change of the box's height over the slide (it starts exactly touching and ends at the engine's
+    # resting depth). |dz| is bounded by ``resting_height`` (2 mm; dart 5 mm), so the relative error is at
+    # most mu*dz/d: 0.5*2e-3/0.398 = 2.5e-3 (mu 0.5), 0.8*2e-3/0.255 = 6.3e-3 (mu 0.8), 0.25*2e-3/0.815 =
+    # 6.1e-4 (mu 0.25); the largest, rounded up: 6.5e-3; dart 0.8*5e-3/0.255 = 1.6e-2.
+    # Measured: pybullet +9e-6, mujoco -4e-7 / +1.4e-5, worst of the four 2.6e-5.
+    "friction_stop": {"default": 6.5e-3, "dart": 1.6e-2},
     # One step of free fall read back at once, m: the contract says "exactly". Also states read right
     # after the build or a reset_body (pose, velocities, joint coordinates at 0). pybullet: < 1e-15.
     # ode: 4.9e-8 m (box z) and 5.3e-8 m (door x): float32 positions, one ulp at 2 m is 2.4e-7.

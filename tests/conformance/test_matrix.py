@@ -17,6 +17,7 @@ from runner.cli.main import main
 from runner.conformance import broken, build_matrix, discover, markdown, run_backend
 from runner.conformance.pool import BackendRun
 from runner.conformance.worker import run_case
+from runner.errors import ScenarioValidationError
 
 HEADER = "# yaml-language-server: $schema=../../runner/schema/scenario.schema.json\n# z = z0 - g*dt^2*n*(n+1)/2\n"
 
@@ -102,7 +103,8 @@ def test_matrix_errors_against_the_formula_and_the_reference(tmp_path: Path) -> 
     assert [b["passed"] for b in m["backends"]] == [1, 1, 0, 0]
     text = markdown(m)
     assert "| `a` | falls | ✅ 1/1 | ✅ 1/1 | ❌ 0/1 | ❌ not run |" in text
-    assert "✅ -1.00e-04<br>Δode -2.00e-04" in text
+    assert "✅ 0.0001 ≤ 0.001<br>Δode -2.00e-04" in text  # |measured - expected| against the tolerance
+    assert "❌ 0.045 > 0.001" in text
     json.dumps(m, allow_nan=False)  # JSON-ready
 
 
@@ -111,6 +113,88 @@ def test_matrix_without_the_reference_and_all_passing(tmp_path: Path) -> None:
     m = build_matrix(cases, {"pybullet": _run("pybullet", {"a": _result(9.945)})}, "suite")
     assert m["reference"] is None and m["passed"] and not broken(m)
     assert m["cases"][0]["checks"][0]["cells"]["pybullet"]["vs_reference"] is None
+
+
+LIMIT = "{measured: %s, cause: float32 rounding, doc: docs/backends/ode.md#deviations}"
+
+
+def _off(name: str, tol: str, limit: str = "", off: str = "0.01") -> str:
+    """The free fall, expected `off` metres too high: `fake` (exact) deviates by exactly that."""
+    text = _fall(name, tol=tol).replace("near: 10 - g", f"near: 10 + {off} - g")
+    return text + (f"    known_limits: {{fake: {limit}}}\n" if limit else "")
+
+
+def _matrix(tmp_path: Path, files: dict[str, str]) -> dict:
+    suite = _suite(tmp_path / "s", files)
+    cases = discover(suite)
+    return build_matrix(cases, {"fake": run_backend("fake", cases, timeout=60)}, "suite")
+
+
+def _problems(m: dict) -> dict[str, str]:
+    return {p["case"]: p["problem"] for p in m["audit"]}
+
+
+def test_overrides_that_are_stale_or_too_wide_fail_the_matrix(tmp_path: Path) -> None:
+    m = _matrix(
+        tmp_path,
+        {
+            "stale.yaml": _off("stale", "{default: 1e-9, fake: 0.5}", off="0"),  # the default passes it
+            "wide.yaml": _off("wide", "{default: 1e-3, fake: 0.031}"),  # > 3 x 0.01
+            "fits.yaml": _off("fits", "{default: 1e-3, fake: 0.029}"),  # needed, < 3 x 0.01
+        },
+    )
+    problems = _problems(m)
+    assert problems["stale"].startswith("stale override: measured error 0 is within the default tolerance 1e-09")
+    assert problems["wide"].startswith("override too wide: tolerance 0.031 is more than 3 x the measured error 0.01")
+    assert "fits" not in problems
+    assert all(c["runs"]["fake"]["status"] == "passed" for c in m["cases"])  # every verdict passed, yet:
+    assert not m["passed"]
+    assert "## Tolerance problems" in markdown(m)
+
+
+def test_a_known_limit_runs_at_the_default_tolerance_and_shows_its_measured_deviation(tmp_path: Path) -> None:
+    m = _matrix(tmp_path, {"lim.yaml": _off("lim", "1e-3", LIMIT % "0.01")})
+    assert m["passed"] and not m["audit"] and not broken(m)
+    case = m["cases"][0]
+    cell = case["checks"][0]["cells"]["fake"]
+    assert cell["status"] == "known limit" and cell["tol"] == 1e-3  # judged at the default
+    assert cell["error"] == pytest.approx(-0.01, abs=1e-12)
+    assert case["runs"]["fake"]["status"] == "known limit"
+    assert (m["backends"][0]["passed"], m["backends"][0]["known_limits"]) == (0, 1)
+    text = markdown(m)
+    assert "⚠️ known limit: measured 0.01 (float32 rounding; [doc](backends/ode.md#deviations))" in text
+    assert "| `lim` | falls | ⚠️ 0/1, 1 known limit |" in text
+    assert "0 pass, 1 known limit of 1 case runs" in text
+
+
+def test_a_known_limit_that_passes_or_measures_worse_than_documented_fails(tmp_path: Path) -> None:
+    m = _matrix(
+        tmp_path,
+        {
+            "gone.yaml": _off("gone", "1e-3", LIMIT % "0.01", off="0"),  # the engine meets the check now
+            "worse.yaml": _off("worse", "1e-3", LIMIT % "0.009"),  # measures 0.01: > 0.009 x 1.05
+            "fine.yaml": _off("fine", "1e-3", LIMIT % "0.0096"),  # 0.01 <= 0.0096 x 1.05
+        },
+    )
+    problems = _problems(m)
+    assert problems["gone"].startswith("known limit no longer needed: passes at the default tolerance")
+    assert problems["worse"].startswith("known limit worse than documented: measured 0.01")
+    assert "fine" not in problems
+    assert {c["id"]: c["runs"]["fake"]["status"] for c in m["cases"]} == {
+        "fine": "known limit", "gone": "failed", "worse": "known limit"
+    }  # fmt: skip
+    assert not m["passed"]
+
+
+def test_command_fails_on_a_stale_override(tmp_path: Path) -> None:
+    suite = _suite(tmp_path / "s", {"a.yaml": _fall("a", tol="{default: 1e-9, fake: 0.5}")})
+    assert main(["conformance", "--backends", "fake", "--suite", str(suite), "--out", str(tmp_path / "o")]) == 1
+
+
+def test_a_known_limit_cannot_also_widen_the_tolerance(tmp_path: Path) -> None:
+    suite = _suite(tmp_path / "s", {"a.yaml": _off("a", "{default: 1e-3, fake: 0.02}", LIMIT % "0.01")})
+    with pytest.raises(ScenarioValidationError, match="fake: a known limit is judged at the default tolerance"):
+        discover(suite)
 
 
 @pytest.mark.slow

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import re
+from pathlib import Path
 
 import pytest
 
@@ -67,7 +68,10 @@ def test_discover_lists_every_variant_with_its_checks() -> None:
     free_fall = next(c for c in cases if c.id == "01_free_fall")
     height = next(ch for ch in free_fall.checks if ch.name == "height-at-end")
     assert height.measure == "ball.pos.z at end" and height.expected.startswith("param.z0 - g*dt*dt")
-    assert height.tolerance == {"default": "1e-9", "ode": "1e-4"}
+    assert height.tolerance == {"default": "1e-9"}
+    assert height.known_limits["ode"]["measured"] == 2.5e-6 and height.known_limits["ode"]["cause"]
+    motor = next(c for c in cases if c.id == "04_slider_motor").checks[0]
+    assert motor.tolerance == {"default": "1e-9", "mujoco": "2e-6"} and set(motor.known_limits) == {"ode"}
 
 
 @pytest.mark.parametrize(
@@ -83,3 +87,22 @@ def test_runner_semantics_cases_pass_on_the_pure_python_backend(case: str) -> No
         for check in result["checks"]:
             if check["target"] is not None and check["tol"] is not None:
                 assert abs(check["measured"] - check["target"]) <= check["tol"] + 1e-12
+
+
+def _anchors(doc: Path) -> set[str]:
+    """GitHub's heading anchors: lower case, punctuation dropped, spaces to hyphens."""
+    heads = [line.lstrip("#").strip() for line in doc.read_text().splitlines() if line.startswith("#")]
+    return {re.sub(r"[^\w\- ]", "", h.lower()).replace(" ", "-") for h in heads}
+
+
+@pytest.mark.parametrize("path", FILES, ids=[f.stem for f in FILES])
+def test_every_known_limit_names_an_engine_and_a_doc_that_exists(path) -> None:  # noqa: ANN001 - a Path
+    root = DEFAULT_SUITE.parents[1]
+    for variant in variant_names(path):
+        for a in load_scenario(path, None if variant == "base" else variant).model.assertions:
+            for backend, limit in a.known_limits.items():
+                assert backend in KNOWN_BACKENDS, f"{a.name}: unknown backend {backend}"
+                file, _, anchor = limit.doc.partition("#")
+                assert (root / file).is_file(), f"{a.name}: {limit.doc} does not exist"
+                assert anchor in _anchors(root / file), f"{a.name}: {limit.doc}: no such heading"
+                assert limit.measured > 0

@@ -44,6 +44,20 @@ bodies:
 """
 
 
+# the box falls straight down: x stays 0 exactly. Near 0.1 the check fails at tol 0.01 and is a known limit
+# (exit 0); near 0 it passes, and the known limit that is no longer needed fails the run (exit 1)
+LIMITED = """\
+assertions:
+  - name: rests
+    at: end
+    value: box.pos.x
+    near: {near}
+    tol: 0.01
+    known_limits:
+      pybullet: {{measured: 0.1, cause: the test's own offset, doc: docs/language.md#known-limits}}
+"""
+
+
 @dataclass(frozen=True)
 class Row:
     name: str
@@ -67,6 +81,8 @@ ROWS = [
     Row("missing engine", "ghost", BOX.format(name="ghosted"), 3),
     Row("failed assertion", "pybullet",
         BOX.format(name="fails") + "assertions:\n  - {name: flies, at: end, check: box.pos.z > 10}\n", 1),
+    Row("known limit (expected failure)", "pybullet", BOX.format(name="limited") + LIMITED.format(near=0.1), 0),
+    Row("known limit that passes", "pybullet", BOX.format(name="unlimited") + LIMITED.format(near=0), 1),
 ]  # fmt: skip
 
 PATHS = ["serial", "-j 2", "--isolate", "--trace-process", "ray", "compare"]

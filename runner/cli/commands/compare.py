@@ -86,7 +86,7 @@ def _check(args: argparse.Namespace) -> None:
 
 def execute(args: argparse.Namespace, out: Console, err: Console) -> int:
     from reports.build import ReportError, write_report
-    from runner.cli.outcomes import print_problem
+    from runner.cli.outcomes import known_limits, print_problem
     from runner.exec.executors import LocalExecutor, check_outputs
     from runner.trace.output import write_error
 
@@ -108,6 +108,8 @@ def execute(args: argparse.Namespace, out: Console, err: Console) -> int:
         out.print(f"  [{colour}]{escape(res.label):<20}[/] {where} ({res.wall_seconds:.1f} s)")
         if not res.passed:
             out.print(f"      {escape(res.headline)} {escape(f'[exit {int(res.exit.code)}]')}", highlight=False)
+        for text in known_limits(res):
+            out.print(f"      [yellow]{escape(text)}[/] {escape(f'[exit {int(res.exit.code)}]')}", highlight=False)
         if res.result is None:
             print_problem(err, res)
 

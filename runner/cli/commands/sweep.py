@@ -276,13 +276,19 @@ def build_table(file: Path, grid: list[tuple[str, list[Any]]], labels: list[dict
             "status": r.status,
             "passed": sum(v.passed for v in verdicts.values()),
             "failed": sum(not v.passed for v in verdicts.values()),
-            "verdicts": {n: {"passed": v.passed, "measured": v.measured} for n, v in verdicts.items()},
+            "verdicts": {n: {"passed": v.passed, "status": v.status, "measured": v.measured}
+                         for n, v in verdicts.items()},
             "metrics": {m: _json_value(found.get(m)) for m in metrics},
             "failure": r.failure,
             "trace": str(Path(trace).relative_to(Path(r.case.out_dir).parent.parent)) if trace else None,
         })  # fmt: skip
     return {"file": file.name, "parameters": [n for n, _ in grid], "metrics": list(metrics),
             "assertions": assertions, "rows": rows}  # fmt: skip
+
+
+def _mark(verdict: dict[str, Any]) -> str:
+    """pass, FAIL, or known limit (an expected failure, which does not fail the case)."""
+    return "known limit" if verdict.get("status") == "known limit" else "pass" if verdict["passed"] else "FAIL"
 
 
 def to_csv(table: dict[str, Any]) -> str:
@@ -292,7 +298,7 @@ def to_csv(table: dict[str, Any]) -> str:
     w.writerow(["case", *names, "variant", "backend", "status", "passed", "failed", *assertions, *metrics, "trace"])
     for row in table["rows"]:
         found = row["verdicts"]
-        verdict = [("pass" if found[a]["passed"] else "FAIL") if a in found else "" for a in assertions]
+        verdict = [_mark(found[a]) if a in found else "" for a in assertions]
         values = [json.dumps(row["params"][n]) if isinstance(row["params"][n], list | dict) else row["params"][n]
                   for n in names]  # fmt: skip
         cells = [json.dumps(row["metrics"][m]) if isinstance(row["metrics"][m], list) else row["metrics"][m]

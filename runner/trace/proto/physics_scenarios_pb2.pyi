@@ -90,7 +90,7 @@ class Sound(_message.Message):
     def __init__(self, time: _Optional[float] = ..., name: _Optional[str] = ..., action: _Optional[str] = ..., offset: _Optional[float] = ..., volume: _Optional[float] = ...) -> None: ...
 
 class Verdict(_message.Message):
-    __slots__ = ("name", "kind", "passed", "measured", "expected", "time", "message", "value", "target", "tolerance")
+    __slots__ = ("name", "kind", "passed", "measured", "expected", "time", "message", "value", "target", "tolerance", "known_limit")
     NAME_FIELD_NUMBER: _ClassVar[int]
     KIND_FIELD_NUMBER: _ClassVar[int]
     PASSED_FIELD_NUMBER: _ClassVar[int]
@@ -101,6 +101,7 @@ class Verdict(_message.Message):
     VALUE_FIELD_NUMBER: _ClassVar[int]
     TARGET_FIELD_NUMBER: _ClassVar[int]
     TOLERANCE_FIELD_NUMBER: _ClassVar[int]
+    KNOWN_LIMIT_FIELD_NUMBER: _ClassVar[int]
     name: str
     kind: str
     passed: bool
@@ -111,7 +112,18 @@ class Verdict(_message.Message):
     value: float
     target: float
     tolerance: float
-    def __init__(self, name: _Optional[str] = ..., kind: _Optional[str] = ..., passed: bool = ..., measured: _Optional[str] = ..., expected: _Optional[str] = ..., time: _Optional[float] = ..., message: _Optional[str] = ..., value: _Optional[float] = ..., target: _Optional[float] = ..., tolerance: _Optional[float] = ...) -> None: ...
+    known_limit: KnownLimit
+    def __init__(self, name: _Optional[str] = ..., kind: _Optional[str] = ..., passed: bool = ..., measured: _Optional[str] = ..., expected: _Optional[str] = ..., time: _Optional[float] = ..., message: _Optional[str] = ..., value: _Optional[float] = ..., target: _Optional[float] = ..., tolerance: _Optional[float] = ..., known_limit: _Optional[_Union[KnownLimit, _Mapping]] = ...) -> None: ...
+
+class KnownLimit(_message.Message):
+    __slots__ = ("measured", "cause", "doc")
+    MEASURED_FIELD_NUMBER: _ClassVar[int]
+    CAUSE_FIELD_NUMBER: _ClassVar[int]
+    DOC_FIELD_NUMBER: _ClassVar[int]
+    measured: float
+    cause: str
+    doc: str
+    def __init__(self, measured: _Optional[float] = ..., cause: _Optional[str] = ..., doc: _Optional[str] = ...) -> None: ...
 
 class Verdicts(_message.Message):
     __slots__ = ("time", "verdicts")
