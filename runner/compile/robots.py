@@ -129,9 +129,10 @@ def compile_robots(
                 link_surfaces.append((f"{name}.{link.name}", Surface(s.bounce, s.bounce_vel, s.mu)))
         group[name] = [f"{name}.{link.name}" for link in desc.links]
         for joint in desc.joints:
+            if joint.kind == "free":  # no joint: the body touches its parent (MuJoCo: the world) as any other
+                continue
             excluded.append((f"{name}.{joint.parent}", f"{name}.{joint.child}"))
-            if joint.kind != "free":
-                joints.append(_joint(name, robot, desc, joint))
+            joints.append(_joint(name, robot, desc, joint))
         excluded.extend((f"{name}.{a}", f"{name}.{b}") for a, b in robot.exclude)
     members = {**arrays, **group}
     for a, b in model.exclude_contacts:

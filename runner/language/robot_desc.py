@@ -125,7 +125,11 @@ def quat_from_matrix(r: np.ndarray) -> Quat:
 
 
 def principal_axes(tensor: np.ndarray) -> tuple[Vec3, Quat]:
-    """Principal moments (ascending) and the rotation from the given frame to the principal axes."""
+    """Principal moments and the rotation from the given frame to the principal axes: a diagonal tensor keeps
+    its axes and order (identity); otherwise the eigenvectors, ascending, made right-handed."""
+    off = abs(tensor[0, 1]) + abs(tensor[0, 2]) + abs(tensor[1, 2])
+    if off <= 1e-12 * max(float(np.abs(tensor).max()), 1e-300):
+        return (float(tensor[0, 0]), float(tensor[1, 1]), float(tensor[2, 2])), (1.0, 0.0, 0.0, 0.0)
     moments, vectors = np.linalg.eigh((tensor + tensor.T) / 2.0)
     if np.linalg.det(vectors) < 0:
         vectors[:, 2] = -vectors[:, 2]

@@ -92,7 +92,7 @@ def load_robots(model: Scenario, positions: Positions, base_dir: FsPath) -> dict
                 if ref not in links:
                     issues.append(positions.issue(("robots", name, "exclude", i, j), unknown("link", ref, links)))
         root = desc.link(desc.root)
-        if root.mass <= 0 and not robot.fixed:
+        if root.mass <= 0 and not robot.fixed and robot.format == "urdf":
             issues.append(
                 Issue(
                     desc.file,

@@ -9,6 +9,7 @@ model is reported at its line; **trimesh** loads meshes and computes their conve
 
 from __future__ import annotations
 
+import io
 import math
 from collections.abc import Iterator
 from pathlib import Path
@@ -32,14 +33,26 @@ _IDENT = r"^[A-Za-z_][A-Za-z0-9_]*$"
 _KINDS = {"revolute": "hinge", "continuous": "hinge", "prismatic": "slider", "fixed": "fixed"}
 
 
+def xml_bytes(file: Path) -> bytes:
+    """The file's bytes with its XML declaration blanked (same length: lines and columns stay): pybullet_data
+    ships files declaring `version="0.0"`, which XML parsers refuse and every simulator reads."""
+    import re
+
+    try:
+        raw = file.read_bytes()
+    except OSError as exc:
+        raise ModelFileError(file, 0, f"cannot read the model file: {exc.strerror}") from None
+    found = re.match(rb"\A(\xef\xbb\xbf)?<\?xml[^>]*\?>", raw)
+    return raw if found is None else b" " * found.end() + raw[found.end() :]
+
+
 def parse_xml(file: Path) -> Any:
     """The lxml tree, or the file and line of the first syntax error."""
     from lxml import etree
 
+    parser = etree.XMLParser(remove_comments=True, resolve_entities=False, no_network=True)
     try:
-        return etree.parse(str(file), etree.XMLParser(remove_comments=True, resolve_entities=False, no_network=True))
-    except OSError as exc:
-        raise ModelFileError(file, 0, f"cannot read the model file: {exc}") from None
+        return etree.ElementTree(etree.fromstring(xml_bytes(file), parser))
     except etree.XMLSyntaxError as exc:
         line = exc.lineno or 0
         raise ModelFileError(file, line, f"malformed XML: {exc.msg}") from None
@@ -176,7 +189,7 @@ def load_urdf(file: Path, package_root: Path, static_root: bool, static_triangle
     link_lines, joint_lines = _check_structure(tree, file)
     mesh_lines = _mesh_lines(tree)
     try:
-        urdf = yourdfpy.URDF.load(str(file), build_scene_graph=False, load_meshes=False)
+        urdf = yourdfpy.URDF.load(io.BytesIO(xml_bytes(file)), build_scene_graph=False, load_meshes=False)
     except Exception as exc:  # noqa: BLE001 - yourdfpy raises ValueError/TypeError/AttributeError on bad values
         raise ModelFileError(file, 0, f"cannot read the URDF: {exc}") from None
     robot = urdf.robot
