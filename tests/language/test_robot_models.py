@@ -47,7 +47,8 @@ def _scenario(folder: Path, urdf_text: str, mesh: str = "meshes/cube.obj", extra
     (folder / "meshes" / "cube.obj").write_text(cube)
     (folder / "robot.urdf").write_text(urdf_text.replace("MESH", mesh))
     path = folder / "s.yaml"
-    path.write_text(textwrap.dedent(f"""\
+    path.write_text(
+        textwrap.dedent(f"""\
         schema_version: 1
         scenario: t
         world: {{dt: 0.01, duration: 1}}
@@ -55,7 +56,8 @@ def _scenario(folder: Path, urdf_text: str, mesh: str = "meshes/cube.obj", extra
           ground: {{plane: {{}}, motion: static}}
         robots:
           bot: {{urdf: robot.urdf, pos: [1, 2, 3], hpr: [30, 0, 0]{extra}}}
-        """))  # fmt: skip
+        """)
+    )
     return path
 
 
@@ -110,8 +112,9 @@ def test_package_path_resolves_under_the_root(tmp_path: Path) -> None:
 def test_a_bad_model_exits_2_without_a_traceback(tmp_path: Path) -> None:
     path = _scenario(tmp_path, GOOD_URDF.replace('<parent link="base"/>', '<parent link="nowhere"/>'))
     for command in (["validate", str(path)], ["run", str(path), "--no-trace"]):
-        done = subprocess.run([sys.executable, "-m", "runner", *command], capture_output=True, text=True,
-                              cwd=tmp_path, timeout=120)  # fmt: skip
+        done = subprocess.run(
+            [sys.executable, "-m", "runner", *command], capture_output=True, text=True, cwd=tmp_path, timeout=120
+        )
         assert done.returncode == 2, done.stderr
         assert "Traceback" not in done.stderr and "robot.urdf:" in done.stderr + done.stdout
 
@@ -153,8 +156,12 @@ def test_compiled_world_matches_the_urdf(tmp_path: Path) -> None:
     assert joint.name == "bot.shoulder" and joint.body == "bot.arm" and joint.other == "bot.base"
     assert np.allclose(joint.axis, expected[:3, :3] @ [0, 1, 0], atol=1e-12) and (joint.lo, joint.hi) == (-1.0, 1.0)
     assert world.excluded_pairs == (("bot.arm", "bot.base"),)
-    assert {Capability.SHAPE_COMPOUND, Capability.SHAPE_CONVEX, Capability.COM_OFFSET,
-            Capability.COLLISION_FILTER} <= world.required_capabilities()  # fmt: skip
+    assert {
+        Capability.SHAPE_COMPOUND,
+        Capability.SHAPE_CONVEX,
+        Capability.COM_OFFSET,
+        Capability.COLLISION_FILTER,
+    } <= world.required_capabilities()
 
 
 def test_kuka_links_match_yourdfpy() -> None:
@@ -193,7 +200,11 @@ def test_mjcf_beyond_the_subset_is_refused_at_its_line(tmp_path: Path) -> None:
     text = (DATA / "mjcf" / "inverted_pendulum.xml").read_text()
     (tmp_path / "m.xml").write_text(text)
     path = tmp_path / "s.yaml"
-    path.write_text("schema_version: 1\nscenario: t\nworld: {dt: 0.01, duration: 1}\nbodies:\n"
-                    "  g: {plane: {}, motion: static}\nrobots:\n  p: {mjcf: m.xml}\n")  # fmt: skip
+    path.write_text(
+        "schema_version: 1\nscenario: t\nworld: {dt: 0.01, duration: 1}\nbodies:\n"
+        "  g: {plane: {}, motion: static}\nrobots:\n  p: {mjcf: m.xml}\n"
+    )
     file, line, message = _issue(path)
-    assert file.endswith("m.xml") and line == _line_of(text, "<tendon") and "<tendon> is beyond the MJCF subset" in message
+    assert (
+        file.endswith("m.xml") and line == _line_of(text, "<tendon") and "<tendon> is beyond the MJCF subset" in message
+    )
