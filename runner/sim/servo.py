@@ -11,6 +11,7 @@ runner's, so every engine gets the same commands; an adapter only needs ``set_mo
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 from backends.base import Backend
@@ -53,4 +54,5 @@ class Servos:
             vel = spec.gain * (float(target) - positions[j])
             if spec.vmax is not None:
                 vel = max(-spec.vmax, min(spec.vmax, vel))
-            backend.set_motor(j, vel, spec.fmax)
+            if math.isfinite(vel):  # a NaN reading is the engine's failure, which the runner reports itself
+                backend.set_motor(j, vel, spec.fmax)
