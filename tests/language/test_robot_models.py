@@ -208,3 +208,34 @@ def test_mjcf_beyond_the_subset_is_refused_at_its_line(tmp_path: Path) -> None:
     assert (
         file.endswith("m.xml") and line == _line_of(text, "<tendon") and "<tendon> is beyond the MJCF subset" in message
     )
+
+
+@pytest.mark.parametrize(
+    ("extra", "top", "found"),
+    [
+        ("", "exclude_contacts: [[bot.arm, nothing]]\n", "unknown body `nothing`"),
+        ("", "joints: {bot: {type: hinge, bodies: [ground, environment]}}\n", "has the name of a body or joint"),
+        (", joints: {shoulder: {servo: {target: 0, gain: 200, fmax: 1}}}", "", "expected gain x dt <= 1"),
+        (", joints: {shoulder: {servo: {target: state.nope, gain: 10, fmax: 1}}}", "", "unknown name `state.nope`"),
+        (", links: {hand: {color: [1, 0, 0]}}", "", "unknown link `hand`"),
+    ],
+)
+def test_scenario_side_mistakes_are_located_in_the_scenario(tmp_path: Path, extra: str, top: str, found: str) -> None:
+    path = _scenario(tmp_path, GOOD_URDF, extra=extra)
+    path.write_text(path.read_text() + top)
+    with pytest.raises(ScenarioValidationError) as caught:
+        load_scenario(path)
+    assert any(i.file == str(path) and i.line > 0 and found in i.message for i in caught.value.issues), str(
+        caught.value
+    )
+
+
+def test_link_overrides_reach_the_compiled_world(tmp_path: Path) -> None:
+    extra = ", fixed: true, links: {arm: {color: [1, 0, 0], surface: {mu: 0.25}}}, joints: {shoulder: {free: true}}"
+    world = build_program(load_scenario(_scenario(tmp_path, GOOD_URDF, extra=extra))).world
+    arm = next(b for b in world.bodies if b.name == "bot.arm")
+    base = next(b for b in world.bodies if b.name == "bot.base")
+    assert arm.color == (1.0, 0.0, 0.0, 1.0) and base.motion is Motion.STATIC and base.mass == 0.0
+    assert world.surface("bot.arm", "ground").mu == 0.25 and world.surface("bot.base", "ground").mu == float("inf")
+    shoulder = world.joints[0]
+    assert shoulder.other is None and shoulder.lo is None and shoulder.hi is None  # to the environment, no stops
