@@ -60,6 +60,9 @@ def test_links_and_joints_read_back_by_name(trace: Path) -> None:
     link = data.bodies["arm.lbr_iiwa_link_7"]
     assert np.allclose(link.pos[0], (0.0, 0.0, 1.261), atol=1e-9) and np.all(np.isfinite(link.vel))
     assert "arm.lbr_iiwa_joint_2" in data.joints
+    times, z = data.series("arm.lbr_iiwa_link_7.pos.z")
+    assert len(times) == len(z) == 501 and z[0] == pytest.approx(1.261, abs=1e-9)
+    assert len(data.series("arm.lbr_iiwa_joint_2.position")[1]) == 501
 
 
 def test_report_scene_from_messages_and_from_metadata_agree(trace: Path) -> None:
