@@ -202,7 +202,7 @@ def test_mjcf_beyond_the_subset_is_refused_at_its_line(tmp_path: Path) -> None:
     path = tmp_path / "s.yaml"
     path.write_text(
         "schema_version: 1\nscenario: t\nworld: {dt: 0.01, duration: 1}\nbodies:\n"
-        "  g: {plane: {}, motion: static}\nrobots:\n  p: {mjcf: m.xml}\n"
+        "  floor: {plane: {}, motion: static}\nrobots:\n  p: {mjcf: m.xml}\n"
     )
     file, line, message = _issue(path)
     assert (
@@ -239,3 +239,37 @@ def test_link_overrides_reach_the_compiled_world(tmp_path: Path) -> None:
     assert world.surface("bot.arm", "ground").mu == 0.25 and world.surface("bot.base", "ground").mu == float("inf")
     shoulder = world.joints[0]
     assert shoulder.other is None and shoulder.lo is None and shoulder.hi is None  # to the environment, no stops
+
+
+def test_static_meshes_as_triangles(tmp_path: Path) -> None:
+    """`static_meshes: triangles`: the fixed root keeps its mesh's triangles (shape:trimesh); moving links hull."""
+    import trimesh
+
+    path = tmp_path / "s.yaml"
+    path.write_text(
+        "schema_version: 1\nscenario: t\nworld: {dt: 0.01, duration: 1}\nbodies:\n  floor: {plane: {}, motion: static}\n"
+        'robots:\n  arm: {urdf: "@pybullet_data/kuka_iiwa/model.urdf", fixed: true, static_meshes: triangles}\n'
+    )
+    world = build_program(load_scenario(path)).world
+    base = next(b for b in world.bodies if b.name == "arm.lbr_iiwa_link_0")
+    mesh = trimesh.load(str(KUKA.parent / "meshes" / "link_0.stl"), force="mesh")
+    assert base.shapes[0].shape.kind is ShapeKind.TRIMESH and base.motion is Motion.STATIC
+    assert len(base.shapes[0].shape.mesh.faces) == len(mesh.faces)  # type: ignore[union-attr]
+    assert np.allclose(np.asarray(base.shapes[0].shape.mesh.vertices), mesh.vertices)  # type: ignore[union-attr]
+    assert all(b.shapes[0].shape.kind is ShapeKind.CONVEX for b in world.bodies[2:])
+    assert Capability.SHAPE_TRIMESH in world.required_capabilities()
+
+
+def test_mjcf_without_mujoco_names_the_extra(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    from runner.language import robots
+
+    robots._read.cache_clear()
+    monkeypatch.setitem(sys.modules, "mujoco", None)  # `import mujoco` raises ImportError
+    (tmp_path / "m.xml").write_text((DATA / "mjcf" / "hello_mjcf.xml").read_text())
+    path = tmp_path / "s.yaml"
+    path.write_text(
+        "schema_version: 1\nscenario: t\nworld: {dt: 0.01, duration: 1}\nbodies:\n"
+        "  floor: {plane: {}, motion: static}\nrobots:\n  p: {mjcf: m.xml}\n"
+    )
+    file, _, message = _issue(path)
+    assert file.endswith("m.xml") and "pip install 'physics-scenarios[mujoco]'" in message
