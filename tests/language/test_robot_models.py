@@ -247,7 +247,8 @@ def test_static_meshes_as_triangles(tmp_path: Path) -> None:
 
     path = tmp_path / "s.yaml"
     path.write_text(
-        "schema_version: 1\nscenario: t\nworld: {dt: 0.01, duration: 1}\nbodies:\n  floor: {plane: {}, motion: static}\n"
+        "schema_version: 1\nscenario: t\nworld: {dt: 0.01, duration: 1}\nbodies:\n"
+        "  floor: {plane: {}, motion: static}\n"
         'robots:\n  arm: {urdf: "@pybullet_data/kuka_iiwa/model.urdf", fixed: true, static_meshes: triangles}\n'
     )
     world = build_program(load_scenario(path)).world
