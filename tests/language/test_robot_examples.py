@@ -111,3 +111,43 @@ def test_duck_rest_pose_from_trimesh_stable_poses() -> None:
     expected = quat_from_matrix(best[:3, :3])
     assert abs(abs(float(np.dot(q, expected))) - 1.0) < 1e-9  # the same orientation (q and -q alike)
     assert robot.pos[2] == pytest.approx(best[2, 3] + 0.1, abs=1e-6)
+
+
+@pytest.mark.slow
+def test_kuka_links_never_touch_along_the_commanded_path() -> None:
+    """Non-adjacent links' hulls stay apart along the straight joint-space path zero -> pose A -> pose B (the
+    servos' paths: each joint's error decays at the same rate, so the path is that straight line), and the
+    hand stays above the ground: the arm's only contacts are the excluded adjacent pairs. Hull overlap is a
+    linear program (scipy): a point inside both hulls with slack t exists iff t > 0 at the optimum."""
+    import itertools
+
+    import trimesh
+    import yourdfpy
+    from scipy.optimize import linprog
+
+    folder = DATA / "kuka_iiwa"
+    urdf = yourdfpy.URDF.load(str(folder / "model.urdf"), load_meshes=False)
+    hulls = {
+        link.name: trimesh.load(str(folder / link.collisions[0].geometry.mesh.filename), force="mesh").convex_hull
+        for link in urdf.robot.links
+    }
+    adjacent = {tuple(sorted((j.parent, j.child))) for j in urdf.robot.joints}
+
+    def slack(a: trimesh.Trimesh, b: trimesh.Trimesh) -> float:
+        normals = np.vstack([a.face_normals, b.face_normals])
+        offsets = np.concatenate([np.einsum("ij,ij->i", m.face_normals, m.triangles[:, 0]) for m in (a, b)])
+        found = linprog([0, 0, 0, -1], A_ub=np.hstack([normals, np.ones((len(normals), 1))]), b_ub=offsets,
+                        bounds=[(None, None)] * 3 + [(None, 1)])  # fmt: skip
+        return float(found.x[3])
+
+    waypoints = [(0.0, 0.0), (0.5, -1.0), (-0.4, 1.2)]
+    for (a2, a4), (b2, b4) in itertools.pairwise(waypoints):
+        for s in np.linspace(0.0, 1.0, 6):
+            cfg = np.zeros(7)
+            cfg[1], cfg[3] = a2 + s * (b2 - a2), a4 + s * (b4 - a4)
+            urdf.update_cfg(cfg)
+            placed = {n: h.copy().apply_transform(urdf.get_transform(n, "lbr_iiwa_link_0")) for n, h in hulls.items()}
+            for x, y in itertools.combinations(sorted(placed), 2):
+                if (x, y) not in adjacent:
+                    assert slack(placed[x], placed[y]) < 0, (x, y, cfg)
+            assert min(placed[n].vertices[:, 2].min() for n in placed if n >= "lbr_iiwa_link_2") > 0.05
