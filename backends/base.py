@@ -31,6 +31,22 @@ Semantics every backend must honour (ODE's):
   (w, x, y, z; a quaternion and its negation are the same orientation), velocities in the world frame.
 * ``drain_messages()`` returns what the engine printed about itself since the last call (lines).
 
+Robots (the capabilities in ``backends.types.ROBOT_CAPABILITIES``; the full text is in backends/types.py and
+docs/robots.md). An adapter declares one only when it honours all of it:
+
+* ``shape:compound``: build every ``PlacedShape`` of ``BodySpec.shapes`` at its local pose in the body frame
+  (none: a body that never collides); the body's mass properties come from ``mass``/``inertia``/``com``/
+  ``inertia_quat``, never from the shapes.
+* ``body:com-offset``: the COM at ``BodySpec.com`` and the principal axes at ``BodySpec.inertia_quat`` in the
+  body frame; ``body_states()`` still reports the *body frame* (pose, velocity of its origin, angular
+  velocity), ``apply_force`` acts at the COM, ``reset_body``/``set_kinematic`` place the body frame.
+* ``shape:convex``: collide with exactly the hull in ``Shape.mesh`` (vertices and outward triangles).
+* ``shape:trimesh``: ``Shape.mesh`` as a triangle mesh; the compiler only gives it to static bodies.
+* ``collision:exclude-pairs``: the pairs of ``CompiledWorld.excluded_pairs`` never touch (no force, not in
+  ``contacts()``); every other pair, links of one robot included, collides.
+* Joints of a model are ordinary ``JointSpec`` entries (world-frame axis and anchor at the start; positions
+  from the start pose); the position servo is the runner's (``set_motor`` every step), never the adapter's.
+
 Edge cases, the same on every backend (checked here, before any engine call):
 
 * a body or joint index outside the world, ``set_kinematic`` on a body that is not kinematic,

@@ -24,6 +24,7 @@ from __future__ import annotations
 
 from collections.abc import Iterator
 from contextlib import contextmanager
+from typing import Any
 
 
 class PhysicsScenariosError(Exception):
@@ -43,7 +44,9 @@ class BackendNotInstalled(BackendError):
 
 
 class UnsupportedFeature(BackendError):
-    """The scenario needs a capability that the backend does not declare."""
+    """The scenario needs a capability that the backend does not declare (``missing``: which ones, when known)."""
+
+    missing: frozenset[Any] = frozenset()
 
 
 class EngineFailure(BackendError):

@@ -162,12 +162,15 @@ def check_options(name: str, raw: Mapping[str, Any]) -> BackendOptions:
 def check_capabilities(cls: type[Backend], world: CompiledWorld) -> None:
     """Refuse a world that needs what the backend cannot do, or options it does not take, before anything
     is built (UnsupportedFeature, exit 2)."""
-    missing = sorted(c.value for c in world.required_capabilities() - cls.capabilities)
+    lacking = world.required_capabilities() - cls.capabilities
+    missing = sorted(c.value for c in lacking)
     if missing:
-        raise UnsupportedFeature(
+        refusal = UnsupportedFeature(
             f"Scenario `{world.name}` needs {', '.join(missing)}, which backend `{cls.name}` does not "
             f"support. Supported: {', '.join(sorted(c.value for c in cls.capabilities))}."
         )
+        refusal.missing = frozenset(lacking)
+        raise refusal
     cls.Options.parse(world.options_for(cls.name), cls.name)  # unknown keys and bad values, before building
 
 

@@ -16,6 +16,31 @@ Conventions (ODE's, see docs/semantics.md):
   (metres). Hinge angle: rotation of ``body`` relative to ``other`` about ``axis`` since the start
   (radians, right-handed). A motor drives that coordinate's rate towards ``vel`` with force (or torque)
   bounded by ``fmax``; ``fmax == 0`` means the motor is off (ODE's dParamVel / dParamFMax).
+
+Robots (URDF and MJCF models, docs/robots.md) add, and every adapter that declares the matching capability
+must honour:
+
+* **Body frame and inertial frame** (``body:com-offset``). ``BodySpec.pos``/``quat`` place the *body frame*
+  (a URDF link frame). The centre of mass sits at ``BodySpec.com`` in that frame and the principal axes of
+  inertia are the body frame rotated by ``BodySpec.inertia_quat``; ``BodySpec.inertia`` holds the
+  principal moments about the COM along those axes (``BodySpec.inertia_tensor()`` is the full tensor in
+  the body frame). A hand-written body has ``com == 0`` and ``inertia_quat == IDENTITY``: its frame is
+  its inertial frame, as in ODE. States are always those of the body frame: ``pos``/``quat`` its pose,
+  ``lin_vel`` the velocity of its origin (so it is the rate of ``pos``; an adapter whose engine reports
+  the COM velocity adds ``ang_vel x (pos - com_world)``), ``ang_vel`` its angular velocity.
+  ``apply_force`` still acts at the COM; ``reset_body``/``set_kinematic`` place the body frame.
+* **Compound bodies** (``shape:compound``). A body whose ``shape.kind`` is ``COMPOUND`` collides with the
+  shapes of ``BodySpec.shapes`` (each a :class:`PlacedShape` at a pose in the body frame); the tuple may
+  be empty (a link that never touches anything). Mass and inertia are given, never derived from them.
+* **Convex meshes** (``shape:convex``). ``Shape.mesh`` holds the convex hull's vertices and outward
+  triangles in the shape's frame; the adapter collides with exactly that hull (no re-hulling that moves
+  vertices, no margin beyond the engine's usual contact tolerance).
+* **Triangle meshes** (``shape:trimesh``), only ever on static bodies: ``Shape.mesh`` as it is, not convex.
+* **Collision filters** (``collision:exclude-pairs``). ``CompiledWorld.excluded_pairs`` lists body pairs
+  that never touch (the URDF convention: a joint's two links; plus the scenario's ``exclude``): no contact
+  force and no entry in ``contacts()``. Pairs were chosen over group/mask bits because all four engines
+  express them (PyBullet setCollisionFilterPair, MuJoCo ``<contact><exclude>``, DART's
+  BodyNodeCollisionFilter black list, ODE's near callback) and bits run out at 16 or 32 groups.
 """
 
 from __future__ import annotations
@@ -46,6 +71,9 @@ class ShapeKind(str, enum.Enum):
     CAPSULE = "capsule"
     CYLINDER = "cylinder"
     PLANE = "plane"
+    COMPOUND = "compound"  # the body's shapes are BodySpec.shapes, at local poses
+    CONVEX = "convex"  # Shape.mesh: a convex hull
+    TRIMESH = "trimesh"  # Shape.mesh: a triangle mesh, static bodies only
 
 
 class JointKind(str, enum.Enum):
@@ -64,6 +92,11 @@ class Capability(str, enum.Enum):
     SHAPE_CAPSULE = "shape:capsule"
     SHAPE_CYLINDER = "shape:cylinder"
     SHAPE_PLANE = "shape:plane"
+    SHAPE_COMPOUND = "shape:compound"  # several shapes (or none) at local poses in the body frame
+    SHAPE_CONVEX = "shape:convex"  # convex hulls of meshes
+    SHAPE_TRIMESH = "shape:trimesh"  # triangle meshes on static bodies
+    COM_OFFSET = "body:com-offset"  # the centre of mass or principal axes away from the body frame
+    COLLISION_FILTER = "collision:exclude-pairs"  # CompiledWorld.excluded_pairs never touch
     JOINT_SLIDER = "joint:slider"
     JOINT_HINGE = "joint:hinge"
     JOINT_BALL = "joint:ball"
@@ -84,11 +117,39 @@ class Capability(str, enum.Enum):
 UNMAPPED_CAPABILITIES: frozenset[Capability] = frozenset(
     {Capability.JOINT_STOP_BOUNCE, Capability.JOINT_STOP_SOFTNESS}
 )
-#: Every shape; and everything but universal joints (what the pybullet, mujoco and dart adapters offer).
-ALL_SHAPES: frozenset[Capability] = frozenset(c for c in Capability if c.value.startswith("shape:"))
-RIGID_BODY_CAPABILITIES: frozenset[Capability] = (
-    frozenset(Capability) - {Capability.JOINT_UNIVERSAL} - UNMAPPED_CAPABILITIES
+#: What robot models (URDF, MJCF) need beyond hand-written bodies; each adapter adds them to its declaration
+#: as its mapping lands and is tested (issue 22's ENGINE phase). Until then a robot scenario is refused
+#: up front with the capability message.
+ROBOT_CAPABILITIES: frozenset[Capability] = frozenset(
+    {
+        Capability.SHAPE_COMPOUND,
+        Capability.SHAPE_CONVEX,
+        Capability.SHAPE_TRIMESH,
+        Capability.COM_OFFSET,
+        Capability.COLLISION_FILTER,
+    }
 )
+#: Every primitive shape; and everything but universal joints and the robot capabilities (what the pybullet,
+#: mujoco and dart adapters offer).
+ALL_SHAPES: frozenset[Capability] = frozenset(
+    c for c in Capability if c.value.startswith("shape:") and c not in ROBOT_CAPABILITIES
+)
+RIGID_BODY_CAPABILITIES: frozenset[Capability] = (
+    frozenset(Capability) - {Capability.JOINT_UNIVERSAL} - UNMAPPED_CAPABILITIES - ROBOT_CAPABILITIES
+)
+
+
+IDENTITY_QUAT: Quat = (1.0, 0.0, 0.0, 0.0)
+
+
+@dataclass(frozen=True)
+class Mesh:
+    """Triangles in the shape's frame: vertices in metres (scale applied), faces counter-clockwise seen from
+    outside (outward normals by the right-hand rule)."""
+
+    vertices: tuple[Vec3, ...]
+    faces: tuple[tuple[int, int, int], ...]
+    source: str = ""  # the mesh file it came from, for messages and the trace (not a path to open)
 
 
 @dataclass(frozen=True)
@@ -97,6 +158,17 @@ class Shape:
     size: Vec3 = (0.0, 0.0, 0.0)  # box: full edge lengths
     radius: float = 0.0  # sphere, capsule, cylinder
     length: float = 0.0  # capsule, cylinder: cylindrical part along local z
+    mesh: Mesh | None = None  # convex, trimesh
+
+
+@dataclass(frozen=True)
+class PlacedShape:
+    """One collision shape of a compound body at a pose in the body frame, with its own colour."""
+
+    shape: Shape
+    pos: Vec3 = (0.0, 0.0, 0.0)
+    quat: Quat = IDENTITY_QUAT
+    color: Rgba | None = None  # None: the body's colour
 
 
 @dataclass(frozen=True)
@@ -126,6 +198,26 @@ class BodySpec:
     lin_vel: Vec3 = (0.0, 0.0, 0.0)
     ang_vel: Vec3 = (0.0, 0.0, 0.0)  # world frame, rad/s
     color: Rgba = (0.7, 0.7, 0.7, 1.0)
+    #: shape COMPOUND: the collision shapes in the body frame (may be empty); otherwise ().
+    shapes: tuple[PlacedShape, ...] = ()
+    com: Vec3 = (0.0, 0.0, 0.0)  # centre of mass in the body frame
+    inertia_quat: Quat = IDENTITY_QUAT  # principal axes of inertia: the body frame rotated by this
+
+    def inertia_tensor(self) -> np.ndarray:
+        """The full inertia tensor about the COM in the body frame: R diag(inertia) R^T."""
+        w, x, y, z = self.inertia_quat
+        r = np.array(
+            [
+                [1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
+                [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
+                [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)],
+            ]
+        )
+        return np.asarray(r @ np.diag(self.inertia) @ r.T, dtype=np.float64)
+
+    def placed_shapes(self) -> tuple[PlacedShape, ...]:
+        """The body's collision shapes at their local poses (one, at the origin, for a primitive body)."""
+        return self.shapes if self.shape.kind is ShapeKind.COMPOUND else (PlacedShape(self.shape),)
 
 
 @dataclass(frozen=True)
@@ -167,6 +259,8 @@ class CompiledWorld:
     default_surface: Surface = Surface()
     pair_surfaces: tuple[PairSurface, ...] = ()
     backend_options: Mapping[str, Mapping[str, Any]] = field(default_factory=dict)
+    #: body pairs (names) that never touch: adjacent links of a model and the scenario's exclusions
+    excluded_pairs: tuple[tuple[str, str], ...] = ()
 
     def body_index(self, name: str) -> int:
         for i, body in enumerate(self.bodies):
@@ -188,8 +282,13 @@ class CompiledWorld:
         need: set[Capability] = set()
         for body in self.bodies:
             need.add(Capability(f"shape:{body.shape.kind.value}"))
+            need.update(Capability(f"shape:{p.shape.kind.value}") for p in body.shapes)
             if body.motion is Motion.KINEMATIC:
                 need.add(Capability.KINEMATIC)
+            if body.com != (0.0, 0.0, 0.0) or body.inertia_quat != IDENTITY_QUAT:
+                need.add(Capability.COM_OFFSET)
+        if self.excluded_pairs:
+            need.add(Capability.COLLISION_FILTER)
         for joint in self.joints:
             need.add(Capability(f"joint:{joint.kind.value}"))
             if joint.other is not None:

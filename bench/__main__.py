@@ -11,13 +11,13 @@ from pathlib import Path
 
 from backends.registry import DEFAULT_BACKEND, is_installed, list_backends
 
-from . import batch, build, encoding, memory, overhead, scaling
+from . import batch, build, encoding, memory, overhead, robot, scaling
 from .instrument import wrapper_cost
 from .report import Results, append_notes, render
 
 #: Every engine the registry lists (a fifth engine joins the benchmarks by its registry line).
 ENGINES = tuple(e.name for e in list_backends())
-SECTIONS = ("overhead", "scaling", "memory", "batch", "encoding", "build")
+SECTIONS = ("overhead", "scaling", "memory", "batch", "encoding", "build", "robot")
 
 
 def _ints(text: str) -> list[int]:
@@ -89,6 +89,7 @@ def main(argv: list[str] | None = None) -> int:
         "batch": f"-j {args.batch_jobs}, {args.batch_reps} reps, {args.batch_backend}",
         "encoding": f"{'x'.join(map(str, args.pile))} boxes, {args.encoding_duration:g} s, {args.encoding_reps} reps",
         "build": f"{args.build_sizes} bodies, {','.join(args.build_backends or installed)}",
+        "robot": f"scenarios/robots/kuka_arm.yaml, {','.join(installed)}",
     }
     results = Results(command=shlex.join(["python", "-m", "bench", *(argv if argv is not None else sys.argv[1:])]),
                       sizes={k: v for k, v in sizes.items() if k in args.sections})  # fmt: skip
@@ -121,6 +122,9 @@ def main(argv: list[str] | None = None) -> int:
         log(f"build: {sizes['build']}")
         chosen = [b for b in (args.build_backends or installed) if b in installed]
         results.build = build.run(chosen, args.build_sizes, log)
+    if "robot" in args.sections:
+        log(f"robot: {sizes['robot']}")
+        results.robot = robot.run(installed, log)
     results.load = (results.load[0], os.getloadavg()[0])
     results.wall_seconds = time.perf_counter() - started
     if args.quick:

@@ -16,6 +16,7 @@ from backends.registry import list_backends
 
 from . import build as bld
 from . import encoding as enc
+from . import robot as rbt
 from .batch import BatchFigures
 from .memory import MemoryFigures
 from .overhead import PROCESS, BackendFigures
@@ -37,6 +38,7 @@ class Results:
     batch: BatchFigures | None = None
     encoding: list[enc.EncodingFigures] = field(default_factory=list)
     build: list[bld.BuildFigures] = field(default_factory=list)
+    robot: list[rbt.RobotFigures] = field(default_factory=list)
     wrapper_us: float = 0.0
     load: tuple[float, float] = (0.0, 0.0)  # 1-minute load average at the start and the end
     wall_seconds: float = 0.0
@@ -100,6 +102,8 @@ def render(r: Results) -> str:
         out += enc.render(r.encoding)
     if r.build:
         out += bld.render(r.build)
+    if r.robot:
+        out += rbt.render(r.robot)
     out += ["## What remains, and why (profiling)", "", *_floor(r.overhead), *(f"- {c}" for c in KNOWN_CAUSES), ""]
     return "\n".join(out) + "\n"
 

@@ -25,6 +25,12 @@ _VERDICT_NUMBERS = ("time", "value", "target", "tolerance")
 _FIELD_TYPE_BOOL, _FIELD_TYPE_STRING = 8, 9  # google.protobuf.FieldDescriptor.TYPE_*
 
 
+
+def _member(msg: Any, name: str) -> Any:
+    """A body's or joint's field; a robot's link or joint (`arm.link_7`) is in its robot's nested message."""
+    group, dot, leaf = name.partition(".")
+    return getattr(getattr(msg, group, None), leaf, None) if dot else getattr(msg, name, None)
+
 class UnreadableMessage(ValueError):
     """A message that its channel's schema does not decode."""
 
@@ -93,7 +99,7 @@ class MessageDecoder:
     def _bodies(self, t: float, msg: Any) -> None:
         row: list[float] = []
         for name in self.bodies:
-            b = getattr(msg, name, None)
+            b = _member(msg, name)
             if b is None:
                 row += [math.nan] * 6
                 continue
@@ -105,7 +111,7 @@ class MessageDecoder:
     def _joints(self, t: float, msg: Any) -> None:
         row: list[float] = []
         for name in self.joints:
-            j = getattr(msg, name, None)
+            j = _member(msg, name)
             row += (math.nan,) * 3 if j is None else (j.position, j.velocity, j.motor_force)
         self.out.joint_times.append(t)
         self.out.joint_rows.append(row)

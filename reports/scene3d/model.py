@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import json
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
@@ -136,9 +136,37 @@ def _rgba(color: Any) -> RGBA:
 
 
 def _spec_entity(spec: Mapping[str, Any]) -> EntityVisual:
-    """The primitives the trace writer publishes for a body shape (runner.trace.foxglove.shape_primitives)."""
-    shape, rgba, name = spec["shape"], _rgba(spec.get("color")), str(spec["name"])
+    """The primitives the trace writer publishes for a body shape (runner.trace.foxglove.body_primitives)."""
+    name = str(spec["name"])
+    return EntityVisual(f"body/{name}", name, tuple(_shape_prims(spec["shape"], _rgba(spec.get("color")), spec)))
+
+
+def _placed(prims: list[Primitive], pos: Vec3, quat: Quat) -> list[Primitive]:
+    """Primitives of a shape moved to its pose in the body frame (a compound body's shape)."""
+    from backends.geometry import quat_mul, quat_rotate
+
+    out = []
+    for p in prims:
+        x, y, z = quat_rotate(quat, p.position)
+        out.append(replace(p, position=(x + pos[0], y + pos[1], z + pos[2]), quat=quat_mul(quat, p.quat)))
+    return out
+
+
+def _shape_prims(shape: Mapping[str, Any], rgba: RGBA, spec: Mapping[str, Any]) -> list[Primitive]:
     kind = shape["kind"]
+    if kind == "compound":  # each shape at its local pose (backends.types.PlacedShape)
+        out: list[Primitive] = []
+        for placed in spec.get("shapes") or []:
+            own = _rgba(placed["color"]) if placed.get("color") else rgba
+            pos = tuple(float(c) for c in placed["pos"])
+            quat = tuple(float(c) for c in placed["quat"])
+            out += _placed(_shape_prims(placed["shape"], own, {}), pos, quat)  # type: ignore[arg-type]
+        return out
+    if kind in ("convex", "trimesh"):
+        mesh = shape.get("mesh") or {"vertices": [], "faces": []}
+        v = mesh["vertices"]
+        points = tuple(tuple(float(c) for c in v[i]) for face in mesh["faces"] for i in face)
+        return [Primitive("triangles", rgba, points=points)]  # type: ignore[arg-type]
     r, length = float(shape.get("radius", 0.0)), float(shape.get("length", 0.0))
     prims: list[Primitive] = []
     if kind == "box":
@@ -154,7 +182,7 @@ def _spec_entity(spec: Mapping[str, Any]) -> EntityVisual:
     elif kind == "plane":
         slab = (PLANE_EXTENT, PLANE_EXTENT, PLANE_THICKNESS)
         prims.append(Primitive("cube", rgba, position=(0.0, 0.0, -PLANE_THICKNESS / 2), size=slab))
-    return EntityVisual(f"body/{name}", name, tuple(prims))
+    return prims
 
 
 # ---- foxglove.SceneUpdate messages (as dicts with Foxglove's field names) -----------------------------------------

@@ -17,7 +17,7 @@ from runner.errors import ScenarioValidationError
 from runner.language import model_behaviour as B
 from runner.language.expressions import Expression, compile_expression
 from runner.language.load import LoadedScenario
-from runner.language.names import expand_bodies, groups
+from runner.language.names import expand_bodies, groups, robot_groups
 from runner.language.refs import expressions_in
 from runner.language.sounds import SoundInfo, read_info
 
@@ -138,6 +138,7 @@ MASS_RANGE = (1e-15, 1e30)
 def check_world(world: CompiledWorld, loaded: LoadedScenario) -> None:
     """Refuse a world whose numbers were each in range but whose masses or inertias are not."""
     keys = {inst.name: inst.key for inst in expand_bodies(loaded.model)}
+    keys.update({f"{r}.{link.name}": r for r, desc in loaded.robots.items() for link in desc.links})
     lo, hi = MASS_RANGE
     issues = []
     seen: set[str] = set()
@@ -149,7 +150,7 @@ def check_world(world: CompiledWorld, loaded: LoadedScenario) -> None:
             moments = ", ".join(f"{v:.3g}" for v in b.inertia)
             issues.append(
                 loaded.positions.issue(
-                    ("bodies", keys[b.name]),
+                    ("robots" if "." in b.name else "bodies", keys[b.name]),
                     f"body `{b.name}` has mass {b.mass:.3g} kg and principal moments {moments} kg m^2; "
                     f"expected each within [{lo:g}, {hi:g}] (change its size, mass or density)",
                 )
@@ -162,7 +163,7 @@ def build_program(loaded: LoadedScenario) -> Program:
     from runner.language.hpr import quat_to_hpr
 
     model = loaded.model
-    world = compile_world(model, model.scenario)
+    world = compile_world(model, model.scenario, loaded.robots)
     check_world(world, loaded)
     base = Path(loaded.path).parent
     sounds = {name: read_info((base / rel).resolve()) for name, rel in model.sounds.items()}
@@ -187,10 +188,14 @@ def build_program(loaded: LoadedScenario) -> Program:
     ]
     start_hpr: dict[str, tuple[float, float, float]] = {}
     start_scale: dict[str, float] = {}
-    for inst, spec in zip(expand_bodies(model), world.bodies, strict=True):
+    instances = expand_bodies(model)
+    for inst, spec in zip(instances, world.bodies[: len(instances)], strict=True):
         body = inst.body
         start_hpr[inst.name] = body.hpr if body.hpr is not None else quat_to_hpr(spec.quat)
         start_scale[inst.name] = body.scale
+    for spec in world.bodies[len(instances) :]:  # the robots' links
+        start_hpr[spec.name] = quat_to_hpr(spec.quat)
+        start_scale[spec.name] = 1.0
     return Program(
         loaded=loaded,
         world=world,
@@ -204,7 +209,7 @@ def build_program(loaded: LoadedScenario) -> Program:
         contact_colliders=[index[b] for b in model.collisions.contacts_from],
         expressions=_expressions(model),
         sounds=sounds,
-        groups=groups(model),
+        groups={**groups(model), **robot_groups(loaded.robots)},
         start_hpr=start_hpr,
         start_scale=start_scale,
         joint_zeros=joint_zeros(model, world),

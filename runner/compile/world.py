@@ -7,7 +7,7 @@ body's uniform scale as Panda3D scales a node; poses become quaternions (w, x, y
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 
 from backends.geometry import IDENTITY, quat_normalize
 from backends.types import (
@@ -23,10 +23,12 @@ from backends.types import (
     Surface,
 )
 from runner.compile.joints import stops, zero_offset
+from runner.compile.robots import compile_robots
 from runner.language.hpr import hpr_to_quat
 from runner.language.model import Scenario
 from runner.language.model_physics import Body, Limits
 from runner.language.names import BodyInstance, expand_bodies, groups
+from runner.language.robot_desc import ModelDesc
 
 #: Kinematic bodies get a mass only because some engines need one; it never affects their motion.
 KINEMATIC_DENSITY = 1000.0
@@ -154,9 +156,11 @@ def _unit(v: Sequence[float]) -> tuple[float, float, float]:
     return (v[0] / n, v[1] / n, v[2] / n)
 
 
-def compile_world(model: Scenario, name: str) -> CompiledWorld:
+def compile_world(model: Scenario, name: str, robots: Mapping[str, ModelDesc] | None = None) -> CompiledWorld:
+    """The world; ``robots`` holds the model of every entry of ``model.robots`` (runner.language.robots)."""
     instances = expand_bodies(model)
     bodies = tuple(compile_body(inst, i) for i, inst in enumerate(instances))
+    parts = compile_robots(model, robots or {}, tuple(b.name for b in bodies), groups(model))
     positions = {b.name: b.pos for b in bodies}
     by_name = {b.name: b for b in bodies}
     joints = []
@@ -181,13 +185,14 @@ def compile_world(model: Scenario, name: str) -> CompiledWorld:
                 motor=Motor(joint.motor.vel, joint.motor.fmax) if joint.motor is not None else None,
             )
         )
-    members = groups(model)
+    members = {**groups(model), **parts.groups}
     pairs: list[PairSurface] = []
     for override in model.surfaces:
         surface = Surface(override.bounce, override.bounce_vel, override.mu)
         side_a = members.get(override.bodies[0], [override.bodies[0]])
         side_b = members.get(override.bodies[1], [override.bodies[1]])
         pairs.extend(PairSurface(a, b, surface) for a in side_a for b in side_b if a != b)
+    pairs.extend(parts.surfaces)  # after the scenario's pairs, which win (CompiledWorld.surface: the first)
     d = model.surface
     return CompiledWorld(
         name=name,
@@ -195,9 +200,10 @@ def compile_world(model: Scenario, name: str) -> CompiledWorld:
         dt=model.world.dt,
         substeps=model.world.substeps,
         duration=model.world.duration,
-        bodies=bodies,
-        joints=tuple(joints),
+        bodies=bodies + parts.bodies,
+        joints=tuple(joints) + parts.joints,
         default_surface=Surface(d.bounce, d.bounce_vel, d.mu),
         pair_surfaces=tuple(pairs),
         backend_options={k: dict(v) for k, v in model.backend_options.items()},
+        excluded_pairs=parts.excluded,
     )

@@ -12,7 +12,7 @@ import hashlib
 import os
 import re
 import stat
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path as FsPath
 from typing import Any
 
@@ -23,6 +23,8 @@ from runner.language.errors_map import issues_from
 from runner.language.files import special_file_kind
 from runner.language.model import Scenario
 from runner.language.refs import check_references
+from runner.language.robot_desc import ModelDesc
+from runner.language.robots import load_robots
 from runner.language.times import time_context
 from runner.language.yaml_source import (
     COMMAND_LINE,
@@ -51,6 +53,8 @@ class LoadedScenario:
     sha256: str
     positions: Positions
     overrides: tuple[tuple[str, Any], ...]
+    #: the model of every entry of ``model.robots`` (runner.language.robots)
+    robots: dict[str, ModelDesc] = field(default_factory=dict)
 
 
 def read_source(path: FsPath) -> tuple[str, Any, Positions]:
@@ -113,6 +117,7 @@ NAME_MAPS: dict[tuple[str, ...], str] = {
     ("state",): "state variable",
     ("bodies",): "body",
     ("joints",): "joint",
+    ("robots",): "robot",
     ("sounds",): "sound",
     ("intervals",): "interval",
     ("triggers",): "trigger",
@@ -242,7 +247,8 @@ def load_scenario(
         model = Scenario.model_validate(data, context=time_context(data))
     except ValidationError as exc:
         raise ScenarioValidationError(issues_from(exc, positions, data, Scenario)) from None
-    check_references(model, positions, path.parent)
+    robots = load_robots(model, positions, path.parent)
+    check_references(model, positions, path.parent, robots)
     return LoadedScenario(
         model=model,
         variant=chosen or BASE_CASE,
@@ -251,6 +257,7 @@ def load_scenario(
         sha256=hashlib.sha256(text.encode()).hexdigest(),
         positions=positions,
         overrides=overrides,
+        robots=robots,
     )
 
 

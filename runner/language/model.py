@@ -19,6 +19,17 @@ from runner.language.model_behaviour import (
     Trigger,
 )
 from runner.language.model_physics import Body, Joint, PairSurface, World
+from runner.language.model_robots import Robot
+
+#: A body, a group or a robot's link (`arm.link_3`).
+BodyRef = Annotated[
+    str,
+    Field(
+        pattern=r"^[A-Za-z_][A-Za-z0-9_]*(\.[A-Za-z_][A-Za-z0-9_]*)?$",
+        max_length=129,
+        description="A body, a group, or a robot's link as `<robot>.<link>`.",
+    ),
+]
 
 #: A scenario's and a variant's names make a trace's file name `<scenario>__<variant>__<backend>.mcap.partial`:
 #: 128 + 64 characters keep it (and the `.cost.json.partial` beside it) under the 255 bytes of a file name.
@@ -53,6 +64,13 @@ class Scenario(Strict):
     surfaces: list[PairSurface] = Field(default_factory=list, description="Overrides per body pair.")
     bodies: dict[Name, Body] = Field(min_length=1)
     joints: dict[Name, Joint] = Field(default_factory=dict)
+    robots: dict[Name, Robot] = Field(
+        default_factory=dict, description="Models loaded from URDF or MJCF files (docs/robots.md)."
+    )
+    exclude_contacts: list[tuple[BodyRef, BodyRef]] = Field(
+        default_factory=list,
+        description="Pairs of bodies (or groups, or robot links `<robot>.<link>`) that never touch.",
+    )
     sounds: dict[Name, str] = Field(default_factory=dict, description="WAV files, relative to the scenario.")
     state: dict[Name, StateValue] = Field(default_factory=dict, description="State variables and initial values.")
     collisions: Collisions = Field(default_factory=Collisions)

@@ -3,10 +3,12 @@
 from __future__ import annotations
 
 import difflib
+from collections.abc import Mapping
 from dataclasses import dataclass
 
 from runner.language.model import Scenario
 from runner.language.model_physics import Body
+from runner.language.robot_desc import ModelDesc
 
 BODY_FIELDS = {
     "pos": ("x", "y", "z"),
@@ -77,15 +79,31 @@ def groups(model: Scenario) -> dict[str, list[str]]:
     return out
 
 
-def readable_names(model: Scenario) -> list[str]:
+def robot_links(robots: Mapping[str, ModelDesc]) -> list[str]:
+    """The bodies the robots add: `<robot>.<link>`."""
+    return [f"{name}.{link.name}" for name, desc in robots.items() for link in desc.links]
+
+
+def robot_groups(robots: Mapping[str, ModelDesc]) -> dict[str, list[str]]:
+    """Robot -> its links' body names (a robot is the group of its links)."""
+    return {name: [f"{name}.{link.name}" for link in desc.links] for name, desc in robots.items()}
+
+
+def robot_joints(robots: Mapping[str, ModelDesc]) -> list[str]:
+    """The joints the robots add: `<robot>.<joint>` (a free joint is no joint)."""
+    return [f"{name}.{j.name}" for name, desc in robots.items() for j in desc.joints if j.kind != "free"]
+
+
+def readable_names(model: Scenario, robots: Mapping[str, ModelDesc] | None = None) -> list[str]:
     """Every dotted name an expression may read (for suggestions)."""
+    robots = robots or {}
     names = list(GLOBALS)
     names += [f"state.{s}" for s in model.state] + [f"param.{p}" for p in model.params]
-    owners = [b.name for b in expand_bodies(model)] + list(groups(model))
+    owners = [b.name for b in expand_bodies(model)] + list(groups(model)) + robot_links(robots) + list(robots)
     for owner in owners:
         names += [f"{owner}.{f}.{c}" for f, comps in BODY_FIELDS.items() for c in comps]
         names += [f"{owner}.{s}" for s in BODY_SCALARS]
-    for joint in model.joints:
+    for joint in [*model.joints, *robot_joints(robots)]:
         names += [f"{joint}.{f}" for f in JOINT_FIELDS]
     return names
 

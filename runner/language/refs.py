@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import math
-from collections.abc import Iterator
+from collections.abc import Iterator, Mapping
 from pathlib import Path as FsPath
 from typing import Any
 
@@ -15,8 +15,17 @@ from runner.language import model_behaviour as B
 from runner.language.expressions import ExpressionError, compile_expression
 from runner.language.model import Scenario
 from runner.language.model_walk import all_actions, walk_steps
-from runner.language.names import RESERVED, array_counts, check_name, expand_bodies, groups, readable_names
+from runner.language.names import (
+    RESERVED,
+    array_counts,
+    check_name,
+    expand_bodies,
+    groups,
+    readable_names,
+    robot_links,
+)
 from runner.language.patterns import possible_events
+from runner.language.robot_desc import ModelDesc
 from runner.language.semantics import (
     check_backend_options,
     check_handlers,
@@ -76,7 +85,10 @@ def polygon_problem(vertices: list[tuple[float, float, float]]) -> str | None:
     return None
 
 
-def check_references(model: Scenario, positions: Positions, base_dir: FsPath) -> None:  # noqa: C901
+def check_references(  # noqa: C901
+    model: Scenario, positions: Positions, base_dir: FsPath, robots: Mapping[str, ModelDesc] | None = None
+) -> None:
+    robots = robots or {}
     issues: list[Issue] = []
 
     def bad(path: Path, message: str, at_key: bool = False) -> None:
@@ -89,12 +101,20 @@ def check_references(model: Scenario, positions: Positions, base_dir: FsPath) ->
     if issues:  # before anything expands arrays, repeats or pairs
         raise ScenarioValidationError(issues)
     instances = expand_bodies(model)
-    body_names = {b.name for b in instances}
-    group_names = set(groups(model))
-    for name in [*model.bodies, *model.joints]:
+    body_names = {b.name for b in instances} | set(robot_links(robots))
+    group_names = set(groups(model)) | set(robots)
+    for name in [*model.bodies, *model.joints, *model.robots]:
         if name in RESERVED:
-            where = ("bodies", name) if name in model.bodies else ("joints", name)
+            kind = "bodies" if name in model.bodies else "joints" if name in model.joints else "robots"
+            where = (kind, name)
             bad(where, f"`{name}` is a reserved name; choose another", at_key=True)
+    for name in model.robots:
+        if name in model.bodies or name in model.joints or name in groups(model):
+            bad(("robots", name), f"robot `{name}` has the name of a body or joint; names must be unique", at_key=True)
+    for i, excluded in enumerate(model.exclude_contacts):
+        for j, ref in enumerate(excluded):
+            if ref not in body_names and ref not in group_names:
+                bad(("exclude_contacts", i, j), _unknown("body", ref, body_names | group_names))
     for joint_name in model.joints:
         if joint_name in body_names or joint_name in group_names:
             clash = f"joint `{joint_name}` has the name of a body; names must be unique"
@@ -167,8 +187,9 @@ def check_references(model: Scenario, positions: Positions, base_dir: FsPath) ->
                 bad(path + ("interval",), _unknown("interval", step.interval, model.intervals))
     check_interval_cycles(model, bad)
     _check_actions(model, bad, body_names, sound_lengths)
-    _check_expressions(model, bad, body_names | group_names)
-    _check_events(model, bad)
+    _check_expressions(model, bad, body_names | group_names, robots)
+    _check_events(model, bad, set(robot_links(robots)))
+    _check_servos(model, bad, robots)
     check_handlers(model, bad, possible_events(model))
     check_times(model, bad)
     check_backend_options(model, bad)
@@ -256,8 +277,8 @@ def expressions_in(model: Scenario) -> Iterator[tuple[str, Path]]:
                 yield value, ("assertions", i, alias)
 
 
-def _check_expressions(model: Scenario, bad: Any, owners: set[str]) -> None:
-    valid = set(readable_names(model))
+def _check_expressions(model: Scenario, bad: Any, owners: set[str], robots: Mapping[str, ModelDesc]) -> None:
+    valid = set(readable_names(model, robots))
     known = {
         "contact": ("body", owners),
         "playing": ("interval", set(model.intervals)),
@@ -278,7 +299,31 @@ def _check_expressions(model: Scenario, bad: Any, owners: set[str]) -> None:
             bad(path, first)
 
 
-def _check_events(model: Scenario, bad: Any) -> None:
+def _check_servos(model: Scenario, bad: Any, robots: Mapping[str, ModelDesc]) -> None:
+    """A servo target written as an expression reads names that exist."""
+    valid = set(readable_names(model, robots))
+    for rname, robot in model.robots.items():
+        for jname, joint in robot.joints.items():
+            if joint.servo is None:
+                continue
+            if joint.servo.gain * model.world.dt > 1.0:
+                bad(("robots", rname, "joints", jname, "servo", "gain"), f"expected gain x dt <= 1 (the servo's error "
+                    f"is multiplied by 1 - gain dt each step; above 1 it overshoots), found {joint.servo.gain} x "
+                    f"{model.world.dt} = {joint.servo.gain * model.world.dt:.3g}")
+            path = ("robots", rname, "joints", jname, "servo", "target")
+            if not isinstance(joint.servo.target, str):
+                continue
+            try:
+                expr = compile_expression(joint.servo.target)
+            except ExpressionError as exc:
+                bad(path, str(exc))
+                continue
+            first = next((p for p in (check_name(n, valid) for n in sorted(expr.names)) if p), None)
+            if first:
+                bad(path, first)
+
+
+def _check_events(model: Scenario, bad: Any, links: set[str]) -> None:
     events = possible_events(model)
     for i, a in enumerate(model.assertions):
         if isinstance(a, A.EventAssertion):
@@ -289,7 +334,7 @@ def _check_events(model: Scenario, bad: Any) -> None:
         if isinstance(a, A.SoundAssertion) and a.sound not in model.sounds:
             bad(("assertions", i, "sound"), _unknown("sound", a.sound, model.sounds))
         if isinstance(a, A.ContactAssertion):
-            names = {b.name for b in expand_bodies(model)}
+            names = {b.name for b in expand_bodies(model)} | links
             for j, ref in enumerate(a.contact):
                 if ref not in names:
                     bad(("assertions", i, "contact", j), _unknown("body", ref, names))

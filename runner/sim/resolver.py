@@ -78,6 +78,9 @@ class StateResolver:
             value = self._constants[name]
             return lambda: value
         head, _, rest = name.partition(".")
+        link, _, tail = rest.partition(".")
+        if f"{head}.{link}" in self.body_index or f"{head}.{link}" in self.joint_index:
+            head, rest = f"{head}.{link}", tail  # a robot's link or joint: `arm.link_7.pos.z`
         if head == "state":
             return lambda: self.state[rest]
         if head == "param":

@@ -40,6 +40,7 @@ from runner.sim.energy import EnergyWatch
 from runner.sim.intervals import IntervalManager
 from runner.sim.kinematics import KinematicTable
 from runner.sim.resolver import Snapshot, StateResolver
+from runner.sim.servo import Servos, servo_specs
 
 #: The one blow-up limit, for every engine (docs/semantics.md, "Blow-ups"): a body whose state is not finite,
 #: or whose linear (m/s) or angular (rad/s) speed exceeds this, has blown up. Adapters check nothing
@@ -137,6 +138,7 @@ class Session:
         self.conditions = ConditionTriggers(program.triggers, program.expressions)
         self.handler_gate = HandlerGate()
         self._zeros = [(self.joint_index[j], offset) for j, offset in program.joint_zeros.items()]
+        self.servos = Servos(servo_specs(model), self.joint_index)  # position servos (runner.sim.servo)
         self.energy = EnergyWatch(self.world, backend.name)  # energy from nowhere: exit 3 (runner.sim.energy)
 
     # --- services used by actions and intervals (runner.sim.intervals.IntervalHost) --------------------
@@ -423,6 +425,8 @@ class Session:
             for i, f in self.forces.items():
                 self.backend.apply_force(i, tuple(f[:3]), tuple(f[3:]))
             self.forces.clear()
+            if self.servos:
+                self.servos.drive(self.backend, self.snapshot.joints.position.tolist(), self.resolver)
             self._step(t_next)
             recorded = self.trace is not None and ((k + 1) % self.record_every == 0 or k == steps - 1)
             self._read(t_next, contacts=recorded)

@@ -20,7 +20,7 @@ import numpy as np
 from reports import trace_format as tf
 from runner.trace import foxglove as fx
 from runner.trace import proto as pb
-from runner.trace.proto.scenario import scenario_messages, with_state
+from runner.trace.proto.scenario import field_of, scenario_messages, with_state
 from runner.trace.slots import PairTemplates, SlotTemplate, quantize
 
 __all__ = ["Channel", "TraceEncoder", "dumps", "plain", "verdict_text"]
@@ -113,7 +113,7 @@ class TraceEncoder:
         msg = self.messages.bodies()
         vx = tf.BODY_ROW.index("vel.x")
         for name, row in zip(self.bodies, values.reshape(-1, len(tf.BODY_ROW)).tolist(), strict=True):
-            b = getattr(msg, name)
+            b = field_of(msg, name)
             b.vel.x, b.vel.y, b.vel.z = row[vx : vx + 3]
             b.angvel.x, b.angvel.y, b.angvel.z = row[vx + 3 : vx + 6]
         return msg
@@ -121,7 +121,7 @@ class TraceEncoder:
     def _fill_joints(self, values: np.ndarray) -> Any:
         msg = self.messages.joints()
         for name, row in zip(self.joints, values.reshape(-1, len(tf.JOINT_FIELDS)).tolist(), strict=True):
-            j = getattr(msg, name)
+            j = field_of(msg, name)
             j.position, j.velocity, j.motor_force = row
         return msg
 

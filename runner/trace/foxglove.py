@@ -10,6 +10,7 @@ published once, frame-locked to each body's frame; bodies move through /tf only.
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
+from dataclasses import asdict
 from typing import Any
 
 import numpy as np
@@ -31,11 +32,15 @@ from foxglove_schemas_protobuf.TriangleListPrimitive_pb2 import TriangleListPrim
 from foxglove_schemas_protobuf.Vector3_pb2 import Vector3
 from google.protobuf.timestamp_pb2 import Timestamp
 
+from backends.geometry import quat_rotate
+from backends.types import BodySpec, PlacedShape, ShapeKind
 from reports.trace_format import BODY_ROW, WORLD_FRAME
 from runner.trace.slots import StampedTemplate
 
 __all__ = [
     "ENTITY_ARRAYS",
+    "body_primitives",
+    "body_spec_record",
     "FrameTransforms",
     "Log",
     "RawAudio",
@@ -138,6 +143,56 @@ def shape_primitives(
         slab = (PLANE_EXTENT, PLANE_EXTENT, PLANE_THICKNESS)
         return {"cubes": [cube(slab, rgba, (0.0, 0.0, -PLANE_THICKNESS / 2.0))]}
     raise ValueError(f"unknown shape {kind!r}")
+
+
+def mesh_points(placed: PlacedShape, scale: float = 1.0) -> list[tuple[float, float, float]]:
+    """A mesh shape's triangles as a flat list of points (three per triangle), in the shape's frame."""
+    mesh = placed.shape.mesh
+    if mesh is None:
+        return []
+    v = mesh.vertices
+    return [tuple(c * scale for c in v[i]) for face in mesh.faces for i in face]  # type: ignore[misc]
+
+
+def _placed(prim: Any, pos: Sequence[float], quat: Sequence[float]) -> Any:
+    """``prim`` (posed in its shape's frame, identity orientation) moved to the shape's pose in the body frame."""
+    p = prim.pose.position
+    x, y, z = quat_rotate((quat[0], quat[1], quat[2], quat[3]), (p.x, p.y, p.z))
+    prim.pose.position.x, prim.pose.position.y, prim.pose.position.z = x + pos[0], y + pos[1], z + pos[2]
+    prim.pose.orientation.w, prim.pose.orientation.x = float(quat[0]), float(quat[1])
+    prim.pose.orientation.y, prim.pose.orientation.z = float(quat[2]), float(quat[3])
+    return prim
+
+
+def body_primitives(body: BodySpec, scale: float = 1.0) -> dict[str, list[Any]]:
+    """Primitives of every shape of ``body`` in the body frame: one shape at the origin for a primitive body;
+    each shape of a compound body at its local pose (meshes as triangle lists: the hull the engines collide
+    with, or the static triangle mesh)."""
+    if body.shape.kind is not ShapeKind.COMPOUND:
+        sh = body.shape
+        return shape_primitives(sh.kind.value, sh.size, sh.radius, sh.length, body.color, scale)
+    out: dict[str, list[Any]] = {}
+    for placed in body.shapes:
+        sh, rgba = placed.shape, placed.color or body.color
+        if sh.kind in (ShapeKind.CONVEX, ShapeKind.TRIMESH):
+            prims: dict[str, list[Any]] = {"triangles": [triangles(mesh_points(placed, scale), rgba)]}
+        else:
+            prims = shape_primitives(sh.kind.value, sh.size, sh.radius, sh.length, rgba, scale)
+        pos = tuple(c * scale for c in placed.pos)
+        for name, items in prims.items():
+            out.setdefault(name, []).extend(_placed(p, pos, placed.quat) for p in items)
+    return out
+
+
+def body_spec_record(body: BodySpec) -> dict[str, Any]:
+    """A body's spec for the trace metadata: the fields of a primitive body exactly as before robots (so their
+    traces stay byte-identical); a compound body adds its shapes, meshes, COM and principal axes."""
+    record = asdict(body)
+    if body.shape.kind is not ShapeKind.COMPOUND:
+        for key in ("shapes", "com", "inertia_quat"):
+            record.pop(key)
+        record["shape"].pop("mesh")
+    return record
 
 
 def solid_primitives(

@@ -204,7 +204,7 @@ class TraceWriter:
             tf.KEY_SCHEMA_VERSION: str(m.schema_version),
             tf.KEY_TRACE_FORMAT: str(tf.TRACE_FORMAT_VERSION),
             tf.KEY_BODIES: dumps(self._names),
-            tf.KEY_BODY_SPECS: dumps([asdict(b) for b in m.bodies]),
+            tf.KEY_BODY_SPECS: dumps([fx.body_spec_record(b) for b in m.bodies]),
             tf.KEY_JOINTS: dumps(self._joint_names),
             tf.KEY_JOINT_SPECS: dumps([asdict(j) for j in m.joints]),
             tf.KEY_STATE: dumps(list(m.state_names)),
@@ -250,9 +250,8 @@ class TraceWriter:
         scales = scales or {}
         entities = []
         for b in self.meta.bodies:
-            sh = b.shape
-            prims = fx.shape_primitives(sh.kind.value, sh.size, sh.radius, sh.length, b.color, scales.get(b.name, 1.0))
-            info = {"shape": sh.kind.value, "motion": b.motion.value}
+            prims = fx.body_primitives(b, scales.get(b.name, 1.0))
+            info = {"shape": b.shape.kind.value, "motion": b.motion.value}
             entities.append(fx.entity(ns, b.name, f"body/{b.name}", info, **prims))
         for s in solids:
             if s.body not in self._names:

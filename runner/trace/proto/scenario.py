@@ -7,7 +7,8 @@ message classes) in a pool of their own per trace, since two traces in one proce
 bodies. State is a file of its own, built when the first step brings the variables' values (their types
 are those of the initial values). Names are the language's identifiers (``[A-Za-z_][A-Za-z0-9_]*``),
 valid protobuf field names as they are; ``json_name`` is set to the name itself so no consumer camel-cases
-it.
+it. A robot's links and joints (``arm.link_7``, docs/robots.md) are fields of a nested message per robot,
+so the paths read ``/bodies.arm.link_7.vel.z`` as the expressions do; traces without robots are unchanged.
 """
 
 from __future__ import annotations
@@ -20,7 +21,7 @@ from google.protobuf import descriptor_pb2, descriptor_pool, message_factory
 
 from runner.trace.proto import physics_scenarios_pb2 as base
 
-__all__ = ["PACKAGE", "ScenarioMessages", "scenario_messages", "state_field_type", "with_state"]
+__all__ = ["PACKAGE", "ScenarioMessages", "field_of", "scenario_messages", "state_field_type", "with_state"]
 
 PACKAGE = "physics_scenarios"
 FILE_NAME = "physics_scenarios_scenario.proto"
@@ -51,10 +52,40 @@ def _message(
     file: descriptor_pb2.FileDescriptorProto, name: str, fields: Sequence[tuple[str, int, str | None]]
 ) -> None:
     msg = file.message_type.add(name=name)
+    _fields(msg, fields)
+
+
+def _fields(msg: descriptor_pb2.DescriptorProto, fields: Sequence[tuple[str, int, str | None]]) -> None:
     for number, (field_name, kind, type_name) in enumerate(fields, start=1):
         f = msg.field.add(name=field_name, json_name=field_name, number=number, type=kind, label=_F.LABEL_OPTIONAL)
         if type_name is not None:
             f.type_name = type_name
+
+
+def _grouped(file: descriptor_pb2.FileDescriptorProto, name: str, names: Sequence[str], type_name: str) -> None:
+    """Message ``name`` with a ``type_name`` field per plain name and, per robot (the part before a dot), a
+    field of a nested message ``Robot_<robot>`` holding its members, at the robot's first member's place."""
+    msg = file.message_type.add(name=name)
+    fields: list[tuple[str, int, str | None]] = []
+    members: dict[str, list[str]] = {}
+    for n in names:
+        group, dot, leaf = n.partition(".")
+        if not dot:
+            fields.append((n, _F.TYPE_MESSAGE, type_name))
+            continue
+        if group not in members:
+            members[group] = []
+            fields.append((group, _F.TYPE_MESSAGE, f".{PACKAGE}.{name}.Robot_{group}"))
+        members[group].append(leaf)
+    _fields(msg, fields)
+    for group, leaves in members.items():
+        _fields(msg.nested_type.add(name=f"Robot_{group}"), [(leaf, _F.TYPE_MESSAGE, type_name) for leaf in leaves])
+
+
+def field_of(msg: Any, name: str) -> Any:
+    """The field of ``msg`` for a name, a robot member's (``arm.link_7``) through its robot's message."""
+    group, dot, leaf = name.partition(".")
+    return getattr(getattr(msg, group), leaf) if dot else getattr(msg, name)
 
 
 def _classes(file: descriptor_pb2.FileDescriptorProto, names: Sequence[str], with_base: bool) -> list[Any]:
@@ -76,8 +107,8 @@ def scenario_messages(bodies: Sequence[str], joints: Sequence[str]) -> ScenarioM
     )
     motion = f".{base.BodyMotion.DESCRIPTOR.full_name}"
     joint = f".{base.JointState.DESCRIPTOR.full_name}"
-    _message(file, "Bodies", [(b, _F.TYPE_MESSAGE, motion) for b in bodies])
-    _message(file, "Joints", [(j, _F.TYPE_MESSAGE, joint) for j in joints])
+    _grouped(file, "Bodies", bodies, motion)
+    _grouped(file, "Joints", joints, joint)
     return ScenarioMessages(*_classes(file, ("Bodies", "Joints"), with_base=True))
 
 

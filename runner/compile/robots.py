@@ -1,0 +1,144 @@
+"""Place a scenario's robots in the world: links become bodies `<robot>.<link>`, joints `<robot>.<joint>`.
+
+A link's body frame is its URDF link frame (MJCF: body frame) at the model's zero configuration, moved by
+the robot's ``pos``/``hpr``; its inertial frame is the model's tensor diagonalised (principal moments and
+the rotation to their axes); its shapes keep their local poses. A model's root is static when ``fixed``
+(an MJCF model's world body always is); joints to a static link are joints to the environment. A joint's
+two links never touch (URDF's convention; MuJoCo's parent-child rule), nor the pairs the scenario excludes.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass
+
+from backends.geometry import IDENTITY, quat_mul, quat_rotate
+from backends.types import BodySpec, JointKind, JointSpec, Motion, Motor, PairSurface, Shape, ShapeKind, Surface
+from runner.language.hpr import hpr_to_quat
+from runner.language.model import Scenario
+from runner.language.model_physics import Limits
+from runner.language.model_robots import Robot
+from runner.language.robot_desc import JointDesc, LinkDesc, ModelDesc, principal_axes
+
+PALETTE = [(0.80, 0.45, 0.20, 1.0), (0.30, 0.50, 0.80, 1.0), (0.40, 0.70, 0.35, 1.0), (0.75, 0.30, 0.40, 1.0)]
+STATIC_COLOR = (0.55, 0.55, 0.55, 1.0)
+
+
+@dataclass(frozen=True)
+class RobotParts:
+    bodies: tuple[BodySpec, ...]
+    joints: tuple[JointSpec, ...]
+    excluded: tuple[tuple[str, str], ...]
+    surfaces: tuple[PairSurface, ...]  # link overrides: (link, other body) for every other body
+    groups: dict[str, list[str]]  # robot -> its links' body names
+
+
+def _placement(robot: Robot) -> tuple[tuple[float, float, float], tuple[float, float, float, float]]:
+    return robot.pos, hpr_to_quat(robot.hpr) if robot.hpr is not None else IDENTITY
+
+
+def _add(a: tuple[float, float, float], b: tuple[float, float, float]) -> tuple[float, float, float]:
+    return (a[0] + b[0], a[1] + b[1], a[2] + b[2])
+
+
+def is_static(robot: Robot, desc: ModelDesc, link: str) -> bool:
+    return link == desc.root and (robot.fixed or robot.format == "mjcf")
+
+
+def link_body(robot_name: str, robot: Robot, desc: ModelDesc, link: LinkDesc, number: int) -> BodySpec:
+    import numpy as np
+
+    pos0, quat0 = _placement(robot)
+    static = is_static(robot, desc, link.name)
+    override = robot.links.get(link.name)
+    given = override.color if override is not None and override.color is not None else link.color
+    if given is None:
+        given = STATIC_COLOR if static else PALETTE[number % len(PALETTE)]
+    color = (float(given[0]), float(given[1]), float(given[2]), float(given[3]) if len(given) > 3 else 1.0)
+    if static:
+        mass, inertia, com, axes = 0.0, (0.0, 0.0, 0.0), (0.0, 0.0, 0.0), IDENTITY
+    else:
+        mass, com = link.mass, link.com
+        inertia, axes = principal_axes(np.asarray(link.inertia, dtype=float))
+    return BodySpec(
+        name=f"{robot_name}.{link.name}",
+        motion=Motion.STATIC if static else Motion.DYNAMIC,
+        shape=Shape(ShapeKind.COMPOUND),
+        mass=mass,
+        inertia=inertia,
+        pos=_add(pos0, quat_rotate(quat0, link.pos)),
+        quat=quat_mul(quat0, link.quat),
+        color=color,
+        shapes=link.shapes,
+        com=com,
+        inertia_quat=axes,
+    )
+
+
+def _joint(robot_name: str, robot: Robot, desc: ModelDesc, joint: JointDesc) -> JointSpec:
+    pos0, quat0 = _placement(robot)
+    override = robot.joints.get(joint.name)
+    lo, hi = joint.lo, joint.hi
+    motor = None
+    if override is not None:
+        if override.free:
+            lo = hi = None
+        elif isinstance(override.limits, Limits):
+            lo, hi = override.limits.lo, override.limits.hi
+        elif override.limits is not None:
+            lo, hi = override.limits
+        if override.motor is not None:
+            motor = Motor(override.motor.vel, override.motor.fmax)
+        elif override.servo is not None:
+            motor = Motor(0.0, 0.0)  # the servo sets it every step (runner.sim.servo)
+    limits = override.limits if override is not None and isinstance(override.limits, Limits) else None
+    other = None if is_static(robot, desc, joint.parent) else f"{robot_name}.{joint.parent}"
+    return JointSpec(
+        name=f"{robot_name}.{joint.name}",
+        kind=JointKind(joint.kind),
+        body=f"{robot_name}.{joint.child}",
+        other=other,
+        axis=quat_rotate(quat0, joint.axis),
+        anchor=_add(pos0, quat_rotate(quat0, joint.anchor)),
+        lo=lo,
+        hi=hi,
+        stop_bounce=limits.bounce if limits is not None else 0.0,
+        stop_stiffness=limits.stiffness if limits is not None else None,
+        stop_damping=limits.damping if limits is not None else None,
+        motor=motor,
+    )
+
+
+def compile_robots(
+    model: Scenario, robots: Mapping[str, ModelDesc], others: tuple[str, ...], arrays: Mapping[str, list[str]]
+) -> RobotParts:
+    """The robots' bodies, joints, excluded pairs and link surfaces; ``others`` are the hand-written bodies,
+    ``arrays`` their groups."""
+    bodies: list[BodySpec] = []
+    joints: list[JointSpec] = []
+    excluded: list[tuple[str, str]] = []
+    link_surfaces: list[tuple[str, Surface]] = []
+    group: dict[str, list[str]] = {}
+    for name, robot in model.robots.items():
+        desc = robots[name]
+        for link in desc.links:
+            bodies.append(link_body(name, robot, desc, link, len(bodies)))
+            override = robot.links.get(link.name)
+            if override is not None and override.surface is not None:
+                s = override.surface
+                link_surfaces.append((f"{name}.{link.name}", Surface(s.bounce, s.bounce_vel, s.mu)))
+        group[name] = [f"{name}.{link.name}" for link in desc.links]
+        for joint in desc.joints:
+            if joint.kind == "free":  # no joint: the body touches its parent (MuJoCo: the world) as any other
+                continue
+            excluded.append((f"{name}.{joint.parent}", f"{name}.{joint.child}"))
+            joints.append(_joint(name, robot, desc, joint))
+        excluded.extend((f"{name}.{a}", f"{name}.{b}") for a, b in robot.exclude)
+    members = {**arrays, **group}
+    for a, b in model.exclude_contacts:
+        for x in members.get(a, [a]):
+            excluded.extend((x, y) for y in members.get(b, [b]) if x != y)
+    everyone = list(others) + [b.name for b in bodies]
+    surfaces = tuple(PairSurface(link, other, s) for link, s in link_surfaces for other in everyone if other != link)
+    unique = tuple(dict.fromkeys((a, b) if a <= b else (b, a) for a, b in excluded))
+    return RobotParts(tuple(bodies), tuple(joints), unique, surfaces, group)

@@ -1,0 +1,145 @@
+"""What a URDF or MJCF file says, engine-neutral, and where its files are (roots, `package://`).
+
+A :class:`ModelDesc` holds every link in the model's own frame at its zero configuration (forward
+kinematics already applied), its inertial frame, its collision shapes, and every joint with its axis and
+anchor in the model frame. :mod:`runner.compile.robots` places it in the world. Problems found while
+reading a model are :class:`ModelFileError`s naming the *model file* and line.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from backends.types import PlacedShape, Quat, Rgba, Vec3
+
+#: `@pybullet_data/...`: the models shipped inside the pybullet wheel (pybullet_data.getDataPath()).
+PYBULLET_DATA = "@pybullet_data"
+
+
+class ModelFileError(Exception):
+    """A problem in a model file (or a file it names): the file, the line (0: unknown) and what is wrong."""
+
+    def __init__(self, file: Path | str, line: int, message: str) -> None:
+        super().__init__(message)
+        self.file = str(file)
+        self.line = line
+        self.message = message
+
+
+@dataclass(frozen=True)
+class LinkDesc:
+    name: str
+    mass: float  # kg; 0: the model says none (only a fixed root may have none)
+    com: Vec3  # in the link frame
+    inertia: tuple[Vec3, Vec3, Vec3]  # full tensor about the COM, link frame
+    pos: Vec3  # link frame in the model frame, at the zero configuration
+    quat: Quat
+    shapes: tuple[PlacedShape, ...]  # collision shapes in the link frame
+    color: Rgba | None  # the first visual's colour, if the model gives one
+    line: int
+
+
+@dataclass(frozen=True)
+class JointDesc:
+    name: str
+    kind: str  # hinge | slider | fixed
+    parent: str
+    child: str
+    axis: Vec3  # unit, model frame, at the zero configuration
+    anchor: Vec3  # model frame: the child's frame origin
+    lo: float | None  # from the zero configuration
+    hi: float | None
+    line: int
+
+
+@dataclass(frozen=True)
+class ModelDesc:
+    file: str  # as resolved (absolute)
+    root: str  # the root link
+    links: tuple[LinkDesc, ...]
+    joints: tuple[JointDesc, ...]
+
+    def link(self, name: str) -> LinkDesc:
+        return next(link for link in self.links if link.name == name)
+
+
+def data_root(text: str) -> tuple[Path, str] | None:
+    """`@pybullet_data/rest` -> (the folder, rest); None for a path that does not start with a root."""
+    if text == PYBULLET_DATA or text.startswith(PYBULLET_DATA + "/"):
+        from importlib.util import find_spec
+
+        spec = find_spec("pybullet_data")  # the data package's folder, found without importing anything
+        if spec is None or not spec.submodule_search_locations:  # pybullet is a base dependency
+            raise ModelFileError(text, 0, f"`{PYBULLET_DATA}` needs the pybullet package (pip install pybullet)")
+        return Path(list(spec.submodule_search_locations)[0]), text[len(PYBULLET_DATA) :].lstrip("/")
+    return None
+
+
+def resolve_file(text: str, base_dir: Path) -> Path:
+    """A model path as the scenario writes it: relative to the scenario's folder, or under a root."""
+    rooted = data_root(text)
+    if rooted is not None:
+        return (rooted[0] / rooted[1]).resolve()
+    return (base_dir / text).resolve()
+
+
+def resolve_package(uri: str, package_root: Path, model_file: Path, line: int) -> Path:
+    """`package://NAME/rest` -> `<package_root>/NAME/rest`; a plain path is relative to the model file.
+    A result outside its root (the package root, or the model's folder) is refused."""
+    if uri.startswith("package://"):
+        root, target = package_root, (package_root / uri[len("package://") :]).resolve()
+    elif uri.startswith("file://"):
+        root, target = model_file.parent.resolve(), Path(uri[len("file://") :]).resolve()
+    else:
+        root, target = model_file.parent.resolve(), (model_file.parent / uri).resolve()
+    if not target.is_relative_to(root.resolve()):
+        raise ModelFileError(model_file, line, f"the mesh `{uri}` resolves to {target}, outside its root {root}")
+    if not target.is_file():
+        raise ModelFileError(model_file, line, f"the mesh `{uri}` does not exist (looked for {target})")
+    return target
+
+
+def quat_from_matrix(r: np.ndarray) -> Quat:
+    """A unit quaternion (w, x, y, z, w >= 0) from a proper rotation matrix (Shepperd's method)."""
+    m = r
+    t = m[0, 0] + m[1, 1] + m[2, 2]
+    if t > 0:
+        s = math.sqrt(t + 1.0) * 2
+        q = (0.25 * s, (m[2, 1] - m[1, 2]) / s, (m[0, 2] - m[2, 0]) / s, (m[1, 0] - m[0, 1]) / s)
+    elif m[0, 0] > m[1, 1] and m[0, 0] > m[2, 2]:
+        s = math.sqrt(1.0 + m[0, 0] - m[1, 1] - m[2, 2]) * 2
+        q = ((m[2, 1] - m[1, 2]) / s, 0.25 * s, (m[0, 1] + m[1, 0]) / s, (m[0, 2] + m[2, 0]) / s)
+    elif m[1, 1] > m[2, 2]:
+        s = math.sqrt(1.0 + m[1, 1] - m[0, 0] - m[2, 2]) * 2
+        q = ((m[0, 2] - m[2, 0]) / s, (m[0, 1] + m[1, 0]) / s, 0.25 * s, (m[1, 2] + m[2, 1]) / s)
+    else:
+        s = math.sqrt(1.0 + m[2, 2] - m[0, 0] - m[1, 1]) * 2
+        q = ((m[1, 0] - m[0, 1]) / s, (m[0, 2] + m[2, 0]) / s, (m[1, 2] + m[2, 1]) / s, 0.25 * s)
+    n = math.sqrt(sum(c * c for c in q))
+    sign = -1.0 if q[0] < 0 else 1.0
+    return (sign * q[0] / n, sign * q[1] / n, sign * q[2] / n, sign * q[3] / n)
+
+
+def principal_axes(tensor: np.ndarray) -> tuple[Vec3, Quat]:
+    """Principal moments and the rotation from the given frame to the principal axes: a diagonal tensor keeps
+    its axes and order (identity); otherwise the eigenvectors, ascending, made right-handed."""
+    off = abs(tensor[0, 1]) + abs(tensor[0, 2]) + abs(tensor[1, 2])
+    if off <= 1e-12 * max(float(np.abs(tensor).max()), 1e-300):
+        return (float(tensor[0, 0]), float(tensor[1, 1]), float(tensor[2, 2])), (1.0, 0.0, 0.0, 0.0)
+    moments, vectors = np.linalg.eigh((tensor + tensor.T) / 2.0)
+    if np.linalg.det(vectors) < 0:
+        vectors[:, 2] = -vectors[:, 2]
+    m = tuple(float(max(v, 0.0)) for v in moments)
+    return (m[0], m[1], m[2]), quat_from_matrix(vectors)
+
+
+def vec(a: np.ndarray) -> Vec3:
+    return (float(a[0]), float(a[1]), float(a[2]))
+
+
+def quat4(a: np.ndarray) -> Quat:
+    return (float(a[0]), float(a[1]), float(a[2]), float(a[3]))

@@ -1,0 +1,118 @@
+"""Load the models a scenario names (``robots:``) and check the names its overrides use.
+
+Model files are read once per load; a problem in one is an issue naming the *model file* and line (exit 2).
+"""
+
+from __future__ import annotations
+
+from functools import lru_cache
+from pathlib import Path as FsPath
+
+from runner.errors import Issue, ScenarioValidationError
+from runner.language.model import Scenario
+from runner.language.model_robots import Robot
+from runner.language.robot_desc import ModelDesc, ModelFileError, data_root, resolve_file
+from runner.language.semantics import unknown
+from runner.language.yaml_source import Positions
+
+#: What a robot's link or joint may not be called: the fields read after it (`arm.pos.x` would be ambiguous).
+FIELD_NAMES = frozenset({"pos", "vel", "angvel", "quat", "speed", "position", "velocity", "force"})
+
+
+def package_root(robot: Robot, model_file: FsPath, base_dir: FsPath) -> FsPath:
+    if robot.package_root is not None:
+        return resolve_file(robot.package_root, base_dir)
+    return model_file.parent.parent
+
+
+def load_model(robot: Robot, base_dir: FsPath) -> ModelDesc:
+    """Read one robot's model file (raises ModelFileError)."""
+    file = resolve_file(robot.file, base_dir)
+    rooted = data_root(robot.file)
+    root = rooted[0].resolve() if rooted is not None else base_dir.resolve()
+    if not file.is_relative_to(root):
+        raise ModelFileError(file, 0, f"the model file must be inside {root}; found {robot.file!r}")
+    if not file.is_file():
+        raise ModelFileError(file, 0, f"no model file at {file}")
+    info = file.stat()
+    triangles = robot.static_meshes == "triangles"
+    return _read(robot.format, file, package_root(robot, file, base_dir), robot.fixed, triangles, info.st_mtime_ns)
+
+
+@lru_cache(maxsize=32)
+def _read(kind: str, file: FsPath, packages: FsPath, fixed: bool, triangles: bool, mtime_ns: int) -> ModelDesc:
+    """One model file's description, read once per content version (every variant of a scenario, and every
+    scenario of a folder, shares it; the file's modification time keys an edited file anew)."""
+    del mtime_ns  # part of the cache key only
+    if kind == "urdf":
+        from runner.language.urdf import load_urdf
+
+        return load_urdf(file, packages, fixed, triangles)
+    from runner.language.mjcf import load_mjcf
+
+    return load_mjcf(file)
+
+
+def load_robots(model: Scenario, positions: Positions, base_dir: FsPath) -> dict[str, ModelDesc]:
+    """Every robot's model, its override names checked; the issues of all robots raised together."""
+    out: dict[str, ModelDesc] = {}
+    issues: list[Issue] = []
+    for name, robot in model.robots.items():
+        where = ("robots", name, robot.format)
+        try:
+            desc = load_model(robot, base_dir)
+        except ModelFileError as exc:
+            issues.append(Issue(exc.file, exc.line, 0, ".".join(str(p) for p in where), exc.message))
+            continue
+        out[name] = desc
+        links = {link.name for link in desc.links}
+        joints = {joint.name for joint in desc.joints}
+        for kind, names in (("link", links), ("joint", joints)):
+            clash = sorted(names & FIELD_NAMES)
+            if clash:
+                issues.append(
+                    positions.issue(
+                        where,
+                        f"the model's {kind} `{clash[0]}` has the name of a field "
+                        f"(`{name}.{clash[0]}` would be ambiguous); rename it in the model",
+                    )
+                )
+        for jname, override in robot.joints.items():
+            joint = next((j for j in desc.joints if j.name == jname), None)
+            if joint is None:
+                issues.append(positions.issue(("robots", name, "joints", jname), unknown("joint", jname, joints), True))
+            elif joint.kind == "fixed" and (override.motor or override.servo or override.limits or override.free):
+                message = f"joint `{jname}` is fixed in the model; it takes no motor, servo or limits"
+                issues.append(positions.issue(("robots", name, "joints", jname), message, True))
+        for lname in robot.links:
+            if lname not in links:
+                issues.append(positions.issue(("robots", name, "links", lname), unknown("link", lname, links), True))
+        for i, pair in enumerate(robot.exclude):
+            for j, ref in enumerate(pair):
+                if ref not in links:
+                    issues.append(positions.issue(("robots", name, "exclude", i, j), unknown("link", ref, links)))
+        root = desc.link(desc.root)
+        if root.mass <= 0 and not robot.fixed and robot.format == "urdf":
+            issues.append(
+                Issue(
+                    desc.file,
+                    root.line,
+                    0,
+                    f"robots.{name}.fixed",
+                    f"root link `{root.name}` has no mass; a free model needs one (or `fixed: true`)",
+                )
+            )
+        for link in desc.links:
+            if link.name != desc.root and link.mass <= 0:
+                issues.append(
+                    Issue(
+                        desc.file,
+                        link.line,
+                        0,
+                        f"robots.{name}",
+                        f"link `{link.name}` has no mass (no <inertial> or mass 0); a moving link needs one",
+                    )
+                )
+    if issues:
+        raise ScenarioValidationError(issues)
+    return out

@@ -1,0 +1,261 @@
+"""Read a URDF file into a :class:`~runner.language.robot_desc.ModelDesc`.
+
+Why these libraries: **yourdfpy** parses URDF into typed objects (origins as 4x4 matrices, inertials,
+geometry, limits) without needing any engine, so a URDF scenario loads for PyBullet on a machine without
+MuJoCo (MuJoCo's own URDF compiler would make the optional `mujoco` extra a requirement, and it merges
+fixed links and drops names). **lxml** (yourdfpy's own parser) gives the line of every element, so a bad
+model is reported at its line; **trimesh** loads meshes and computes their convex hulls.
+"""
+
+from __future__ import annotations
+
+import io
+import math
+from collections.abc import Iterator
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from backends.types import Mesh, PlacedShape, Rgba, Shape, ShapeKind
+from runner.language.robot_desc import (
+    JointDesc,
+    LinkDesc,
+    ModelDesc,
+    ModelFileError,
+    quat_from_matrix,
+    resolve_package,
+    vec,
+)
+
+#: A name expressions can read as `<robot>.<name>` (the language's identifiers).
+_IDENT = r"^[A-Za-z_][A-Za-z0-9_]*$"
+_KINDS = {"revolute": "hinge", "continuous": "hinge", "prismatic": "slider", "fixed": "fixed"}
+
+
+def xml_bytes(file: Path) -> bytes:
+    """The file's bytes with its XML declaration blanked (same length: lines and columns stay): pybullet_data
+    ships files declaring `version="0.0"`, which XML parsers refuse and every simulator reads."""
+    import re
+
+    try:
+        raw = file.read_bytes()
+    except OSError as exc:
+        raise ModelFileError(file, 0, f"cannot read the model file: {exc.strerror}") from None
+    found = re.match(rb"\A(\xef\xbb\xbf)?<\?xml[^>]*\?>", raw)
+    return raw if found is None else b" " * found.end() + raw[found.end() :]
+
+
+def parse_xml(file: Path) -> Any:
+    """The lxml tree, or the file and line of the first syntax error."""
+    from lxml import etree
+
+    parser = etree.XMLParser(remove_comments=True, resolve_entities=False, no_network=True)
+    try:
+        return etree.ElementTree(etree.fromstring(xml_bytes(file), parser))
+    except etree.XMLSyntaxError as exc:
+        line = exc.lineno or 0
+        raise ModelFileError(file, line, f"malformed XML: {exc.msg}") from None
+
+
+def _lines(tree: Any, tag: str) -> dict[str, int]:
+    return {e.get("name"): e.sourceline or 0 for e in tree.getroot().iter(tag) if e.get("name")}
+
+
+def _check_structure(tree: Any, file: Path) -> tuple[dict[str, int], dict[str, int]]:
+    """Names and references, with the line of each problem; returns the links' and joints' lines."""
+    import re
+
+    root = tree.getroot()
+    if root.tag != "robot":
+        raise ModelFileError(file, root.sourceline or 0, f"expected a <robot> URDF document, found <{root.tag}>")
+    links, joints = _lines(tree, "link"), _lines(tree, "joint")
+    for kind, table in (("link", links), ("joint", joints)):
+        for name, line in table.items():
+            if not re.match(_IDENT, name):
+                raise ModelFileError(
+                    file,
+                    line,
+                    f"{kind} name `{name}` is not an identifier (letters, digits, `_`); expressions could not read it",
+                )
+    if not links:
+        raise ModelFileError(file, root.sourceline or 0, "the model has no <link>")
+    children: dict[str, str] = {}
+    for joint in root.iter("joint"):
+        line = joint.sourceline or 0
+        if joint.getparent() is not root:
+            continue  # a <transmission>'s joint reference
+        kind = joint.get("type", "")
+        if kind not in _KINDS:
+            raise ModelFileError(
+                file, line, f"joint `{joint.get('name')}` has type `{kind}`; supported: {', '.join(_KINDS)}"
+            )
+        for end in ("parent", "child"):
+            element = joint.find(end)
+            ref = element.get("link") if element is not None else None
+            if ref is None:
+                raise ModelFileError(file, line, f"joint `{joint.get('name')}` has no <{end} link=...>")
+            if ref not in links:
+                where = element.sourceline or line
+                raise ModelFileError(
+                    file,
+                    where,
+                    f"joint `{joint.get('name')}` names {end} link `{ref}`, which the model does not define",
+                )
+        child = joint.find("child").get("link")
+        if child in children:
+            raise ModelFileError(file, line, f"link `{child}` is the child of two joints (`{children[child]}` too)")
+        children[child] = str(joint.get("name"))
+    roots = [name for name in links if name not in children]
+    if len(roots) != 1:
+        raise ModelFileError(file, root.sourceline or 0, f"expected one root link, found {roots or 'none (a loop)'}")
+    return links, joints
+
+
+def _mesh_lines(tree: Any) -> dict[str, int]:
+    return {e.get("filename"): e.sourceline or 0 for e in tree.getroot().iter("mesh") if e.get("filename")}
+
+
+def load_mesh(path: Path, scale: tuple[float, float, float], file: Path, line: int, hull: bool) -> Mesh:
+    """The mesh file's triangles (scaled), or their convex hull."""
+    import trimesh
+
+    try:
+        loaded = trimesh.load(str(path), force="mesh", process=True)
+    except Exception as exc:  # noqa: BLE001 - trimesh raises many types for unreadable files; all mean "bad mesh"
+        raise ModelFileError(file, line, f"cannot read the mesh {path.name}: {exc}") from None
+    if not isinstance(loaded, trimesh.Trimesh) or len(loaded.faces) == 0:
+        raise ModelFileError(file, line, f"the mesh {path.name} holds no triangles")
+    loaded.apply_scale(np.asarray(scale, dtype=float))
+    if hull:
+        loaded = loaded.convex_hull  # qhull, through trimesh: every vertex of the hull, none moved
+    vertices = tuple(vec(v) for v in np.asarray(loaded.vertices, dtype=float))
+    faces = tuple((int(a), int(b), int(c)) for a, b, c in np.asarray(loaded.faces))
+    return Mesh(vertices=vertices, faces=faces, source=path.name)
+
+
+def _shape(geometry: Any, file: Path, package_root: Path, mesh_lines: dict[str, int], hull: bool) -> Shape:
+    g = geometry
+    if g.box is not None:
+        return Shape(ShapeKind.BOX, size=vec(g.box.size))
+    if g.sphere is not None:
+        return Shape(ShapeKind.SPHERE, radius=float(g.sphere.radius))
+    if g.cylinder is not None:
+        c = g.cylinder
+        return Shape(ShapeKind.CYLINDER, radius=float(c.radius), length=float(c.length))
+    mesh = g.mesh
+    line = mesh_lines.get(mesh.filename, 0)
+    target = resolve_package(mesh.filename, package_root, file, line)
+    s = mesh.scale
+    scale = (1.0, 1.0, 1.0) if s is None else vec(np.broadcast_to(np.asarray(s, dtype=float), (3,)))
+    kind = ShapeKind.CONVEX if hull else ShapeKind.TRIMESH
+    return Shape(kind, mesh=load_mesh(target, scale, file, line, hull))
+
+
+def _pose(matrix: np.ndarray) -> tuple[tuple[float, float, float], tuple[float, float, float, float]]:
+    return vec(matrix[:3, 3]), quat_from_matrix(matrix[:3, :3])
+
+
+def _color(link: Any, materials: dict[str, Rgba]) -> Rgba | None:
+    for visual in link.visuals:
+        material = visual.material
+        if material is None:
+            continue
+        rgba = material.color.rgba if material.color is not None else materials.get(material.name or "")
+        if rgba is not None:
+            return (float(rgba[0]), float(rgba[1]), float(rgba[2]), float(rgba[3]))
+    return None
+
+
+def _walk(root: str, joints: list[Any]) -> Iterator[Any]:
+    """Joints parents first."""
+    by_parent: dict[str, list[Any]] = {}
+    for joint in joints:
+        by_parent.setdefault(joint.parent, []).append(joint)
+    stack = [root]
+    while stack:
+        for joint in by_parent.get(stack.pop(), []):
+            yield joint
+            stack.append(joint.child)
+
+
+def load_urdf(file: Path, package_root: Path, static_root: bool, static_triangles: bool) -> ModelDesc:
+    """Parse ``file``; links' frames by forward kinematics at the zero configuration (model frame). The
+    meshes of a static root are its triangles when ``static_triangles``, else (and for every moving link)
+    convex hulls."""
+    import yourdfpy
+
+    tree = parse_xml(file)
+    link_lines, joint_lines = _check_structure(tree, file)
+    mesh_lines = _mesh_lines(tree)
+    try:
+        urdf = yourdfpy.URDF.load(io.BytesIO(xml_bytes(file)), build_scene_graph=False, load_meshes=False)
+    except Exception as exc:  # noqa: BLE001 - yourdfpy raises ValueError/TypeError/AttributeError on bad values
+        raise ModelFileError(file, 0, f"cannot read the URDF: {exc}") from None
+    robot = urdf.robot
+    materials = {m.name: tuple(m.color.rgba) for m in robot.materials if m.color is not None and m.name}
+    children = {j.child for j in robot.joints}
+    root = next(link.name for link in robot.links if link.name not in children)
+    frames = {root: np.eye(4)}
+    descs: list[JointDesc] = []
+    for joint in _walk(root, list(robot.joints)):
+        frame = frames[joint.parent] @ np.asarray(joint.origin if joint.origin is not None else np.eye(4))
+        frames[joint.child] = frame
+        kind = _KINDS[joint.type]
+        axis = np.asarray(joint.axis if joint.axis is not None else (1.0, 0.0, 0.0), dtype=float)
+        if kind != "fixed" and np.linalg.norm(axis) < 1e-12:
+            raise ModelFileError(file, joint_lines.get(joint.name, 0), f"joint `{joint.name}` has a zero axis")
+        world_axis = frame[:3, :3] @ (axis / max(float(np.linalg.norm(axis)), 1e-300))
+        lo = hi = None
+        if joint.type in ("revolute", "prismatic") and joint.limit is not None:
+            lo, hi = joint.limit.lower, joint.limit.upper
+        if lo is not None and hi is not None and lo > hi:
+            raise ModelFileError(file, joint_lines.get(joint.name, 0), f"joint `{joint.name}` has lower > upper")
+        descs.append(
+            JointDesc(
+                joint.name,
+                kind,
+                joint.parent,
+                joint.child,
+                vec(world_axis),
+                vec(frame[:3, 3]),
+                None if lo is None else float(lo),
+                None if hi is None else float(hi),
+                joint_lines.get(joint.name, 0),
+            )
+        )
+    links: list[LinkDesc] = []
+    for link in robot.links:
+        line = link_lines.get(link.name, 0)
+        inertial = link.inertial
+        mass = float(inertial.mass) if inertial is not None and inertial.mass is not None else 0.0
+        if not math.isfinite(mass) or mass < 0:
+            raise ModelFileError(file, line, f"link `{link.name}` has mass {mass}")
+        origin = np.asarray(inertial.origin) if inertial is not None and inertial.origin is not None else np.eye(4)
+        tensor = (
+            np.asarray(inertial.inertia, dtype=float)
+            if inertial is not None and inertial.inertia is not None
+            else np.zeros((3, 3))
+        )
+        rot = origin[:3, :3]
+        tensor = rot @ tensor @ rot.T  # the inertial frame's tensor, in the link frame
+        hull = not (static_root and link.name == root and static_triangles)
+        shapes = []
+        for collision in link.collisions:
+            pos, quat = _pose(np.asarray(collision.origin) if collision.origin is not None else np.eye(4))
+            shapes.append(PlacedShape(_shape(collision.geometry, file, package_root, mesh_lines, hull), pos, quat))
+        pos, quat = _pose(frames[link.name])
+        links.append(
+            LinkDesc(
+                link.name,
+                mass,
+                vec(origin[:3, 3]),
+                (vec(tensor[0]), vec(tensor[1]), vec(tensor[2])),
+                pos,
+                quat,
+                tuple(shapes),
+                _color(link, materials),
+                line,
+            )
+        )
+    return ModelDesc(str(file), root, tuple(links), tuple(descs))

@@ -1,0 +1,58 @@
+"""The position servo, ODE style, engine-neutral: a velocity motor commanded every step.
+
+Before each step, for every servo joint: ``e = target - position`` (the joint's reading after the last
+step), ``vel = clamp(gain * e, -vmax, vmax)``, and ``set_motor(joint, vel, fmax)``, the way ODE users
+write a position servo (dParamVel = gain x error, dParamFMax = fmax). While the motor is not saturated the
+engine holds the commanded rate exactly, so the error falls geometrically, ``e_{k+1} = (1 - gain dt) e_k``:
+it converges without overshoot for ``gain dt <= 1`` (the loader refuses more) and reaches a fraction
+``(1 - gain dt)^n`` of its start after n steps (docs/semantics.md, "Position servo"). The servo is the
+runner's, so every engine gets the same commands; an adapter only needs ``set_motor``.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+from backends.base import Backend
+from runner.language.expressions import Expression, Resolver, compile_expression
+from runner.language.model import Scenario
+
+
+@dataclass(frozen=True)
+class ServoSpec:
+    joint: str  # `<robot>.<joint>`
+    target: float | Expression
+    gain: float
+    fmax: float
+    vmax: float | None
+
+
+def servo_specs(model: Scenario) -> tuple[ServoSpec, ...]:
+    out = []
+    for rname, robot in model.robots.items():
+        for jname, joint in robot.joints.items():
+            s = joint.servo
+            if s is not None:
+                target = s.target if isinstance(s.target, float | int) else compile_expression(s.target)
+                out.append(ServoSpec(f"{rname}.{jname}", target, s.gain, s.fmax, s.vmax))
+    return tuple(out)
+
+
+class Servos:
+    """Commands every servo's motor from the latest joint readings (``positions``, world joint order)."""
+
+    def __init__(self, specs: tuple[ServoSpec, ...], joint_index: dict[str, int]) -> None:
+        self.specs = [(joint_index[s.joint], s) for s in specs]
+
+    def __bool__(self) -> bool:
+        return bool(self.specs)
+
+    def drive(self, backend: Backend, positions: list[float], resolver: Resolver) -> None:
+        for j, spec in self.specs:
+            target = spec.target if isinstance(spec.target, float | int) else spec.target.number(resolver)
+            vel = spec.gain * (float(target) - positions[j])
+            if spec.vmax is not None:
+                vel = max(-spec.vmax, min(spec.vmax, vel))
+            if math.isfinite(vel):  # a NaN reading is the engine's failure, which the runner reports itself
+                backend.set_motor(j, vel, spec.fmax)
