@@ -62,6 +62,7 @@ class OdeBackend(Backend):
         self._collider = Collider(
             self._scene, self.options.collide, self.options.contact_forces, f"ode-contacts-{id(self):x}",
             follow_slip=self.options.friction_pyramid == "slip", step=world.dt / world.substeps,
+            impact_cfm=self.options.impact_cfm,
         )
         self._fudge = [j.joint.getParamFudgeFactor(*axis_arg(j)) if j.feedback else 1.0 for j in self._scene.joints]
         n = len(world.bodies)
