@@ -59,6 +59,21 @@ class ContactReader:
         lo, hi = self._pair_of_points(tuple(map(_FIRST, points)), tuple(map(_SECOND, points)))
         return set(zip(lo.tolist(), hi.tolist(), strict=True))
 
+    def approach(self, points: Sequence[Any], velocity: Any) -> dict[tuple[int, int], float]:
+        """Per (a < b) pair of ``points``: the fastest speed along a point's normal at which its two bodies
+        move relative to each other (either sign: a separating point does not bounce anyway).
+        ``velocity(i, point)`` is body ``i``'s velocity at a world point (zero for a static body)."""
+        if not points:
+            return {}
+        first, second = self._bodies(tuple(map(_FIRST, points))), self._bodies(tuple(map(_SECOND, points)))
+        out: dict[tuple[int, int], float] = {}
+        for a, b, point in zip(first.tolist(), second.tolist(), points, strict=True):
+            where, normal = np.asarray(point.point), np.asarray(_NORMAL(point))
+            speed = abs(float(np.dot(velocity(a, where) - velocity(b, where), normal)))
+            key = (min(a, b), max(a, b))
+            out[key] = max(out.get(key, 0.0), speed)
+        return out
+
     def _pair_of_points(self, first: Sequence[Any], second: Sequence[Any]) -> tuple[np.ndarray, np.ndarray]:
         """(lower, higher) body index of every point, from its two collision objects."""
         a, b = self._bodies(first), self._bodies(second)

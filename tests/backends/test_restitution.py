@@ -149,12 +149,7 @@ def test_bounce_zero_does_not_hop(engine: str, dt: float) -> None:
     assert max(zs[first:]) <= HOP
 
 
-_NO_THRESHOLD = "DART has no bounce_vel (its own threshold, e*v > 0.1 m/s, is fixed): measured e_eff 0.500"
-
-
-@pytest.mark.parametrize(
-    "engine", [*ENGINES[:3], pytest.param("dart", marks=pytest.mark.xfail(strict=True, reason=_NO_THRESHOLD))]
-)
+@pytest.mark.parametrize("engine", ENGINES)
 def test_no_bounce_below_bounce_vel(engine: str) -> None:
     """An impact at 0.99 m/s with bounce_vel 1.2 does not bounce (e 0.5 would rebound at 0.495 m/s)."""
     _require(engine)
