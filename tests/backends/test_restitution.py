@@ -46,11 +46,7 @@ STEPS = (0.0005, 0.001, 0.004, 0.01)
 BOUNCES = (0.0, 0.5, 0.9)
 ENGINES = ("ode", "pybullet", "mujoco", "dart")
 
-#: Measured misses (e_eff at 1 m/s, every mass and radius alike) and their causes, docs/backends/*.md.
-_BULLET_ERP = (
-    "Bullet adds its contact ERP push-out of the landing step's penetration to the restitution velocity "
-    "(btMultiBody contacts have no split impulse): e_eff {0.5: 0.547, 0.9: 0.95-1.02} at 1 m/s"
-)
+#: Measured misses (e_eff at 1 m/s, every mass and radius alike) and their cause, docs/backends/*.md.
 _AFTER_GRAVITY = (
     "{engine} applies e to the approach speed after the step's gravity, v + g*h: e_eff = e*(1 + g*h/v), "
     "+10 % at dt 10 ms and 1 m/s (0.550 for 0.5, 0.990 for 0.9)"
@@ -58,13 +54,9 @@ _AFTER_GRAVITY = (
 
 
 def _known_miss(engine: str, e: float, dt: float) -> str | None:
-    if e == 0.0:
+    if e == 0.0 or dt < 0.01:
         return None
-    if engine == "pybullet":
-        return _BULLET_ERP if dt < 0.01 else _BULLET_ERP + "; " + _AFTER_GRAVITY.format(engine="Bullet")
-    if engine == "dart" and dt >= 0.01:
-        return _AFTER_GRAVITY.format(engine="DART")
-    return None
+    return {"pybullet": _AFTER_GRAVITY.format(engine="Bullet"), "dart": _AFTER_GRAVITY.format(engine="DART")}.get(engine)
 
 
 def ball_world(mass: float, r: float, dt: float, e: float, drop: float, bounce_vel: float = 0.0) -> CompiledWorld:
@@ -164,6 +156,4 @@ def test_bounce_above_bounce_vel(engine: str) -> None:
     _require(engine)
     _, vs = trajectory(engine, ball_world(1.0, 0.1, 0.001, 0.5, DROP, bounce_vel=0.8), math.sqrt(2 * DROP / G) + 0.1)
     _, got = e_eff(vs, 0.001)
-    if engine == "pybullet":
-        pytest.xfail(_BULLET_ERP)  # not strict here: this test is about the threshold, the grid holds the miss
     assert abs(got - 0.5) <= REL * 0.5
