@@ -56,7 +56,8 @@ _AFTER_GRAVITY = (
 def _known_miss(engine: str, e: float, dt: float) -> str | None:
     if e == 0.0 or dt < 0.01:
         return None
-    return {"pybullet": _AFTER_GRAVITY.format(engine="Bullet"), "dart": _AFTER_GRAVITY.format(engine="DART")}.get(engine)
+    names = {"pybullet": "Bullet", "dart": "DART"}
+    return _AFTER_GRAVITY.format(engine=names[engine]) if engine in names else None
 
 
 def ball_world(mass: float, r: float, dt: float, e: float, drop: float, bounce_vel: float = 0.0) -> CompiledWorld:
