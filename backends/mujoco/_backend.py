@@ -288,6 +288,7 @@ class MujocoBackend(Backend):
             "tolerance": float(self._m.opt.tolerance),
             "motors": "tendon frictionloss rows (bounded velocity constraints), impedance 0.9999",
             "contact_solref": f"(-erp/h^2, -(1+bounce)/h), erp {o.erp}",
+            "max_correcting_vel": o.max_correcting_vel,
             "contact_normal_reference": "ODE's: max(bounce*approach above bounce_vel, min(erp*depth/h, "
             f"max_correcting_vel {o.max_correcting_vel:g} m/s))",
             "friction_solref": "(-1, -1/h)",

@@ -87,6 +87,8 @@ class OdeBackend(Backend):
             "quickstep_iterations": o.quickstep_iterations,
             "erp": o.erp,
             "cfm": o.cfm,
+            "max_correcting_vel": o.max_correcting_vel,
+            "impact_cfm": "min(cfm, 1e-4 * h * (1/m1 + 1/m2)) above 1 cm/s" if o.impact_cfm else "off (world cfm)",
             "space": o.space,
             "collide": self._collider.mode,
             "contact_mode": "dContactBounce | dContactApprox1 (mu is a Coulomb coefficient)"

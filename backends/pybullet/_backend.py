@@ -309,6 +309,9 @@ class PyBulletBackend(Backend):
             "restitution_velocity_threshold": self._threshold,
             "bounce_vel": self._fit.restitution_threshold,
             "contact_breaking_threshold": CONTACT_BREAKING_THRESHOLD,
+            "impact_contact_erp": "0 for a substep in which a bouncing pair is hit, else Bullet's 0.08"
+            if self._impacts.active
+            else "Bullet's (no pair bounces)",
             "plane": f"static box, half size {PLANE_HALF_SIZE:g} m, top face on the plane",
             "damping": 0.0,
             "sleeping": "disabled",
