@@ -3,7 +3,7 @@
 Every geom carries the ODE-style contact parameters of the world's surface and MuJoCo's own filtering
 makes the contacts (only the dynamic boxes have a contype, so the static plane meets every box), as the
 adapter builds it (docs/backends/mujoco.md), with the friction rows' reference of a bouncing surface
-and ODE's normal reference (bounce above bounce_vel, capped push-out) set by the adapter's engine step
+and ODE's normal reference of impacts and capped push-outs set by the adapter's engine step
 function, so the physics is the same. The loop is one ``mj_step`` per step,
 or, when the adapter's settings say its friction is "Coulomb" (sliding contacts' normal reference
 corrected, several constraint solves per step), the adapter's own engine step function for that: it
@@ -27,12 +27,12 @@ class MujocoLoop:
         h = s["timestep"]
         if s["integrator"] != "implicitfast" or s["cone"] != "elliptic" or s["solver"] != "Newton":
             raise ValueError(f"unexpected MuJoCo settings: {dict(s)}")
-        erp_text = re.search(r"erp ([0-9.e+-]+)", s["contact_solref"])
+        erp_text = re.search(r"erp ([0-9.e+-]+), bounce_erp ([0-9.e+-]+)", s["contact_solref"])
         capped = re.fullmatch(r"\(-1, -min\(([0-9.e+-]+), ([0-9.e+-]+)/h\)\)", s["friction_solref"])
         plain = re.fullmatch(r"\(-1, -([0-9.e+-]+)/h\)", s["friction_solref"])
         if erp_text is None or (capped is None and plain is None):
             raise ValueError(f"unexpected MuJoCo settings: {dict(s)}")
-        erp = float(erp_text[1])
+        erp, bounce_erp = float(erp_text[1]), float(erp_text[2])
         friction_rate = min(float(capped[1]), float(capped[2]) / h) if capped else float(plain[1]) / h  # type: ignore[index]
         coulomb = "Coulomb" in str(s.get("friction", ""))
         spec = mujoco.MjSpec()
@@ -48,7 +48,7 @@ class MujocoLoop:
         impedance, mu_max = s["impedance"], s["mu_max"]
         surface = world.default_surface
         e = surface.bounce
-        solref = [-erp / h**2, -(1.0 + e) / h]
+        solref = [-(erp if e == 0.0 else bounce_erp) / h**2, -(1.0 + e) / h]
         mu = min(surface.mu, mu_max)
         solimp = [impedance, impedance, 0.001, 0.5, 2.0]
         # static bodies first, then the dynamic ones (the adapter's tree order)
@@ -76,7 +76,8 @@ class MujocoLoop:
             from backends.mujoco import _coulomb
             from backends.mujoco._bounce import Impacts
 
-            impacts = Impacts(h, erp, s["max_correcting_vel"], surface.bounce_vel)
+            rest = (1.0 - impedance) * float(np.linalg.norm(world.gravity)) * h * h / bounce_erp
+            impacts = Impacts(h, erp, s["max_correcting_vel"], rest, surface.bounce_vel)
             self.advance = lambda m, d: _coulomb.step(m, d, damping, impacts)
         self.m = spec.compile()
         self.d = mujoco.MjData(self.m)

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from typing import Any, ClassVar
 
 import mujoco
@@ -287,10 +288,11 @@ class MujocoBackend(Backend):
             "iterations": int(self._m.opt.iterations),
             "tolerance": float(self._m.opt.tolerance),
             "motors": "tendon frictionloss rows (bounded velocity constraints), impedance 0.9999",
-            "contact_solref": f"(-erp/h^2, -(1+bounce)/h), erp {o.erp}",
+            "contact_solref": f"(-erp/h^2, -(1+bounce)/h), erp {o.erp}, bounce_erp {o.bounce_erp}",
             "max_correcting_vel": o.max_correcting_vel,
-            "contact_normal_reference": "ODE's: max(bounce*approach above bounce_vel, min(erp*depth/h, "
-            f"max_correcting_vel {o.max_correcting_vel:g} m/s))",
+            "contact_normal_reference": "ODE's for impacts (approach > 1 cm/s) and capped push-outs: "
+            f"max(bounce*approach above bounce_vel, min(erp*depth/h, max_correcting_vel {o.max_correcting_vel:g}"
+            " m/s)); MuJoCo's from solref for the others",
             "friction_solref": "(-1, -1/h)",
             "friction": f"Coulomb for mu <= {_coulomb.MU_COULOMB:g}: sliding contacts' normal reference corrected "
             f"for the convex cone (at most {_coulomb.MAX_SOLVES} solves per engine step, {_coulomb.TOLERANCE:g} m/s)",
@@ -307,4 +309,5 @@ def _impacts(world: CompiledWorld, m: mujoco.MjModel, h: float, o: MujocoOptions
     for pair in world.pair_surfaces:
         a, b = m.geom(f"geom:{pair.a}").id, m.geom(f"geom:{pair.b}").id
         pairs[(min(a, b), max(a, b))] = pair.surface.bounce_vel
-    return Impacts(h, o.erp, o.max_correcting_vel, world.default_surface.bounce_vel, pairs)
+    rest = (1.0 - IMPEDANCE) * math.hypot(*world.gravity) * h * h / o.bounce_erp
+    return Impacts(h, o.erp, o.max_correcting_vel, rest, world.default_surface.bounce_vel, pairs)

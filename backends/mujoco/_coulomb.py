@@ -53,7 +53,7 @@ def step(
     if friction_damping is not None and d.ncon:
         _friction_reference(d, friction_damping)
     if impacts is not None and d.ncon:
-        normal_reference(d, impacts)
+        normal_reference(d, impacts, MU_COULOMB)
     mujoco.mj_fwdActuation(m, d)
     mujoco.mj_fwdAcceleration(m, d)
     mujoco.mj_fwdConstraint(m, d)

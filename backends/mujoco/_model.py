@@ -157,7 +157,8 @@ def _rigid_groups(world: CompiledWorld, edges: dict[str, Edge]) -> dict[str, str
 def contact_solref(surface: Surface, h: float, opts: MujocoOptions) -> tuple[list[float], list[float]]:
     """(normal, friction) solref for a surface at engine step ``h`` (see the module docstring)."""
     e = surface.bounce
-    return [-opts.erp / h**2, -(1.0 + e) / h], [-1.0, -1.0 / h]  # friction: the slip removed in one step
+    erp = opts.erp if e == 0.0 else opts.bounce_erp
+    return [-erp / h**2, -(1.0 + e) / h], [-1.0, -1.0 / h]  # friction: the slip removed in one step
 
 
 def _mu(surface: Surface) -> float:
