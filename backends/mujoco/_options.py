@@ -14,8 +14,9 @@ class MujocoOptions(BackendOptions):
         minimum=0.0, min_exclusive=True, maximum=1.0,
     )  # fmt: skip
     bounce_erp: float = option(
-        0.05, "error reduction of contacts that bounce, while they approach slower than 1 cm/s (resting); impacts "
-        "get ODE's bounce (default 0.05)", minimum=0.0, min_exclusive=True, maximum=1.0,
+        0.05, "error reduction of contacts that bounce, while they approach slower than 1 cm/s (resting), and of "
+        "all of them on MuJoCo's cone (mu > 20); impacts with Coulomb friction get ODE's bounce (default 0.05)",
+        minimum=0.0, min_exclusive=True, maximum=1.0,
     )  # fmt: skip
     max_correcting_vel: float = option(
         0.1, "contact max correcting velocity, m/s: the speed at which erp may push a penetration out (ODE's "
