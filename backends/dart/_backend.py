@@ -218,7 +218,7 @@ class DartBackend(Backend):
         plastic: frozenset[tuple[int, int]] = frozenset()
         if self._thresholds:
             limits = self._thresholds
-            speeds = self._reader.approach(points, self._point_velocity)
+            speeds = self._reader.approach(points, self._com_motion)
             plastic = frozenset(p for p, v in speeds.items() if p in limits and v <= limits[p])
         if touching == self._touching and plastic == self._plastic:
             return
@@ -234,13 +234,18 @@ class DartBackend(Backend):
             handle.aspect.setRestitutionCoeff(r)
         self._touching, self._plastic = touching, plastic
 
-    def _point_velocity(self, i: int, point: np.ndarray) -> np.ndarray:
-        """Body ``i``'s velocity at a world point: v + w x (p - x) (its frame's origin is its COM)."""
-        if self.world.bodies[i].motion is Motion.STATIC:
-            return np.zeros(3)
-        node = self._bodies[i].node
-        offset = point - np.asarray(node.getWorldTransform().translation())
-        return np.asarray(node.getLinearVelocity()) + np.cross(np.asarray(node.getAngularVelocity()), offset)
+    def _com_motion(self, indices: list[int]) -> np.ndarray:
+        """(N, 9) rows of these bodies: centre of mass (the body frame's origin), linear and angular velocity
+        (zeros for a static body)."""
+        rows = np.zeros((len(indices), 9))
+        for k, i in enumerate(indices):
+            if self.world.bodies[i].motion is Motion.STATIC:
+                continue
+            node = self._bodies[i].node
+            rows[k, 0:3] = node.getWorldTransform().translation()
+            rows[k, 3:6] = node.getLinearVelocity()
+            rows[k, 6:9] = node.getAngularVelocity()
+        return rows
 
     def _close(self) -> None:
         self._dart.removeAllSkeletons()
