@@ -286,8 +286,8 @@ class Collider:
         ODE adds CFM/h to each row's diagonal, whose mass part is at least ``w = 1/m1 + 1/m2`` (the
         rotational terms only add to it). The contact row then reaches ``1/(1 + CFM/(h*w))`` of its target
         velocity change in the step: the world's CFM 1e-5 leaves a 100 kg ball at h 1 ms half of it, the
-        next steps bounce again on what is left (e_eff 0.04 instead of 0.5, measured), and without bounce
-        the soft row stores the impact as a spring that throws the ball back (e_eff 0.21). A CFM relative to
+        next steps bounce again on what is left (e_eff 0.16 instead of 0.5, measured), and without bounce
+        the soft row stores the impact as a spring that throws the ball back (e_eff 0.20). A CFM relative to
         ``w`` makes the impact the same for every mass (1e-4 of the velocity change lost), never softer than
         the world's.
         """
