@@ -3,7 +3,8 @@
 Every geom carries the ODE-style contact parameters of the world's surface and MuJoCo's own filtering
 makes the contacts (only the dynamic boxes have a contype, so the static plane meets every box), as the
 adapter builds it (docs/backends/mujoco.md), with the friction rows' reference of a bouncing surface
-set by the adapter's engine step function, so the physics is the same. The loop is one ``mj_step`` per step,
+and ODE's normal reference of impacts and capped push-outs set by the adapter's engine step
+function, so the physics is the same. The loop is one ``mj_step`` per step,
 or, when the adapter's settings say its friction is "Coulomb" (sliding contacts' normal reference
 corrected, several constraint solves per step), the adapter's own engine step function for that: it
 is the physics, not the runner's overhead.
@@ -73,8 +74,11 @@ class MujocoLoop:
         self.advance: Callable[[mujoco.MjModel, mujoco.MjData], object] = mujoco.mj_step
         if coulomb:
             from backends.mujoco import _coulomb
+            from backends.mujoco._bounce import Impacts
 
-            self.advance = lambda m, d: _coulomb.step(m, d, damping)
+            rest = (1.0 - impedance) * float(np.linalg.norm(world.gravity)) * h * h / bounce_erp
+            impacts = Impacts(h, erp, s["max_correcting_vel"], rest, surface.bounce_vel)
+            self.advance = lambda m, d: _coulomb.step(m, d, damping, impacts)
         self.m = spec.compile()
         self.d = mujoco.MjData(self.m)
         mujoco.mj_forward(self.m, self.d)  # the adapter bases the solver's scale on the dynamic bodies' inertia

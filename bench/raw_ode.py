@@ -39,6 +39,7 @@ class OdeLoop:
         w.setGravity(*world.gravity)
         w.setErp(s["erp"])
         w.setCfm(s["cfm"])
+        w.setContactMaxCorrectingVel(s["max_correcting_vel"])
         w.setQuickStepNumIterations(s["quickstep_iterations"])
         self.stepper = w.step if s["stepper"] == "dWorldStep" else w.quickStep
         self.space = space = OdeSimpleSpace() if s["space"] == "simple" else OdeHashSpace()

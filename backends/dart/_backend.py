@@ -85,6 +85,8 @@ class DartBackend(Backend):
         self._substep_contacts = SubstepContacts(self._engine_steps)
         self._relevant = set(_surfaces.touching_pairs(world))
         self._touching: list[tuple[int, int]] | None = None
+        self._thresholds = _surfaces.thresholded_pairs(world)  # pairs whose bounce_vel the adapter applies
+        self._plastic: frozenset[tuple[int, int]] = frozenset()
         for j, handle in enumerate(self._joints):
             if handle.spec.motor is not None:
                 self._set_motor(j, handle.spec.motor.vel, handle.spec.motor.fmax)
@@ -143,7 +145,7 @@ class DartBackend(Backend):
             for i, acc in self.forces.items():
                 self._bodies[i].node.addExtForce(acc[:3])
                 self._bodies[i].node.addExtTorque(acc[3:])
-            if self._surface_conflict:
+            if self._surface_conflict or self._thresholds:
                 self._match_touching_pairs()
             self._dart.step()
             applied = np.zeros(len(self._joints))
@@ -202,21 +204,48 @@ class DartBackend(Backend):
 
         DART's step detects collisions at the current poses; detecting them here first tells which pairs
         its contact constraints will combine, so per-shape values are solved for those pairs only.
+
+        With ``bounce_vel`` (worlds with thresholded pairs): DART has no threshold of its own but 0.1 m/s on
+        e*v, so a touching pair approaching no faster than its ``bounce_vel`` before the step (ODE's test)
+        gets bounce 0 for the step (``plastic``). When per-shape values cannot give it that together with
+        the other touching pairs, the pair keeps its bounce (docs/backends/dart.md).
         """
         solver = self._dart.getConstraintSolver()
         result = dart.collision.CollisionResult()
         solver.getCollisionGroup().collide(solver.getCollisionOption(), result)
-        touching = sorted(self._reader.pairs(result.getContacts()) & self._relevant)
-        if touching == self._touching:
+        points = result.getContacts()
+        touching = sorted(self._reader.pairs(points) & self._relevant)
+        plastic: frozenset[tuple[int, int]] = frozenset()
+        if self._thresholds:
+            limits = self._thresholds
+            speeds = self._reader.approach(points, self._com_motion)
+            plastic = frozenset(p for p, v in speeds.items() if p in limits and v <= limits[p])
+        if touching == self._touching and plastic == self._plastic:
             return
+        pairs = touching if self._surface_conflict or plastic else None
         try:
-            coefficients = _surfaces.solve(self.world, touching)
+            coefficients = _surfaces.solve(self.world, pairs, plastic)
         except UnsupportedFeature as exc:
-            raise UnsupportedFeature(f"{exc} (at t = {self.steps * self.world.dt:.3f} s)") from None
+            if not plastic:
+                raise UnsupportedFeature(f"{exc} (at t = {self.steps * self.world.dt:.3f} s)") from None
+            coefficients = _surfaces.solve(self.world, pairs)
         for handle, f, r in zip(self._bodies, coefficients.friction, coefficients.restitution, strict=True):
             handle.aspect.setFrictionCoeff(f)
             handle.aspect.setRestitutionCoeff(r)
-        self._touching = touching
+        self._touching, self._plastic = touching, plastic
+
+    def _com_motion(self, indices: list[int]) -> np.ndarray:
+        """(N, 9) rows of these bodies: centre of mass (the body frame's origin), linear and angular velocity
+        (zeros for a static body)."""
+        rows = np.zeros((len(indices), 9))
+        for k, i in enumerate(indices):
+            if self.world.bodies[i].motion is Motion.STATIC:
+                continue
+            node = self._bodies[i].node
+            rows[k, 0:3] = node.getWorldTransform().translation()
+            rows[k, 3:6] = node.getLinearVelocity()
+            rows[k, 6:9] = node.getAngularVelocity()
+        return rows
 
     def _close(self) -> None:
         self._dart.removeAllSkeletons()

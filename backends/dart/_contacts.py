@@ -21,6 +21,7 @@ from ..types import Contact
 
 _FIRST, _SECOND = attrgetter("collisionObject1"), attrgetter("collisionObject2")
 _DEPTH, _FORCE, _NORMAL = attrgetter("penetrationDepth"), attrgetter("force"), attrgetter("normal")
+_POINT = attrgetter("point")
 
 
 class ContactReader:
@@ -58,6 +59,29 @@ class ContactReader:
             return set()
         lo, hi = self._pair_of_points(tuple(map(_FIRST, points)), tuple(map(_SECOND, points)))
         return set(zip(lo.tolist(), hi.tolist(), strict=True))
+
+    def approach(self, points: Sequence[Any], motion: Any) -> dict[tuple[int, int], float]:
+        """Per (a < b) pair of ``points``: the fastest speed along a point's normal at which its two bodies
+        move relative to each other (either sign: a separating point does not bounce anyway).
+        ``motion(indices)`` gives those bodies' (N, 9) rows: centre of mass, linear and angular velocity
+        (zeros for a static body)."""
+        if not points:
+            return {}
+        first, second = self._bodies(tuple(map(_FIRST, points))), self._bodies(tuple(map(_SECOND, points)))
+        vectors = np.frombuffer(b"".join((*map(_POINT, points), *map(_NORMAL, points)))).reshape(2, -1, 3)
+        where, normal = vectors[0], vectors[1]
+        bodies, index = np.unique(np.concatenate([first, second]), return_inverse=True)
+        rows = motion(bodies.tolist())
+        ra, rb = rows[index[: len(first)]], rows[index[len(first) :]]
+        rel = ra[:, 3:6] + np.cross(ra[:, 6:9], where - ra[:, 0:3])
+        rel -= rb[:, 3:6] + np.cross(rb[:, 6:9], where - rb[:, 0:3])
+        speed = np.abs(np.einsum("ij,ij->i", rel, normal))
+        lo, hi = np.minimum(first, second), np.maximum(first, second)
+        out: dict[tuple[int, int], float] = {}
+        for a, b, v in zip(lo.tolist(), hi.tolist(), speed.tolist(), strict=True):
+            if v > out.get((a, b), -1.0):
+                out[(a, b)] = v
+        return out
 
     def _pair_of_points(self, first: Sequence[Any], second: Sequence[Any]) -> tuple[np.ndarray, np.ndarray]:
         """(lower, higher) body index of every point, from its two collision objects."""

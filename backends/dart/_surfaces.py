@@ -52,8 +52,13 @@ def finite_mu(world: CompiledWorld) -> float:
     return max(MU_INF, 10.0 * largest)
 
 
-def solve(world: CompiledWorld, pairs: Iterable[tuple[int, int]] | None = None) -> ShapeCoefficients:
-    """Per-body (friction, restitution) matching ``pairs`` (default: every pair that can touch).
+def solve(
+    world: CompiledWorld,
+    pairs: Iterable[tuple[int, int]] | None = None,
+    plastic: frozenset[tuple[int, int]] = frozenset(),
+) -> ShapeCoefficients:
+    """Per-body (friction, restitution) matching ``pairs`` (default: every pair that can touch); the pairs
+    in ``plastic`` (approaching below their ``bounce_vel`` this step) get bounce 0.
 
     Raises UnsupportedFeature when DART's combining rules cannot give all of them their surface.
     """
@@ -65,11 +70,22 @@ def solve(world: CompiledWorld, pairs: Iterable[tuple[int, int]] | None = None) 
     for a, b in pairs:
         surface = world.surface(names[a], names[b])
         mu[(a, b)] = surface.mu if math.isfinite(surface.mu) else inf_mu
-        bounce[(a, b)] = surface.bounce
+        bounce[(a, b)] = 0.0 if (a, b) in plastic else surface.bounce
     return ShapeCoefficients(
         friction=_solve_min(len(names), mu, names),
         restitution=_solve_product(len(names), bounce, names),
     )
+
+
+def thresholded_pairs(world: CompiledWorld) -> dict[tuple[int, int], float]:
+    """Pairs that can touch, bounce and have a ``bounce_vel`` > 0: pair -> bounce_vel."""
+    names = [b.name for b in world.bodies]
+    out: dict[tuple[int, int], float] = {}
+    for a, b in touching_pairs(world):
+        surface = world.surface(names[a], names[b])
+        if surface.bounce > 0.0 and surface.bounce_vel > 0.0:
+            out[(a, b)] = surface.bounce_vel
+    return out
 
 
 def _pair_text(names: Sequence[str], a: int, b: int) -> str:

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from typing import Any, ClassVar
 
 import mujoco
@@ -15,6 +16,7 @@ from ..types import (
     RIGID_BODY_CAPABILITIES,
     BodyStates,
     Capability,
+    CompiledWorld,
     Contact,
     JointKind,
     JointStates,
@@ -23,6 +25,7 @@ from ..types import (
     Vec3,
 )
 from . import _coulomb
+from ._bounce import Impacts
 from ._model import IMPEDANCE, KINEMATIC_MASS_RATIO, MU_MAX, build
 from ._options import MujocoOptions
 
@@ -72,6 +75,7 @@ class MujocoBackend(Backend):
         self._m = self._layout.model
         self._d = mujoco.MjData(self._m)
         m, lay = self._m, self._layout
+        self._impacts = _impacts(world, m, self._h, self.options)
         ids = lay.body_id
         self._root = m.body_rootid[ids]
         self._free = {  # world index -> (qpos address, dof address) of free bodies (dynamic or kinematic)
@@ -146,7 +150,7 @@ class MujocoBackend(Backend):
                     self._put(i, pose, self._times[k - 1])
             if motors:
                 d.qvel[self._helper_dof] = self._target
-            _coulomb.step(m, d, friction)
+            _coulomb.step(m, d, friction, self._impacts)
             if motors:
                 self._motor_mean.add(-d.qfrc_constraint[self._helper_dof])  # the helper feels -(motor force)
             if k + 1 < nsteps:  # the last engine step's contacts stay in MjData until contacts() asks
@@ -285,13 +289,25 @@ class MujocoBackend(Backend):
             "tolerance": float(self._m.opt.tolerance),
             "motors": "tendon frictionloss rows (bounded velocity constraints), impedance 0.9999",
             "contact_solref": f"(-erp/h^2, -(1+bounce)/h), erp {o.erp}, bounce_erp {o.bounce_erp}",
+            "max_correcting_vel": o.max_correcting_vel,
+            "contact_normal_reference": "ODE's for impacts (approach > 1 cm/s) and capped push-outs: "
+            f"max(bounce*approach above bounce_vel, min(erp*depth/h, max_correcting_vel {o.max_correcting_vel:g}"
+            " m/s)); MuJoCo's from solref for the others",
             "friction_solref": "(-1, -1/h)",
             "friction": f"Coulomb for mu <= {_coulomb.MU_COULOMB:g}: sliding contacts' normal reference corrected "
             f"for the convex cone (at most {_coulomb.MAX_SOLVES} solves per engine step, {_coulomb.TOLERANCE:g} m/s)",
             "impedance": IMPEDANCE,
             "mu_max": MU_MAX,
             "kinematic_mass_ratio": KINEMATIC_MASS_RATIO,
-            "bounce_vel": "ignored (MuJoCo's contact is linear in the approach speed)",
+            "bounce_vel": "honoured (the normal row's reference, set before each solve)",
         }
 
 
+def _impacts(world: CompiledWorld, m: mujoco.MjModel, h: float, o: MujocoOptions) -> Impacts:
+    """The normal rows' parameters: the world's bounce_vel and the pairs' own (by MuJoCo geom id)."""
+    pairs: dict[tuple[int, int], float] = {}
+    for pair in world.pair_surfaces:
+        a, b = m.geom(f"geom:{pair.a}").id, m.geom(f"geom:{pair.b}").id
+        pairs[(min(a, b), max(a, b))] = pair.surface.bounce_vel
+    rest = (1.0 - IMPEDANCE) * math.hypot(*world.gravity) * h * h / o.bounce_erp
+    return Impacts(h, o.erp, o.max_correcting_vel, rest, world.default_surface.bounce_vel, pairs)

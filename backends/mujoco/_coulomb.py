@@ -27,6 +27,8 @@ import math
 import mujoco
 import numpy as np
 
+from ._bounce import Impacts, normal_reference
+
 #: Constraint solves per engine step at most (the first one included), plus one to return to the best
 #: correction seen when the iteration has not converged by then.
 MAX_SOLVES = 12
@@ -37,16 +39,21 @@ TOLERANCE = 1e-6
 MU_COULOMB = 20.0
 
 
-def step(m: mujoco.MjModel, d: mujoco.MjData, friction_damping: float | None = None) -> int:
+def step(
+    m: mujoco.MjModel, d: mujoco.MjData, friction_damping: float | None = None, impacts: Impacts | None = None
+) -> int:
     """``mj_step`` with the sliding contacts' normal reference corrected; returns the solves made.
 
     ``friction_damping``: when given, the friction rows of contacts made from geoms (which take MuJoCo's
     normal solref, having no friction solref of their own) ask for ``aref = -friction_damping * v``, what
-    a contact pair's ``solreffriction`` gives (``_model.Layout.friction_damping``).
+    a contact pair's ``solreffriction`` gives (``_model.Layout.friction_damping``). ``impacts``: when
+    given, the normal rows get ODE's bounce and capped push-out (``_bounce.normal_reference``).
     """
     mujoco.mj_step1(m, d)
     if friction_damping is not None and d.ncon:
         _friction_reference(d, friction_damping)
+    if impacts is not None and d.ncon:
+        normal_reference(d, impacts, MU_COULOMB)
     mujoco.mj_fwdActuation(m, d)
     mujoco.mj_fwdAcceleration(m, d)
     mujoco.mj_fwdConstraint(m, d)

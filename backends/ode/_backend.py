@@ -62,6 +62,7 @@ class OdeBackend(Backend):
         self._collider = Collider(
             self._scene, self.options.collide, self.options.contact_forces, f"ode-contacts-{id(self):x}",
             follow_slip=self.options.friction_pyramid == "slip", step=world.dt / world.substeps,
+            impact_cfm=self.options.impact_cfm,
         )
         self._fudge = [j.joint.getParamFudgeFactor(*axis_arg(j)) if j.feedback else 1.0 for j in self._scene.joints]
         n = len(world.bodies)
@@ -86,6 +87,8 @@ class OdeBackend(Backend):
             "quickstep_iterations": o.quickstep_iterations,
             "erp": o.erp,
             "cfm": o.cfm,
+            "max_correcting_vel": o.max_correcting_vel,
+            "impact_cfm": "min(cfm, 1e-4 * h * (1/m1 + 1/m2)) above 1 cm/s" if o.impact_cfm else "off (world cfm)",
             "space": o.space,
             "collide": self._collider.mode,
             "contact_mode": "dContactBounce | dContactApprox1 (mu is a Coulomb coefficient)"

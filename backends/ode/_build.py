@@ -214,6 +214,7 @@ def build_scene(world: CompiledWorld, options: OdeOptions) -> Scene:
     ode_world.setGravity(*world.gravity)
     ode_world.setErp(options.erp)
     ode_world.setCfm(options.cfm)
+    ode_world.setContactMaxCorrectingVel(options.max_correcting_vel)
     ode_world.setQuickStepNumIterations(options.quickstep_iterations)
     space = OdeSimpleSpace() if options.space == "simple" else OdeHashSpace()
     heaviest = max([b.mass for b in world.bodies if b.motion is Motion.DYNAMIC] + [1.0])

@@ -57,6 +57,8 @@ from ._build import MAX_SURFACE_CLASSES, Scene
 CALLBACK_MAX_CONTACTS = 150  # PyODE's ode.collide() default, as the lab calls it
 _MODE = OdeSurfaceParameters.MFContactBounce | OdeSurfaceParameters.MFContactApprox1
 _MODE_FDIR1 = _MODE | OdeSurfaceParameters.MFContactFDir1
+_MODE_SOFT = _MODE | OdeSurfaceParameters.MFContactSoftCFM
+_MODE_SOFT_FDIR1 = _MODE_FDIR1 | OdeSurfaceParameters.MFContactSoftCFM
 #: Predicted slip speed (m/s) below which a contact keeps its previous friction direction. A body held by
 #: friction creeps at CFM * F per contact row (1.75e-5 m/s for 7 N on 4 contacts at CFM 1e-5) and the
 #: float32 noise of a resting 4-box column reaches 5.2e-6 m/s (conformance 12, measured): neither has a
@@ -64,6 +66,12 @@ _MODE_FDIR1 = _MODE | OdeSurfaceParameters.MFContactFDir1
 #: shows as h*a in the predicted slip: 1e-4 m/s is a = 0.01 m/s^2 at h 0.01 s (a 0.06 deg tilt), below
 #: which the pyramid's direction changes the friction limit only for mu < 1e-3.
 SLIP_SPEED = 1e-4
+#: An impact's CFM as a fraction of its normal row's inverse mass times h (see ``Collider._impact_cfm``).
+IMPACT_CFM = 1e-4
+#: Approach speed (m/s) above which a contact is an impact and gets :data:`IMPACT_CFM`. A resting body
+#: approaches at CFM creep and float noise (< 1e-4 m/s, see :data:`SLIP_SPEED`): it keeps the world's
+#: CFM, so resting stacks are the world's. Slower impacts keep it too: their rebound is below 1 cm/s.
+IMPACT_SPEED = 0.01
 _JT_CONTACT = OdeJoint.JTContact
 
 #: One touching pair of the reported substep: (a, b, entry, first) with a < b its bodies, entry its
@@ -77,7 +85,7 @@ class Collider:
 
     def __init__(
         self, scene: Scene, mode: str, contact_forces: bool, event_name: str, follow_slip: bool = True,
-        step: float = 0.0,
+        step: float = 0.0, impact_cfm: bool = True,
     ) -> None:
         self.scene = scene
         self.contact_forces = contact_forces
@@ -93,8 +101,12 @@ class Collider:
         classes = max(scene.surface_class, default=0) + 1
         #: Surface classes pairs whose contacts follow the slip (finite mu > 0; 0 and inf have no direction).
         self._slipping = {key for key, s in scene.surfaces.items() if follow_slip and 0.0 < s.mu < math.inf}
-        # autoCollide's table is indexed by a byte, and its mode has no dContactFDir1: the callback then.
-        self.mode = mode if classes <= MAX_SURFACE_CLASSES and not self._slipping else "callback"
+        #: Impacts get a CFM of their own (``_impact_cfm``), a per-contact mode autoCollide cannot give.
+        self._impacts = impact_cfm
+        # autoCollide's table is indexed by a byte, and its mode has no dContactFDir1 nor a per-contact CFM:
+        # the callback then.
+        auto = classes <= MAX_SURFACE_CLASSES and not self._slipping and not impact_cfm
+        self.mode = mode if auto else "callback"
         self._auto = self.mode == "auto"
         self._event_set: str | None = None  # the collision event last given to the space ("": none)
         if self._auto:
@@ -237,14 +249,19 @@ class Collider:
         follow = key in self._slipping
         arm = report and self.contact_forces
         first = self._used if arm else -1
+        impacts = self._impacts
         for k, geom in enumerate(entry.getContactGeoms()):
             contact = OdeContact()
             contact.setGeom(geom)
             slip = self._direction((i, j, k), body1, body2, geom) if follow else None
-            if slip is None:
+            if impacts and _approach(body1, body2, geom) > IMPACT_SPEED:
+                mode = _MODE_SOFT if slip is None else _MODE_SOFT_FDIR1
+                contact.setSurface(_surface_parameters(scene.surfaces[key], mode, self._impact_cfm(i, j)))
+            elif slip is None:
                 contact.setSurface(params)
             else:
                 contact.setSurface(self._params_fdir1[key])
+            if slip is not None:
                 contact.setFdir1(slip)
             joint = OdeContactJoint(scene.world, scene.contact_group, contact)
             joint.attach(body1, body2)
@@ -262,6 +279,20 @@ class Collider:
                 return None
         self._next_directions[key] = slip
         return slip
+
+    def _impact_cfm(self, i: int, j: int) -> float:
+        """The CFM of an impact's contact rows: :data:`IMPACT_CFM` of the row's own inverse mass, times h.
+
+        ODE adds CFM/h to each row's diagonal, whose mass part is at least ``w = 1/m1 + 1/m2`` (the
+        rotational terms only add to it). The contact row then reaches ``1/(1 + CFM/(h*w))`` of its target
+        velocity change in the step: the world's CFM 1e-5 leaves a 100 kg ball at h 1 ms half of it, the
+        next steps bounce again on what is left (e_eff 0.16 instead of 0.5, measured), and without bounce
+        the soft row stores the impact as a spring that throws the ball back (e_eff 0.20). A CFM relative to
+        ``w`` makes the impact the same for every mass (1e-4 of the velocity change lost), never softer than
+        the world's.
+        """
+        w = self._per_mass[i] + self._per_mass[j]  # h/m1 + h/m2
+        return min(self.scene.world.getCfm(), IMPACT_CFM * w)
 
     def _kick(self, i: int) -> Any:
         """h * (F/m + g) for body ``i``: the velocity the substep adds to it before contacts (None: none)."""
@@ -331,9 +362,22 @@ def _slip(body1: Any, body2: Any, geom: Any, kick1: Any, kick2: Any) -> Any:
     return rel / speed if speed > SLIP_SPEED else None
 
 
-def _surface_parameters(surface: Surface, mode: int) -> OdeSurfaceParameters:
+def _approach(body1: Any, body2: Any, geom: Any) -> float:
+    """The speed at which the two bodies approach each other at the contact, along its normal (ODE's
+    ``-outgoing``: the normal points into body 1)."""
+    pos, normal = geom.getPos(), geom.getNormal()
+    rel = Vec3(0.0, 0.0, 0.0)
+    if body1 is not None:
+        rel += body1.getPointVel(pos)
+    if body2 is not None:
+        rel -= body2.getPointVel(pos)
+    return -float(rel.dot(normal))
+
+
+def _surface_parameters(surface: Surface, mode: int, cfm: float = 0.0) -> OdeSurfaceParameters:
     params = OdeSurfaceParameters()
     params.setMode(mode)
+    params.setSoftCfm(cfm)
     params.setMu(_mu(surface))
     params.setBounce(surface.bounce)
     params.setBounceVel(surface.bounce_vel)

@@ -28,6 +28,16 @@ class OdeOptions(BackendOptions):
         1e-5, f"global constraint force mixing, >= {MIN_CFM:g} (default 1e-5, single-precision ODE's)",
         minimum=MIN_CFM, maximum=1.0,
     )  # fmt: skip
+    max_correcting_vel: float = option(
+        0.1, "contact max correcting velocity, m/s (dWorldSetContactMaxCorrectingVel): the speed at which ERP may "
+        "push a penetration out; bounces are not capped (default 0.1: a body pushed out at it rises 0.5 mm; ODE's "
+        "own default inf turns a landing's penetration into launch speed)", minimum=0.0, min_exclusive=True,
+    )  # fmt: skip
+    impact_cfm: bool = option(
+        True, "true (default): contacts approaching faster than 1 cm/s get a CFM of 1e-4 of their inverse mass "
+        "times h, so restitution does not depend on mass (needs the callback collide); false: the world's CFM "
+        "on every contact (ODE's own; autoCollide possible)",
+    )  # fmt: skip
     space: str = option(
         "simple", "collision space: simple (the lab's, the default) or hash", choices=("simple", "hash")
     )

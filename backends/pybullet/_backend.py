@@ -30,6 +30,7 @@ from ..types import (
     Vec3,
 )
 from ._build import PLANE_HALF_SIZE, Layout, build, initial_rate, xyzw
+from ._impacts import ImpactErp
 from ._options import PyBulletOptions
 from ._reads import ROW, ContactReader, base_rows
 from ._surfaces import FRICTION_CLAMP, SurfaceFit, fit_surfaces
@@ -157,6 +158,8 @@ class PyBulletBackend(Backend):
         for i in range(len(world.bodies)):
             lut[layout.uid[i], layout.link[i] + 1] = i
         self._contact_reader = ContactReader(lut.tolist(), len(world.bodies))  # (multibody, link + 1) -> body
+        kick = math.hypot(*world.gravity) * self._h
+        self._impacts = ImpactErp(c, lut.tolist(), self._fit.restitution, self._threshold, kick)
         self._cache: np.ndarray | None = None
         self._listed: list[Contact] | None = None
 
@@ -165,7 +168,7 @@ class PyBulletBackend(Backend):
     def _step(self) -> None:
         c, n = self._c, self.world.substeps
         motors = n > 1 and bool(self._motor_joints)  # the substeps' motor torques, for their mean
-        if n == 1 and not (self.forces or self.kinematic):  # nothing to do around the engine's step
+        if n == 1 and not (self.forces or self.kinematic or self._impacts.active):  # nothing around the step
             p.stepSimulation(c)
         else:
             self._step_with_inputs(c, n, motors)
@@ -181,6 +184,8 @@ class PyBulletBackend(Backend):
         for t in self._times:
             if self.forces:
                 self._apply_forces()
+            if self._impacts.active:
+                self._impacts.before_substep(self._fresh_rows)
             p.stepSimulation(physicsClientId=c)
             if self.kinematic:
                 self._follow_track(t)
@@ -220,6 +225,11 @@ class PyBulletBackend(Backend):
         return out
 
     # --- reading --------------------------------------------------------------------------------
+
+    def _fresh_rows(self) -> np.ndarray:
+        """The bodies' states now (between substeps the cache is stale)."""
+        self._cache = None
+        return self._read()
 
     def _read(self) -> np.ndarray:
         if self._cache is not None:
@@ -299,6 +309,9 @@ class PyBulletBackend(Backend):
             "restitution_velocity_threshold": self._threshold,
             "bounce_vel": self._fit.restitution_threshold,
             "contact_breaking_threshold": CONTACT_BREAKING_THRESHOLD,
+            "impact_contact_erp": "0 for a substep in which a bouncing pair is hit, else Bullet's 0.08"
+            if self._impacts.active
+            else "Bullet's (no pair bounces)",
             "plane": f"static box, half size {PLANE_HALF_SIZE:g} m, top face on the plane",
             "damping": 0.0,
             "sleeping": "disabled",

@@ -201,7 +201,7 @@ def test_large_mu_does_not_sink(mu: float, dt: float) -> None:
             sim.step()
         s = sim.body_states()
     assert s.pos[1, 2] == pytest.approx(0.15, abs=2e-3)  # measured 0.1483 at dt 0.04, 0.1500 at dt 0.01
-    # still rising out of the landing's depth at bounce_erp 0.05 per step: 1.7 mm/s at dt 0.04
+    # still rising out of the landing's depth (erp 0.2 per step, at most max_correcting_vel 0.1 m/s)
     assert np.linalg.norm(s.lin_vel[1]) < 5e-3
 
 
@@ -222,18 +222,19 @@ def _restitution(bounce: float, drop: float, dt: float) -> float:
 
 @pytest.mark.parametrize("bounce", [0.2, 0.5, 0.8])
 def test_restitution_against_target(bounce: float) -> None:
-    """solref (-erp/h^2, -(1+e)/h) bounces at e plus the ERP push-out of the first contact's depth.
-
-    That depth is at most v*h (3.1 mm here), pushed out at bounce_erp 0.05 per step: at most +0.05 on e.
-    Measured at 0.5 m: 0.205, 0.506, 0.806.
+    """The normal rows' reference is ODE's, max(e*v, push-out) (``_bounce``): the rebound is e, less the
+    1e-3*(1 + e)*v the impedance 0.999 leaks and the apex read from whole steps (2e-3 of e at most, the
+    issue's bound is 5 %). Measured at 0.5 m: 0.1967, 0.4982, 0.7982 (was 0.205, 0.506, 0.806 with the
+    push-out added, bounce_erp 0.05).
     """
     e = _restitution(bounce, 0.5, 0.001)
-    assert bounce - 0.005 <= e <= bounce + 0.05
+    assert abs(e - bounce) <= 0.05 * bounce
 
 
 def test_no_bounce_without_restitution() -> None:
-    """bounce 0: only ODE's ERP push-out (erp 0.2 of at most 3.1 mm per step) lifts it: measured 0.007."""
-    assert _restitution(0.0, 0.5, 0.001) < 0.05
+    """bounce 0: only ODE's ERP push-out (erp 0.2 of at most 3.1 mm per step, capped at 0.1 m/s) lifts it:
+    a rebound below 0.1 m/s, i.e. sqrt of the apex ratio below 0.1/3.13 = 0.032; measured 0.0105."""
+    assert _restitution(0.0, 0.5, 0.001) < 0.1 / math.sqrt(2 * 9.81 * 0.5)
 
 
 def test_contact_shorter_than_a_step_is_reported() -> None:
@@ -324,13 +325,18 @@ def test_a_box_that_can_stick_sticks() -> None:
 @pytest.mark.parametrize("slides", [False, True])
 def test_without_sliding_contacts_a_step_is_mj_step(monkeypatch: pytest.MonkeyPatch, slides: bool) -> None:
     """The corrected step makes mj_step's calls in mj_step's order: a resting cube and a cube dropped
-    straight (mu 1), or landing at 3 m/s on a mu above MU_COULOMB (MuJoCo's cone), step bit for bit."""
+    straight (mu 1), or landing at 3 m/s on a mu above MU_COULOMB (MuJoCo's cone), step bit for bit.
+    The push-out cap is lifted (max_correcting_vel 1e3): the landing's 0.56 m/s push-out would bind it,
+    and a capped row is ODE's reference, not MuJoCo's (``_bounce``, tested by test_restitution.py)."""
+    import dataclasses
+
     import backends.mujoco._coulomb as coulomb
 
     mu, vx = (coulomb.MU_COULOMB * 2, 3.0) if slides else (1.0, 0.0)
     cube = w.box("cube", (0.2, 0.2, 0.2), (0.0, 0.0, 0.1), density=500.0)
     falling = w.box("falling", (0.2, 0.2, 0.2), (1.0, 0.0, 0.5), density=500.0, lin_vel=(vx, 0.0, 0.0))
     world = w.world("rest", [w.ground(), cube, falling], surface=Surface(mu=mu))
+    world = dataclasses.replace(world, backend_options={"mujoco": {"max_correcting_vel": 1e3}})
 
     def run() -> np.ndarray:
         with make_backend("mujoco", world) as sim:
@@ -339,7 +345,7 @@ def test_without_sliding_contacts_a_step_is_mj_step(monkeypatch: pytest.MonkeyPa
             return np.concatenate([sim._d.qpos, sim._d.qvel])  # type: ignore[attr-defined]
 
     corrected = run()
-    monkeypatch.setattr(coulomb, "step", lambda m, d, friction_damping=None: mujoco.mj_step(m, d) or 1)
+    monkeypatch.setattr(coulomb, "step", lambda m, d, friction_damping=None, impacts=None: mujoco.mj_step(m, d) or 1)
     assert np.array_equal(run(), corrected)
 
 

@@ -83,7 +83,7 @@ def test_lab_replay_matches_the_notes() -> None:
     The notes ran mu 5000 as a force limit (approx0); here it is a coefficient (approx1), which moves the
     box's x by 0.39 mm (1.15997 vs 1.16035 measured with approx0), hence 1 mm on x.
     """
-    box, sim = run_lab()
+    box, sim = run_lab(impact_cfm=False, max_correcting_vel=1e9)  # the notes ran ODE's own contacts
     with sim:
         s = sim.body_states()
     assert s.pos[1] == pytest.approx((1.1604, 0.0, 1.1917), abs=1e-3)
@@ -212,7 +212,7 @@ def test_autocollide_equals_the_callback(make: Any) -> None:
     With ODE's own friction directions (``friction_pyramid: axes``): following the slip needs the callback.
     """
     world = make()
-    opts: Mapping[str, Any] = {**world.options_for("ode"), "friction_pyramid": "axes"}
+    opts: Mapping[str, Any] = {**world.options_for("ode"), "friction_pyramid": "axes", "impact_cfm": False}
     with make_backend("ode", _opts(world, **opts)) as auto, \
             make_backend("ode", _opts(world, **{**opts, "collide": "callback"})) as callback:
         assert auto.settings()["collide"] == "auto" and callback.settings()["collide"] == "callback"
@@ -234,7 +234,7 @@ def test_pair_surfaces_reach_the_surface_table() -> None:
     world = w.world("pairs", [w.ground(), a, b], surface=Surface(mu=0.5), pairs=pairs)
     ends = []
     for collide in ("auto", "callback"):
-        with make_backend("ode", _opts(world, collide=collide, friction_pyramid="axes")) as sim:
+        with make_backend("ode", _opts(world, collide=collide, friction_pyramid="axes", impact_cfm=False)) as sim:
             assert sim.settings()["collide"] == collide
             for _ in range(100):
                 sim.step()
