@@ -133,7 +133,7 @@ class Session:
         self.kinematics = KinematicTable(self.world, program.start_hpr, program.start_scale)
         self.intervals = IntervalManager(self, program.intervals)
         self.snapshot = Snapshot()
-        self.contact_pairs: set[tuple[str, str]] = set()
+        self._contact_pairs: set[tuple[str, str]] | None = set()  # None: not yet made from self.contacts
         self.contacts: list[Any] = []
         self._contacts_at: float | None = None  # when self.contacts was read
         # Contacts are read every step only when something uses them: contact events, contact() in an
@@ -182,8 +182,17 @@ class Session:
     def truth(self, text: str) -> bool:
         return self.program.expressions[text].truth(self.resolver)
 
+    @property
+    def contact_pairs(self) -> set[tuple[str, str]]:
+        """The touching pairs by name, made from the last contacts read when something first asks."""
+        if self._contact_pairs is None:
+            names = self.names
+            self._contact_pairs = {(names[c.a], names[c.b]) for c in self.contacts}
+        return self._contact_pairs
+
     def in_contact(self, a: str, b: str) -> bool:
-        return (a, b) in self.contact_pairs or (b, a) in self.contact_pairs
+        pairs = self.contact_pairs
+        return (a, b) in pairs or (b, a) in pairs
 
     def get_pos(self, body: str) -> tuple[float, float, float]:
         return self.kinematics.get(body).target_pos
@@ -342,9 +351,8 @@ class Session:
             self._read_contacts(t)
 
     def _read_contacts(self, t: float) -> None:
-        names = self.names
         self.contacts = self.backend.contacts()
-        self.contact_pairs = {(names[c.a], names[c.b]) for c in self.contacts}
+        self._contact_pairs = None
         self._contacts_at = t
 
     def _solid_hits(self) -> list[tuple[str, str, bool]]:
