@@ -21,7 +21,8 @@ from .memory import MemoryFigures
 from .overhead import PROCESS, BackendFigures
 from .scaling import SizeFigures, marginal
 
-TARGET_RATIO = 1.10
+TARGET_RATIO = 1.10  # runner with the full trace / the hand-written loop that reads every body each step
+TARGET_RATIO_RAW = {"mujoco": 1.30}  # runner with the full trace / the hand-written loop without reads
 TARGET_MEMORY = 1.10
 TARGET_SPEEDUP = 1.7
 TARGET_LINEAR = 1.5  # marginal runner cost per body, 100->1000 over 10->100: at most this
@@ -105,16 +106,20 @@ def render(r: Results) -> str:
 
 
 def _targets(r: Results) -> list[str]:
-    rows = ["## Targets", "", "| target | measured | status | where the time goes (beyond the raw loop) |",
+    rows = ["## Targets", "", "| target | measured | status | where the time goes (beyond the hand-written loop of the target) |",
             "|---|---|---|---|"]  # fmt: skip
     for f in r.overhead:
-        ratio = f.ratio("runner+trace")
-        rows.append(f"| overhead, {f.backend}, {f.bodies} boxes, full trace: runner/raw <= {TARGET_RATIO} "
+        ratio = f.ratio("runner+trace", "raw+reads")
+        rows.append(f"| overhead, {f.backend}, {f.bodies} boxes, full trace: runner/(raw+reads) <= {TARGET_RATIO} "
                     f"| {ratio:.2f} | {_met(ratio <= TARGET_RATIO)} | {_cause(f)} |")  # fmt: skip
+        if f.backend in TARGET_RATIO_RAW:
+            ratio, target = f.ratio("runner+trace"), TARGET_RATIO_RAW[f.backend]
+            rows.append(f"| overhead, {f.backend}, {f.bodies} boxes, full trace: runner/raw <= {target} "
+                        f"| {ratio:.2f} | {_met(ratio <= target)} | {_cause(f, base='raw')} |")  # fmt: skip
         if PROCESS in f.seconds:
-            ratio = f.ratio(PROCESS)
+            ratio = f.ratio(PROCESS, "raw+reads")
             rows.append(f"| overhead, {f.backend}, {f.bodies} boxes, full trace written by a second process "
-                        f"(`--trace-process`): runner/raw <= {TARGET_RATIO} | {ratio:.2f} "
+                        f"(`--trace-process`): runner/(raw+reads) <= {TARGET_RATIO} | {ratio:.2f} "
                         f"| {_met(ratio <= TARGET_RATIO)} | {_cause(f, 'process')} |")  # fmt: skip
     for backend in sorted({s.backend for s in r.scaling}):
         steps = marginal([s for s in r.scaling if s.backend == backend])
@@ -158,21 +163,41 @@ def _floor(figs: Sequence[BackendFigures]) -> list[str]:
     ]
 
 
-def _cause(f: BackendFigures, runs: str = "trace") -> str:
-    """The parts of a traced run beyond the raw loop, largest first, in ms per step and share of the excess
+def _cause(f: BackendFigures, runs: str = "trace", base: str = "raw+reads") -> str:
+    """The parts of a traced run beyond the hand-written loop ``base`` (``raw+reads``: it also reads every
+    body's state each step; ``raw``: it does not), largest first, in ms per step and share of the excess
     (``runs``: "trace", the writer in the run's process, or "process", the writer in a second process)."""
     per = 1e3 / f.steps
+    loop_reads = f.median("raw+reads") - f.median("raw") if base == "raw+reads" else 0.0
     parts = {
         "adapter step beyond raw": f.part("engine_step", runs) - f.median("raw") + f.part("engine_build", runs),
-        "engine reads": f.part("engine_reads", runs),
+        "state reads" + (" beyond the loop's" if base == "raw+reads" else ""): f.part("engine_states", runs)
+        - loop_reads,
+        "contact reads": f.part("engine_contacts", runs),
         "trace" if runs == "trace" else "sending the trace": f.part("trace", runs),
         "assertions": f.part("assertions", runs),
         "collision events": f.part("detect", runs),
         "runner, other": f.part("runner_own", runs) - f.part("assertions", runs) - f.part("detect", runs),
     }
-    excess = f.median("runner+trace" if runs == "trace" else PROCESS) - f.median("raw")
+    excess = f.median("runner+trace" if runs == "trace" else PROCESS) - f.median(base)
     ranked = sorted(parts.items(), key=lambda kv: -kv[1])[:3]
     return "; ".join(f"{k} {v * per:.2f} ms/step ({v / excess:.0%})" for k, v in ranked if excess > 0)
+
+
+def _reads(figs: Sequence[BackendFigures]) -> list[str]:
+    """Reads per body per step: the hand-written loop's (raw+reads - raw) and the adapter's, split."""
+    out = ["Reads, us per body per step (medians; the adapter's from the traced runs): *loop*: what reading every "
+           "body's pose and velocity adds to the hand-written loop (raw+reads - raw, the engine's cheapest path "
+           "written by hand); *states*: the adapter's `body_states()` and `joint_states()`; *contacts*: its "
+           "`contacts()` (every touching pair with its points, depth and normal force, for the trace's "
+           "/contacts).", "",
+           "| backend | loop | adapter: states | adapter: contacts | adapter: all reads |", "|---|---|---|---|---|"]
+    for f in figs:
+        per = 1e6 / f.steps / f.bodies
+        out.append(f"| {f.backend} | {(f.median('raw+reads') - f.median('raw')) * per:.2f} "
+                   f"| {f.part('engine_states') * per:.2f} | {f.part('engine_contacts') * per:.2f} "
+                   f"| {f.part('engine_reads') * per:.2f} |")  # fmt: skip
+    return [*out, ""]
 
 
 def _overhead(figs: Sequence[BackendFigures]) -> list[str]:
@@ -212,7 +237,7 @@ def _overhead(figs: Sequence[BackendFigures]) -> list[str]:
                    f"| {f.part('engine_reads') * per:.3f} | {f.part('trace') * per:.3f} "
                    f"| {f.part('assertions') * per:.3f} | {f.part('detect') * per:.3f} | {other * per:.3f} "
                    f"| {f.part('engine_build'):.2f} |")  # fmt: skip
-    return [*out, ""]
+    return [*out, "", *_reads(figs)]
 
 
 def _scaling(figs: Sequence[SizeFigures]) -> list[str]:
