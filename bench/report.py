@@ -106,7 +106,7 @@ def render(r: Results) -> str:
 
 
 def _targets(r: Results) -> list[str]:
-    rows = ["## Targets", "", "| target | measured | status | where the time goes (beyond the hand-written loop of the target) |",
+    rows = ["## Targets", "", "| target | measured | status | where the time goes (beyond the target's loop) |",
             "|---|---|---|---|"]  # fmt: skip
     for f in r.overhead:
         ratio = f.ratio("runner+trace", "raw+reads")
