@@ -93,6 +93,7 @@ class EnergyWatch:
         self.work = 0.0  # booked motor work so far (J)
         self._driven = True  # the first state is the first reference
         self._window: deque[tuple[float, np.ndarray]] = deque(maxlen=WINDOW_STEPS + 1)
+        self._totals: deque[float] = deque(maxlen=WINDOW_STEPS + 1)  # the window's totals, for a C-level max
         self._k_peak = 0.0  # the largest kinetic energy since the check (re)started
         self._reference = 0.0
         self._reference_at = 0.0
@@ -116,6 +117,8 @@ class EnergyWatch:
             self._driven = False
             self._window.clear()
             self._window.append(entry)
+            self._totals.clear()
+            self._totals.append(total)
             self._reference, self._reference_at, self._reference_bodies = total, t, energy
             self._k_peak = float(kinetic.sum())
             return
@@ -126,9 +129,12 @@ class EnergyWatch:
             if rise > bound:
                 self._raise(t, rise, bound, energy)
         self._window.append(entry)
-        back, top = max(enumerate(reversed(self._window)), key=lambda e: e[1][0])  # steps back, entry
-        if top[0] < self._reference:
-            self._reference, self._reference_at, self._reference_bodies = top[0], t - back * self.dt, top[1]
+        self._totals.append(total)
+        top = max(reversed(self._totals))  # the window's largest energy (newest first)
+        if top < self._reference:  # the newest entry holding it (steps back from now)
+            back = next(k for k, e in enumerate(reversed(self._totals)) if e == top)
+            self._reference, self._reference_at = top, t - back * self.dt
+            self._reference_bodies = self._window[-1 - back][1]
 
     def bound(self, energy: np.ndarray) -> float:
         """The rise allowed now (J): integrator error on the motion, position correction at rest, rounding."""
