@@ -37,6 +37,7 @@ depths and forces are read through panda3d only when ``contacts()`` is called.
 from __future__ import annotations
 
 import math
+from collections import deque
 from collections.abc import Mapping
 from typing import Any
 
@@ -69,6 +70,9 @@ _JT_CONTACT = OdeJoint.JTContact
 #: The getters ``_summaries`` maps over a pair's points (unbound: no attribute lookup per point).
 _DEPTH, _NORMAL = OdeContactGeom.getDepth, OdeContactGeom.getNormal
 _FORCE1, _DOT = OdeJointFeedback.getForce1, LVecBase3f.dot
+_SET_FEEDBACK = OdeJoint.setFeedback
+_SINK: deque[Any] = deque(maxlen=0)
+_consume = _SINK.extend  # runs an iterator of calls for their effect, keeping nothing
 
 #: One touching pair of the reported substep: (a, b, entry, first) with a < b its bodies, entry its
 #: OdeCollisionEntry (contact geoms in ODE's order) and first the index of its first feedback slot in
@@ -220,8 +224,8 @@ class Collider:
                 append(_record(i, j, e, -1))
                 continue
             first.setFeedback(pool[used])
-            for k in range(1, count):
-                joint(top - k).setFeedback(pool[used + k])
+            if count > 1:  # the pair's other joints, newest first: top-1 ... top-count+1 (one map, no loop)
+                _consume(map(_SET_FEEDBACK, map(joint, range(top - 1, top - count, -1)), pool[used + 1 : used + count]))
             append(_record(i, j, e, used))
             used += count
         self._used = used
