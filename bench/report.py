@@ -327,13 +327,29 @@ KNOWN_CAUSES = (
     " runs on the other core (shared cache and memory bandwidth), most on DART. `--record-every K` divides "
     "the trace's cost by K.",
     "Reading contacts is only needed for the trace here (the pile has no contact assertion), so the untraced "
-    "runs skip it; with the trace on, the engines' per-point costs dominate: PyBullet's getContactPoints "
-    "about 0.45 us per point (400-600 points), DART 0.1-0.3 us per field per point through dartpy (no batched"
-    " read in dartpy 6.20), ODE about 4 panda3d calls per contact plus 2 per contact to arm joint feedback "
-    "for the normal forces.",
-    "Reading states: PyBullet and DART have no batched call for separate bodies (two engine calls per body "
-    "per step: about 0.2 ms for 100 bodies on PyBullet, 0.3-0.5 ms on DART); MuJoCo and ODE read in bulk "
-    "(under 0.06 ms).",
+    "runs skip it; with the trace on it is the largest read on three engines (us per body per step, CPU time"
+    " inside the step loop, 100-box pile): DART 6.4 (454 points; five dartpy fields per point, each a pybind "
+    "property call of 0.13-0.2 us and no batched read in dartpy 6.20: read by the properties' own getters), "
+    "ODE 3.9 (413 contacts; four panda3d calls per contact, mapped unbound, plus feedback armed on each "
+    "contact joint in the step), PyBullet 3.0 (400 points; getContactPoints itself builds 400 tuples of 14 "
+    "fields, about 0.3 us per point, before any of ours), MuJoCo 0.7 (478 points read as arrays; the rest is"
+    " grouping them per pair). The readers were sped up with the same numbers (old and new readers equal on "
+    "every step of the pile; in-process, interleaved: DART -16 %, PyBullet -11 %, ODE -28 %, the kit's "
+    "grouping -11 %); what is left is each binding's per-point floor.",
+    "Reading states: PyBullet has no state call for several multibodies (two engine calls per base: "
+    "getBasePositionAndOrientation and getBaseVelocity, about 0.5 us each; getLinkStates needs the bodies to "
+    "be links of one multibody, which free boxes are not), 1.6 us per body; DART 1.9 (was 2.9): dartpy 6.20 "
+    "has no world-level getter and does not bind Skeleton::Configuration, Group or LinkageCriteria, but a "
+    "Chain between two skeletons' root bodies reads both skeletons' coordinates in one call, so two calls per"
+    " two bodies instead of per body (backends/dart/_reads.py); MuJoCo 0.35 and ODE 1.3 read in bulk (numpy "
+    "views of MjData; one datagram of float32 vectors). The hand-written loops read the same way (bench/"
+    "raw_*.py), so the state reads cost the runner no more than the loop it is compared with.",
+    "The runner's own work per step (runner/sim: blow-up check, energy watchdog, assertions, contact pairs, "
+    "the step loop) is 0.09 ms on MuJoCo, 0.13 on PyBullet, 0.19 on DART and 0.21 on ODE (CPU time, traced "
+    "runs; it was 0.15, 0.20, 0.33 and 0.34): the blow-up check takes one whole-array pass when every state "
+    "is finite and slow (28 -> 8 us), the energy watchdog turns the angular velocity without rotation "
+    "matrices (25 -> 16 us), touching pairs by name are made only when asked for, group reads index once. "
+    "What is left is a few microseconds each of numpy calls on 100-element arrays and the step loop itself.",
     "MuJoCo: the pile is a small world for MuJoCo (0.5 ms per step), so any fixed Python cost per step weighs"
     " twice as much as on the other engines; the adapter's step adds about 0.03 ms to the custom Coulomb step"
     " measured alone (more inside runs, as above). Contacts come from MuJoCo's geom filtering (no explicit "
@@ -341,9 +357,9 @@ KNOWN_CAUSES = (
     "ODE: dWorldStep evicts the caches, so the same Python per step costs 2-3 times more inside the step loop"
     " than alone; what the adapter adds to the hand-written loop (collision events drained from panda3d's "
     "queue, feedback armed) is near panda3d's per-call floor.",
-    "The adapters' speed-ups behind these figures left every trace byte for byte the same (32 traces per "
-    "engine, every scenario and variant, compared before and after): a faster adapter never changes the "
-    "physics it reports.",
+    "The adapters' and the runner's speed-ups behind these figures left every trace byte for byte the same "
+    "(35 per engine, 140 in all: every scenario and variant, compared before and after): a faster read "
+    "never changes the physics it reports.",
 )
 
 
