@@ -345,8 +345,9 @@ KNOWN_CAUSES = (
     "views of MjData; one datagram of float32 vectors). The hand-written loops read the same way (bench/"
     "raw_*.py), so the state reads cost the runner no more than the loop it is compared with.",
     "The runner's own work per step (runner/sim: blow-up check, energy watchdog, assertions, contact pairs, "
-    "the step loop) is 0.09 ms on MuJoCo, 0.13 on PyBullet, 0.19 on DART and 0.21 on ODE (CPU time, traced "
-    "runs; it was 0.15, 0.20, 0.33 and 0.34): the blow-up check takes one whole-array pass when every state "
+    "the step loop) is 0.09 ms on MuJoCo, 0.13 on PyBullet, 0.13 on DART and 0.17 on ODE (CPU time, traced "
+    "runs, medians of 3 interleaved with the tree before; it was 0.15, 0.20, 0.25 and 0.28): the blow-up "
+    "check takes one whole-array pass when every state "
     "is finite and slow (28 -> 8 us), the energy watchdog turns the angular velocity without rotation "
     "matrices (25 -> 16 us), touching pairs by name are made only when asked for, group reads index once. "
     "What is left is a few microseconds each of numpy calls on 100-element arrays and the step loop itself.",
