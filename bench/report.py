@@ -158,18 +158,22 @@ def _raw_target(backend: str) -> float | None:
 
 
 def _floor(figs: Sequence[BackendFigures]) -> list[str]:
-    """The part of the gap no runner that looks at every body every step can close, from this run's figures."""
+    """What reading every body costs the hand-written loop, and the runner without a trace against it."""
     if not figs:
         return []
     reads = ", ".join(f"{f.backend} {f.ratio('raw+reads'):.2f}" for f in figs)
-    over = [f.backend for f in figs if f.ratio("raw+reads") > TARGET_RATIO]
     untraced = ", ".join(f"{f.backend} {f.ratio('runner', 'raw+reads'):.2f}" for f in figs)
-    floor = (f"; on {', '.join(over)} that alone is beyond the target of {TARGET_RATIO}, which no runner that "
-             "checks assertions on every body every step can then meet") if over else ""  # fmt: skip
+    raw_targets = [(f, t) for f in figs if (t := _raw_target(f.backend)) is not None]
+    against_raw = "".join(
+        f" On {f.backend} the target against the loop without reads ({t:.2f}) leaves "
+        f"{(t - f.ratio('raw+reads')) * 100:.0f} % of the raw loop's time for everything but the state reads."
+        for f, t in raw_targets
+    )
     return [
         f"- Reading every body's state each step is itself a cost the raw loop does not pay: the hand-written "
-        f"loop that also reads them runs at {reads} times the raw loop{floor}. Against that loop, the runner "
-        f"without a trace runs at {untraced}; what is beyond it is the trace and reading contacts for it.",
+        f"loop that also reads them (the 1.10 target's loop) runs at {reads} times the raw loop.{against_raw} "
+        f"Against the loop with reads, the runner without a trace runs at {untraced}; what is beyond it is the "
+        f"trace and reading contacts for it.",
     ]
 
 
