@@ -54,6 +54,8 @@ class RunnerTiming:
     engine_build: float  # the adapter's constructor (and settings(), close())
     engine_step: float  # Backend.step
     engine_reads: float  # body_states, joint_states, contacts
+    engine_states: float  # body_states, joint_states: the part of the reads the hand-written loop also makes
+    engine_contacts: float  # contacts (read for the trace's /contacts, and for contact events and assertions)
     engine_inputs: float
     trace: float  # every TraceWriter method
     assertions: float  # AssertionTracker.on_step
@@ -99,6 +101,8 @@ def run_runner(loaded: LoadedScenario, backend: str, out_dir: Path | None, trace
         engine_build=split.total("engine", ins.ENGINE_SETUP),
         engine_step=split.total("engine", ins.ENGINE_STEP),
         engine_reads=split.total("engine", ins.ENGINE_READS),
+        engine_states=split.total("engine", ("body_states", "joint_states")),
+        engine_contacts=split.total("engine", ("contacts",)),
         engine_inputs=split.total("engine", ins.ENGINE_INPUTS),
         trace=split.total("trace") + split.total("trace-process"),
         assertions=split.total("assert"),

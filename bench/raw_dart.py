@@ -70,24 +70,30 @@ class DartLoop:
             self.skeletons.append(skeleton)
         for skeleton in self.skeletons:
             w.addSkeleton(skeleton)
-        self.static = [b.motion is Motion.STATIC for b in world.bodies]
-        self.fixed = np.array([list(b.pos) + list(b.quat) for b in world.bodies], dtype=float)
+        self.free_at = np.array([i for i, b in enumerate(world.bodies) if b.motion is not Motion.STATIC], dtype=int)
+        self.free = [self.skeletons[i] for i in self.free_at]
+        self.fixed_rows = np.zeros((len(world.bodies), 13))
+        self.fixed_rows[:, :7] = [list(b.pos) + list(b.quat) for b in world.bodies]
 
     def step(self) -> None:
         self.w.step()
 
     def read(self) -> np.ndarray:
-        rows = np.zeros((len(self.skeletons), 13))
-        for i, skeleton in enumerate(self.skeletons):
-            if self.static[i]:
-                rows[i, :7] = self.fixed[i]
-                continue
-            q, v = skeleton.getPositions(), skeleton.getVelocities()
-            angle = float(np.linalg.norm(q[:3]))
-            axis = q[:3] / angle if angle > 1e-12 else np.zeros(3)
-            rows[i, :3] = q[3:]
-            rows[i, 3:7] = [np.cos(angle / 2), *(axis * np.sin(angle / 2))]
-            rows[i, 7:10], rows[i, 10:13] = v[3:], v[:3]
+        """Two calls per free skeleton (getPositions, getVelocities: DART has no world-level state getter),
+        the rotation vectors turned into quaternions on arrays."""
+        rows = self.fixed_rows.copy()
+        if self.free:
+            q = np.concatenate([skeleton.getPositions() for skeleton in self.free]).reshape(-1, 6)
+            v = np.concatenate([skeleton.getVelocities() for skeleton in self.free]).reshape(-1, 6)
+            angle = np.sqrt((q[:, :3] ** 2).sum(axis=1))
+            small = angle < 1e-12
+            scale = np.sin(angle / 2) / np.where(small, 1.0, angle)
+            scale[small] = 0.5  # sin(a/2)/a -> 1/2
+            free = self.free_at
+            rows[free, :3] = q[:, 3:]
+            rows[free, 3] = np.cos(angle / 2)
+            rows[free, 4:7] = q[:, :3] * scale[:, None]
+            rows[free, 7:10], rows[free, 10:13] = v[:, 3:], v[:, :3]
         return rows
 
     def close(self) -> None:

@@ -12,7 +12,7 @@ from collections.abc import Mapping
 from typing import Any
 
 import numpy as np
-from panda3d.core import BitMask32, Quat
+from panda3d.core import BitMask32, Datagram, Quat
 from panda3d.ode import (
     OdeBody,
     OdeBoxGeom,
@@ -73,7 +73,10 @@ class OdeLoop:
         w.setSurfaceEntry(0, 0, mu, surface.bounce, surface.bounce_vel, 0.0, w.getCfm(), 0.0, 0.0)
         space.setAutoCollideWorld(w)
         space.setAutoCollideJointGroup(self.group)
-        self.fixed = np.array([list(b.pos) + list(b.quat) for b in world.bodies], dtype=float)
+        self.dynamic_at = np.array([i for i, b in enumerate(self.bodies) if b is not None], dtype=int)
+        self.dynamic = [b for b in self.bodies if b is not None]
+        self.fixed_rows = np.zeros((len(world.bodies), 13))
+        self.fixed_rows[:, :7] = [list(b.pos) + list(b.quat) for b in world.bodies]
 
     def step(self) -> None:
         self.space.autoCollide()
@@ -81,13 +84,16 @@ class OdeLoop:
         self.group.empty()
 
     def read(self) -> np.ndarray:
-        rows = np.zeros((len(self.bodies), 13))
-        for i, body in enumerate(self.bodies):
-            if body is None:
-                rows[i, :7] = self.fixed[i]
-                continue
-            p, q, v, a = body.getPosition(), body.getQuaternion(), body.getLinearVel(), body.getAngularVel()
-            rows[i] = (p[0], p[1], p[2], q[0], q[1], q[2], q[3], v[0], v[1], v[2], a[0], a[1], a[2])
+        """Four getters per body, each vector written as ODE's float32 values into one datagram."""
+        rows = self.fixed_rows.copy()
+        if self.dynamic:
+            dg = Datagram()
+            for body in self.dynamic:
+                body.getPosition().writeDatagramFixed(dg)
+                body.getQuaternion().writeDatagramFixed(dg)
+                body.getLinearVel().writeDatagramFixed(dg)
+                body.getAngularVel().writeDatagramFixed(dg)
+            rows[self.dynamic_at] = np.frombuffer(dg.getMessage(), dtype="<f4").reshape(-1, 13)
         return rows
 
     def close(self) -> None:

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping
+from itertools import chain, repeat
 from typing import Any
 
 import numpy as np
@@ -17,6 +18,9 @@ import pybullet as p
 from backends.pybullet._impacts import ImpactErp
 from backends.pybullet._reads import base_rows
 from backends.types import CompiledWorld, Motion, ShapeKind
+
+#: PyBullet's row (pos, quaternion x y z w, lin, ang) in the loops' order (quaternion w x y z).
+_WXYZ_ROW = np.array([0, 1, 2, 6, 3, 4, 5, 7, 8, 9, 10, 11, 12])
 
 
 class PyBulletLoop:
@@ -85,12 +89,13 @@ class PyBulletLoop:
         p.stepSimulation(physicsClientId=self.c)
 
     def read(self) -> np.ndarray:
-        rows = []
-        for uid in self.uids:
-            pos, orn = p.getBasePositionAndOrientation(uid, physicsClientId=self.c)
-            lin, ang = p.getBaseVelocity(uid, physicsClientId=self.c)
-            rows.append(pos + (orn[3], orn[0], orn[1], orn[2]) + lin + ang)
-        return np.array(rows, dtype=float)
+        """Two calls per base (PyBullet has no state getter for several multibodies), the floats streamed
+        into one array."""
+        c, n = self.c, len(self.uids)
+        poses = map(p.getBasePositionAndOrientation, self.uids, repeat(c))
+        twists = map(p.getBaseVelocity, self.uids, repeat(c))
+        flat = chain.from_iterable(chain.from_iterable(chain.from_iterable(zip(poses, twists, strict=True))))
+        return np.fromiter(flat, np.float64, 13 * n).reshape(n, 13)[:, _WXYZ_ROW]
 
     def close(self) -> None:
         p.disconnect(physicsClientId=self.c)

@@ -70,9 +70,13 @@ def _grouped_with_numpy(n_bodies: int, first: np.ndarray, second: np.ndarray, de
                         force: np.ndarray) -> list[Contact]:  # fmt: skip
     lo, hi = np.minimum(first, second), np.maximum(first, second)
     key = lo.astype(np.int64) * n_bodies + hi
-    order = np.argsort(key, kind="stable")  # a pair's points keep the engine's order
-    key, depth, force = key[order], depth[order], force[order]
-    start = np.flatnonzero(np.concatenate(([True], key[1:] != key[:-1])))
+    if (key[1:] < key[:-1]).any():  # MuJoCo and others list points pair by pair already: no sort then
+        order = np.argsort(key, kind="stable")  # a pair's points keep the engine's order
+        key, depth, force = key[order], depth[order], force[order]
+    new = np.empty(len(key), dtype=bool)
+    new[0] = True
+    np.not_equal(key[1:], key[:-1], out=new[1:])
+    start = np.flatnonzero(new)
     count = np.diff(np.append(start, len(key)))
     if np.isnan(depth).any():  # NaN spreads through np.maximum; the fold from 0.0 skips it
         values = depth.tolist()
@@ -80,10 +84,14 @@ def _grouped_with_numpy(n_bodies: int, first: np.ndarray, second: np.ndarray, de
     else:
         top = np.maximum.reduceat(depth, start)
         deepest = np.where(top > 0.0, top, 0.0).tolist()
-    total = force[start].copy()
-    for j in range(1, int(count.max())):  # column by column: each pair's j-th point added to its total
-        more = count > j
-        total[more] += force[start[more] + j]
+    # Each pair's forces summed point by point: row j of the table holds every pair's j-th point, -0.0
+    # where a pair has fewer (x + -0.0 is x for every x, -0.0, inf and NaN included), rows added in order.
+    pair_of = np.cumsum(new) - 1
+    table = np.full((int(count.max()), len(start)), -0.0)
+    table[np.arange(len(key)) - start[pair_of], pair_of] = force
+    total = table[0].copy()
+    for row in table[1:]:
+        total += row
     pair = key[start]
     rows = zip((pair // n_bodies).tolist(), (pair % n_bodies).tolist(), count.tolist(), deepest, total.tolist(),
                strict=True)  # fmt: skip

@@ -3,9 +3,9 @@
 DART resets joint commands and external forces in every ``World.step()``, so each engine step re-issues
 the motor targets (SERVO actuators, force-limited to +-fmax), the kinematic velocities (VELOCITY
 actuators on FreeJoints) and the one-step forces of the scenario step. Poses of free bodies are read in
-two calls per skeleton (FreeJoint positions are [rotation vector, translation], velocities
-[angular, linear], both in the world frame) and converted with numpy: DART's per-body reads cost several
-times the other engines' (notes §9).
+two calls per pair of skeletons (``_reads``; FreeJoint positions are [rotation vector, translation],
+velocities [angular, linear], both in the world frame) and converted with numpy: DART's per-body reads cost
+several times the other engines' (notes §9).
 """
 
 from __future__ import annotations
@@ -34,6 +34,7 @@ from ..types import (
 from . import _contacts, _surfaces
 from ._build import BodyHandle, JointHandle, build, place_free
 from ._options import MAX_CONE_MU, DartOptions
+from ._reads import state_readers
 
 _NAME = "dart"
 
@@ -69,8 +70,7 @@ class DartBackend(Backend):
         self._coefficients = built.coefficients
         self._free = [i for i, h in enumerate(self._bodies) if h.free]
         self._free_at = _rows(self._free)
-        self._read_q = [self._bodies[i].skeleton.getPositions for i in self._free]
-        self._read_v = [self._bodies[i].skeleton.getVelocities for i in self._free]
+        self._read_q, self._read_v = state_readers([self._bodies[i].skeleton for i in self._free])
         self._static = [i for i, b in enumerate(world.bodies) if b.motion is Motion.STATIC]
         self._static_at = _rows(self._static)
         self._reader = _contacts.ContactReader(len(world.bodies), self._static)

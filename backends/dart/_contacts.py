@@ -2,15 +2,16 @@
 
 ``CollisionResult.getContacts()`` lists contact points, each naming two collision objects. Reading a
 field of a point through dartpy costs 0.1-0.3 us (a numpy view for a vector), so each field is read
-once, one field at a time over all points, and the rest is done on arrays: body pairs from a cache
-of the collision objects, normal forces as one ``einsum``; the kit's ``group_by_pair`` then gives each
-pair's count, deepest depth and summed normal force, the points in DART's order. This module does not
-import the engine.
+once, one field at a time over all points, by the property's own getter (``fget``, taken from the points'
+class: about 10 % cheaper than ``attrgetter``, which goes through the descriptor each time), and the rest
+is done on arrays: body pairs from a cache of the collision objects, normal forces as one ``einsum``; the
+kit's ``group_by_pair`` then gives each pair's count, deepest depth and summed normal force, the points in
+DART's order. This module does not import the engine.
 """
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from operator import attrgetter
 from typing import Any
 
@@ -22,6 +23,18 @@ from ..types import Contact
 _FIRST, _SECOND = attrgetter("collisionObject1"), attrgetter("collisionObject2")
 _DEPTH, _FORCE, _NORMAL = attrgetter("penetrationDepth"), attrgetter("force"), attrgetter("normal")
 _POINT = attrgetter("point")
+#: The fields read from each point, in the order of :class:`_Getters`.
+_FIELDS = ("collisionObject1", "collisionObject2", "penetrationDepth", "force", "normal")
+_Getters = tuple[Callable[[Any], Any], ...]
+
+
+def _getters(point_class: type) -> _Getters:
+    """Each field's getter: the property's ``fget`` where the class has one, else ``attrgetter``."""
+    found = (getattr(point_class, name, None) for name in _FIELDS)
+    return tuple(
+        prop.fget if isinstance(prop, property) and prop.fget else attrgetter(name)
+        for prop, name in zip(found, _FIELDS, strict=True)
+    )
 
 
 class ContactReader:
@@ -36,14 +49,16 @@ class ContactReader:
         self._static = np.zeros(n_bodies, dtype=bool)
         self._static[list(static)] = True
         self._object_body: dict[Any, int] = {}
+        self._getters: dict[type, _Getters] = {}
 
     def contacts(self, points: Sequence[Any]) -> list[Contact]:
         """The touching pairs of ``points``: point count, deepest penetration, summed |force . normal|."""
         if not points:
             return []
-        lo, hi = self._pair_of_points(tuple(map(_FIRST, points)), tuple(map(_SECOND, points)))
-        depths = np.array(tuple(map(_DEPTH, points)))
-        vectors = np.frombuffer(b"".join((*map(_FORCE, points), *map(_NORMAL, points)))).reshape(2, -1, 3)
+        first, second, depth, force, normal = self._fields(points)
+        lo, hi = self._pair_of_points(tuple(map(first, points)), tuple(map(second, points)))
+        depths = np.fromiter(map(depth, points), np.float64, len(points))
+        vectors = np.frombuffer(b"".join((*map(force, points), *map(normal, points)))).reshape(2, -1, 3)
         both_static = self._static[lo] & self._static[hi]
         if both_static.any():
             kept = ~both_static
@@ -57,7 +72,8 @@ class ContactReader:
         """The (a < b) body pairs of ``points``, static pairs included."""
         if not points:
             return set()
-        lo, hi = self._pair_of_points(tuple(map(_FIRST, points)), tuple(map(_SECOND, points)))
+        first, second = self._fields(points)[:2]
+        lo, hi = self._pair_of_points(tuple(map(first, points)), tuple(map(second, points)))
         return set(zip(lo.tolist(), hi.tolist(), strict=True))
 
     def approach(self, points: Sequence[Any], motion: Any) -> dict[tuple[int, int], float]:
@@ -82,6 +98,14 @@ class ContactReader:
             if v > out.get((a, b), -1.0):
                 out[(a, b)] = v
         return out
+
+    def _fields(self, points: Sequence[Any]) -> _Getters:
+        """The getters for these points' class (one class per engine: looked up once)."""
+        kind = type(points[0])
+        getters = self._getters.get(kind)
+        if getters is None:
+            getters = self._getters[kind] = _getters(kind)
+        return getters
 
     def _pair_of_points(self, first: Sequence[Any], second: Sequence[Any]) -> tuple[np.ndarray, np.ndarray]:
         """(lower, higher) body index of every point, from its two collision objects."""

@@ -45,7 +45,6 @@ import numpy as np
 
 from backends.types import BodyStates, CompiledWorld, JointStates, Motion
 from runner.errors import EnergyGain
-from runner.sim.collisions import quat_matrices
 
 __all__ = ["GAIN_FRACTION", "WINDOW_STEPS", "EnergyWatch", "body_energies"]
 
@@ -57,14 +56,19 @@ _ROUNDING = 4 * float(np.finfo(float).eps)
 
 
 def body_energies(
-    states: BodyStates, index: np.ndarray, mass: np.ndarray, inertia: np.ndarray, gravity: np.ndarray
+    states: BodyStates, index: np.ndarray | slice, mass: np.ndarray, inertia: np.ndarray, gravity: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray]:
     """(kinetic, total) mechanical energy of the bodies ``index`` (J): translational and rotational
     kinetic energy, plus the gravitational -m g.p."""
-    rot = quat_matrices(states.quat[index])
-    w_body = np.einsum("nji,nj->ni", rot, states.ang_vel[index])  # R^T w: the body-frame angular velocity
+    s, x, y, z = states.quat[index].T
+    wx, wy, wz = states.ang_vel[index].T
+    # R^T w, the body-frame angular velocity: w turned by the inverse quaternion (s, -u), u = (x, y, z),
+    # without its matrix: t = 2 (-u) x w, then w + s t + (-u) x t.
+    tx, ty, tz = 2.0 * (z * wy - y * wz), 2.0 * (x * wz - z * wx), 2.0 * (y * wx - x * wy)
+    bx, by, bz = wx + s * tx + (z * ty - y * tz), wy + s * ty + (x * tz - z * tx), wz + s * tz + (y * tx - x * ty)
     v = states.lin_vel[index]
-    kinetic = 0.5 * mass * np.einsum("ni,ni->n", v, v) + 0.5 * np.einsum("ni,ni->n", inertia, w_body * w_body)
+    ix, iy, iz = inertia.T
+    kinetic = 0.5 * mass * np.add.reduce(v * v, axis=1) + 0.5 * (ix * bx * bx + iy * by * by + iz * bz * bz)
     return kinetic, kinetic - mass * (states.pos[index] @ gravity)
 
 
@@ -75,6 +79,10 @@ class EnergyWatch:
         self.backend = backend
         self.names = [b.name for b in world.bodies]
         self.index = np.array([i for i, b in enumerate(world.bodies) if b.motion is Motion.DYNAMIC], dtype=int)
+        first = int(self.index[0]) if self.index.size else 0
+        contiguous = self.index.size and self.index[-1] - first == self.index.size - 1
+        #: the same rows, as a slice when they are consecutive (a view, not a copy, of each state array)
+        self.rows: np.ndarray | slice = slice(first, first + self.index.size) if contiguous else self.index
         self.mass = np.array([world.bodies[i].mass for i in self.index], float)
         self.inertia = np.array([world.bodies[i].inertia for i in self.index], float).reshape(-1, 3)
         self.gravity = np.asarray(world.gravity, float)
@@ -85,6 +93,7 @@ class EnergyWatch:
         self.work = 0.0  # booked motor work so far (J)
         self._driven = True  # the first state is the first reference
         self._window: deque[tuple[float, np.ndarray]] = deque(maxlen=WINDOW_STEPS + 1)
+        self._totals: deque[float] = deque(maxlen=WINDOW_STEPS + 1)  # the window's totals, for a C-level max
         self._k_peak = 0.0  # the largest kinetic energy since the check (re)started
         self._reference = 0.0
         self._reference_at = 0.0
@@ -101,13 +110,15 @@ class EnergyWatch:
         if self.motors.size:
             power = np.nan_to_num(joints.motor_force[self.motors] * joints.velocity[self.motors])
             self.work += float(np.abs(power).sum()) * self.dt
-        kinetic, energy = body_energies(states, self.index, self.mass, self.inertia, self.gravity)
+        kinetic, energy = body_energies(states, self.rows, self.mass, self.inertia, self.gravity)
         total = float(energy.sum()) - self.work
         entry = (total, energy)
         if self._driven:
             self._driven = False
             self._window.clear()
             self._window.append(entry)
+            self._totals.clear()
+            self._totals.append(total)
             self._reference, self._reference_at, self._reference_bodies = total, t, energy
             self._k_peak = float(kinetic.sum())
             return
@@ -118,9 +129,12 @@ class EnergyWatch:
             if rise > bound:
                 self._raise(t, rise, bound, energy)
         self._window.append(entry)
-        back, top = max(enumerate(reversed(self._window)), key=lambda e: e[1][0])  # steps back, entry
-        if top[0] < self._reference:
-            self._reference, self._reference_at, self._reference_bodies = top[0], t - back * self.dt, top[1]
+        self._totals.append(total)
+        top = max(reversed(self._totals))  # the window's largest energy (newest first)
+        if top < self._reference:  # the newest entry holding it (steps back from now)
+            back = next(k for k, e in enumerate(reversed(self._totals)) if e == top)
+            self._reference, self._reference_at = top, t - back * self.dt
+            self._reference_bodies = self._window[-1 - back][1]
 
     def bound(self, energy: np.ndarray) -> float:
         """The rise allowed now (J): integrator error on the motion, position correction at rest, rounding."""

@@ -97,10 +97,25 @@ class StateResolver:
         if rest == "speed":
             if isinstance(rows, int):
                 return lambda: float(np.linalg.norm(snap.bodies.lin_vel[rows]))
-            return lambda: [float(v) for v in np.linalg.norm(snap.bodies.lin_vel[rows], axis=1)]
+            group = _index(rows)
+            return lambda: _norms(snap.bodies.lin_vel[group]).tolist()
         field, _, comp = rest.partition(".")
         attr = _BODY_ARRAYS[field]
         col = (_QUAT if field == "quat" else _COMPONENT)[comp]
         if isinstance(rows, int):
             return lambda: float(getattr(snap.bodies, attr)[rows, col])
-        return lambda: [float(v) for v in getattr(snap.bodies, attr)[rows, col]]
+        group = _index(rows)
+        return lambda: getattr(snap.bodies, attr)[group, col].tolist()
+
+
+def _index(rows: list[int]) -> slice | np.ndarray:
+    """A group's rows as a slice when they are consecutive (a view), else an index array (built once)."""
+    if rows and rows == list(range(rows[0], rows[-1] + 1)):
+        return slice(rows[0], rows[-1] + 1)
+    return np.array(rows, dtype=np.intp)
+
+
+def _norms(v: np.ndarray) -> np.ndarray:
+    """Row norms of (N, 3) ``v``: what ``np.linalg.norm(v, axis=1)`` computes for real arrays (the same
+    sum of squares and square root, numpy 2's special case for ord 2), without its argument checks."""
+    return np.sqrt(np.add.reduce(v * v, axis=1))

@@ -26,7 +26,7 @@ import numpy as np
 
 from backends.base import Backend
 from backends.errors import EngineFailure
-from backends.types import Motion
+from backends.types import BodyStates, Motion
 from runner import interrupts
 from runner.compile.program import Program
 from runner.language import model_behaviour as B
@@ -46,6 +46,42 @@ from runner.sim.servo import Servos, servo_specs
 #: or whose linear (m/s) or angular (rad/s) speed exceeds this, has blown up. Adapters check nothing
 #: themselves beyond what their engine calls fatal (backends/base.py).
 MAX_SPEED = 1.0e4
+
+
+_MAX_SPEED_SQUARED = MAX_SPEED * MAX_SPEED  # 1e8, exact: |v|^2 <= it  <=>  |v| <= MAX_SPEED (sqrt is monotone)
+
+
+def _blown_up(states: BodyStates) -> tuple[int, bool] | None:
+    """The first body whose state is not finite or too fast, and whether it is not finite; None if none.
+
+    Every step checks every body, so the common case (all well) is a few whole-array operations: a
+    speed within the limit has its square within the limit squared (NaN and inf fail the comparison).
+    Anything else takes the exact per-body test.
+    """
+    lin, ang = states.lin_vel, states.ang_vel
+    lin2, ang2 = np.add.reduce(lin * lin, axis=1), np.add.reduce(ang * ang, axis=1)
+    if (
+        len(lin2) == 0
+        or np.isfinite(states.pos).all()
+        and np.isfinite(states.quat).all()
+        and float(lin2.max()) <= _MAX_SPEED_SQUARED
+        and float(ang2.max()) <= _MAX_SPEED_SQUARED
+    ):
+        return None
+    bad = ~(
+        np.isfinite(states.pos).all(axis=1)
+        & np.isfinite(states.quat).all(axis=1)
+        & np.isfinite(lin).all(axis=1)
+        & np.isfinite(ang).all(axis=1)
+    )
+    fast = (np.linalg.norm(np.nan_to_num(lin, nan=np.inf), axis=1) > MAX_SPEED) | (
+        np.linalg.norm(np.nan_to_num(ang, nan=np.inf), axis=1) > MAX_SPEED
+    )
+    broken = np.flatnonzero(bad | fast)
+    if not broken.size:
+        return None
+    i = int(broken[0])
+    return i, bool(bad[i])
 
 
 @dataclass
@@ -98,7 +134,7 @@ class Session:
         self.kinematics = KinematicTable(self.world, program.start_hpr, program.start_scale)
         self.intervals = IntervalManager(self, program.intervals)
         self.snapshot = Snapshot()
-        self.contact_pairs: set[tuple[str, str]] = set()
+        self._contact_pairs: set[tuple[str, str]] | None = set()  # None: not yet made from self.contacts
         self.contacts: list[Any] = []
         self._contacts_at: float | None = None  # when self.contacts was read
         # Contacts are read every step only when something uses them: contact events, contact() in an
@@ -148,8 +184,17 @@ class Session:
     def truth(self, text: str) -> bool:
         return self.program.expressions[text].truth(self.resolver)
 
+    @property
+    def contact_pairs(self) -> set[tuple[str, str]]:
+        """The touching pairs by name, made from the last contacts read when something first asks."""
+        if self._contact_pairs is None:
+            names = self.names
+            self._contact_pairs = {(names[c.a], names[c.b]) for c in self.contacts}
+        return self._contact_pairs
+
     def in_contact(self, a: str, b: str) -> bool:
-        return (a, b) in self.contact_pairs or (b, a) in self.contact_pairs
+        pairs = self.contact_pairs
+        return (a, b) in pairs or (b, a) in pairs
 
     def get_pos(self, body: str) -> tuple[float, float, float]:
         return self.kinematics.get(body).target_pos
@@ -283,20 +328,11 @@ class Session:
 
     def _read(self, t: float, contacts: bool = True) -> None:
         states = self.backend.body_states()
-        bad = ~(
-            np.isfinite(states.pos).all(axis=1)
-            & np.isfinite(states.quat).all(axis=1)
-            & np.isfinite(states.lin_vel).all(axis=1)
-            & np.isfinite(states.ang_vel).all(axis=1)
-        )
-        fast = (np.linalg.norm(np.nan_to_num(states.lin_vel, nan=np.inf), axis=1) > MAX_SPEED) | (
-            np.linalg.norm(np.nan_to_num(states.ang_vel, nan=np.inf), axis=1) > MAX_SPEED
-        )
-        broken = np.flatnonzero(bad | fast)
-        if broken.size:
-            i = int(broken[0])
+        broken = _blown_up(states)
+        if broken is not None:
+            i, bad = broken
             name = self.world.bodies[i].name
-            what = "a non-finite state" if bad[i] else f"a speed above {MAX_SPEED:g}"
+            what = "a non-finite state" if bad else f"a speed above {MAX_SPEED:g}"
             raise EngineFailure(
                 f"body `{name}` reached {what} at t={t:.4f} s on {self.backend.name}",
                 backend=self.backend.name,
@@ -317,9 +353,8 @@ class Session:
             self._read_contacts(t)
 
     def _read_contacts(self, t: float) -> None:
-        names = self.names
         self.contacts = self.backend.contacts()
-        self.contact_pairs = {(names[c.a], names[c.b]) for c in self.contacts}
+        self._contact_pairs = None
         self._contacts_at = t
 
     def _solid_hits(self) -> list[tuple[str, str, bool]]:

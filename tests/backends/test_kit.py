@@ -184,16 +184,27 @@ def test_python_and_numpy_grouping_give_the_same_numbers() -> None:
     def same(x: list[Contact], y: list[Contact]) -> bool:
         return len(x) == len(y) and all(
             a[:4] == b[:4] and math.copysign(1.0, a.depth) == math.copysign(1.0, b.depth) == 1.0
-            and (a.normal_force == b.normal_force or (math.isnan(a.normal_force) and math.isnan(b.normal_force)))
+            and (
+                (a.normal_force == b.normal_force
+                 and math.copysign(1.0, a.normal_force) == math.copysign(1.0, b.normal_force))
+                or (math.isnan(a.normal_force) and math.isnan(b.normal_force))
+            )
             for a, b in zip(x, y, strict=True)
         )
 
     rng = np.random.default_rng(7)
-    for size in (1, 5, kit.NUMPY_FROM - 1, kit.NUMPY_FROM, 300):
+    for size, listed_by_pair in [(n, False) for n in (1, 5, kit.NUMPY_FROM - 1, kit.NUMPY_FROM, 300)] + [
+        (n, True) for n in (kit.NUMPY_FROM, 300)  # points already pair by pair (MuJoCo's order): no sort
+    ]:
         first, second = rng.integers(0, 6, size), rng.integers(0, 6, size)
+        if listed_by_pair:
+            order = np.argsort(np.minimum(first, second) * 6 + np.maximum(first, second), kind="stable")
+            first, second = first[order], second[order]
         depth = np.where(rng.random(size) < 0.2, -0.0, rng.random(size) * 1e-3)
         force = rng.random(size) * 100.0
         force[rng.random(size) < 0.1] = math.nan if size % 2 else 0.0
+        force[rng.random(size) < 0.1] = -0.0  # a pair of -0.0 forces sums to -0.0, with 0.0 to 0.0
+        force[rng.random(size) < 0.02] = math.inf
         python = kit._grouped_in_python(6, first.tolist(), second.tolist(), depth.tolist(), force.tolist())
         numpy = kit._grouped_with_numpy(6, first, second, depth, force)
         assert same(python, numpy), size

@@ -29,6 +29,11 @@ def test_raw_loop_matches_the_runner(backend: str, tmp_path: Path) -> None:
     final = measure.final_from_trace(str(trace_path(tmp_path, loaded, backend)))
     assert np.abs(final[:, :3] - raw.final[:, :3]).max() <= 1e-9
     assert np.abs(final[:, 7:10] - raw.final[:, 7:10]).max() <= 1e-9
+    # orientations and spins too (a quaternion and its negation are one orientation): the loops' reads
+    # convert each engine's own form (PyBullet x y z w, DART rotation vectors, ODE float32) like the adapter
+    quat, raw_quat = final[:, 3:7], raw.final[:, 3:7]
+    assert np.minimum(np.abs(quat - raw_quat).max(axis=1), np.abs(quat + raw_quat).max(axis=1)).max() <= 1e-9
+    assert np.abs(final[:, 10:13] - raw.final[:, 10:13]).max() <= 1e-9
     # and the boxes moved: they fell 1 cm onto the ground or each other, then came to rest
     assert np.abs(final[1:, 2] - np.array([b.pos[2] for b in world.bodies[1:]])).max() > 0.005
     # the instrumented parts add up: engine, trace and the runner's own work are each a positive share
