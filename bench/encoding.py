@@ -273,8 +273,8 @@ def targets(figs: list[EncodingFigures]) -> list[str]:
 def _cost_cause(f: EncodingFigures) -> str:
     if f.us("protobuf tf+bodies") <= TARGET_US:
         return ""
-    return ("encoding (templates) about 0.1, the SDK writer's copies about 0.05, the rest zstd level 1 on the "
-            "steps' bytes, which grows with how little they compress (section 6)")
+    return ("encoding (templates) about 0.15, the SDK writer's calls and copies about 0.05, the rest zstd level 1 "
+            "on the steps' bytes, which grows with how little they compress (section 6)")
 
 
 def render(figs: list[EncodingFigures]) -> list[str]:
@@ -283,8 +283,9 @@ def render(figs: list[EncodingFigures]) -> list[str]:
         "",
         "The same recorded steps (the pile run by the runner, read back) written by both formats, interleaved, "
         "medians of the repetitions; MCAP container and 1 MiB chunks for both; time includes the chunks' "
-        "compression at `finish()` (bench/encoding.py). *tf+bodies*: those two channels alone; *whole*: every "
-        "per-step channel (/tf, /bodies, /joints, /contacts, /state), format 2 through the runner's TraceWriter.",
+        "compression when the file is closed (bench/encoding.py). *tf+bodies*: those two channels alone; *whole*: "
+        "every per-step channel (/tf, /bodies, /joints, /contacts, /state), format 2 through the runner's "
+        "TraceWriter.",
         "",
         "Format 2's /tf + /bodies are written twice: by the runner's writer (the Foxglove SDK's native MCAP "
         "writer, zstd level 1) and by the previous one (the pure-Python `mcap` writer, zstd level 3: *before*).",
