@@ -31,7 +31,9 @@ PREVIOUS_FORMATS: Final = {1: "JSON channels with LZ4 chunks (physics-scenarios 
 
 #: MCAP header
 PROFILE: Final = ""
-LIBRARY: Final = "physics-scenarios"
+LIBRARY: Final = "physics-scenarios"  # the header of traces written by the pure-Python mcap writer
+#: how the header of a trace written by the Foxglove SDK begins (the SDK sets it: its name and version)
+SDK_LIBRARY: Final = "foxglove-sdk"
 
 #: file naming
 FILE_SUFFIX: Final = ".mcap"

@@ -16,9 +16,11 @@ name by an atomic rename only.
 (removed when the claim is taken). A file it did not write is refused (:func:`foreign`), unless the user
 asks with ``--force``. The tool recognises its own files by content, never by name alone:
 
-* a trace (``.mcap``, ``.mcap.partial``): the MCAP magic and a header whose ``library`` is this tool's
-  (:data:`reports.trace_format.LIBRARY`); a ``.partial`` shorter than its header (a run killed at once)
-  counts as the tool's when its bytes are a prefix of the MCAP magic;
+* a trace (``.mcap``, ``.mcap.partial``): the MCAP magic, a header written by the Foxglove SDK's writer
+  (:data:`reports.trace_format.SDK_LIBRARY`, or this tool's own name,
+  :data:`reports.trace_format.LIBRARY`, in traces written before it), then this tool's ``scenario``
+  metadata record; a ``.partial`` cut before that record counts as the tool's when its bytes are a
+  prefix of the MCAP magic or it holds such a header;
 * ``.outcome.json``: readable by :func:`reports.outcome.read_outcome` (format and outcome checked);
 * ``.cost.json``: a JSON object naming this case's trace with a ``wall_seconds`` figure.
 """
@@ -37,7 +39,7 @@ from pathlib import Path
 from types import TracebackType
 
 from mcap.exceptions import McapError
-from mcap.records import Header
+from mcap.records import Header, Metadata
 from mcap.stream_reader import StreamReader
 
 from reports import outcome as oc
@@ -48,6 +50,7 @@ __all__ = ["RESOURCE_ERRNOS", "Claim", "case_files", "foreign", "is_own", "lock_
            "remove_own", "write_error"]  # fmt: skip
 
 _MAGIC = b"\x89MCAP0\r\n"
+_LIBRARIES = (tf.SDK_LIBRARY, tf.LIBRARY)
 
 #: errno values of a resource fault while writing: the disk (or quota) is full, the device failed
 RESOURCE_ERRNOS = frozenset({errno.ENOSPC, errno.EDQUOT, errno.EIO, errno.EFBIG})
@@ -79,10 +82,24 @@ def _own_trace(path: Path) -> bool:
             if head != _MAGIC:
                 return False
             f.seek(0)
-            record = next(iter(StreamReader(f, skip_magic=False).records), None)
-    except (OSError, McapError, StopIteration, ValueError, EOFError):
+            records = iter(StreamReader(f, skip_magic=False).records)
+            header = next(records, None)
+            if not isinstance(header, Header) or not header.library.startswith(_LIBRARIES):
+                return False
+            if header.library.startswith(tf.LIBRARY):
+                return True
+            partial = path.name.endswith(tf.PARTIAL_SUFFIX)
+            try:
+                record = next(records, None)
+            except (McapError, ValueError, EOFError, struct.error):
+                return partial
+    except (OSError, McapError, StopIteration, ValueError, EOFError, struct.error):
         return path.name.endswith(tf.PARTIAL_SUFFIX) and _partial_header(path)
-    return isinstance(record, Header) and record.library.startswith(tf.LIBRARY)
+    if record is None:
+        return partial
+    if not isinstance(record, Metadata):
+        return False
+    return record.name == tf.METADATA_SCENARIO and tf.KEY_TRACE_FORMAT in record.metadata
 
 
 def _partial_header(path: Path) -> bool:
@@ -92,7 +109,7 @@ def _partial_header(path: Path) -> bool:
             head = f.read(256)
     except OSError:
         return False
-    return head.startswith(_MAGIC) and (tf.LIBRARY.encode() in head or len(head) < 64)
+    return head.startswith(_MAGIC) and (any(n.encode() in head for n in _LIBRARIES) or len(head) < 64)
 
 
 def _own_json(path: Path, trace: Path) -> bool:

@@ -1,12 +1,16 @@
-"""The MCAP trace writer: the only writer-side importer of ``mcap``.
+"""The MCAP trace writer: the only writer-side user of an MCAP writer.
 
-Layout, topics and metadata: :mod:`reports.trace_format`. The file is written while the run goes on
-(chunked, zstd, memory constant in the duration) to ``<path>.partial`` through an unbuffered sink, so a
-finished chunk is in the operating system at once; a chunk closes when it exceeds ``chunk_size`` bytes
-and after the first step at or past each multiple of ``flush_interval`` simulated seconds, which bounds
-what a hard kill loses. ``finish()`` writes the ``result`` record and the summary, then renames the file
-to ``<path>``. Messages are encoded by :class:`runner.trace.encoder.TraceEncoder` (protobuf; the
-per-step ones through serialised templates).
+Layout, topics and metadata: :mod:`reports.trace_format`. The container is written by the official
+Foxglove SDK's native (Rust) MCAP writer (``foxglove-sdk``), zstd level 1 chunks, while the run goes on
+(memory constant in the duration), to ``<path>.partial`` through an unbuffered sink of ours, so a finished
+chunk is in the operating system at once; a chunk closes when it exceeds ``chunk_size`` bytes and after
+the first step at or past each multiple of ``flush_interval`` simulated seconds, which bounds what a hard
+kill loses. ``finish()`` writes the ``result`` record and the summary, then renames the file to
+``<path>``. Messages are encoded by :class:`runner.trace.encoder.TraceEncoder` (protobuf; the per-step ones
+through serialised templates). Why this writer and level: docs/trace-format.md, "Cost".
+
+The SDK logs a failed sink write as a warning instead of raising it; the sink keeps the first failure and
+every call here re-raises it, so a full disk still ends the run with its error (docs/reliability.md).
 """
 
 from __future__ import annotations
@@ -14,14 +18,14 @@ from __future__ import annotations
 import contextlib
 import math
 import os
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from types import TracebackType
-from typing import IO, Any, cast
+from typing import Any, TypeVar
 
-from mcap.exceptions import McapError
-from mcap.writer import CompressionType, Writer
+import foxglove
+from foxglove.mcap import MCAPCompression, MCAPWriteOptions
 
 from backends.errors import EngineFailure
 from backends.types import BodySpec, BodyStates, Contact, JointSpec, JointStates, Vec3
@@ -32,7 +36,13 @@ from runner.trace import output
 from runner.trace.encoder import TraceEncoder, dumps, verdict_text
 from runner.trace.sounds import SoundBank
 
-__all__ = ["SolidVisual", "TraceMeta", "TraceWriter"]
+__all__ = ["ZSTD_LEVEL", "SolidVisual", "TraceMeta", "TraceWriter"]
+
+_T = TypeVar("_T")
+
+#: zstd level of the chunks: level 1 writes 0.1-0.2 us/body/step less than level 3 (the SDK's default) for
+#: 8-20 % more bytes, which keeps the trace well under half of format 1 (bench/results-encoding.md)
+ZSTD_LEVEL = 1
 
 
 @dataclass(frozen=True)
@@ -79,11 +89,14 @@ class _Sink:
         self._path = path
         self._file = open(path, "xb" if exclusive else "wb", buffering=0)
         self._pos = 0
-        self._failed: TraceError | None = None
+        self.failed: TraceError | None = None
+        self._discard = False
 
     def write(self, data: bytes | memoryview) -> int:
-        if self._failed is not None:
-            raise self._failed
+        if self._discard:  # abandoned: the SDK writer's last words go nowhere
+            return len(memoryview(data))
+        if self.failed is not None:
+            raise self.failed
         view = memoryview(data).cast("B")
         total = len(view)
         try:
@@ -92,13 +105,28 @@ class _Sink:
         except OSError as exc:
             with contextlib.suppress(OSError):
                 os.ftruncate(self._file.fileno(), self._pos)
-            self._failed = output.write_error(exc, f"trace {self._path}")
-            raise self._failed from exc
+            self.failed = output.write_error(exc, f"trace {self._path}")
+            raise self.failed from exc
         self._pos += total
         return total
 
     def tell(self) -> int:
         return self._pos
+
+    def seek(self, offset: int, whence: int = os.SEEK_SET) -> int:
+        """Where the file is: the SDK writes with ``disable_seeking`` and only asks for the position."""
+        if (whence, offset) not in ((os.SEEK_CUR, 0), (os.SEEK_SET, self._pos)):
+            raise OSError(f"the trace sink does not seek (asked {offset}, {whence})")
+        return self._pos
+
+    def check(self) -> None:
+        """Raise the first failed write, which the SDK only logs."""
+        if self.failed is not None and not self._discard:
+            raise self.failed
+
+    def discard(self) -> None:
+        """Ignore every later write (an abandoned trace keeps what is in the file)."""
+        self._discard = True
 
     def flush(self) -> None:
         """Nothing is buffered here."""
@@ -149,18 +177,20 @@ class TraceWriter:
         self._encoder = TraceEncoder(self._names, self._joint_names)
         self._sounds = SoundBank()
         self._sink = self._open()
+        self._context = foxglove.Context()  # this trace's channels reach this trace's writer only
         try:
-            self._writer = Writer(cast(IO[bytes], self._sink), chunk_size=chunk_size, compression=CompressionType.ZSTD)
-            self._writer.start(profile=tf.PROFILE, library=tf.LIBRARY)
-            self._channels: dict[str, int] = {}
+            options = MCAPWriteOptions(
+                compression=MCAPCompression.Zstd, compression_level=ZSTD_LEVEL, compression_threads=0,
+                profile=tf.PROFILE, chunk_size=chunk_size, disable_seeking=True,
+            )  # fmt: skip
+            self._writer = self._sdk(foxglove.open_mcap, self._sink, context=self._context, writer_options=options)
+            self._channels: dict[str, foxglove.Channel] = {}
             self._register_all()
-            self._writer.add_metadata(tf.METADATA_SCENARIO, self._scenario_record())
+            self._sdk(self._writer.write_metadata, tf.METADATA_SCENARIO, self._scenario_record())
         except BaseException as exc:
             self._abandon()
             if isinstance(exc, OSError):
                 raise output.write_error(exc, f"trace {self.partial_path}") from exc
-            if isinstance(exc, McapError):
-                raise TraceError(f"cannot write trace {self.partial_path}: {exc}") from exc
             raise
 
     # ---- opening ---------------------------------------------------------------------------------
@@ -179,9 +209,23 @@ class TraceWriter:
         except OSError as exc:
             raise output.write_error(exc, f"trace {self.partial_path}") from exc
 
+    def _sdk(self, call: Callable[..., _T], *args: Any, **kwargs: Any) -> _T:
+        """``call(*args, **kwargs)`` on the SDK writer; a failed write raises the sink's own error (the SDK's
+        RuntimeError names no cause), any other SDK error a TraceError."""
+        try:
+            result = call(*args, **kwargs)
+        except RuntimeError as exc:
+            self._sink.check()
+            raise TraceError(f"cannot write trace {self.partial_path}: {exc}") from exc
+        self._sink.check()
+        return result
+
     def _register(self, topic: str, schema_name: str, schema_data: bytes) -> None:
-        sid = self._writer.register_schema(schema_name, tf.SCHEMA_ENCODING, schema_data)
-        self._channels[topic] = self._writer.register_channel(topic, tf.MESSAGE_ENCODING, sid)
+        """A channel of this trace; the SDK writes its schema and channel records before its first message."""
+        schema = foxglove.Schema(name=schema_name, encoding=tf.SCHEMA_ENCODING, data=schema_data)
+        self._channels[topic] = foxglove.Channel(
+            topic, schema=schema, message_encoding=tf.MESSAGE_ENCODING, context=self._context
+        )
 
     def _register_all(self) -> None:
         for channel in self._encoder.channels():
@@ -224,10 +268,9 @@ class TraceWriter:
         return ns
 
     def _write(self, topic: str, ns: int, data: bytes) -> None:
-        try:
-            self._writer.add_message(self._channels[topic], ns, data, ns)
-        except OSError as exc:
-            raise output.write_error(exc, f"trace {self.partial_path}") from exc
+        self._channels[topic].log(data, log_time=ns)
+        if self._sink.failed is not None:
+            raise self._sink.failed
 
     def _log(self, ns: int, level: int, message: str, name: str) -> None:
         self._write(tf.TOPIC_LOG, ns, self._encoder.log(ns, level, message, name))
@@ -236,7 +279,8 @@ class TraceWriter:
         """Attach a file (the scenario, its sounds); a ``sounds/<name>.wav`` also feeds /audio."""
         if self._closed:
             raise TraceError(f"trace {self.path} is already finished")
-        self._writer.add_attachment(0, self._last_ns, name, media_type, bytes(data))
+        self._sdk(self._writer.attach, log_time=self._last_ns, create_time=0, name=name, media_type=media_type,
+                  data=bytes(data))  # fmt: skip
         self._sounds.add(name, bytes(data))
 
     def scene(self, t: float, solids: Sequence[SolidVisual] = (), scales: Mapping[str, float] | None = None) -> None:
@@ -283,7 +327,7 @@ class TraceWriter:
             self._write(tf.TOPIC_STATE, ns, enc.state_message(state_vars))
         self._steps += 1
         if ns >= self._next_flush_ns:
-            self._writer.flush()
+            self._sdk(self._writer.flush)
             self._next_flush_ns = (ns // self._flush_ns + 1) * self._flush_ns
 
     def event(self, t: float, name: str, source: str, detail: Mapping[str, Any] | None = None) -> None:
@@ -349,8 +393,8 @@ class TraceWriter:
             tf.KEY_END_TIME: repr(self._last_ns / 1e9),
         }
         try:
-            self._writer.add_metadata(tf.METADATA_RESULT, result)
-            self._writer.finish()
+            self._sdk(self._writer.write_metadata, tf.METADATA_RESULT, result)
+            self._sdk(self._writer.close)
             self._closed = True
             self._sink.close(sync=True)
         except TraceError:
@@ -359,9 +403,6 @@ class TraceWriter:
         except OSError as exc:
             self._abandon()
             raise output.write_error(exc, f"trace {self.partial_path}") from exc
-        except McapError as exc:
-            self._abandon()
-            raise TraceError(f"cannot finish trace {self.partial_path}: {exc}") from exc
         if not self._force and self.path.exists():
             raise TraceError(f"{self.path} appeared while this run was writing; the trace is in {self.partial_path}")
         try:
@@ -372,10 +413,19 @@ class TraceWriter:
         return self.path
 
     def _abandon(self) -> None:
-        """Close without finishing: the .partial file stays, readable with recover=True."""
+        """Close without finishing: the .partial file stays, readable with recover=True. The SDK writer is
+        closed into a sink that discards (it would otherwise finish the file when collected)."""
         self._closed = True
+        sink = getattr(self, "_sink", None)
+        if sink is None:
+            return
+        sink.discard()
+        writer = getattr(self, "_writer", None)
+        if writer is not None:
+            with contextlib.suppress(Exception):
+                writer.close()
         with contextlib.suppress(OSError):
-            self._sink.close(sync=False)
+            sink.close(sync=False)
 
     def __enter__(self) -> TraceWriter:
         return self

@@ -32,6 +32,7 @@ from reports.inspect import summary_text
 from reports.trace_reader import TraceReadError, read_trace
 from runner.errors import TraceError
 from runner.trace import foxglove as fx
+from runner.trace import output
 from runner.trace.writer import SolidVisual, TraceMeta, TraceWriter
 
 REPO = Path(__file__).resolve().parents[2]
@@ -124,14 +125,15 @@ def test_round_trip_with_the_mcap_reader(trace_file: Path) -> None:
     with open(trace_file, "rb") as f:
         reader = make_reader(f)
         summary = reader.get_summary()
-        assert reader.get_header().library == tf.LIBRARY
+        assert reader.get_header().library.startswith(tf.SDK_LIBRARY)
         schema_of = {ch.topic: summary.schemas[ch.schema_id] for ch in summary.channels.values()}
         for ch in summary.channels.values():
             assert (ch.message_encoding, schema_of[ch.topic].encoding) == ("protobuf", "protobuf")
         assert schema_of["/tf"].name == "foxglove.FrameTransforms"
         assert schema_of["/scene"].name == "foxglove.SceneUpdate"
         assert schema_of["/log"].name == "foxglove.Log"
-        assert schema_of["/audio"].name == "foxglove.RawAudio"
+        # the SDK's writer records a channel with its first message: the topics listed are those that carry any
+        assert set(schema_of) == {topic for topic, *_ in mcap_messages(trace_file)}
         assert {c.compression for c in summary.chunk_indexes} == {"zstd"}
         meta = {m.name: m.metadata for m in reader.iter_metadata()}
         attachments = {a.name: (a.media_type, a.data, a.log_time) for a in reader.iter_attachments()}
@@ -487,3 +489,23 @@ def test_a_verdict_is_logged_when_it_is_decided(tmp_path: Path) -> None:
         (1.2, "error", "FAIL rest: measured false (expected always true); false at t=1.2000"),
         (2.0, "error", "1/2 assertions passed; failed: rest"),
     ]
+
+
+def test_own_traces_are_told_from_other_sdk_recordings(tmp_path: Path) -> None:
+    """The SDK names itself in the header, so a trace is the tool's by the scenario record that follows it: a
+    user's own recording with the same SDK (messages, no scenario record) is never taken for one."""
+    import foxglove  # the writer's library, as a user would call it
+
+    ours = tmp_path / "ours.mcap"
+    write_trace(ours)
+    theirs = tmp_path / "theirs.mcap"
+    context = foxglove.Context()
+    with foxglove.open_mcap(theirs, context=context):
+        foxglove.Channel("/x", message_encoding="json", context=context).log(b"{}", log_time=1)
+    with open(theirs, "rb") as f:
+        assert make_reader(f).get_header().library.startswith(tf.SDK_LIBRARY)
+    assert output.is_own(ours, ours)
+    assert not output.is_own(theirs, theirs)
+    partial = tmp_path / ("cut.mcap" + tf.PARTIAL_SUFFIX)
+    partial.write_bytes(ours.read_bytes()[:40])  # killed inside the header: still the tool's to replace
+    assert output.is_own(partial, tmp_path / "cut.mcap")
