@@ -11,13 +11,13 @@ from pathlib import Path
 
 from backends.registry import DEFAULT_BACKEND, is_installed, list_backends
 
-from . import batch, build, encoding, memory, overhead, scaling
+from . import batch, build, encoding, memory, overhead, scaling, seed_loop
 from .instrument import wrapper_cost
 from .report import Results, append_notes, render
 
 #: Every engine the registry lists (a fifth engine joins the benchmarks by its registry line).
 ENGINES = tuple(e.name for e in list_backends())
-SECTIONS = ("overhead", "scaling", "memory", "batch", "encoding", "build")
+SECTIONS = ("overhead", "scaling", "memory", "batch", "encoding", "build", "seed")
 
 
 def _ints(text: str) -> list[int]:
@@ -55,6 +55,8 @@ def parser() -> argparse.ArgumentParser:
     p.add_argument("--encoding-reps", type=int, default=3, help="encoding: interleaved repetitions (median)")
     p.add_argument("--build-backends", type=_names, default=None, help="build: engines (default: all installed)")
     p.add_argument("--build-sizes", type=_ints, default=[100, 1000, 10000], help="build: body counts")
+    p.add_argument("--seed-duration", type=float, default=4.0, help="seed: simulated seconds of the pile on ODE")
+    p.add_argument("--seed-reps", type=int, default=3, help="seed: interleaved repetitions (median)")
     return p
 
 
@@ -65,6 +67,7 @@ def _quick(a: argparse.Namespace) -> None:
     a.batch_reps = 1
     a.encoding_duration, a.encoding_reps = 0.4, 1
     a.build_sizes = [10, 40]
+    a.seed_duration, a.seed_reps = 0.2, 1
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -89,6 +92,7 @@ def main(argv: list[str] | None = None) -> int:
         "batch": f"-j {args.batch_jobs}, {args.batch_reps} reps, {args.batch_backend}",
         "encoding": f"{'x'.join(map(str, args.pile))} boxes, {args.encoding_duration:g} s, {args.encoding_reps} reps",
         "build": f"{args.build_sizes} bodies, {','.join(args.build_backends or installed)}",
+        "seed": f"{'x'.join(map(str, args.pile))} boxes, {args.seed_duration:g} s on ode, {args.seed_reps} reps",
     }
     results = Results(command=shlex.join(["python", "-m", "bench", *(argv if argv is not None else sys.argv[1:])]),
                       sizes={k: v for k, v in sizes.items() if k in args.sections})  # fmt: skip
@@ -121,6 +125,9 @@ def main(argv: list[str] | None = None) -> int:
         log(f"build: {sizes['build']}")
         chosen = [b for b in (args.build_backends or installed) if b in installed]
         results.build = build.run(chosen, args.build_sizes, log)
+    if "seed" in args.sections and is_installed("ode"):
+        log(f"seed: {sizes['seed']}")
+        results.seed = seed_loop.run(tuple(args.pile), args.seed_duration, args.seed_reps, log)  # type: ignore[arg-type]
     results.load = (results.load[0], os.getloadavg()[0])
     results.wall_seconds = time.perf_counter() - started
     if args.quick:

@@ -16,6 +16,7 @@ from backends.registry import list_backends
 
 from . import build as bld
 from . import encoding as enc
+from . import seed_loop
 from .batch import BatchFigures
 from .memory import MemoryFigures
 from .overhead import PROCESS, BackendFigures
@@ -37,6 +38,7 @@ class Results:
     batch: BatchFigures | None = None
     encoding: list[enc.EncodingFigures] = field(default_factory=list)
     build: list[bld.BuildFigures] = field(default_factory=list)
+    seed: seed_loop.SeedFigures | None = None
     wrapper_us: float = 0.0
     load: tuple[float, float] = (0.0, 0.0)  # 1-minute load average at the start and the end
     wall_seconds: float = 0.0
@@ -100,6 +102,7 @@ def render(r: Results) -> str:
         out += enc.render(r.encoding)
     if r.build:
         out += bld.render(r.build)
+    out += seed_loop.render(r.seed)
     out += ["## What remains, and why (profiling)", "", *_floor(r.overhead), *(f"- {c}" for c in KNOWN_CAUSES), ""]
     return "\n".join(out) + "\n"
 
@@ -125,6 +128,7 @@ def _targets(r: Results) -> list[str]:
                         f"| {growth:.2f} | {_met(growth <= TARGET_LINEAR)} | |")  # fmt: skip
     rows += enc.targets(r.encoding)
     rows += bld.targets(r.build)
+    rows += seed_loop.targets(r.seed)
     for backend in sorted({m.backend for m in r.memory}):
         runs = sorted((m for m in r.memory if m.backend == backend), key=lambda m: m.duration)
         if len(runs) >= 2:
