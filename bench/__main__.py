@@ -42,7 +42,7 @@ def parser() -> argparse.ArgumentParser:
     p.add_argument("--duration", type=float, default=10.0, help="overhead: simulated seconds")
     p.add_argument("--pile", type=_ints, default=[5, 5, 4], help="overhead: nx,ny,nz boxes (default 100)")
     p.add_argument("--scaling-backends", type=_names, default=None, help="scaling: engines (default: all installed)")
-    p.add_argument("--scaling-sizes", type=_ints, default=[10, 100, 1000])
+    p.add_argument("--scaling-sizes", type=_ints, default=[10, 100, 1000, 10000])
     p.add_argument("--scaling-duration", type=float, default=1.0, help="simulated seconds per scaling run")
     p.add_argument("--memory-backends", type=_names, default=None, help="memory: engines (default: all installed)")
     p.add_argument("--memory-durations", type=_floats, default=[10.0, 100.0])
@@ -104,8 +104,10 @@ def main(argv: list[str] | None = None) -> int:
         results.overhead = overhead.run(backends, tuple(args.pile), args.duration, args.reps, log)  # type: ignore[arg-type]
     if "scaling" in args.sections:
         log(f"scaling: {sizes['scaling']}")
-        results.scaling = scaling.run([b for b in args.scaling_backends if b in installed], args.scaling_sizes,
-                                      args.scaling_duration, log)  # fmt: skip
+        section = time.perf_counter()
+        chosen = [b for b in args.scaling_backends if b in installed]
+        results.scaling, results.scaling_limits = scaling.run(chosen, args.scaling_sizes, args.scaling_duration, log)
+        results.section_seconds["scaling"] = time.perf_counter() - section
     if "memory" in args.sections:
         log(f"memory: {sizes['memory']}")
         results.memory = memory.run([b for b in args.memory_backends if b in installed], args.memory_durations,

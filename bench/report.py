@@ -20,7 +20,7 @@ from . import seed_loop
 from .batch import BatchFigures
 from .memory import MemoryFigures
 from .overhead import PROCESS, BackendFigures
-from .scaling import SizeFigures, marginal
+from .scaling import FULL_STEPS_UP_TO, Limit, SizeFigures, marginal
 
 TARGET_RATIO = 1.10
 TARGET_MEMORY = 1.10
@@ -34,6 +34,8 @@ class Results:
     sizes: dict[str, Any]
     overhead: list[BackendFigures] = field(default_factory=list)
     scaling: list[SizeFigures] = field(default_factory=list)
+    scaling_limits: list[Limit] = field(default_factory=list)
+    section_seconds: dict[str, float] = field(default_factory=dict)  # wall time of the sections that record it
     memory: list[MemoryFigures] = field(default_factory=list)
     batch: BatchFigures | None = None
     encoding: list[enc.EncodingFigures] = field(default_factory=list)
@@ -92,7 +94,7 @@ def render(r: Results) -> str:
     if r.overhead:
         out += _overhead(r.overhead)
     if r.scaling:
-        out += _scaling(r.scaling)
+        out += _scaling(r.scaling, r.scaling_limits, r.section_seconds.get("scaling"))
     out += _trace(r.overhead, r.scaling)
     if r.memory:
         out += _memory(r.memory)
@@ -126,6 +128,7 @@ def _targets(r: Results) -> list[str]:
             rows.append(f"| runner's own cost linear in bodies ({backend}): marginal cost per body "
                         f"{steps[-1][0]}->{steps[-1][1]} / {steps[0][0]}->{steps[0][1]} <= {TARGET_LINEAR} "
                         f"| {growth:.2f} | {_met(growth <= TARGET_LINEAR)} | |")  # fmt: skip
+    rows += _reach(r.scaling, r.scaling_limits)
     rows += enc.targets(r.encoding)
     rows += bld.targets(r.build)
     rows += seed_loop.targets(r.seed)
@@ -144,6 +147,28 @@ def _targets(r: Results) -> list[str]:
                     f"(the ceiling for -j 2; {s / ceiling:.0%} of it reached); load average "
                     f"{r.load[0]:.1f}-{r.load[1]:.1f} on {os.cpu_count()} cores |")  # fmt: skip
     return [*rows, ""]
+
+
+def _reach(figs: Sequence[SizeFigures], limits: Sequence[Limit]) -> list[str]:
+    """Target rows: each backend's table reaches the largest size asked (10,000 bodies by default)."""
+    if not figs and not limits:
+        return []
+    largest = max([s.bodies for s in figs] + [lim.bodies for lim in limits])
+    rows = []
+    for backend in sorted({s.backend for s in figs} | {lim.backend for lim in limits}):
+        top = [s for s in figs if s.backend == backend and s.bodies == largest]
+        stop = [lim for lim in limits if lim.backend == backend]
+        if top:
+            s = top[0]
+            rows.append(f"| scaling table to {largest:,} bodies ({backend}) | runner {s.runner_us_per_body:.2f} "
+                        f"us/body/step, {s.kib_per_body:.1f} KiB/body, trace {s.trace_bytes_per_body_step:.1f} "
+                        f"bytes/body/step | met | section 2 |")  # fmt: skip
+        else:
+            reached = max((s.bodies for s in figs if s.backend == backend), default=0)
+            why = stop[0].reason if stop else "not run"
+            rows.append(f"| scaling table to {largest:,} bodies ({backend}) | up to {reached:,} "
+                        f"| **not met** | at {stop[0].bodies if stop else largest:,} bodies: {why} |")  # fmt: skip
+    return rows
 
 
 def _floor(figs: Sequence[BackendFigures]) -> list[str]:
@@ -219,28 +244,41 @@ def _overhead(figs: Sequence[BackendFigures]) -> list[str]:
     return [*out, ""]
 
 
-def _scaling(figs: Sequence[SizeFigures]) -> list[str]:
-    out = ["## 2. Scaling: 10, 100, 1000 bodies", "",
-           "One run each, trace on. *engine*: the adapter's step, reads and inputs; *runner*: everything but the "
-           "engine and the trace writer; *build*: the adapter's constructor.", "",
+def _scaling(figs: Sequence[SizeFigures], limits: Sequence[Limit], seconds: float | None) -> list[str]:
+    sizes = sorted({s.bodies for s in figs} | {lim.bodies for lim in limits})
+    took = f" The section took {seconds / 60:.1f} min." if seconds is not None else ""
+    out = [f"## 2. Scaling: {', '.join(f'{n:,}' for n in sizes)} bodies", "",
+           "One run each, trace on, each in a child process. *engine*: the adapter's step, reads and inputs; "
+           "*runner*: everything but the engine and the trace writer; *build*: the adapter's constructor; "
+           "*memory*: the child's peak RSS after the run minus its RSS with the engine imported, per body (at small sizes mostly the run's fixed cost: the marginal table gives the cost of a body); "
+           f"*trace*: bytes per body per step (the ground included). Beyond {FULL_STEPS_UP_TO:,} bodies the "
+           f"runs are shorter in proportion (25 steps at 10,000).{took}", "",
            "| backend | bodies | steps | engine ms/step | trace ms/step | runner ms/step | runner us/body/step "
-           "| build (s) |", "|---|---|---|---|---|---|---|---|"]  # fmt: skip
+           "| trace us/body/step | memory KiB/body | trace bytes/body/step | build (s) |",
+           "|---|---|---|---|---|---|---|---|---|---|---|"]  # fmt: skip
     for s in figs:
-        out.append(f"| {s.backend} | {s.bodies} | {s.timing.steps} | {s.engine_ms:.3f} | {s.trace_ms:.3f} "
-                   f"| {s.runner_ms:.3f} | {s.runner_us_per_body:.2f} | {s.timing.engine_build:.2f} |")  # fmt: skip
+        out.append(f"| {s.backend} | {s.bodies:,} | {s.timing.steps} | {s.engine_ms:.3f} | {s.trace_ms:.3f} "
+                   f"| {s.runner_ms:.3f} | {s.runner_us_per_body:.2f} | {1e3 * s.trace_ms / s.bodies:.2f} "
+                   f"| {s.kib_per_body:.1f} | {s.trace_bytes_per_body_step:.1f} "
+                   f"| {s.timing.engine_build:.2f} |")  # fmt: skip
+    for lim in limits:
+        out.append(f"| {lim.backend} | {lim.bodies:,} | | {lim.reason} | | | | | | | |")
     out += [
         "",
-        "Marginal cost per added body per step (us): linear growth keeps it constant.",
+        "Marginal cost per added body per step (us), and memory per added body (KiB): linear growth keeps them "
+        "constant.",
         "",
-        "| backend | sizes | runner | trace | engine |",
-        "|---|---|---|---|---|",
+        "| backend | sizes | runner | trace | engine | memory |",
+        "|---|---|---|---|---|---|",
     ]
     for backend in sorted({s.backend for s in figs}):
-        mine = [s for s in figs if s.backend == backend]
-        for (a, b, run_), (_, _, tr), (_, _, eng) in zip(
-            marginal(mine), marginal(mine, "trace_ms"), marginal(mine, "engine_ms"), strict=True
+        mine = sorted((s for s in figs if s.backend == backend), key=lambda s: s.bodies)
+        mem = [(b.peak_kib - a.peak_kib) / (b.bodies - a.bodies) for a, b in zip(mine, mine[1:], strict=False)]
+        for (a, b, run_), (_, _, tr), (_, _, eng), kib in zip(
+            marginal(mine), marginal(mine, "trace_ms"), marginal(mine, "engine_ms"), mem, strict=True
         ):
-            out.append(f"| {backend} | {a} -> {b} | {run_ * 1e3:.2f} | {tr * 1e3:.2f} | {eng * 1e3:.2f} |")
+            out.append(f"| {backend} | {a:,} -> {b:,} | {run_ * 1e3:.2f} | {tr * 1e3:.2f} | {eng * 1e3:.2f} "
+                       f"| {kib:.1f} |")  # fmt: skip
     return [*out, ""]
 
 
