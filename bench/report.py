@@ -250,7 +250,8 @@ def _scaling(figs: Sequence[SizeFigures], limits: Sequence[Limit], seconds: floa
     out = [f"## 2. Scaling: {', '.join(f'{n:,}' for n in sizes)} bodies", "",
            "One run each, trace on, each in a child process. *engine*: the adapter's step, reads and inputs; "
            "*runner*: everything but the engine and the trace writer; *build*: the adapter's constructor; "
-           "*memory*: the child's peak RSS after the run minus its RSS with the engine imported, per body (at small sizes mostly the run's fixed cost: the marginal table gives the cost of a body); "
+           "*memory*: the child's peak RSS after the run minus its RSS with the engine imported, per body (at "
+           "small sizes mostly the run's fixed cost: the marginal table gives the cost of a body); "
            f"*trace*: bytes per body per step (the ground included). Beyond {FULL_STEPS_UP_TO:,} bodies the "
            f"runs are shorter in proportion (25 steps at 10,000).{took}", "",
            "| backend | bodies | steps | engine ms/step | trace ms/step | runner ms/step | runner us/body/step "
