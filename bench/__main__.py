@@ -11,13 +11,13 @@ from pathlib import Path
 
 from backends.registry import DEFAULT_BACKEND, is_installed, list_backends
 
-from . import batch, build, encoding, memory, overhead, scaling, seed_loop
+from . import batch, build, encoding, memory, overhead, ray_cluster, scaling, seed_loop
 from .instrument import wrapper_cost
 from .report import Results, append_notes, render
 
 #: Every engine the registry lists (a fifth engine joins the benchmarks by its registry line).
 ENGINES = tuple(e.name for e in list_backends())
-SECTIONS = ("overhead", "scaling", "memory", "batch", "encoding", "build", "seed")
+SECTIONS = ("overhead", "scaling", "memory", "batch", "encoding", "build", "seed", "ray")
 
 
 def _ints(text: str) -> list[int]:
@@ -130,6 +130,9 @@ def main(argv: list[str] | None = None) -> int:
     if "seed" in args.sections and is_installed("ode"):
         log(f"seed: {sizes['seed']}")
         results.seed = seed_loop.run(tuple(args.pile), args.seed_duration, args.seed_reps, log)  # type: ignore[arg-type]
+    if "ray" in args.sections and not args.quick:  # CI runs the test itself (make test); --quick skips it
+        log(f"ray: {ray_cluster.TEST}")
+        results.ray = ray_cluster.run(log)
     results.load = (results.load[0], os.getloadavg()[0])
     results.wall_seconds = time.perf_counter() - started
     if args.quick:

@@ -16,7 +16,7 @@ from backends.registry import list_backends
 
 from . import build as bld
 from . import encoding as enc
-from . import seed_loop
+from . import ray_cluster, seed_loop
 from .batch import BatchFigures
 from .memory import MemoryFigures
 from .overhead import PROCESS, BackendFigures
@@ -41,6 +41,7 @@ class Results:
     encoding: list[enc.EncodingFigures] = field(default_factory=list)
     build: list[bld.BuildFigures] = field(default_factory=list)
     seed: seed_loop.SeedFigures | None = None
+    ray: ray_cluster.RayFigures | None = None
     wrapper_us: float = 0.0
     load: tuple[float, float] = (0.0, 0.0)  # 1-minute load average at the start and the end
     wall_seconds: float = 0.0
@@ -132,6 +133,7 @@ def _targets(r: Results) -> list[str]:
     rows += enc.targets(r.encoding)
     rows += bld.targets(r.build)
     rows += seed_loop.targets(r.seed)
+    rows += ray_cluster.targets(r.ray)
     for backend in sorted({m.backend for m in r.memory}):
         runs = sorted((m for m in r.memory if m.backend == backend), key=lambda m: m.duration)
         if len(runs) >= 2:
