@@ -347,8 +347,7 @@ def _batch(b: BatchFigures) -> list[str]:
     if b.serial:
         out += ["", f"The serial part: `scenario validate` on the same files (the command's start-up and the loading "
                     f"and validation of every variant, which every -j pays once) takes "
-                    f"{', '.join(f'{x:.2f}' for x in b.serial)} s (median {b.serial_seconds():.2f} s). `run` starts "
-                    f"its workers before loading, so their engine imports overlap it (docs/scaling.md)."]  # fmt: skip
+                    f"{', '.join(f'{x:.2f}' for x in b.serial)} s (median {b.serial_seconds():.2f} s)."]  # fmt: skip
     return [*out, ""]
 
 

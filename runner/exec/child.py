@@ -23,7 +23,6 @@ from __future__ import annotations
 import contextlib
 import ctypes
 import faulthandler
-import importlib
 import os
 import signal
 import sys
@@ -74,20 +73,11 @@ class _Reporter:
             self.conn.send(("progress", self.job_id, k, n))
 
 
-def serve(conn: Connection, log_path: str | None, preload: tuple[str, ...] = ()) -> None:
-    """The worker's main function (see the module docstring). ``preload``: modules imported before the
-    first job is awaited (the engine's adapter: a pool started early imports it while its parent works)."""
+def serve(conn: Connection, log_path: str | None) -> None:
+    """The worker's main function (see the module docstring)."""
     _detach(log_path)
     interrupts.install(always=True, backstop=BACKSTOP)
     from runner.exec.transport import encode_error
-
-    for name in preload:
-        try:
-            importlib.import_module(name)
-        except KeyboardInterrupt:  # the parent is stopping us before any job
-            return
-        except Exception:  # noqa: BLE001, S112 - the job that needs it meets the same error and reports it
-            continue
 
     parent = os.getppid()
     while True:

@@ -66,8 +66,6 @@ class Executor(Protocol):
             on_progress: OnProgress | None = None,
             on_start: OnStart | None = None) -> list[CaseResult]: ...  # fmt: skip
 
-    def prepare(self, backends: Sequence[str]) -> None: ...
-
     def close(self) -> None: ...
 
 
@@ -92,16 +90,6 @@ class LocalExecutor:
         self.isolate = isolate
         self.force = force
         self.grace = grace  # seconds between a time limit's SIGTERM and SIGKILL
-        self._pool: Pool | None = None  # started early by prepare(), kept until close()
-
-    def prepare(self, backends: Sequence[str]) -> None:
-        """Start the worker processes now, each importing the first backend's adapter and the run's
-        modules, so that this start-up overlaps the caller's loading of the scenarios (a serial part of
-        every batch) instead of delaying the first cases. Optional; ``close()`` ends them."""
-        if self.isolate or not backends or self._pool is not None:
-            return
-        self._pool = Pool(self.jobs, timeout_grace=self.grace)
-        self._pool.prestart(backends[0], preload_for(backends[0]))
 
     def run(self, cases: Sequence[Case], on_result: OnResult | None = None,
             on_progress: OnProgress | None = None, on_start: OnStart | None = None) -> list[CaseResult]:  # fmt: skip
@@ -114,31 +102,12 @@ class LocalExecutor:
                 on_result(index, results[index])
 
         jobs = [Job(run_case, (c,), c.backend, c.budget, self.isolate, c.cost) for c in cases]
-        before = None if on_start is None else lambda i: on_start(i)
-        if self._pool is not None:
-            self._pool.run(jobs, end, on_progress, before)
-        else:
-            with Pool(min(self.jobs, max(1, len(cases))), timeout_grace=self.grace) as pool:
-                pool.run(jobs, end, on_progress, before)
+        with Pool(min(self.jobs, max(1, len(cases))), timeout_grace=self.grace) as pool:
+            pool.run(jobs, end, on_progress, None if on_start is None else lambda i: on_start(i))
         return [results[i] for i in range(len(cases))]
 
     def close(self) -> None:
-        """Ends the workers prepare() started; nothing else stays running between run() calls."""
-        if self._pool is not None:
-            self._pool.close()
-            self._pool = None
-
-
-def preload_for(backend: str) -> list[str]:
-    """What a worker for ``backend`` imports before its first case: the adapter (and so the engine) and
-    the run's own modules."""
-    from backends.registry import entry
-
-    modules = ["runner.exec.cases", "runner.sim.run", "runner.trace.writer"]
-    try:
-        return [entry(backend).target.partition(":")[0], *modules]
-    except Exception:  # noqa: BLE001 - an unknown backend: the case reports it
-        return modules
+        """Nothing stays running between run() calls."""
 
 
 def make_executor(kind: str = "local", jobs: int = 1, ray_address: str | None = None, *, isolate: bool = False,

@@ -160,14 +160,13 @@ class Pool:
 
     # ---- workers ---------------------------------------------------------------------------------
 
-    def _start(self, preload: tuple[str, ...] = ()) -> _Worker:
+    def _start(self) -> _Worker:
         if self._ctx is None:
             self._ctx = context()
         self._started += 1
         log = Path(self._folder.name) / f"worker{self._started}.log"
         parent, child = self._ctx.Pipe()
-        process = self._ctx.Process(target=serve, args=(child, str(log), preload),
-                                    name=f"scenario-worker-{self._started}")  # fmt: skip
+        process = self._ctx.Process(target=serve, args=(child, str(log)), name=f"scenario-worker-{self._started}")
         worker = _Worker(process, parent, log)
         self._workers.append(worker)  # before it starts: an interruption during start() leaves nothing untracked
         try:
@@ -190,16 +189,6 @@ class Pool:
             worker.process.kill()
             worker.process.join()
         worker.conn.close()
-
-    def prestart(self, affinity: str, preload: Sequence[str], count: int | None = None) -> int:
-        """Start up to ``count`` (default: the pool's size) idle workers for jobs of ``affinity`` now, each
-        importing ``preload`` at once, so that their start-up overlaps the caller's own work (loading the
-        scenarios) instead of delaying the first jobs. Returns how many were started."""
-        wanted = min(self.size - len(self._workers), self.size if count is None else count)
-        for _ in range(max(0, wanted)):
-            self.started[affinity] += 1
-            self._start(tuple(preload)).affinity = affinity
-        return max(0, wanted)
 
     def close(self) -> None:
         for worker in list(self._workers):

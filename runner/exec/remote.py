@@ -203,9 +203,6 @@ class RayExecutor:
         ending: Ending = reply["ending"]
         return ending
 
-    def prepare(self, backends: Sequence[str]) -> None:
-        """Nothing to start early: Ray's workers are the cluster's."""
-
     def close(self) -> None:
         if self._started and self._ray.is_initialized():
             self._ray.shutdown()

@@ -73,21 +73,3 @@ def test_executor_choice_is_checked() -> None:
     with pytest.raises(UsageError, match="-j"):
         LocalExecutor(0)
 
-
-def test_workers_started_before_loading_run_the_cases_and_give_the_same_traces(tmp_path: Path) -> None:
-    """`prepare()` (what `scenario run` calls before it loads the files) starts the workers at once, each
-    importing the engine; the run then uses those very workers, and the traces are the ones of a pool
-    started by run() itself."""
-    executor = LocalExecutor(2)
-    try:
-        executor.prepare(["pybullet"])
-        assert executor._pool is not None and executor._pool.started == {"pybullet": 2}
-        early = executor.run(pile_cases(tmp_path / "early"))
-        assert executor._pool.started == {"pybullet": 2}  # no other worker was needed
-    finally:
-        executor.close()
-    assert executor._pool is None
-    late = LocalExecutor(2).run(pile_cases(tmp_path / "late"))
-    assert summary(early) == summary(late)
-    for a, b in zip(early, late, strict=True):
-        assert Path(a.result.trace).read_bytes() == Path(b.result.trace).read_bytes()

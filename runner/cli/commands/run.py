@@ -149,31 +149,23 @@ def _execute(
     backends = options.backend_names(args)  # unknown: bad input (exit 2); missing: exit 3; before anything runs
     overrides = parse_overrides(args.set)
     _check(args)
-    # local workers start now and import the engine while the scenarios load (a serial part of any batch);
-    # a Ray cluster is reached only once the input has been checked, as before
-    executor = make_executor("local", args.jobs, args.ray_address, isolate=args.isolate, force=args.force) \
-        if args.executor == "local" else None  # fmt: skip
+    loaded = load_files(options.scenario_files(args.files), args.variant, args.all_variants, overrides)
+    work = [(case, backend) for backend in backends for case in loaded]
+    cases.extend(case for case, _ in work)
+    out_dir: Path | None = None if args.no_trace else args.out
+    if out_dir is not None:
+        for backend in backends:
+            _refuse_duplicates(out_dir, loaded, backend)
+        try:
+            out_dir.mkdir(parents=True, exist_ok=True)
+        except OSError as exc:
+            raise ScenarioError(f"cannot use {out_dir} as the trace folder: {exc.strerror or exc}") from None
+    jobs = [_case(args, c, b, overrides, out_dir) for c, b in work]
+    check_outputs(jobs, args.force)  # files the tool did not write: refused before anything runs
+    executor = make_executor(args.executor, args.jobs, args.ray_address, isolate=args.isolate, force=args.force)
+    shown = _Shown(args, out, err, cases, results)
+    watched = wanted(err, args.quiet, args.json)
     try:
-        if executor is not None:
-            executor.prepare(backends)
-        loaded = load_files(options.scenario_files(args.files), args.variant, args.all_variants, overrides)
-        work = [(case, backend) for backend in backends for case in loaded]
-        cases.extend(case for case, _ in work)
-        out_dir: Path | None = None if args.no_trace else args.out
-        if out_dir is not None:
-            for backend in backends:
-                _refuse_duplicates(out_dir, loaded, backend)
-            try:
-                out_dir.mkdir(parents=True, exist_ok=True)
-            except OSError as exc:
-                raise ScenarioError(f"cannot use {out_dir} as the trace folder: {exc.strerror or exc}") from None
-        jobs = [_case(args, c, b, overrides, out_dir) for c, b in work]
-        check_outputs(jobs, args.force)  # files the tool did not write: refused before anything runs
-        if executor is None:
-            executor = make_executor(args.executor, args.jobs, args.ray_address, isolate=args.isolate,
-                                     force=args.force)  # fmt: skip
-        shown = _Shown(args, out, err, cases, results)
-        watched = wanted(err, args.quiet, args.json)
         if watched and len(jobs) > 1:  # a batch: cases done, running, failed, ETA
             with BatchProgress(err, len(jobs), then=shown.add) as bar:
                 executor.run(jobs, bar.result, None, bar.start)
@@ -183,8 +175,7 @@ def _execute(
         else:
             executor.run(jobs, shown.add, None)
     finally:
-        if executor is not None:
-            executor.close()
+        executor.close()
     if args.json:
         body = {"results": [_result_json(r, c) for r, c in zip(results, cases, strict=True)]}
         out.print_json(json.dumps(body, allow_nan=False, default=str))
