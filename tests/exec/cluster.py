@@ -13,8 +13,9 @@ machine, another cluster included.
 The folders are short ones under /tmp (Ray's socket paths must fit in 107 bytes; pytest's ``tmp_path``
 does not), removed by :meth:`Cluster.stop`.
 
-Readiness is event-driven: a node is up when its ``ray start --block`` prints "Ray runtime started"
-(read line by line from its pipe); the cluster is up when the GCS lists both nodes alive.
+Readiness is event-driven: a node is up when its ``ray start --block`` prints its last line, "will now
+block forever" (after "Ray runtime started" and the address to join; read line by line from its
+pipe); the cluster is up when the GCS lists both nodes alive.
 """
 
 from __future__ import annotations
@@ -35,6 +36,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 MARKER = "SCENARIO_TEST_CLUSTER"
+READY = "will now block forever"  # `ray start --block`'s last line once the node is up
 RAY = Path(sys.executable).with_name("ray")
 
 
@@ -97,7 +99,7 @@ class Node:
         assert self.process.stdout is not None
         for line in self.process.stdout:
             self.lines.append(line)
-            if "Ray runtime started" in line:
+            if READY in line:  # printed last, after "Ray runtime started" and the address to join
                 self.ready.set()
         self.ready.set()  # it ended: whoever waits sees that it is not running
 

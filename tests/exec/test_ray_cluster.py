@@ -5,7 +5,8 @@ cancels what is in flight and leaves every finished trace.
 
 The driver is `scenario sweep --executor ray` in a process of its own (tests/exec/ray_driver.py, which
 kills the worker, or sends itself SIGINT, from the results as they come back: no timed waits). The cases
-are 0.1 s columns of 1 to 4 boxes on PyBullet (10 steps). Skipped only when the `ray` extra is not
+are 0.1 s columns of 1 to 4 boxes on PyBullet (10 steps). About 35 s on the two-core machine, 90 s under
+heavy load. Skipped only when the `ray` extra is not
 installed, and never in CI (`SCENARIO_REQUIRE_RAY=1`, set by .ci/run, makes a missing Ray a failure).
 """
 
