@@ -290,10 +290,12 @@ def _scaling(figs: Sequence[SizeFigures], limits: Sequence[Limit], seconds: floa
     for backend in sorted({s.backend for s in figs}):
         mine = sorted((s for s in figs if s.backend == backend), key=lambda s: s.bodies)
         mem = [(b.peak_kib - a.peak_kib) / (b.bodies - a.bodies) for a, b in zip(mine, mine[1:], strict=False)]
-        for (a, b, run_), (_, _, tr), (_, _, eng), kib in zip(
-            marginal(mine), marginal(mine, "trace_ms"), marginal(mine, "engine_ms"), mem, strict=True
+        traced = [not (x.untraced or y.untraced) for x, y in zip(mine, mine[1:], strict=False)]
+        for (a, b, run_), (_, _, tr), (_, _, eng), kib, both in zip(
+            marginal(mine), marginal(mine, "trace_ms"), marginal(mine, "engine_ms"), mem, traced, strict=True
         ):
-            out.append(f"| {backend} | {a:,} -> {b:,} | {run_ * 1e3:.2f} | {tr * 1e3:.2f} | {eng * 1e3:.2f} "
+            trace = f"{tr * 1e3:.2f}" if both else "no trace¹"
+            out.append(f"| {backend} | {a:,} -> {b:,} | {run_ * 1e3:.2f} | {trace} | {eng * 1e3:.2f} "
                        f"| {kib:.1f} |")  # fmt: skip
     return [*out, ""]
 

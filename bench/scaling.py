@@ -105,23 +105,23 @@ def measure(backend: str, bodies: int, duration: float, trace: bool = True) -> S
     cmd = [sys.executable, "-m", "bench.scaling", backend, str(bodies), repr(duration_for(bodies, duration)),
            "trace" if trace else "no-trace"]  # fmt: skip
     start = time.perf_counter()
+    boxes = math.prod(shape_for(bodies))  # the figures and limits count the boxes actually built
     simulated = f"build and {duration_for(bodies, duration):g} s simulated"
     try:
         done = subprocess.run(cmd, capture_output=True, text=True, check=False, timeout=WALL_LIMIT_S,
                               cwd=Path(__file__).parent.parent, preexec_fn=_limit_cpu)  # fmt: skip
     except subprocess.TimeoutExpired:
-        return Limit(backend, bodies, f"not done within {WALL_LIMIT_S:g} s of wall time ({simulated})")
+        return Limit(backend, boxes, f"not done within {WALL_LIMIT_S:g} s of wall time ({simulated})")
     wall = time.perf_counter() - start
     if done.returncode in (-signal.SIGXCPU, -signal.SIGKILL):
-        return Limit(backend, bodies, f"not done within {CPU_LIMIT_S} s of CPU time ({simulated})")
+        return Limit(backend, boxes, f"not done within {CPU_LIMIT_S} s of CPU time ({simulated})")
     if done.returncode != 0:
         last = (done.stderr.strip().splitlines() or [""])[-1]
         if trace and TRACE_REFUSED in last:
             again = measure(backend, bodies, duration, trace=False)
             return again if isinstance(again, Limit) else replace(again, untraced=last.split(": ", 1)[-1])
-        return Limit(backend, bodies, f"failed (exit {done.returncode}): {last}")
+        return Limit(backend, boxes, f"failed (exit {done.returncode}): {last}")
     data = json.loads(done.stdout.strip().splitlines()[-1])
-    boxes = math.prod(shape_for(bodies))  # the figures per body divide by the boxes actually built
     return SizeFigures(backend, boxes, m.RunnerTiming(**data["timing"]), data["base_kib"], data["peak_kib"], wall)
 
 
