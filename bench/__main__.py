@@ -11,13 +11,13 @@ from pathlib import Path
 
 from backends.registry import DEFAULT_BACKEND, is_installed, list_backends
 
-from . import batch, build, encoding, memory, overhead, robot, scaling
+from . import batch, build, encoding, memory, overhead, ray_cluster, robot, scaling, seed_loop
 from .instrument import wrapper_cost
 from .report import Results, append_notes, render
 
 #: Every engine the registry lists (a fifth engine joins the benchmarks by its registry line).
 ENGINES = tuple(e.name for e in list_backends())
-SECTIONS = ("overhead", "scaling", "memory", "batch", "encoding", "build", "robot")
+SECTIONS = ("overhead", "scaling", "memory", "batch", "encoding", "build", "robot", "seed", "ray")
 
 
 def _ints(text: str) -> list[int]:
@@ -42,7 +42,7 @@ def parser() -> argparse.ArgumentParser:
     p.add_argument("--duration", type=float, default=10.0, help="overhead: simulated seconds")
     p.add_argument("--pile", type=_ints, default=[5, 5, 4], help="overhead: nx,ny,nz boxes (default 100)")
     p.add_argument("--scaling-backends", type=_names, default=None, help="scaling: engines (default: all installed)")
-    p.add_argument("--scaling-sizes", type=_ints, default=[10, 100, 1000])
+    p.add_argument("--scaling-sizes", type=_ints, default=[10, 100, 1000, 10000])
     p.add_argument("--scaling-duration", type=float, default=1.0, help="simulated seconds per scaling run")
     p.add_argument("--memory-backends", type=_names, default=None, help="memory: engines (default: all installed)")
     p.add_argument("--memory-durations", type=_floats, default=[10.0, 100.0])
@@ -55,6 +55,8 @@ def parser() -> argparse.ArgumentParser:
     p.add_argument("--encoding-reps", type=int, default=3, help="encoding: interleaved repetitions (median)")
     p.add_argument("--build-backends", type=_names, default=None, help="build: engines (default: all installed)")
     p.add_argument("--build-sizes", type=_ints, default=[100, 1000, 10000], help="build: body counts")
+    p.add_argument("--seed-duration", type=float, default=4.0, help="seed: simulated seconds of the pile on ODE")
+    p.add_argument("--seed-reps", type=int, default=3, help="seed: interleaved repetitions (median)")
     return p
 
 
@@ -65,6 +67,7 @@ def _quick(a: argparse.Namespace) -> None:
     a.batch_reps = 1
     a.encoding_duration, a.encoding_reps = 0.4, 1
     a.build_sizes = [10, 40]
+    a.seed_duration, a.seed_reps = 0.2, 1
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -90,6 +93,7 @@ def main(argv: list[str] | None = None) -> int:
         "encoding": f"{'x'.join(map(str, args.pile))} boxes, {args.encoding_duration:g} s, {args.encoding_reps} reps",
         "build": f"{args.build_sizes} bodies, {','.join(args.build_backends or installed)}",
         "robot": f"scenarios/robots/kuka_arm.yaml, {','.join(installed)}",
+        "seed": f"{'x'.join(map(str, args.pile))} boxes, {args.seed_duration:g} s on ode, {args.seed_reps} reps",
     }
     results = Results(command=shlex.join(["python", "-m", "bench", *(argv if argv is not None else sys.argv[1:])]),
                       sizes={k: v for k, v in sizes.items() if k in args.sections})  # fmt: skip
@@ -101,8 +105,10 @@ def main(argv: list[str] | None = None) -> int:
         results.overhead = overhead.run(backends, tuple(args.pile), args.duration, args.reps, log)  # type: ignore[arg-type]
     if "scaling" in args.sections:
         log(f"scaling: {sizes['scaling']}")
-        results.scaling = scaling.run([b for b in args.scaling_backends if b in installed], args.scaling_sizes,
-                                      args.scaling_duration, log)  # fmt: skip
+        section = time.perf_counter()
+        chosen = [b for b in args.scaling_backends if b in installed]
+        results.scaling, results.scaling_limits = scaling.run(chosen, args.scaling_sizes, args.scaling_duration, log)
+        results.section_seconds["scaling"] = time.perf_counter() - section
     if "memory" in args.sections:
         log(f"memory: {sizes['memory']}")
         results.memory = memory.run([b for b in args.memory_backends if b in installed], args.memory_durations,
@@ -125,6 +131,12 @@ def main(argv: list[str] | None = None) -> int:
     if "robot" in args.sections:
         log(f"robot: {sizes['robot']}")
         results.robot = robot.run(installed, log)
+    if "seed" in args.sections and is_installed("ode"):
+        log(f"seed: {sizes['seed']}")
+        results.seed = seed_loop.run(tuple(args.pile), args.seed_duration, args.seed_reps, log)  # type: ignore[arg-type]
+    if "ray" in args.sections and not args.quick:  # CI runs the test itself (make test); --quick skips it
+        log(f"ray: {ray_cluster.TEST}")
+        results.ray = ray_cluster.run(log)
     results.load = (results.load[0], os.getloadavg()[0])
     results.wall_seconds = time.perf_counter() - started
     if args.quick:

@@ -42,12 +42,21 @@ class BatchFigures:
     exit_codes: set[int] = field(default_factory=set)
     #: jobs -> wall seconds of a fixed pure-Python loop split over that many processes, per repetition
     ceiling: dict[int, list[float]] = field(default_factory=dict)
+    #: wall seconds of `scenario validate FILES` (start-up and loading every variant: what -j cannot divide)
+    serial: list[float] = field(default_factory=list)
 
     def median(self, jobs: int) -> float:
         return statistics.median(self.seconds[jobs])
 
     def speedup(self, jobs: int) -> float:
         return self.median(1) / self.median(jobs)
+
+    def share_of_ceiling(self, jobs: int) -> float:
+        """The speed-up over the ceiling's: 1.0 is everything the machine gives parallel work."""
+        return self.speedup(jobs) / self.ceiling_speedup(jobs)
+
+    def serial_seconds(self) -> float:
+        return statistics.median(self.serial) if self.serial else float("nan")
 
     def ceiling_speedup(self, jobs: int) -> float:
         """What this machine gives perfectly parallel CPU work on ``jobs`` processes (NaN if not measured)."""
@@ -96,6 +105,11 @@ def run(
                 fig.exit_codes.add(done.returncode)
                 shutil.rmtree(out, ignore_errors=True)
                 fig.ceiling.setdefault(j, []).append(spin(j))
+            if cli:
+                start = time.perf_counter()
+                subprocess.run([str(Path(sys.executable).parent / "scenario"), "validate", *map(str, files)],
+                               capture_output=True, cwd=ROOT, check=False)  # fmt: skip
+                fig.serial.append(time.perf_counter() - start)
             times = ", ".join(f"-j {j} {fig.seconds[j][-1]:.2f}s (pure loop {fig.ceiling[j][-1]:.2f}s)" for j in jobs)
             log(f"  batch round {rep + 1}/{repetitions}: {times}")
     return fig

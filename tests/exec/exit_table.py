@@ -30,6 +30,8 @@ from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
 
+from tests.exec.cluster import MARKER, marked
+
 ROOT = Path(__file__).resolve().parents[2]
 GHOST = Path(__file__).resolve().parent / "ghost"
 BIN = Path(sys.executable).parent
@@ -183,15 +185,20 @@ def ray_cluster() -> Iterator[str]:
     with socket.socket() as probe:
         probe.bind(("127.0.0.1", 0))
         port = probe.getsockname()[1]
-    started = subprocess.run([ray, "start", "--head", "--num-cpus", "2", "--disable-usage-stats", "--temp-dir", tmp,
-                              "--include-dashboard", "false", "--node-ip-address", "127.0.0.1", "--port", str(port)],
-                             env=environment(), capture_output=True, text=True, timeout=300)  # fmt: skip
-    if started.returncode != 0:
-        raise RuntimeError(f"ray start failed: {started.stderr[-2000:]}")
+    marker = f"exit-table-{os.getpid()}-{port}"
+    env = {**environment(), MARKER: marker}  # every process of this cluster carries it (see stop below)
     try:
+        started = subprocess.run([ray, "start", "--head", "--num-cpus", "2", "--disable-usage-stats", "--temp-dir",
+                                  tmp, "--include-dashboard", "false", "--node-ip-address", "127.0.0.1", "--port",
+                                  str(port)], env=env, capture_output=True, text=True, timeout=300)  # fmt: skip
+        if started.returncode != 0:
+            raise RuntimeError(f"ray start failed: {started.stderr[-2000:]}")
         yield f"127.0.0.1:{port}"
     finally:
-        subprocess.run([ray, "stop", "--force"], capture_output=True, timeout=300, env=environment())
+        # this cluster's processes only: `ray stop` would stop every Ray cluster of the user on the machine
+        for pid in marked(marker):
+            with contextlib.suppress(ProcessLookupError):
+                os.kill(pid, signal.SIGKILL)
         shutil.rmtree(tmp, ignore_errors=True)
 
 

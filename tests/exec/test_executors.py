@@ -72,3 +72,4 @@ def test_executor_choice_is_checked() -> None:
         make_executor("slurm", 2)
     with pytest.raises(UsageError, match="-j"):
         LocalExecutor(0)
+

@@ -1,19 +1,21 @@
 """A sweep through Ray gives what it gives locally: the same table and the same traces, byte for byte.
 
 Starts a local Ray instance (2 CPUs), so it is slow: about 20 s here, most of it Ray starting. Skipped,
-with the reason, only when the `ray` extra is not installed (CI installs it).
+with the reason, only when the `ray` extra is not installed, and never in CI (SCENARIO_REQUIRE_RAY=1).
 """
 
 from __future__ import annotations
 
 import csv
+import os
 from pathlib import Path
 
 import pytest
 
 from runner.cli.main import main
 
-pytest.importorskip("ray", reason="the `ray` extra is not installed: pip install 'physics-scenarios[ray]'")
+if os.environ.get("SCENARIO_REQUIRE_RAY") != "1":  # CI (.ci/run) requires Ray
+    pytest.importorskip("ray", reason="the `ray` extra is not installed: pip install 'physics-scenarios[ray]'")
 
 from runner.exec.executors import Case, RayExecutor  # noqa: E402 - after the skip
 

@@ -15,6 +15,7 @@ from rich.progress import BarColumn, Progress, TaskID, TextColumn, TimeRemaining
 from backends.errors import BackendError, BackendNotInstalled, EngineFailure
 from backends.registry import DEFAULT_BACKEND
 from runner.cli import options
+from runner.cli.progress import BatchProgress, wanted
 from runner.errors import ScenarioError, ScenarioValidationError, TraceError, UsageError
 from runner.exec.cases import Case, CaseResult
 from runner.language.load import BASE_CASE, LoadedScenario, load_files, parse_overrides
@@ -163,10 +164,13 @@ def _execute(
     check_outputs(jobs, args.force)  # files the tool did not write: refused before anything runs
     executor = make_executor(args.executor, args.jobs, args.ray_address, isolate=args.isolate, force=args.force)
     shown = _Shown(args, out, err, cases, results)
-    progress = _progress(err) if err.is_terminal and not (args.quiet or args.json) and args.jobs == 1 else None
+    watched = wanted(err, args.quiet, args.json)
     try:
-        if progress is not None:
-            with progress:
+        if watched and len(jobs) > 1:  # a batch: cases done, running, failed, ETA
+            with BatchProgress(err, len(jobs), then=shown.add) as bar:
+                executor.run(jobs, bar.result, None, bar.start)
+        elif watched:  # one case: its steps
+            with _progress(err) as progress:
                 executor.run(jobs, shown.add, _advance(progress, cases))
         else:
             executor.run(jobs, shown.add, None)

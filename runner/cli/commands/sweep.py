@@ -13,6 +13,7 @@ wall time or on the executor: the same sweep gives the same files locally and on
 from __future__ import annotations
 
 import argparse
+import contextlib
 import csv
 import io
 import itertools
@@ -24,7 +25,6 @@ from pathlib import Path
 from typing import Any
 
 from rich.console import Console
-from rich.markup import escape
 from rich.table import Table
 
 from backends.registry import DEFAULT_BACKEND
@@ -123,6 +123,7 @@ def _slug(values: dict[str, Any]) -> str:
 
 def execute(args: argparse.Namespace, out: Console, err: Console) -> int:
     from runner.cli.outcomes import print_problem
+    from runner.cli.progress import BatchProgress, wanted
     from runner.exec.executors import Case, CaseResult, check_outputs, estimate_cost, make_executor, status_code
     from runner.language.load import load_all, load_scenario, parse_overrides
     from runner.sim.budget import DEFAULT_BUDGET
@@ -155,16 +156,17 @@ def execute(args: argparse.Namespace, out: Console, err: Console) -> int:
                 loads.append(loaded)
     check_outputs(cases, args.force)
     executor = make_executor(args.executor, args.jobs, args.ray_address, force=args.force)
-    show = err.is_terminal and not (args.quiet or args.json)
+    bar = BatchProgress(err, len(cases)) if wanted(err, args.quiet, args.json) else None
 
     def done(i: int, r: CaseResult) -> None:
-        if show:
-            err.print(f"  {i + 1}/{len(cases)} {escape(r.label)}")
+        if bar is not None:
+            bar.result(i, r)
         if r.result is None:
             print_problem(err, r)
 
     try:
-        results = executor.run(cases, done)
+        with bar if bar is not None else contextlib.nullcontext():
+            results = executor.run(cases, done, None, None if bar is None else bar.start)
     finally:
         executor.close()
     metrics = [
