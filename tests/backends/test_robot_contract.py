@@ -12,7 +12,18 @@ import pytest
 
 from backends.base import Backend
 from backends.geometry import quat_from_axis_angle, quat_rotate
-from backends.types import BodySpec, Capability, CompiledWorld, JointKind, JointSpec, Mesh, Motion, PlacedShape, Shape, ShapeKind
+from backends.types import (
+    BodySpec,
+    Capability,
+    CompiledWorld,
+    JointKind,
+    JointSpec,
+    Mesh,
+    Motion,
+    PlacedShape,
+    Shape,
+    ShapeKind,
+)
 
 from . import worlds as w
 from .tolerances import tol
@@ -30,7 +41,8 @@ def test_compound_rests_on_its_shapes(backend_name: str, backend_cls: type[Backe
     cube = Shape(ShapeKind.BOX, size=(0.1, 0.1, 0.1))
     shapes = (PlacedShape(cube, (0.2, 0.0, 0.0)), PlacedShape(cube, (-0.2, 0.0, 0.0)))
     # mass and inertia are the body's, given (two 1 kg cubes: I from the parallel axis theorem)
-    spec = BodySpec("dumbbell", Motion.DYNAMIC, EMPTY, 2.0, (0.0033, 0.0833, 0.0833), (0.0, 0.0, 0.06), w.IDENTITY, shapes=shapes)
+    inertia = (0.0033, 0.0833, 0.0833)
+    spec = BodySpec("dumbbell", Motion.DYNAMIC, EMPTY, 2.0, inertia, (0.0, 0.0, 0.06), w.IDENTITY, shapes=shapes)
     with w.make_backend(backend_name, w.world("compound", [w.ground(), spec])) as sim:
         for _ in range(100):
             sim.step()
