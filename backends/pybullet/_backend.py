@@ -27,9 +27,11 @@ from ..types import (
     JointStates,
     Motion,
     Quat,
+    ShapeKind,
     Vec3,
 )
 from ._build import PLANE_HALF_SIZE, Layout, build, initial_rate, xyzw
+from ._frames import InertialFrames
 from ._impacts import ImpactErp
 from ._options import PyBulletOptions
 from ._reads import ROW, ContactReader, base_rows
@@ -43,6 +45,11 @@ _MAX_JOINT_VELOCITY = 1e6
 #: rebounds to 0.0000 of its height at 0.02, 0.27 at 0.001]. ODE makes contacts only when touching.
 #: NB: Bullet keeps this in a process-wide global, so every instance sets the same value.
 CONTACT_BREAKING_THRESHOLD = 0.001
+#: Collision margin of a body with convex hulls. PyBullet gives a hull built from vertices a 1 mm margin
+#: that Bullet adds OUTSIDE the vertices (primitives keep theirs inside): a hull box rested 0.99 mm high
+#: [checked]. Margin 0 rests at -1.0e-5 m but on 1 contact point (it rocks, as on GEOM_PLANE); 1e-4 keeps
+#: 4 points and rests at +1.5e-5 m, the primitive box's -1.4e-5 m in size [checked, dt 0.01].
+HULL_MARGIN = 1e-4
 #: restitutionVelocityThreshold = bounce_vel + this * |g| * h (see PyBulletBackend._build_world).
 _GRAVITY_MARGIN = 1.5
 #: The quaternion's columns in a state row, in (w, x, y, z) order.
@@ -54,7 +61,12 @@ class PyBulletBackend(Backend):
 
     name: ClassVar[str] = _NAME
     engine_distribution: ClassVar[str] = "pybullet"
-    capabilities: ClassVar[frozenset[Capability]] = RIGID_BODY_CAPABILITIES
+    capabilities: ClassVar[frozenset[Capability]] = RIGID_BODY_CAPABILITIES | {
+        Capability.SHAPE_COMPOUND,
+        Capability.SHAPE_CONVEX,
+        Capability.COM_OFFSET,
+        Capability.COLLISION_FILTER,
+    }
     Options: ClassVar[type[BackendOptions]] = PyBulletOptions
     #: pybullet raises only ``pybullet.error`` (a failed command, a lost client).
     engine_errors: ClassVar[tuple[type[BaseException], ...]] = (p.error,)
@@ -80,6 +92,7 @@ class PyBulletBackend(Backend):
         p.setGravity(*world.gravity, physicsClientId=c)
         p.setTimeStep(self._h, physicsClientId=c)
         self._layout: Layout = build(p, c, world)
+        self._frames = InertialFrames(world)
         self._fit: SurfaceFit = fit_surfaces(world, self._layout.excluded)
         # ODE bounces when the approach speed *before* the step exceeds bounce_vel; Bullet compares the
         # speed after this substep's gravity, so a resting body approaches at about g*h and bounces every
@@ -123,8 +136,11 @@ class PyBulletBackend(Backend):
             # alone: combined with other parameters it misroutes them, like the damping. On a base it lifts
             # Bullet's 100 m/s cap on free bodies [checked: 2000 N for 0.04 s on 0.5 kg gave 100.0, now 160.0]
             p.changeDynamics(uid, link, maxJointVelocity=_MAX_JOINT_VELOCITY, physicsClientId=c)
-            if link < 0:
-                p.resetBaseVelocity(uid, list(spec.lin_vel), list(spec.ang_vel), physicsClientId=c)
+            if any(one.shape.kind is ShapeKind.CONVEX for one in spec.placed_shapes()):  # alone, as above
+                p.changeDynamics(uid, link, collisionMargin=HULL_MARGIN, physicsClientId=c)
+            if link < 0:  # the COM's velocity (the body's origin's, given, plus omega x arm)
+                lin = self._frames.to_inertial(i, spec.pos, spec.quat, spec.lin_vel, spec.ang_vel)[2]
+                p.resetBaseVelocity(uid, list(lin), list(spec.ang_vel), physicsClientId=c)
         for k, joint in enumerate(world.joints):
             handle = layout.joints[k]
             if joint.kind is JointKind.BALL:  # PyBullet holds spherical links with a default motor
@@ -202,8 +218,9 @@ class PyBulletBackend(Backend):
         for i, pose in self.kinematic.items():
             uid = self._layout.uid[i]
             pos, quat = pose.at(t)
+            pos, quat, lin = self._frames.to_inertial(i, pos, quat, pose.lin_vel, pose.ang_vel)
             p.resetBasePositionAndOrientation(uid, pos, xyzw(quat), physicsClientId=c)
-            p.resetBaseVelocity(uid, pose.lin_vel, pose.ang_vel, physicsClientId=c)
+            p.resetBaseVelocity(uid, lin, pose.ang_vel, physicsClientId=c)
 
     def _apply_forces(self) -> None:
         """At the centre of mass, world frame, for this substep (PyBullet clears them after each)."""
@@ -244,6 +261,8 @@ class PyBulletBackend(Backend):
                     uid, links, computeLinkVelocity=1, computeForwardKinematics=1, physicsClientId=c
                 )
                 arr[bodies] = [ls[0] + ls[1] + ls[6] + ls[7] for ls in states]
+        if self._frames.offsets:  # inertial frames -> body frames
+            self._frames.to_body(arr)
         self._cache = arr
         return arr
 
@@ -279,8 +298,9 @@ class PyBulletBackend(Backend):
 
     def _place_kinematic(self, body: int, pose: KinematicPose) -> None:
         uid = self._layout.uid[body]
-        p.resetBasePositionAndOrientation(uid, list(pose.pos), xyzw(pose.quat), physicsClientId=self._c)
-        p.resetBaseVelocity(uid, list(pose.lin_vel), list(pose.ang_vel), physicsClientId=self._c)
+        pos, quat, lin = self._frames.to_inertial(body, pose.pos, pose.quat, pose.lin_vel, pose.ang_vel)
+        p.resetBasePositionAndOrientation(uid, list(pos), xyzw(quat), physicsClientId=self._c)
+        p.resetBaseVelocity(uid, list(lin), list(pose.ang_vel), physicsClientId=self._c)
         self._cache = None
 
     def _set_motor(self, joint: int, vel: float, fmax: float) -> None:
@@ -291,6 +311,7 @@ class PyBulletBackend(Backend):
 
     def _reset_body(self, body: int, pos: Vec3, quat: Quat, lin_vel: Vec3, ang_vel: Vec3) -> None:
         uid = self._layout.uid[body]
+        pos, quat, lin_vel = self._frames.to_inertial(body, pos, quat, lin_vel, ang_vel)
         p.resetBasePositionAndOrientation(uid, list(pos), xyzw(quat), physicsClientId=self._c)
         p.resetBaseVelocity(uid, list(lin_vel), list(ang_vel), physicsClientId=self._c)
         self._cache = None

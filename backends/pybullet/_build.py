@@ -16,12 +16,12 @@ from typing import Any
 
 from ..errors import UnsupportedFeature
 from ..geometry import quat_conj, quat_mul, quat_rotate
-from ..types import BodySpec, CompiledWorld, JointKind, JointSpec, Motion, Shape, ShapeKind, Vec3
+from ..types import BodySpec, CompiledWorld, JointKind, JointSpec, Motion, PlacedShape, Quat, Shape, ShapeKind, Vec3
 
 ORIGIN: Vec3 = (0.0, 0.0, 0.0)
 #: Half size of the box that stands in for a static plane (its top face is the plane).
 PLANE_HALF_SIZE = 1000.0
-IDENTITY = (1.0, 0.0, 0.0, 0.0)
+IDENTITY: Quat = (1.0, 0.0, 0.0, 0.0)
 
 
 def xyzw(q: tuple[float, float, float, float]) -> list[float]:
@@ -45,11 +45,14 @@ class Layout:
     link: list[int]  # per body: -1 for a base
     joints: list[JointHandle]  # per joint
     link_groups: list[tuple[int, list[int], list[int]]] = field(default_factory=list)  # uid, links, bodies
-    excluded: set[tuple[int, int]] = field(default_factory=set)  # directly joined body pairs (i < j)
+    excluded: set[tuple[int, int]] = field(default_factory=set)  # joined or excluded body pairs (i < j)
 
 
-def _shape(p: Any, c: int, shape: Shape, offset: Vec3 = ORIGIN) -> int:
+def _shape(p: Any, c: int, shape: Shape, offset: Vec3 = ORIGIN, quat: Quat = IDENTITY) -> int:
+    """One collision shape at ``offset``/``quat`` in its link frame."""
     kw: dict[str, Any] = {"collisionFramePosition": list(offset), "physicsClientId": c}
+    if quat != IDENTITY:
+        kw["collisionFrameOrientation"] = xyzw(quat)
     if shape.kind is ShapeKind.BOX:
         return int(p.createCollisionShape(p.GEOM_BOX, halfExtents=[s / 2 for s in shape.size], **kw))
     if shape.kind is ShapeKind.SPHERE:
@@ -58,11 +61,97 @@ def _shape(p: Any, c: int, shape: Shape, offset: Vec3 = ORIGIN) -> int:
         return int(p.createCollisionShape(p.GEOM_CAPSULE, radius=shape.radius, height=shape.length, **kw))
     if shape.kind is ShapeKind.CYLINDER:  # a cylinder's height is its full length, as ODE's
         return int(p.createCollisionShape(p.GEOM_CYLINDER, radius=shape.radius, height=shape.length, **kw))
+    if shape.kind in (ShapeKind.CONVEX, ShapeKind.TRIMESH):
+        return _mesh(p, shape, kw)
     # A plane is a 2 km box whose top face is the plane [checked]: Bullet's convex-vs-plane test adds
     # one point per step, so a box sliding on a GEOM_PLANE rocks on 1-2 points and sinks up to 1.9 cm
     # (dt 0.01); box-vs-box gives ODE's 4 points. The body's pose stays the plane's point and normal.
-    kw["collisionFramePosition"] = [offset[0], offset[1], offset[2] - PLANE_HALF_SIZE]
+    down = quat_rotate(quat, (0.0, 0.0, -PLANE_HALF_SIZE))
+    kw["collisionFramePosition"] = [offset[i] + down[i] for i in range(3)]
     return int(p.createCollisionShape(p.GEOM_BOX, halfExtents=[PLANE_HALF_SIZE] * 3, **kw))
+
+
+def _mesh(p: Any, shape: Shape, kw: dict[str, Any]) -> int:
+    """A convex hull (btConvexHullShape of exactly these vertices: they already are the hull, so Bullet's
+    optimizeConvexHull keeps every one) or, with the faces, a static triangle mesh (btBvhTriangleMeshShape)."""
+    mesh = shape.mesh
+    if mesh is None:
+        raise UnsupportedFeature(f"Backend `pybullet`: a {shape.kind.value} shape without a mesh.")
+    vertices = [list(v) for v in mesh.vertices]
+    if shape.kind is ShapeKind.CONVEX:
+        return int(p.createCollisionShape(p.GEOM_MESH, vertices=vertices, **kw))
+    indices = [i for face in mesh.faces for i in face]
+    return int(p.createCollisionShape(p.GEOM_MESH, vertices=vertices, indices=indices, **kw))
+
+
+def _collision(p: Any, c: int, spec: BodySpec, offset: Vec3 = ORIGIN) -> int:
+    """The body's collision shape in a link frame with the body frame's orientation, its origin at
+    ``offset``; -1 for a compound body without shapes."""
+    if spec.shape.kind is not ShapeKind.COMPOUND:
+        return _shape(p, c, spec.shape, offset)
+    placed = spec.shapes
+    if not placed:
+        return -1
+    if len(placed) == 1:
+        one = placed[0]
+        return _shape(p, c, one.shape, _add(offset, one.pos), one.quat)
+    meshes = [s for s in placed if s.shape.kind in (ShapeKind.CONVEX, ShapeKind.TRIMESH)]
+    if meshes:  # createCollisionShapeArray takes primitives and mesh files, not vertices
+        raise UnsupportedFeature(
+            f"Backend `pybullet` cannot build body `{spec.name}`: a compound of {len(placed)} shapes with a "
+            f"mesh among them (PyBullet builds meshes from vertices only as a link's single shape)."
+        )
+    return _compound(p, c, spec.shapes, offset)
+
+
+def _compound(p: Any, c: int, placed: tuple[PlacedShape, ...], offset: Vec3) -> int:
+    """Several primitives as one btCompoundShape (createCollisionShapeArray)."""
+    cols: dict[str, list[Any]] = {k: [] for k in ("type", "half", "radius", "length", "pos", "orn")}
+    for one in placed:
+        shape, pos, quat = one.shape, _add(offset, one.pos), one.quat
+        half, radius, length, kind = [0.0] * 3, 0.0, 0.0, shape.kind
+        if kind is ShapeKind.BOX:
+            geom, half = p.GEOM_BOX, [s / 2 for s in shape.size]
+        elif kind is ShapeKind.SPHERE:
+            geom, radius = p.GEOM_SPHERE, shape.radius
+        elif kind in (ShapeKind.CAPSULE, ShapeKind.CYLINDER):
+            geom = p.GEOM_CAPSULE if kind is ShapeKind.CAPSULE else p.GEOM_CYLINDER
+            radius, length = shape.radius, shape.length
+        else:  # a plane: the 2 km box of _shape
+            geom, half = p.GEOM_BOX, [PLANE_HALF_SIZE] * 3
+            pos = _add(pos, quat_rotate(quat, (0.0, 0.0, -PLANE_HALF_SIZE)))
+        for key, value in zip(cols, (geom, half, radius, length, list(pos), xyzw(quat)), strict=True):
+            cols[key].append(value)
+    return int(
+        p.createCollisionShapeArray(
+            shapeTypes=cols["type"],
+            halfExtents=cols["half"],
+            radii=cols["radius"],
+            lengths=cols["length"],
+            collisionFramePositions=cols["pos"],
+            collisionFrameOrientations=cols["orn"],
+            physicsClientId=c,
+        )
+    )
+
+
+def _add(a: Vec3, b: Vec3) -> Vec3:
+    return (a[0] + b[0], a[1] + b[1], a[2] + b[2])
+
+
+def has_offset(spec: BodySpec) -> bool:
+    """Whether the body's inertial frame (PyBullet's base/link state) differs from its body frame."""
+    return spec.com != ORIGIN or spec.inertia_quat != IDENTITY
+
+
+def _inertial(spec: BodySpec) -> dict[str, list[float]]:
+    """createMultiBody's base inertial frame arguments (none for a body whose frame is its inertial frame)."""
+    if not has_offset(spec):
+        return {}
+    return {
+        "baseInertialFramePosition": list(spec.com),
+        "baseInertialFrameOrientation": xyzw(spec.inertia_quat),
+    }
 
 
 def _to_frame(origin: Vec3, quat: tuple[float, float, float, float], point: Vec3) -> list[float]:
@@ -163,13 +252,26 @@ def build(p: Any, c: int, world: CompiledWorld) -> Layout:
             layout.uid[i] = int(
                 p.createMultiBody(
                     baseMass=mass,
-                    baseCollisionShapeIndex=_shape(p, c, spec.shape),
+                    baseCollisionShapeIndex=_collision(p, c, spec),
                     basePosition=list(spec.pos),
                     baseOrientation=xyzw(spec.quat),
                     physicsClientId=c,
+                    **_inertial(spec),
                 )
             )
+    _exclude(p, c, world, layout)
     return layout
+
+
+def _exclude(p: Any, c: int, world: CompiledWorld, layout: Layout) -> None:
+    """``world.excluded_pairs`` never touch: a per link pair filter (Bullet's overlap filter callback, which
+    also holds between links of one multibody). Every other pair keeps colliding."""
+    for a, b in world.excluded_pairs:
+        i, j = world.body_index(a), world.body_index(b)
+        p.setCollisionFilterPair(
+            layout.uid[i], layout.uid[j], layout.link[i], layout.link[j], enableCollision=0, physicsClientId=c
+        )
+        layout.excluded.add((min(i, j), max(i, j)))
 
 
 def _build_tree(
@@ -186,13 +288,16 @@ def _build_tree(
     if root is None:
         frames[None] = (ORIGIN, IDENTITY)  # the environment: a massless fixed base at the origin
         base_mass, base_shape, base_pos, base_quat = 0.0, -1, ORIGIN, IDENTITY
+        base_inertial: dict[str, list[float]] = {}
     else:
         spec = bodies[root]
         frames[root] = (spec.pos, spec.quat)
-        base_mass, base_shape, base_pos, base_quat = spec.mass, _shape(p, c, spec.shape), spec.pos, spec.quat
+        base_mass, base_shape, base_pos, base_quat = spec.mass, _collision(p, c, spec), spec.pos, spec.quat
+        base_inertial = _inertial(spec)
     link_of: dict[int, int] = {}
     handles: dict[int, tuple[int, float, int]] = {}  # joint -> (link, sign, dofs)
-    cols: dict[str, list[Any]] = {k: [] for k in ("m", "shape", "pos", "orn", "ipos", "parent", "type", "axis")}
+    keys = ("m", "shape", "pos", "orn", "ipos", "iorn", "parent", "type", "axis")
+    cols: dict[str, list[Any]] = {k: [] for k in keys}
     for li, (child, par, k) in enumerate(links):
         joint, spec = world.joints[k], bodies[child]
         pivot = joint.anchor if joint.kind in (JointKind.HINGE, JointKind.BALL) else spec.pos
@@ -200,10 +305,11 @@ def _build_tree(
         p_origin, p_quat = frames[par]
         offset = _to_frame(pivot, spec.quat, spec.pos)
         cols["m"].append(spec.mass)
-        cols["shape"].append(_shape(p, c, spec.shape, tuple(offset)))  # type: ignore[arg-type]
+        cols["shape"].append(_collision(p, c, spec, (offset[0], offset[1], offset[2])))
         cols["pos"].append(_to_frame(p_origin, p_quat, pivot))
         cols["orn"].append(xyzw(quat_mul(quat_conj(p_quat), spec.quat)))
-        cols["ipos"].append(offset)
+        cols["ipos"].append(list(_add((offset[0], offset[1], offset[2]), spec.com)))
+        cols["iorn"].append(xyzw(spec.inertia_quat))
         cols["parent"].append(0 if par is None or par == root else link_of[par] + 1)
         cols["type"].append(getattr(p, _LINK_TYPE[joint.kind.value]))
         cols["axis"].append(list(quat_rotate(quat_conj(spec.quat), joint.axis)))
@@ -224,12 +330,13 @@ def _build_tree(
             linkPositions=cols["pos"],
             linkOrientations=cols["orn"],
             linkInertialFramePositions=cols["ipos"],
-            linkInertialFrameOrientations=[[0.0, 0.0, 0.0, 1.0]] * len(links),
+            linkInertialFrameOrientations=cols["iorn"],
             linkParentIndices=cols["parent"],
             linkJointTypes=cols["type"],
             linkJointAxis=cols["axis"],
             flags=p.URDF_USE_SELF_COLLISION | p.URDF_USE_SELF_COLLISION_EXCLUDE_PARENT,
             physicsClientId=c,
+            **base_inertial,
         )
     )
     if uid < 0:
