@@ -16,7 +16,7 @@ BODY_FIELDS = {
     "angvel": ("x", "y", "z"),
     "quat": ("w", "x", "y", "z"),
 }
-BODY_SCALARS = ("speed",)
+BODY_SCALARS = ("speed", "energy")
 JOINT_FIELDS = ("position", "velocity", "force")
 GLOBALS = ("time", "dt", "duration", "g", "gravity.x", "gravity.y", "gravity.z")
 RESERVED = frozenset(

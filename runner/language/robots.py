@@ -16,7 +16,7 @@ from runner.language.semantics import unknown
 from runner.language.yaml_source import Positions
 
 #: What a robot's link or joint may not be called: the fields read after it (`arm.pos.x` would be ambiguous).
-FIELD_NAMES = frozenset({"pos", "vel", "angvel", "quat", "speed", "position", "velocity", "force"})
+FIELD_NAMES = frozenset({"pos", "vel", "angvel", "quat", "speed", "energy", "position", "velocity", "force"})
 
 
 def package_root(robot: Robot, model_file: FsPath, base_dir: FsPath) -> FsPath:

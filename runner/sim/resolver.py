@@ -1,4 +1,10 @@
-"""Resolve dotted names (``box.pos.z``, ``slider.force``, ``state.x``, ``time``) against the current state."""
+"""Resolve dotted names (``box.pos.z``, ``slider.force``, ``state.x``, ``time``) against the current state.
+
+``<body>.energy`` is the body's mechanical energy (J) in the world frame, ``1/2 m |v_c|^2 + 1/2 w_b^T I w_b
+- m g.p_c``: its centre of mass ``p_c`` (``BodySpec.com`` turned by the body's orientation), that point's
+velocity ``v_c = v + w x (R com)``, the body-frame angular velocity ``w_b = R^T w`` and the inertia tensor
+about the centre of mass in the body frame (``BodySpec.inertia_tensor()``). The energy watchdog
+(runner.sim.energy) computes the same sum for hand-written bodies (com 0, principal axes the body's)."""
 
 from __future__ import annotations
 
@@ -9,6 +15,7 @@ from typing import Any
 import numpy as np
 
 from backends.types import BodyStates, CompiledWorld, JointStates
+from runner.sim.collisions import quat_matrices
 
 _COMPONENT = {"x": 0, "y": 1, "z": 2}
 _QUAT = {"w": 0, "x": 1, "y": 2, "z": 3}
@@ -94,6 +101,11 @@ class StateResolver:
             rows = self.groups.get(head)
         if rows is None:
             raise KeyError(name)
+        if rest == "energy":
+            energy = self._energy_of([rows] if isinstance(rows, int) else rows)
+            if isinstance(rows, int):
+                return lambda: float(energy()[0])
+            return lambda: energy().tolist()
         if rest == "speed":
             if isinstance(rows, int):
                 return lambda: float(np.linalg.norm(snap.bodies.lin_vel[rows]))
@@ -106,6 +118,27 @@ class StateResolver:
             return lambda: float(getattr(snap.bodies, attr)[rows, col])
         group = _index(rows)
         return lambda: getattr(snap.bodies, attr)[group, col].tolist()
+
+    def _energy_of(self, rows: list[int]) -> Callable[[], np.ndarray]:
+        """A getter of the mechanical energy (J) of the bodies ``rows`` (the module docstring's sum)."""
+        specs = [self.world.bodies[i] for i in rows]
+        mass = np.array([b.mass for b in specs], float)
+        com = np.array([b.com for b in specs], float).reshape(-1, 3)
+        tensor = np.array([b.inertia_tensor() for b in specs], float).reshape(-1, 3, 3)
+        gravity = np.asarray(self.world.gravity, float)
+        group = _index(rows)
+        snap = self.snap
+
+        def energy() -> np.ndarray:
+            states = snap.bodies
+            rot = quat_matrices(states.quat[group])
+            arm = np.einsum("nij,nj->ni", rot, com)  # R com: the centre of mass from the body origin
+            v = states.lin_vel[group] + np.cross(states.ang_vel[group], arm)
+            wb = np.einsum("nji,nj->ni", rot, states.ang_vel[group])  # R^T w
+            spin = np.einsum("ni,nij,nj->n", wb, tensor, wb)
+            return 0.5 * mass * np.add.reduce(v * v, axis=1) + 0.5 * spin - mass * ((states.pos[group] + arm) @ gravity)
+
+        return energy
 
 
 def _index(rows: list[int]) -> slice | np.ndarray:
