@@ -36,13 +36,18 @@ from runner.trace import output
 from runner.trace.encoder import TraceEncoder, dumps, verdict_text
 from runner.trace.sounds import SoundBank
 
-__all__ = ["ZSTD_LEVEL", "SolidVisual", "TraceMeta", "TraceWriter"]
+__all__ = ["COMPRESSION_THREADS", "ZSTD_LEVEL", "SolidVisual", "TraceMeta", "TraceWriter"]
 
 _T = TypeVar("_T")
 
 #: zstd level of the chunks: level 1 writes 0.1-0.2 us/body/step less than level 3 (the SDK's default) for
 #: 8-20 % more bytes, which keeps the trace well under half of format 1 (bench/results-encoding.md)
 ZSTD_LEVEL = 1
+#: zstd runs in one SDK thread beside the run, so the step loop's thread pays encoding and hand-over only
+#: (ODE's pile: 0.51 -> 0.24 us/body/step of the run's thread; bench/results-encoding.md). zstd's output
+#: depends on its input and parameters, the worker count included, never on timing: a fixed count keeps
+#: "same scenario, backend and engine version => same bytes" (checked by the bench and tests/trace).
+COMPRESSION_THREADS = 1
 
 
 @dataclass(frozen=True)
@@ -180,7 +185,7 @@ class TraceWriter:
         self._context = foxglove.Context()  # this trace's channels reach this trace's writer only
         try:
             options = MCAPWriteOptions(
-                compression=MCAPCompression.Zstd, compression_level=ZSTD_LEVEL, compression_threads=0,
+                compression=MCAPCompression.Zstd, compression_level=ZSTD_LEVEL, compression_threads=COMPRESSION_THREADS,
                 profile=tf.PROFILE, chunk_size=chunk_size, disable_seeking=True,
             )  # fmt: skip
             self._writer = self._sdk(foxglove.open_mcap, self._sink, context=self._context, writer_options=options)
