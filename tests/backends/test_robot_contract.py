@@ -27,7 +27,7 @@ from backends.types import (
 
 from . import worlds as w
 from .tolerances import tol
-from .worlds import G, ZERO, make_backend, require
+from .worlds import ZERO, G, make_backend, require
 
 # --- compound bodies ----------------------------------------------------------------------------------
 
