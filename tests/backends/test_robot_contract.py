@@ -215,3 +215,28 @@ def test_excluded_pair_does_not_push_apart(backend_name: str, backend_cls: type[
         s = sim.body_states()
     assert touching == [(0, 1)]
     assert s.pos[1, 0] - s.pos[0, 0] > 0.1 + 1e-3
+
+
+def test_com_offset_reset_body_places_the_frame(backend_name: str, backend_cls: type[Backend]) -> None:
+    """``reset_body`` gives the body FRAME's pose and its origin's velocity; they read back as given.
+
+    A spinning body's origin 0.5 m from its COM moves at v_com + w x (origin - com): an adapter that set
+    the COM to the frame's pose, or the COM's velocity to the origin's, reads back 0.5 m or 1 m/s off.
+    Tolerance: values of order 1 stored by single-precision engines, a few float32 ulps (1.2e-7): 1e-6.
+    """
+    require(backend_cls, Capability.COM_OFFSET)
+    require(backend_cls, Capability.SHAPE_COMPOUND)
+    world = CompiledWorld(
+        name="reset", gravity=ZERO, dt=0.01, substeps=1, duration=1.0,
+        bodies=(BodySpec("bob", Motion.DYNAMIC, Shape(ShapeKind.COMPOUND), _M, _PRINCIPAL, ZERO, w.IDENTITY,
+                         com=(0.0, 0.0, -_L), inertia_quat=_TURN_Z),),
+    )  # fmt: skip
+    quat = (math.cos(math.pi / 4), 0.0, 0.0, math.sin(math.pi / 4))
+    with make_backend(backend_name, world) as sim:
+        sim.step()
+        sim.reset_body(0, (1.0, 2.0, 3.0), quat, (0.5, 0.0, 0.0), (0.0, 2.0, 0.0))
+        s = sim.body_states()
+    assert s.pos[0] == pytest.approx((1.0, 2.0, 3.0), abs=1e-6)
+    assert s.quat[0] * np.sign(s.quat[0, 0]) == pytest.approx(quat, abs=1e-6)
+    assert s.lin_vel[0] == pytest.approx((0.5, 0.0, 0.0), abs=1e-6)
+    assert s.ang_vel[0] == pytest.approx((0.0, 2.0, 0.0), abs=1e-6)
