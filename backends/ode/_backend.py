@@ -17,7 +17,7 @@ from panda3d.core import Datagram
 
 from .._kit import BackendOptions, KinematicPose, SubstepContacts, SubstepMean, substep_times
 from ..base import Backend
-from ..types import ROBOT_CAPABILITIES, BodyStates, Capability, Contact, JointKind, JointStates, Motion, Quat, Vec3
+from ..types import BodyStates, Capability, Contact, JointKind, JointStates, Motion, Quat, Vec3
 from . import _native
 from ._build import JointHandle, axis_arg, build_scene, destroy_scene, panda_quat, set_motor
 from ._contacts import Collider
@@ -35,7 +35,7 @@ class OdeBackend(Backend):
 
     name = "ode"
     engine_distribution = "panda3d"
-    capabilities = frozenset(Capability) - ROBOT_CAPABILITIES
+    capabilities = frozenset(Capability)
     Options: ClassVar[type[BackendOptions]] = OdeOptions
     #: panda3d turns a failed C++ assertion (nassert) into AssertionError; ODE's own fatal errors abort.
     engine_errors: ClassVar[tuple[type[BaseException], ...]] = (AssertionError,)
@@ -137,8 +137,12 @@ class OdeBackend(Backend):
 
     def _follow_track(self, t: float) -> None:
         """Put each kinematic body where its velocity takes it ``t`` after the step began."""
+        offsets = self._scene.offsets
         for i, pose in self.kinematic.items():
             pos, quat = pose.at(t)
+            if i in offsets:
+                self._place(i, pos, quat, pose.lin_vel, pose.ang_vel)
+                continue
             body = self._scene.bodies[i]
             body.setPosition(*pos)  # type: ignore[union-attr]
             body.setQuaternion(panda_quat(quat))  # type: ignore[union-attr]
@@ -211,6 +215,9 @@ class OdeBackend(Backend):
                 b.getLinearVel().writeDatagramFixed(dg)  # type: ignore[union-attr]
                 b.getAngularVel().writeDatagramFixed(dg)  # type: ignore[union-attr]
             rows[self._dynamic] = np.frombuffer(dg.getMessage(), dtype="<f4").reshape(-1, 13)
+        for i, offset in self._scene.offsets.items():  # the OdeBody is at the COM: back to the body frame
+            if i not in self.kinematic:
+                offset.frame_row(rows[i])
         return rows
 
     def _body_states(self) -> BodyStates:
@@ -241,17 +248,19 @@ class OdeBackend(Backend):
     # --- inputs --------------------------------------------------------------------------------------
 
     def _place_kinematic(self, body: int, pose: KinematicPose) -> None:
-        ode_body = self._scene.bodies[body]
-        ode_body.setPosition(*pose.pos)  # type: ignore[union-attr]
-        ode_body.setQuaternion(panda_quat(pose.quat))  # type: ignore[union-attr]
-        ode_body.setLinearVel(*pose.lin_vel)  # type: ignore[union-attr]
-        ode_body.setAngularVel(*pose.ang_vel)  # type: ignore[union-attr]
-        self._states = None
+        self._place(body, pose.pos, pose.quat, pose.lin_vel, pose.ang_vel)
 
     def _set_motor(self, joint: int, vel: float, fmax: float) -> None:
         set_motor(self._scene.joints[joint], vel, fmax)
 
     def _reset_body(self, body: int, pos: Vec3, quat: Quat, lin_vel: Vec3, ang_vel: Vec3) -> None:
+        self._place(body, pos, quat, lin_vel, ang_vel)
+
+    def _place(self, body: int, pos: Vec3, quat: Quat, lin_vel: Vec3, ang_vel: Vec3) -> None:
+        """Put the body FRAME at ``pos``/``quat`` with its origin moving at ``lin_vel`` (the OdeBody is its COM)."""
+        offset = self._scene.offsets.get(body)
+        if offset is not None:
+            pos, lin_vel = offset.com_pose(pos, quat), offset.com_velocity(quat, lin_vel, ang_vel)
         ode_body = self._scene.bodies[body]
         ode_body.setPosition(*pos)  # type: ignore[union-attr]
         ode_body.setQuaternion(panda_quat(quat))  # type: ignore[union-attr]

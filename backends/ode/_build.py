@@ -14,6 +14,7 @@ import math
 from dataclasses import dataclass, field
 from typing import Any
 
+import numpy as np
 from panda3d.core import BitMask32, Quat
 from panda3d.ode import (
     OdeBallJoint,
@@ -37,8 +38,9 @@ from panda3d.ode import (
 
 from ..errors import UnsupportedFeature
 from ..geometry import quat_rotate
-from ..types import BodySpec, CompiledWorld, JointKind, JointSpec, Motion, ShapeKind, Surface
+from ..types import IDENTITY_QUAT, BodySpec, CompiledWorld, JointKind, JointSpec, Motion, ShapeKind, Surface
 from ._options import OdeOptions
+from ._shapes import FrameOffset, build_robot_geoms, check_static_shapes, is_robot_body
 
 #: A kinematic body's mass relative to the heaviest dynamic body (at least 1 kg): dynamic bodies push it
 #: by m/M of their impulse during a step, and the backend re-places it exactly afterwards anyway.
@@ -77,6 +79,11 @@ class Scene:
     joints: list[JointHandle]
     surface_class: list[int]  # per body: its row in the surface table
     surfaces: dict[tuple[int, int], Surface] = field(default_factory=dict)  # (class, class), both orders
+    #: body index pairs that never touch (CompiledWorld.excluded_pairs), both orders
+    excluded: frozenset[tuple[int, int]] = frozenset()
+    #: per body with a COM offset: where its COM sits in its frame (the OdeBody is at the COM)
+    offsets: dict[int, FrameOffset] = field(default_factory=dict)
+    meshes: dict[int, Any] = field(default_factory=dict)  # id(Mesh) -> OdeTriMeshData, kept alive
 
 
 def panda_quat(q: tuple[float, float, float, float]) -> Quat:
@@ -88,7 +95,9 @@ def _mass(spec: BodySpec, kinematic_mass: float) -> OdeMass:
     mass = OdeMass()
     if spec.motion is Motion.KINEMATIC:
         shape, m = spec.shape, kinematic_mass
-        if shape.kind is ShapeKind.BOX:
+        if is_robot_body(spec):  # any inertia will do under a huge mass: a 1 m cube's
+            mass.setBoxTotal(m, 1.0, 1.0, 1.0)
+        elif shape.kind is ShapeKind.BOX:
             mass.setBoxTotal(m, *(max(s, 1e-3) for s in shape.size))
         elif shape.kind is ShapeKind.SPHERE:
             mass.setSphereTotal(m, shape.radius)
@@ -99,6 +108,10 @@ def _mass(spec: BodySpec, kinematic_mass: float) -> OdeMass:
         return mass
     if not spec.mass > 0.0 or not all(i > 0.0 for i in spec.inertia):
         raise UnsupportedFeature(f"Dynamic body `{spec.name}` needs a positive mass and inertia.")
+    if spec.inertia_quat != IDENTITY_QUAT:  # the full tensor in the body frame (the OdeBody's orientation)
+        t = spec.inertia_tensor()
+        mass.setParameters(spec.mass, 0.0, 0.0, 0.0, t[0, 0], t[1, 1], t[2, 2], t[0, 1], t[0, 2], t[1, 2])
+        return mass
     ixx, iyy, izz = spec.inertia
     mass.setParameters(spec.mass, 0.0, 0.0, 0.0, ixx, iyy, izz, 0.0, 0.0, 0.0)
     return mass
@@ -123,7 +136,7 @@ def _geom(space: Any, spec: BodySpec) -> Any:
 
 def _check_colliders(world: CompiledWorld) -> None:
     """ODE in this build has no capsule-cylinder collider: such a pair would pass through silently."""
-    kinds = {(b.shape.kind, b.motion is Motion.DYNAMIC) for b in world.bodies}
+    kinds = {(p.shape.kind, b.motion is Motion.DYNAMIC) for b in world.bodies for p in b.placed_shapes()}
     caps = {dyn for kind, dyn in kinds if kind is ShapeKind.CAPSULE}
     cyls = {dyn for kind, dyn in kinds if kind is ShapeKind.CYLINDER}
     if any(a or b for a in caps for b in cyls):
@@ -222,28 +235,44 @@ def build_scene(world: CompiledWorld, options: OdeOptions) -> Scene:
 
     bodies: list[OdeBody | None] = []
     geoms: list[Any] = []
-    for spec in world.bodies:
-        geom = _geom(space, spec)
-        category, collide = _BITS[spec.motion]
-        geom.setCategoryBits(BitMask32(category))
-        geom.setCollideBits(BitMask32(collide))
+    geom_body: list[int] = []  # per geom: its body's index
+    offsets: dict[int, FrameOffset] = {}
+    meshes: dict[int, Any] = {}
+    for index, spec in enumerate(world.bodies):
+        robot = is_robot_body(spec)
         body: OdeBody | None = None
-        if spec.motion is Motion.STATIC:
-            if spec.shape.kind is not ShapeKind.PLANE:
-                geom.setPosition(*spec.pos)
-                geom.setQuaternion(panda_quat(spec.quat))
-        else:
+        if spec.motion is not Motion.STATIC:
             body = OdeBody(ode_world)
             body.setMass(_mass(spec, kinematic_mass))
-            body.setPosition(*spec.pos)
+            pos, lin_vel = spec.pos, spec.lin_vel
+            if spec.com != (0.0, 0.0, 0.0):  # the OdeBody sits at the COM
+                offsets[index] = offset = FrameOffset(np.asarray(spec.com, dtype=float))
+                pos = offset.com_pose(spec.pos, spec.quat)
+                lin_vel = offset.com_velocity(spec.quat, spec.lin_vel, spec.ang_vel)
+            body.setPosition(*pos)
             body.setQuaternion(panda_quat(spec.quat))
-            body.setLinearVel(*spec.lin_vel)
+            body.setLinearVel(*lin_vel)
             body.setAngularVel(*spec.ang_vel)
             if spec.motion is Motion.KINEMATIC:
                 body.setGravityMode(False)
-            geom.setBody(body)
+        if robot:
+            check_static_shapes(spec)
+            body_geoms = build_robot_geoms(space, spec, body, meshes)
+        else:
+            geom = _geom(space, spec)
+            if body is not None:
+                geom.setBody(body)
+            elif spec.shape.kind is not ShapeKind.PLANE:
+                geom.setPosition(*spec.pos)
+                geom.setQuaternion(panda_quat(spec.quat))
+            body_geoms = [geom]
+        category, collide = _BITS[spec.motion]
+        for geom in body_geoms:
+            geom.setCategoryBits(BitMask32(category))
+            geom.setCollideBits(BitMask32(collide))
         bodies.append(body)
-        geoms.append(geom)
+        geoms.extend(body_geoms)
+        geom_body.extend([index] * len(body_geoms))
 
     joints: list[JointHandle] = []
     for jspec in world.joints:
@@ -260,11 +289,19 @@ def build_scene(world: CompiledWorld, options: OdeOptions) -> Scene:
         contact_group=OdeJointGroup(),
         bodies=bodies,
         geoms=geoms,
-        geom_index={hash(g.getId()): i for i, g in enumerate(geoms)},
+        geom_index={hash(g.getId()): i for g, i in zip(geoms, geom_body, strict=True)},
         joints=joints,
         surface_class=classes,
         surfaces=table,
+        excluded=_excluded(world),
+        offsets=offsets,
+        meshes=meshes,
     )
+
+
+def _excluded(world: CompiledWorld) -> frozenset[tuple[int, int]]:
+    pairs = [(world.body_index(a), world.body_index(b)) for a, b in world.excluded_pairs]
+    return frozenset(pairs + [(j, i) for i, j in pairs])
 
 
 def destroy_scene(scene: Scene) -> None:
@@ -275,6 +312,8 @@ def destroy_scene(scene: Scene) -> None:
         handle.joint.destroy()
     for geom in scene.geoms:
         geom.destroy()
+    for data in scene.meshes.values():
+        data.destroy()
     for body in scene.bodies:
         if body is not None:
             body.destroy()

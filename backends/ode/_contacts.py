@@ -113,7 +113,8 @@ class Collider:
         self._impacts = impact_cfm
         # autoCollide's table is indexed by a byte, and its mode has no dContactFDir1 nor a per-contact CFM:
         # the callback then.
-        auto = classes <= MAX_SURFACE_CLASSES and not self._slipping and not impact_cfm
+        # Excluded pairs need the callback too: autoCollide contacts every pair the category bits allow.
+        auto = classes <= MAX_SURFACE_CLASSES and not self._slipping and not impact_cfm and not scene.excluded
         self.mode = mode if auto else "callback"
         self._auto = self.mode == "auto"
         self._event_set: str | None = None  # the collision event last given to the space ("": none)
@@ -126,8 +127,8 @@ class Collider:
                     world.setSurfaceEntry(i, j, _mu(s), s.bounce, s.bounce_vel, 0.0, cfm, 0.0, 0.0)
             space.setAutoCollideWorld(world)
             space.setAutoCollideJointGroup(scene.contact_group)
-            for geom, cls in zip(scene.geoms, scene.surface_class, strict=True):
-                space.setSurfaceType(geom, cls)
+            for geom in scene.geoms:  # a compound body's geoms share its class
+                space.setSurfaceType(geom, scene.surface_class[self._index[hash(geom.getId())]])
         else:
             self._params = {key: _surface_parameters(s, _MODE) for key, s in scene.surfaces.items()}
             self._params_fdir1 = {key: _surface_parameters(scene.surfaces[key], _MODE_FDIR1) for key in self._slipping}
@@ -246,11 +247,13 @@ class Collider:
     # --- callback ------------------------------------------------------------------------------------
 
     def _near_callback(self, report: bool, geom1: Any, geom2: Any) -> None:
+        scene = self.scene
+        i, j = scene.geom_index[hash(geom1.getId())], scene.geom_index[hash(geom2.getId())]
+        if (i, j) in scene.excluded:  # collision:exclude-pairs (ODE skips two geoms of one body itself)
+            return
         entry = OdeUtil.collide(geom1, geom2, CALLBACK_MAX_CONTACTS)
         if entry.getNumContacts() == 0:
             return
-        scene = self.scene
-        i, j = scene.geom_index[hash(geom1.getId())], scene.geom_index[hash(geom2.getId())]
         key = (scene.surface_class[i], scene.surface_class[j])
         params = self._params[key]
         body1, body2 = scene.bodies[i], scene.bodies[j]
