@@ -9,6 +9,7 @@ is the documented gap (docs/robots.md), not a hidden one.
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -29,6 +30,10 @@ from backends.types import (
     ShapeKind,
     Vec3,
 )
+from runner.compile.program import build_program
+from runner.language.load import load_scenario, variant_names
+from runner.sim.run import run_loaded
+from tests.paths import ROOT
 
 from . import worlds as w
 from .tolerances import tol
@@ -258,3 +263,24 @@ def test_excluded_static_pair_keeps_other_contacts(backend_name: str, backend_cl
         s, touching = sim.body_states(), sim.contacts()
     assert s.pos[2, 2] == pytest.approx(0.15, abs=tol("resting_height", backend_name))
     assert [(c.a, c.b) for c in touching] == [(0, 2)]
+
+
+# --- the robot examples end to end ----------------------------------------------------------------
+
+ROBOT_SCENARIOS = sorted((ROOT / "scenarios" / "robots").glob("*.yaml"))
+ROBOT_CASES = [(p, v) for p in ROBOT_SCENARIOS for v in variant_names(p)]
+
+
+@pytest.mark.parametrize("path,variant", ROBOT_CASES, ids=[f"{p.stem}:{v}" for p, v in ROBOT_CASES])
+def test_robot_scenario_passes(backend_name: str, backend_cls: type[Backend], path: Path, variant: str,
+                               tmp_path: Path) -> None:  # fmt: skip
+    """Each example of scenarios/robots/ passes on every backend declaring what it needs (tests/integration
+    globs only the top folder); a backend lacking a capability refuses it up front instead
+    (tests/language/test_robot_examples.py)."""
+    loaded = load_scenario(path, variant)
+    for capability in sorted(build_program(loaded).world.required_capabilities(), key=str):
+        require(backend_cls, capability)
+    result = run_loaded(loaded, backend_name, tmp_path)
+    failed = [f"{v.name}: measured {v.measured}, expected {v.expected}" for v in result.verdicts if not v.passed]
+    assert result.status == "passed", f"{result.failure or ''}\n" + "\n".join(failed)
+    assert result.verdicts
