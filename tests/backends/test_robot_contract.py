@@ -222,6 +222,22 @@ def test_convex_hull_box_rests_at_half_height(backend_name: str, backend_cls: ty
     assert np.linalg.norm(s.lin_vel[1]) < 0.01
 
 
+def test_thin_convex_plate_holds_a_box(backend_name: str, backend_cls: type[Backend]) -> None:
+    """A static hull 1 mm thick (a plate a URDF may well hold) builds and carries a 0.1 m box resting on its
+    top face: the box's centre at 0.001 + 0.05 m. No ground: only the plate holds it."""
+    require(backend_cls, Capability.SHAPE_CONVEX)
+    require(backend_cls, Capability.SHAPE_COMPOUND)
+    plate = Shape(ShapeKind.CONVEX, mesh=_box_hull((1.0, 1.0, 0.001)))
+    static = BodySpec("plate", Motion.STATIC, Shape(ShapeKind.COMPOUND), 0.0, ZERO, ZERO, w.IDENTITY,
+                      shapes=(PlacedShape(plate, pos=(0.0, 0.0, 0.0005)),))  # fmt: skip
+    box = w.box("box", (0.1, 0.1, 0.1), (0.0, 0.0, 0.061), density=500.0)
+    with make_backend(backend_name, _robot_world("plate", [static, box])) as sim:
+        for _ in range(100):
+            sim.step()
+        s = sim.body_states()
+    assert s.pos[1, 2] == pytest.approx(0.051, abs=tol("resting_height", backend_name))
+
+
 # --- collision:exclude-pairs ----------------------------------------------------------------------
 
 
