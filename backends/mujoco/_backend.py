@@ -14,6 +14,7 @@ from ..errors import EngineFailure
 from ..geometry import quat_conj, quat_rotate
 from ..types import (
     RIGID_BODY_CAPABILITIES,
+    ROBOT_CAPABILITIES,
     BodyStates,
     Capability,
     CompiledWorld,
@@ -55,7 +56,10 @@ class MujocoBackend(Backend):
 
     name: ClassVar[str] = "mujoco"
     engine_distribution: ClassVar[str] = "mujoco"
-    capabilities: ClassVar[frozenset[Capability]] = RIGID_BODY_CAPABILITIES
+    #: no shape:trimesh: MuJoCo collides with a mesh's convex hull only (docs/backends/mujoco.md)
+    capabilities: ClassVar[frozenset[Capability]] = RIGID_BODY_CAPABILITIES | (
+        ROBOT_CAPABILITIES - {Capability.SHAPE_TRIMESH}
+    )
     Options: ClassVar[type[BackendOptions]] = MujocoOptions
     #: mju_error and the bindings' own failures; MjSpec.compile's ValueError is translated where it is called.
     engine_errors: ClassVar[tuple[type[BaseException], ...]] = (mujoco.FatalError, mujoco.UnexpectedError)

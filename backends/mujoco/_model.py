@@ -34,7 +34,7 @@ import numpy as np
 
 from ..errors import EngineFailure, UnsupportedFeature
 from ..geometry import quat_conj, quat_mul, quat_rotate
-from ..types import BodySpec, CompiledWorld, JointKind, Motion, ShapeKind, Surface
+from ..types import BodySpec, CompiledWorld, JointKind, Motion, PlacedShape, Rgba, Shape, ShapeKind, Surface
 from ._options import MujocoOptions
 
 #: Constant constraint impedance (solimp dmin = dmax): how nearly a contact or stop reaches its
@@ -55,6 +55,7 @@ _GEOM = {
     ShapeKind.CAPSULE: mujoco.mjtGeom.mjGEOM_CAPSULE,
     ShapeKind.CYLINDER: mujoco.mjtGeom.mjGEOM_CYLINDER,
     ShapeKind.PLANE: mujoco.mjtGeom.mjGEOM_PLANE,
+    ShapeKind.CONVEX: mujoco.mjtGeom.mjGEOM_MESH,
 }
 _JOINT = {
     JointKind.SLIDER: mujoco.mjtJoint.mjJNT_SLIDE,
@@ -187,6 +188,7 @@ def build(world: CompiledWorld, opts: MujocoOptions, h: float) -> Layout:
     specs = {b.name: b for b in world.bodies}
     heavy = KINEMATIC_MASS_RATIO * max([1.0] + [b.mass for b in world.bodies if b.motion is Motion.DYNAMIC])
     mj_bodies: dict[str, Any] = {}
+    geoms: dict[str, list[str]] = {}  # body -> its geoms' names
     group = _rigid_groups(world, edges)
     moving = {b.name for b in world.bodies if b.motion is Motion.DYNAMIC}  # rigid groups that move freely
     default = contact_params(world.default_surface, h, opts)
@@ -197,19 +199,22 @@ def build(world: CompiledWorld, opts: MujocoOptions, h: float) -> Layout:
             name=f"body:{name}", **_relative_pose(body, parent)
         )
         mj_bodies[name] = mj
-        if body.motion is not Motion.STATIC:
-            mass, inertia = (heavy, [heavy] * 3) if body.motion is Motion.KINEMATIC else (body.mass, body.inertia)
-            mj.mass, mj.inertia, mj.explicitinertial = mass, list(inertia), True
-            mj.ipos, mj.iquat = [0.0, 0.0, 0.0], [1.0, 0.0, 0.0, 0.0]  # COM at the body origin
-            mj.gravcomp = 1.0 if body.motion is Motion.KINEMATIC else 0.0
+        if body.motion is Motion.KINEMATIC:  # its motion is imposed: the inertial frame does not matter
+            mj.mass, mj.inertia, mj.explicitinertial = heavy, [heavy] * 3, True
+            mj.ipos, mj.iquat = [0.0, 0.0, 0.0], [1.0, 0.0, 0.0, 0.0]
+            mj.gravcomp = 1.0
+        elif body.motion is Motion.DYNAMIC:  # the inertial frame: COM at `com`, principal axes `inertia_quat`
+            mj.mass, mj.inertia, mj.explicitinertial = body.mass, list(body.inertia), True
+            mj.ipos, mj.iquat = list(body.com), list(body.inertia_quat)
+            mj.gravcomp = 0.0
         if body.motion is not Motion.STATIC and edge.joint is None:
             mj.add_freejoint()
         elif edge.joint is not None:
             _add_joint(mj, body, world, edge, h, opts)
-        _add_geom(mj, body, default, group[name] in moving)
+        geoms[name] = add_geoms(spec, mj, body, default, group[name] in moving)
     _add_motors(spec, world, heavy, h)
     _add_excludes(spec, world, group, moving)
-    _add_pairs(spec, world, group, moving, default, h, opts)
+    _add_pairs(spec, world, group, moving, geoms, default, h, opts)
     model = _compile(spec, len(world.bodies))
     _rescale_solver(model, [b.name for b in world.bodies if b.motion is Motion.DYNAMIC])
     index = {f"body:{b.name}": i for i, b in enumerate(world.bodies)}
@@ -314,23 +319,66 @@ def _add_joint(mj: Any, body: BodySpec, world: CompiledWorld, edge: Edge, h: flo
     mj_joint.solimp_limit = _SOLIMP
 
 
-def _add_geom(mj: Any, body: BodySpec, params: ContactParams, moving: bool) -> None:
-    """The body's geom with the world's surface; only a geom of a moving rigid group has a contype, so
-    two driven (static, kinematic) geoms never collide, as the contract says."""
-    shape = body.shape
+def add_geoms(spec: Any, mj: Any, body: BodySpec, params: ContactParams, moving: bool) -> list[str]:
+    """The body's geoms with the world's surface, named ``geom:<body>`` (a primitive body) or
+    ``geom:<body>:<k>`` (the k-th shape of a compound body, at its pose in the body frame); only a geom of
+    a moving rigid group has a contype, so two driven (static, kinematic) geoms never collide, as the
+    contract says. Geoms carry no mass: the body's inertial is explicit."""
+    if body.shape.kind is not ShapeKind.COMPOUND:
+        name = f"geom:{body.name}"
+        _add_geom(spec, mj, body, name, PlacedShape(body.shape), body.color, params, moving, local=False)
+        return [name]
+    names = [f"geom:{body.name}:{k}" for k in range(len(body.shapes))]
+    for name, placed in zip(names, body.shapes, strict=True):
+        color = placed.color if placed.color is not None else body.color
+        _add_geom(spec, mj, body, name, placed, color, params, moving, local=True)
+    return names
+
+
+def _add_geom(
+    spec: Any,
+    mj: Any,
+    body: BodySpec,
+    name: str,
+    placed: PlacedShape,
+    color: Rgba,
+    params: ContactParams,
+    moving: bool,
+    local: bool,
+) -> None:
+    shape = placed.shape
     if shape.kind is ShapeKind.PLANE and body.motion is not Motion.STATIC:
         raise UnsupportedFeature(f"mujoco: plane `{body.name}` must be static")
+    if shape.kind not in _GEOM:
+        raise UnsupportedFeature(f"mujoco: body `{body.name}` has a {shape.kind.value} shape, not supported")
     size = {
         ShapeKind.BOX: [s / 2.0 for s in shape.size],
         ShapeKind.SPHERE: [shape.radius, 0.0, 0.0],
         ShapeKind.CAPSULE: [shape.radius, shape.length / 2.0, 0.0],
         ShapeKind.CYLINDER: [shape.radius, shape.length / 2.0, 0.0],
         ShapeKind.PLANE: [0.0, 0.0, 1.0],  # infinite
+        ShapeKind.CONVEX: [0.0, 0.0, 0.0],  # the mesh's
     }[shape.kind]
-    geom = mj.add_geom(name=f"geom:{body.name}", type=_GEOM[shape.kind], size=size, rgba=list(body.color))
+    pose = {"pos": list(placed.pos), "quat": list(placed.quat)} if local else {}
+    geom = mj.add_geom(name=name, type=_GEOM[shape.kind], size=size, rgba=list(color), **pose)
+    if shape.kind is ShapeKind.CONVEX:
+        geom.meshname = _add_hull(spec, name, shape)
     geom.contype, geom.conaffinity = (1 if moving else 0), 1
     geom.condim, geom.friction = params.condim, list(params.friction)
     geom.solref, geom.solimp = list(params.solref), _SOLIMP
+
+
+def _add_hull(spec: Any, name: str, shape: Shape) -> str:
+    """A mesh asset holding the hull's vertices and faces. MuJoCo collides with the convex hull of a mesh's
+    vertices (qhull, ``maxhullvert`` -1: every vertex kept); every vertex of ``Shape.mesh`` is already a
+    hull vertex, so that hull is exactly this one."""
+    if shape.mesh is None:
+        raise UnsupportedFeature(f"mujoco: convex shape `{name}` has no mesh")
+    mesh = spec.add_mesh(name=f"mesh:{name}")
+    mesh.uservert = np.asarray(shape.mesh.vertices, dtype=np.float64).ravel().tolist()
+    mesh.userface = np.asarray(shape.mesh.faces, dtype=np.int32).ravel().tolist()
+    mesh.maxhullvert = -1
+    return str(mesh.name)
 
 
 def _add_motors(spec: Any, world: CompiledWorld, heavy: float, h: float) -> None:
@@ -363,15 +411,22 @@ def _touch(a: str, b: str, group: dict[str, str], moving: set[str]) -> bool:
     return group[a] != group[b] and bool({group[a], group[b]} & moving)
 
 
+def _excluded(world: CompiledWorld) -> list[tuple[str, str]]:
+    """The body pairs that never touch, in order, once each: joined bodies (ODE programs skip connected
+    bodies), then ``CompiledWorld.excluded_pairs`` (a model's adjacent links, the scenario's exclusions)."""
+    pairs = [(j.body, j.other) for j in world.joints if j.other is not None]
+    pairs += list(world.excluded_pairs)
+    unique: dict[frozenset[str], tuple[str, str]] = {}
+    for a, b in pairs:
+        unique.setdefault(frozenset((a, b)), (a, b))
+    return list(unique.values())
+
+
 def _add_excludes(spec: Any, world: CompiledWorld, group: dict[str, str], moving: set[str]) -> None:
-    """Joined bodies never touch (ODE programs skip connected bodies)."""
-    done: set[frozenset[str]] = set()
-    for joint in world.joints:
-        pair = frozenset((joint.body, joint.other)) if joint.other is not None else None
-        if pair is None or pair in done or not _touch(joint.body, joint.other, group, moving):  # type: ignore[arg-type]
-            continue
-        done.add(pair)
-        spec.add_exclude(bodyname1=f"body:{joint.body}", bodyname2=f"body:{joint.other}")
+    """A MuJoCo ``<exclude>`` (a body pair) for each excluded pair that MuJoCo's filtering would let touch."""
+    for a, b in _excluded(world):
+        if a != b and _touch(a, b, group, moving):
+            spec.add_exclude(bodyname1=f"body:{a}", bodyname2=f"body:{b}")
 
 
 def _add_pairs(
@@ -379,16 +434,17 @@ def _add_pairs(
     world: CompiledWorld,
     group: dict[str, str],
     moving: set[str],
+    geoms: dict[str, list[str]],
     default: ContactParams,
     h: float,
     opts: MujocoOptions,
 ) -> None:
-    """An explicit contact pair for each pair of bodies whose own surface the geoms cannot give.
+    """An explicit contact pair for each pair of geoms whose bodies' own surface the geoms cannot give.
 
     A pair overrides MuJoCo's filtering and its own geom pair (MuJoCo merges the two), so it is made only
-    where the bodies could touch: not both driven, not one rigid group, not joined.
+    where the bodies could touch: not both driven, not one rigid group, not joined or excluded.
     """
-    joined = {frozenset((j.body, j.other)) for j in world.joints if j.other is not None}
+    excluded = {frozenset(pair) for pair in _excluded(world)}
     order = {b.name: i for i, b in enumerate(world.bodies)}
     seen: set[frozenset[str]] = set()
     for pair in world.pair_surfaces:  # the first one naming a pair is the pair's (CompiledWorld.surface)
@@ -397,18 +453,20 @@ def _add_pairs(
         if key in seen:
             continue
         seen.add(key)
-        if a == b or key in joined or not _touch(a, b, group, moving):
+        if a == b or key in excluded or not _touch(a, b, group, moving):
             continue
         params = contact_params(pair.surface, h, opts)
         if params == default:
             continue
         mu, spin, roll = params.friction
-        spec.add_pair(
-            geomname1=f"geom:{a}",
-            geomname2=f"geom:{b}",
-            condim=params.condim,
-            friction=[mu, mu, spin, roll, roll],
-            solref=list(params.solref),
-            solreffriction=list(params.solreffriction),
-            solimp=_SOLIMP,
-        )
+        for geom_a in geoms[a]:
+            for geom_b in geoms[b]:
+                spec.add_pair(
+                    geomname1=geom_a,
+                    geomname2=geom_b,
+                    condim=params.condim,
+                    friction=[mu, mu, spin, roll, roll],
+                    solref=list(params.solref),
+                    solreffriction=list(params.solreffriction),
+                    solimp=_SOLIMP,
+                )

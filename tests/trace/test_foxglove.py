@@ -31,10 +31,11 @@ from pathlib import Path
 import pytest
 from mcap.reader import make_reader
 
-from backends.registry import is_installed
+from backends.registry import get_backend, is_installed
 from reports import trace_format as tf
 from reports.trace_reader import read_trace
 from runner.cli.layouts import layout_spec
+from runner.compile.program import build_program
 from runner.language.load import load_files
 from runner.trace.layout import write_layout
 from tests.paths import ROOT
@@ -60,6 +61,18 @@ pytestmark = [
 ]
 
 
+#: every scenario file `scenario run FOLDERS` collects (recursively, each once): robots/ included
+FILES = sorted({p for folder in FOLDERS for p in folder.rglob("*.yaml")})
+
+
+def _accepted(backend: str) -> int:
+    """The cases of FILES that ``backend`` runs: all but those it refuses up front for a capability it
+    does not declare (no trace then; the robot examples until every adapter maps robots, issue 22)."""
+    cls = get_backend(backend)
+    return sum(1 for case in load_files(FILES, None, True)
+               if build_program(case).world.required_capabilities() <= cls.capabilities)  # fmt: skip
+
+
 @dataclass
 class Case:
     trace: Path
@@ -72,7 +85,7 @@ class Case:
 def _z_path(layout: Path, bodies: set[str]) -> tuple[str, str]:
     """(legend label, body) of the first plotted body height in ``layout`` for one of ``bodies``."""
     for path in json.loads(layout.read_text())["configById"]["Plot!asserted"]["paths"]:
-        found = re.fullmatch(r'/tf\.transforms\[:\]\{child_frame_id=="(\w+)"\}\.translation\.z', path["value"])
+        found = re.fullmatch(r'/tf\.transforms\[:\]\{child_frame_id=="([\w.]+)"\}\.translation\.z', path["value"])
         if found and found.group(1) in bodies:
             return path.get("label", path["value"]), found.group(1)
     raise AssertionError(f"{layout} plots no body height for {sorted(bodies)}")
@@ -92,10 +105,11 @@ def cases(tmp_path_factory: pytest.TempPathFactory) -> list[Case]:
              "--out", str(root / backend), "-j", "2", "--quiet"],
             cwd=ROOT, capture_output=True, text=True, timeout=900,
         )  # fmt: skip
-        assert done.returncode in (0, 1), done.stderr[-3000:]
+        refusals = _accepted(backend) < len(load_files(FILES, None, True))  # a refused case exits 2 (bad input)
+        assert done.returncode in ((0, 1, 2) if refusals else (0, 1)), done.stderr[-3000:]
         assert (root / backend / tf.LAYOUT_FILE).is_file()
     layouts = {}
-    for file in sorted(p for folder in FOLDERS for p in folder.glob("*.yaml")):  # `scenario layout FILE`, per file
+    for file in FILES:  # `scenario layout FILE`, per file
         layouts[file.name] = write_layout(root / "layouts" / file.stem, layout_spec(load_files([file], None, True)))
     out = []
     for trace_path in sorted(root.glob("*/*.mcap")):
@@ -105,8 +119,8 @@ def cases(tmp_path_factory: pytest.TempPathFactory) -> list[Case]:
         layout = layouts[trace.scenario[tf.KEY_SCENARIO_PATH]]
         label, body = _z_path(layout, set(trace.bodies))
         out.append(Case(trace_path, layout, topics, label, set(trace.bodies[body].pos[:, 2].tolist())))
-    cases = len(load_files(sorted(p for folder in FOLDERS for p in folder.glob("*.yaml")), None, True))
-    assert len(out) == cases * len(backends), f"expected {cases} cases of scenarios/ on each backend, found {len(out)}"
+    expected = sum(_accepted(b) for b in backends)
+    assert len(out) == expected, f"expected {expected} traces of scenarios/ over {backends}, found {len(out)}"
     return out
 
 
