@@ -35,12 +35,13 @@ def mesh_shape(mesh: Mesh) -> Any:
     if not mesh.faces:
         raise UnsupportedFeature(f"Backend `dart` cannot build the empty mesh `{mesh.source}`.")
     triangles = trimesh.Trimesh(
-        vertices=np.asarray(mesh.vertices, dtype=float), faces=np.asarray(mesh.faces, dtype=np.int64),
+        vertices=np.asarray(mesh.vertices, dtype=float),
+        faces=np.asarray(mesh.faces, dtype=np.int64),
         process=False,
     )
     with tempfile.TemporaryDirectory(prefix="dart-mesh-") as folder:
         path = Path(folder) / "mesh.stl"
-        path.write_bytes(triangles.export(file_type="stl"))
+        triangles.export(file_obj=str(path), file_type="stl")
         urdf = (
             '<robot name="mesh"><link name="mesh"><collision><geometry>'
             f'<mesh filename="{path.as_uri()}"/></geometry></collision></link></robot>'

@@ -36,10 +36,17 @@ def _box_hull(size: tuple[float, float, float]) -> Shape:
     return Shape(ShapeKind.CONVEX, mesh=Mesh(vertices, faces, source="box"))
 
 
-def _compound(name: str, shapes: tuple[PlacedShape, ...], pos: tuple[float, float, float], mass: float,
-              inertia: tuple[float, float, float], **kw: object) -> BodySpec:
-    return BodySpec(name, Motion.DYNAMIC, Shape(ShapeKind.COMPOUND), mass, inertia, pos, w.IDENTITY,
-                    shapes=shapes, **kw)  # type: ignore[arg-type]
+def _compound(
+    name: str,
+    shapes: tuple[PlacedShape, ...],
+    pos: tuple[float, float, float],
+    mass: float,
+    inertia: tuple[float, float, float],
+    **kw: object,
+) -> BodySpec:
+    return BodySpec(
+        name, Motion.DYNAMIC, Shape(ShapeKind.COMPOUND), mass, inertia, pos, w.IDENTITY, shapes=shapes, **kw
+    )  # type: ignore[arg-type]
 
 
 # --- shape:compound -----------------------------------------------------------------------------------
@@ -51,8 +58,8 @@ def test_compound_body_rests_on_its_placed_shapes(backend_name: str, backend_cls
     The right one is a 0.1 x 0.1 x 0.3 box turned 90 degrees about x (so 0.1 high): both ends rest flat only
     if each shape sits at its local pose, and the body frame rests at z = 0.05 (0.15 if the turn were
     ignored, tilted if either offset were). A sphere of 0.03 m around the body's origin (x = 0, 1 cm
-    above the ground) falls untouched to the ground: no shape at the origin. A body with no shapes falls through the ground.
-    Mass and inertia are the body's (set to a value the shapes would not give: 3 kg).
+    above the ground) falls untouched to the ground: no shape at the origin. A body with no shapes falls
+    through the ground. Mass and inertia are the body's (set to a value the shapes would not give: 3 kg).
     """
     w.require(backend_cls, Capability.SHAPE_COMPOUND)
     turned = _quat_about((1.0, 0.0, 0.0), math.pi / 2)
@@ -91,14 +98,16 @@ def test_com_offset_pendulum_has_the_physical_pendulums_period(backend_name: str
     Physical pendulum: T0 = 2 pi sqrt(I / (m g L)) with I = I_c + m L^2, I_c the moment about the COM along
     the hinge axis; at amplitude a the period is T0 (1 + a^2/16 + 11 a^4/3072 + ...). The principal moments
     are (0.001, 0.05, 0.002) along axes turned 90 degrees about z (``inertia_quat``), so the body's x axis
-    carries the principal 0.05: T = 1.2255 s. Mapping the inertia without that turn gives 0.001 (T 1.0195 s,
-    -17 %), about the frame origin instead of the COM (+m L^2 twice) +28 %, a COM at the origin no swing.
+    carries the principal 0.05: I = 0.14, T = 1.37126 s. Mapping the inertia without that turn gives 0.001
+    (T 1.1049 s, -19 %), about the frame origin instead of the COM (I + m L^2) 1.7565 s (+28 %), a COM at
+    the origin no swing at all.
 
-    Relative tolerance 1e-3 (derived): the series' next term 3.7e-7; semi-implicit Euler shifts omega by
-    (omega h)^2 / 24 = 2e-6 at h = 0.002 s (omega 5.1 rad/s); zero crossings interpolated linearly within
-    a step, where the angle is linear to (omega h)^2 = 1e-4 of a step (0.2 us); a maximal-coordinate hinge
-    (ODE) drifts its anchor by omega^2 r h^2 = 3e-5 m, 1e-4 of L. Every one is below 1e-4; 1e-3 is 10 times
-    that and 170 times smaller than the inertia-axis error it must catch.
+    Relative tolerance 1e-3 (derived): the series' next term 11 a^6 ... < 1e-8 of T after the a^4 term
+    kept; semi-implicit Euler shifts omega by (omega h)^2 / 24 = 3.5e-6 at h = 0.002 s (omega 4.585
+    rad/s); zero crossings interpolated linearly within a step, where the angle is linear to
+    (omega h)^2 = 8e-5 of a step; a maximal-coordinate hinge (ODE) drifts its anchor by about
+    (a omega)^2 L h^2 = 2.5e-7 m. Every one is at most a few 1e-6; 1e-3 leaves room for float32 engines
+    and is 190 times smaller than the inertia-axis error it must catch.
 
     The body frame stays at the pivot: its position within ``pivot_distance`` of the anchor, and its
     reported velocity (of its origin) below 0.01 m/s where the COM moves at up to a omega L = 0.15 m/s.
@@ -112,8 +121,17 @@ def test_com_offset_pendulum_has_the_physical_pendulums_period(backend_name: str
     period = t0 * (1 + a * a / 16 + 11 * a**4 / 3072)
     start = _quat_about((1.0, 0.0, 0.0), a)
     anchor = (0.0, 0.0, 1.0)
-    bob = BodySpec("bob", Motion.DYNAMIC, Shape(ShapeKind.COMPOUND), m, moments, anchor, start,
-                   com=(0.0, 0.0, -length), inertia_quat=_quat_about((0.0, 0.0, 1.0), math.pi / 2))
+    bob = BodySpec(
+        "bob",
+        Motion.DYNAMIC,
+        Shape(ShapeKind.COMPOUND),
+        m,
+        moments,
+        anchor,
+        start,
+        com=(0.0, 0.0, -length),
+        inertia_quat=_quat_about((0.0, 0.0, 1.0), math.pi / 2),
+    )
     hinge = JointSpec("pivot", JointKind.HINGE, "bob", None, axis=(1.0, 0.0, 0.0), anchor=anchor)
     dt = 0.002
     world = w.world("com-pendulum", [bob], joints=(hinge,), dt=dt, steps=1500)
@@ -143,8 +161,16 @@ def test_force_acts_at_the_com(backend_name: str, backend_cls: type[Backend]) ->
     and the frame (moving with the COM) at F dt / m = 0.05 m/s. At the frame's origin the same force would
     spin it at F d dt / I = 1 rad/s (d 0.2 m, I 0.02)."""
     w.require(backend_cls, Capability.COM_OFFSET)
-    body = BodySpec("body", Motion.DYNAMIC, Shape(ShapeKind.COMPOUND), 2.0, (0.02, 0.02, 0.02), (0.0, 0.0, 1.0),
-                    w.IDENTITY, com=(0.2, 0.0, 0.0))
+    body = BodySpec(
+        "body",
+        Motion.DYNAMIC,
+        Shape(ShapeKind.COMPOUND),
+        2.0,
+        (0.02, 0.02, 0.02),
+        (0.0, 0.0, 1.0),
+        w.IDENTITY,
+        com=(0.2, 0.0, 0.0),
+    )
     world = w.world("com-force", [body], gravity=(0.0, 0.0, 0.0))
     with w.make_backend(backend_name, world) as sim:
         sim.apply_force(0, (0.0, 0.0, 10.0), (0.0, 0.0, 0.0))
