@@ -181,6 +181,37 @@ def test_force_acts_at_the_com(backend_name: str, backend_cls: type[Backend]) ->
     assert s.lin_vel[0] == pytest.approx((0.0, 0.0, 0.05), abs=eps)
 
 
+def test_free_body_spins_about_its_com_and_reports_its_frame(backend_name: str, backend_cls: type[Backend]) -> None:
+    """Without gravity, a body whose COM is 0.2 m along its x axis, spinning at 1 rad/s about z with its frame
+    origin moving at omega x (origin - COM) = (0, -0.2, 0) m/s: the COM stays put, and the reported state
+    is the frame's: its origin on a circle of 0.2 m around the COM, its velocity omega x (pos - COM), 0.2 m/s.
+
+    Tolerances (derived): an engine integrating the frame origin with semi-implicit Euler (a first-order
+    step along a turning velocity) moves the COM outward by at most omega^2 r h^2 / 2 = 1e-5 m per step,
+    1e-3 m over 100 steps: 2e-3 m on the COM. The velocity's direction follows the orientation; its
+    relation to pos and COM is exact in any engine up to that same drift: 2e-3 m/s. An adapter reporting
+    the COM (position 0.2 m off, velocity 0) misses both by a hundred times that.
+    """
+    w.require(backend_cls, Capability.COM_OFFSET)
+    com = np.array([0.2, 0.0, 0.0])
+    body = BodySpec("body", Motion.DYNAMIC, Shape(ShapeKind.COMPOUND), 1.0, (0.02, 0.02, 0.02), (0.0, 0.0, 1.0),
+                    w.IDENTITY, lin_vel=(0.0, -0.2, 0.0), ang_vel=(0.0, 0.0, 1.0), com=(0.2, 0.0, 0.0))  # fmt: skip
+    world = w.world("com-spin", [body], gravity=(0.0, 0.0, 0.0))
+    with w.make_backend(backend_name, world) as sim:
+        for _ in range(100):
+            sim.step()
+        s = sim.body_states()
+    qw, qx, qy, qz = (float(v) for v in s.quat[0])
+    turn = 2 * math.atan2(qz, qw)  # about z only
+    assert abs(qx) < tol("orientation", backend_name) and abs(qy) < tol("orientation", backend_name)
+    com_world = s.pos[0] + np.array([math.cos(turn), math.sin(turn), 0.0]) * com[0]
+    assert com_world == pytest.approx((0.2, 0.0, 1.0), abs=2e-3)
+    assert turn == pytest.approx(1.0, abs=tol("orientation", backend_name))  # 1 s at 1 rad/s
+    expected_vel = np.cross(s.ang_vel[0], s.pos[0] - com_world)
+    assert s.lin_vel[0] == pytest.approx(expected_vel, abs=2e-3)
+    assert float(np.linalg.norm(s.lin_vel[0])) == pytest.approx(0.2, abs=2e-3)
+
+
 # --- shape:convex ---------------------------------------------------------------------------------------
 
 
