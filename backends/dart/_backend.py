@@ -21,6 +21,7 @@ from ..base import Backend
 from ..errors import UnsupportedFeature
 from ..types import (
     RIGID_BODY_CAPABILITIES,
+    ROBOT_CAPABILITIES,
     BodyStates,
     Capability,
     CompiledWorld,
@@ -42,7 +43,9 @@ _NAME = "dart"
 class DartBackend(Backend):
     name: ClassVar[str] = _NAME
     engine_distribution: ClassVar[str] = "dartpy"
-    capabilities: ClassVar[frozenset[Capability]] = RIGID_BODY_CAPABILITIES
+    #: Every robot capability: compound bodies, COM offsets, convex hulls and static triangle meshes (both as
+    #: DART MeshShapes, ``_meshes``), excluded pairs (the solver's BodyNodeCollisionFilter).
+    capabilities: ClassVar[frozenset[Capability]] = RIGID_BODY_CAPABILITIES | ROBOT_CAPABILITIES
     Options: ClassVar[type[BackendOptions]] = DartOptions
     #: pybind11 turns the C++ exceptions of DART into RuntimeError (DART 6 itself mostly prints its errors,
     #: dterr, and carries on); Python's own RuntimeError subclasses are never translated (backends.errors).
@@ -143,8 +146,12 @@ class DartBackend(Backend):
             for i, pose in self.kinematic.items():
                 self._bodies[i].root.setCommands(np.concatenate([pose.ang_vel, pose.lin_vel]))
             for i, acc in self.forces.items():
-                self._bodies[i].node.addExtForce(acc[:3])
-                self._bodies[i].node.addExtTorque(acc[3:])
+                body = self._bodies[i]
+                if body.com is None:
+                    body.node.addExtForce(acc[:3])
+                else:  # at the centre of mass (an offset in the body frame), the force in the world frame
+                    body.node.addExtForce(acc[:3], body.com, False, True)
+                body.node.addExtTorque(acc[3:])
             if self._surface_conflict or self._thresholds:
                 self._match_touching_pairs()
             self._dart.step()
@@ -230,8 +237,9 @@ class DartBackend(Backend):
                 raise UnsupportedFeature(f"{exc} (at t = {self.steps * self.world.dt:.3f} s)") from None
             coefficients = _surfaces.solve(self.world, pairs)
         for handle, f, r in zip(self._bodies, coefficients.friction, coefficients.restitution, strict=True):
-            handle.aspect.setFrictionCoeff(f)
-            handle.aspect.setRestitutionCoeff(r)
+            for aspect in handle.aspects:
+                aspect.setFrictionCoeff(f)
+                aspect.setRestitutionCoeff(r)
         self._touching, self._plastic = touching, plastic
 
     def _com_motion(self, indices: list[int]) -> np.ndarray:

@@ -23,8 +23,8 @@ import dartpy as dart
 import numpy as np
 
 from ..errors import BackendNotInstalled, UnsupportedFeature
-from ..types import BodySpec, CompiledWorld, JointKind, JointSpec, Motion, Shape, ShapeKind
-from . import _surfaces, _trees
+from ..types import IDENTITY_QUAT, BodySpec, CompiledWorld, JointKind, JointSpec, Motion, Shape, ShapeKind
+from . import _meshes, _surfaces, _trees
 from ._options import CONE_MAX_SWEEPS
 
 #: The detector of each ``collision_detector`` option value (``_options.DETECTOR_NAMES``, in that order).
@@ -48,8 +48,9 @@ class BodyHandle:
     skeleton: Any
     node: Any
     free: bool  # the skeleton is this one body on a FreeJoint: states come from two batched reads
-    aspect: Any = None  # the shape's DynamicsAspect (friction, restitution)
+    aspects: tuple[Any, ...] = ()  # its shapes' DynamicsAspects (friction, restitution); none for no shape
     root: Any = None  # the skeleton's root joint (a FreeJoint for free and kinematic roots)
+    com: Any = None  # the centre of mass in the body frame where it is not the origin (forces act there)
 
 
 @dataclass
@@ -93,6 +94,8 @@ def make_shape(shape: Shape) -> Any:
         return dart.dynamics.CapsuleShape(shape.radius, shape.length)
     if shape.kind is ShapeKind.CYLINDER:
         return dart.dynamics.CylinderShape(shape.radius, shape.length)
+    if shape.kind in (ShapeKind.CONVEX, ShapeKind.TRIMESH) and shape.mesh is not None:
+        return _meshes.mesh_shape(shape.mesh)
     return dart.dynamics.PlaneShape(np.array([0.0, 0.0, 1.0]), 0.0)
 
 
@@ -140,7 +143,22 @@ def build(
         built.skeletons.append(_build_tree(world, tree, built))
     for skeleton in built.skeletons:
         dw.addSkeleton(skeleton)
+    _exclude_pairs(world, built, solver)
     return built
+
+
+def _exclude_pairs(world: CompiledWorld, built: Built, solver: Any) -> None:
+    """Black-list ``excluded_pairs`` in the constraint solver's own BodyNodeCollisionFilter (DART's default
+    filter, which also applies each skeleton's self-collision and adjacent-body settings): those pairs get
+    no contact, so no force and no entry in the collision result that ``contacts()`` reads."""
+    if not world.excluded_pairs:
+        return
+    found = solver.getCollisionOption().collisionFilter
+    if not isinstance(found, dart.collision.BodyNodeCollisionFilter):
+        raise UnsupportedFeature(f"Backend `dart` found no BodyNodeCollisionFilter to exclude pairs with ({found}).")
+    nodes = {handle.spec.name: handle.node for handle in built.bodies}
+    for a, b in world.excluded_pairs:
+        found.addBodyNodePairToBlackList(nodes[a], nodes[b])
 
 
 def _build_tree(world: CompiledWorld, tree: _trees.Tree, built: Built) -> Any:
@@ -178,7 +196,8 @@ def _build_tree(world: CompiledWorld, tree: _trees.Tree, built: Built) -> Any:
     free = tree.root_joint is None and root.motion is not Motion.STATIC and not tree.links
     root_joint = skeleton.getRootJoint()
     for i in tree.bodies:
-        built.bodies[i] = BodyHandle(bodies[i], skeleton, nodes[i], free, aspects[i], root_joint)
+        com = None if bodies[i].com == (0.0, 0.0, 0.0) else np.asarray(bodies[i].com, dtype=float)
+        built.bodies[i] = BodyHandle(bodies[i], skeleton, nodes[i], free, aspects[i], root_joint, com)
     if tree.root_joint is None and root.motion is not Motion.STATIC:
         place_free(root_joint, root.pos, root.quat, root.lin_vel, root.ang_vel)
     return skeleton
@@ -209,23 +228,41 @@ def _joint_pair(
     return joint, node
 
 
-def _dress(node: Any, index: int, spec: BodySpec, built: Built) -> Any:
-    """Name, shape (named by the body's index), friction, restitution and mass of one body."""
+def _dress(node: Any, index: int, spec: BodySpec, built: Built) -> tuple[Any, ...]:
+    """Name, shapes (named by the body's index), friction, restitution and mass of one body.
+
+    A primitive body's one shape node is named ``"<index>"``; a compound body's are ``"<index>:<k>"`` at
+    their local poses (the contact reader takes the body from the part before the colon).
+    """
     node.setName(spec.name)
     if spec.shape.kind is ShapeKind.PLANE and (spec.motion is not Motion.STATIC or node.getParentBodyNode()):
         raise UnsupportedFeature(f"Plane `{spec.name}` must be static and unjointed (planes never move).")
-    shape = make_shape(spec.shape)
-    shape_node = node.createShapeNode(shape, f"{index}")
-    shape_node.createCollisionAspect()
-    aspect = shape_node.createDynamicsAspect()
-    aspect.setFrictionCoeff(built.coefficients.friction[index])
-    aspect.setRestitutionCoeff(built.coefficients.restitution[index])
+    compound = spec.shape.kind is ShapeKind.COMPOUND
+    aspects = []
+    for k, placed in enumerate(spec.placed_shapes()):
+        shape = make_shape(placed.shape)
+        shape_node = node.createShapeNode(shape, f"{index}:{k}" if compound else f"{index}")
+        if compound:
+            shape_node.setRelativeTransform(isometry(placed.pos, placed.quat))
+        shape_node.createCollisionAspect()
+        aspect = shape_node.createDynamicsAspect()
+        aspect.setFrictionCoeff(built.coefficients.friction[index])
+        aspect.setRestitutionCoeff(built.coefficients.restitution[index])
+        aspects.append(aspect)
     if spec.mass > 0.0:
-        moments = shape.computeInertia(spec.mass)
-        if not np.allclose(np.diag(moments), spec.inertia, rtol=1e-9, atol=0.0):
-            moments = np.diag(np.asarray(spec.inertia, float))  # the world's inertia is the contract
-        node.setInertia(dart.dynamics.Inertia(spec.mass, np.zeros(3), moments))
-    return aspect
+        node.setInertia(_inertia(spec))
+    return tuple(aspects)
+
+
+def _inertia(spec: BodySpec) -> Any:
+    """The body's mass properties, from its fields only (never from its shapes): DART's ``Inertia`` takes
+    the COM in the body frame and the tensor about it in the body frame, which ``inertia_tensor()`` is."""
+    if spec.com != (0.0, 0.0, 0.0) or spec.inertia_quat != IDENTITY_QUAT or spec.shape.kind is ShapeKind.COMPOUND:
+        return dart.dynamics.Inertia(spec.mass, np.asarray(spec.com, dtype=float), spec.inertia_tensor())
+    moments = make_shape(spec.shape).computeInertia(spec.mass)
+    if not np.allclose(np.diag(moments), spec.inertia, rtol=1e-9, atol=0.0):
+        moments = np.diag(np.asarray(spec.inertia, float))  # the world's inertia is the contract
+    return dart.dynamics.Inertia(spec.mass, np.zeros(3), moments)
 
 
 def place_free(joint: Any, pos: Any, quat: Any, lin_vel: Any, ang_vel: Any) -> None:

@@ -113,7 +113,8 @@ class ContactReader:
         return np.minimum(a, b), np.maximum(a, b)
 
     def _bodies(self, objects: Sequence[Any]) -> np.ndarray:
-        """The body indices of collision objects (each object's shape node is named by the index).
+        """The body indices of collision objects (each object's shape node is named by the index, a compound
+        body's shape nodes ``<index>:<k>``).
 
         Reading the name costs about 7 us; the wrapper objects are cached instead, which keeps them
         alive so that dartpy hands back the same wrapper for the same object on later calls.
@@ -124,5 +125,5 @@ class ContactReader:
         except KeyError:
             for obj in objects:
                 if obj not in known:
-                    known[obj] = int(obj.getShapeFrame().getName())
+                    known[obj] = int(obj.getShapeFrame().getName().partition(":")[0])
             return np.fromiter(map(known.__getitem__, objects), dtype=np.intp, count=len(objects))

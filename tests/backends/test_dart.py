@@ -202,7 +202,7 @@ def test_mu_inf_is_finite_and_silent(capfd: pytest.CaptureFixture[str]) -> None:
             sim.step()
         assert abs(sim.body_states().pos[1, 0]) < 1e-5  # measured 3e-7 m
         assert capfd.readouterr().err == ""
-        sim._bodies[1].aspect.setFrictionCoeff(math.inf)  # control: what DART does with inf itself
+        sim._bodies[1].aspects[0].setFrictionCoeff(math.inf)  # control: what DART does with inf itself
         sim.step()
         assert "friction" in capfd.readouterr().err
 

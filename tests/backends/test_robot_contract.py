@@ -13,6 +13,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+import trimesh
 from scipy.special import ellipk
 
 from backends.base import Backend
@@ -336,3 +337,33 @@ def test_com_offset_reset_body_places_the_frame(backend_name: str, backend_cls: 
     assert s.quat[0] * np.sign(s.quat[0, 0]) == pytest.approx(turn_z, abs=1e-6)
     assert s.lin_vel[0] == pytest.approx((0.5, 0.0, 0.0), abs=1e-6)
     assert s.ang_vel[0] == pytest.approx((0.0, 2.0, 0.0), abs=1e-6)
+
+
+# --- shape:trimesh ----------------------------------------------------------------------------------------
+
+
+def test_static_triangle_mesh_keeps_its_hole(backend_name: str, backend_cls: type[Backend]) -> None:
+    """A static ring (trimesh's annulus: radii 0.2 and 0.4 m, 0.1 m high, 256 triangles, centre at z 0.5)
+    as a triangle mesh: a 0.05 m sphere 1 cm above the ring's top rests on it (centre at 0.6 m, the main
+    suite's resting tolerance), while one dropped through the hole falls to the ground below. Built as its
+    convex hull (a solid disc), the second sphere would rest on the disc at 0.6 m too."""
+    require(backend_cls, Capability.SHAPE_COMPOUND)
+    require(backend_cls, Capability.SHAPE_TRIMESH)
+    ring = trimesh.creation.annulus(r_min=0.2, r_max=0.4, height=0.1, sections=32)
+    mesh = Mesh(
+        tuple((float(x), float(y), float(z)) for x, y, z in ring.vertices),
+        tuple((int(a), int(b), int(c)) for a, b, c in ring.faces),
+        source="annulus",
+    )
+    placed = PlacedShape(Shape(ShapeKind.TRIMESH, mesh=mesh))
+    static = BodySpec("ring", Motion.STATIC, Shape(ShapeKind.COMPOUND), 0.0, (0.0, 0.0, 0.0), (0.0, 0.0, 0.5),
+                      w.IDENTITY, shapes=(placed,))  # fmt: skip
+    on_ring = w.sphere("on_ring", 0.05, (0.3, 0.0, 0.61), density=500.0)
+    in_hole = w.sphere("in_hole", 0.05, (0.0, 0.0, 0.61), density=500.0)
+    world = w.world("ring", [w.ground(), static, on_ring, in_hole])
+    with make_backend(backend_name, world) as sim:
+        for _ in range(100):
+            sim.step()
+        s = sim.body_states()
+    assert s.pos[2, 2] == pytest.approx(0.6, abs=tol("resting_height", backend_name))
+    assert s.pos[3, 2] < 0.45 - 0.05  # below the ring's underside: through the hole
