@@ -9,8 +9,6 @@ from pathlib import Path
 
 import pytest
 
-from backends.registry import DEFAULT_BACKEND, get_backend
-from backends.types import ROBOT_CAPABILITIES
 from runner.cli.main import main
 from runner.language.files import scenario_files
 from tests.paths import ROOT
@@ -101,12 +99,7 @@ def test_folders_are_taken_by_every_command_recursing_like_pytest(
     twice = ROOT / "scenarios" / "factory_physics.yaml"
     assert scenario_files([twice, twice]) == [twice, twice]
     code, out, err = run(capsys, "validate", ROOT / "scenarios")
-    # the robot examples (scenarios/robots/, sorted last) are refused up front by a backend whose adapter does
-    # not declare the robot capabilities yet (issue 22's ENGINE phase): exit 2 with the capability message
-    refused = not ROBOT_CAPABILITIES <= get_backend(DEFAULT_BACKEND).capabilities
-    robots = [p for p in everything if "robots" in p.relative_to(ROOT).parts] if refused else []
-    assert code == (2 if robots else 0) and out.count("ok ") == len(everything) - len(robots)
-    assert not robots or f"which backend `{DEFAULT_BACKEND}` does not support" in err
+    assert code == 0 and out.count("ok ") == len(everything)  # the robot examples included (scenarios/robots/)
     folder = tmp_path / "cases" / "deeper"
     folder.mkdir(parents=True)
     small(folder)
