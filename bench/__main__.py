@@ -131,7 +131,7 @@ def main(argv: list[str] | None = None) -> int:
     if "robot" in args.sections:
         log(f"robot: {sizes['robot']}")
         results.robot = robot.run(installed, log)
-    if "seed" in args.sections and is_installed("ode"):
+    if "seed" in args.sections and is_installed(seed_loop.ENGINE):
         log(f"seed: {sizes['seed']}")
         results.seed = seed_loop.run(tuple(args.pile), args.seed_duration, args.seed_reps, log)  # type: ignore[arg-type]
     if "ray" in args.sections and not args.quick:  # CI runs the test itself (make test); --quick skips it

@@ -31,6 +31,9 @@ from runner.sim.run import run_loaded, trace_path
 
 from . import measure as m
 
+#: The lab's own loop is ODE's (panda3d.ode): this section is one engine's by definition, like raw_ode.py.
+ENGINE = "ode"
+
 TARGET = 5.0  # the runner (with its trace) at least this many times faster than the seed's loop
 MAX_CONTACTS = 150  # PyODE's ode.collide
 
@@ -160,7 +163,7 @@ def run_seed(world: Any, settings: dict[str, Any], steps: int, fig: SeedFigures)
 def run(counts: tuple[int, int, int], duration: float, reps: int, log: Callable[[str], None] = print) -> SeedFigures:
     loaded = m.pile(counts, duration)
     world, steps = m.world_of(loaded)
-    settings = m.adapter_settings("ode", world)
+    settings = m.adapter_settings(ENGINE, world)
     fig = SeedFigures(len(world.bodies) - 1, steps)
     seed_final = None
     with tempfile.TemporaryDirectory(prefix="bench-seed-") as tmp:
@@ -171,11 +174,11 @@ def run(counts: tuple[int, int, int], duration: float, reps: int, log: Callable[
                     continue
                 gc.collect()
                 start = time.perf_counter()
-                result = run_loaded(loaded, "ode", Path(tmp))
+                result = run_loaded(loaded, ENGINE, Path(tmp))
                 fig.runner.append(time.perf_counter() - start)
                 fig.status = result.status
             log(f"  seed loop round {rep + 1}/{reps}: seed {fig.seed[-1]:.2f}s, runner+trace {fig.runner[-1]:.2f}s")
-        final = m.final_from_trace(str(trace_path(Path(tmp), loaded, "ode")))[1:, :3]  # without the ground
+        final = m.final_from_trace(str(trace_path(Path(tmp), loaded, ENGINE)))[1:, :3]  # without the ground
     if seed_final is not None:
         fig.distance = float(np.abs(final - seed_final).max())
     return fig

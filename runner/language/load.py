@@ -154,7 +154,7 @@ class _SetError(Exception):
 
 
 def _set_path(data: dict[str, Any], dotted: str, value: Any) -> Path:
-    parts: list[str | int] = [int(p) if p.isdigit() else p for p in dotted.split(".")]
+    parts: list[str | int] = [int(p) if p.isascii() and p.isdigit() else p for p in dotted.split(".")]
     if any(p == "" for p in parts):
         raise _SetError(f"expected a dotted path such as world.dt, found `{dotted}`")
     node: Any = data
