@@ -2,8 +2,9 @@
 excluded pairs, checked against analytic values on every backend that declares the capability.
 
 The worlds are built here in Python (no URDF), so each test isolates one rule of the contract text in
-``backends/types.py``. A backend without the capability is skipped with that reason: the capability list
-is the documented gap (docs/robots.md), not a hidden one.
+``backends/types.py``. Every backend declares compound shapes, COM offsets, convex hulls and excluded
+pairs; ``shape:trimesh`` (ODE, DART) is checked on the others to be refused up front with the alternative
+(docs/robots.md), so no test here is skipped for a missing mapping.
 """
 
 from __future__ import annotations

@@ -1,5 +1,5 @@
 """The example robot scenarios (scenarios/robots/): they load and compile, every engine declares what they
-need (they run on all four: tests/backends/test_robot_contract.py, tests/integration), and the expected
+need (they run on all four: tests/backends/test_robot_contract.py, `pytest scenarios/robots`), and the expected
 numbers written in their files are re-derived here from the model files with tools we did not write
 (yourdfpy's forward kinematics, trimesh's stable poses, the URDF's inertials)."""
 
