@@ -20,7 +20,7 @@ from typing import Any
 from ._kit.options import BackendOptions
 from .base import Backend
 from .errors import BackendNotInstalled, UnknownBackend, UnsupportedFeature
-from .types import CompiledWorld
+from .types import Capability, CompiledWorld
 
 
 @dataclass(frozen=True)
@@ -168,10 +168,30 @@ def check_capabilities(cls: type[Backend], world: CompiledWorld) -> None:
         refusal = UnsupportedFeature(
             f"Scenario `{world.name}` needs {', '.join(missing)}, which backend `{cls.name}` does not "
             f"support. Supported: {', '.join(sorted(c.value for c in cls.capabilities))}."
+            f"{_alternatives(cls, lacking)}"
         )
         refusal.missing = frozenset(lacking)
         raise refusal
     cls.Options.parse(world.options_for(cls.name), cls.name)  # unknown keys and bad values, before building
+
+
+def _alternatives(refusing: type[Backend], lacking: frozenset[Capability] | set[Capability]) -> str:
+    """The hint of a refusal: the other installed backends that declare everything ``lacking``, else the
+    install commands of those that would (a backend that cannot be imported is judged by nothing)."""
+    installed, hints = [], []
+    for name, known in KNOWN_BACKENDS.items():
+        if known.hidden or name == refusing.name:
+            continue
+        try:
+            other = get_backend(name)
+        except BackendNotInstalled:
+            hints.append(known.hint)
+            continue
+        if lacking <= other.capabilities:
+            installed.append(name)
+    if installed:
+        return f" Backends that support it: {', '.join(installed)} (--backend {installed[0]})."
+    return f" Install another backend: {'; '.join(hints)}." if hints else ""
 
 
 def create_backend(name: str, world: CompiledWorld) -> Backend:

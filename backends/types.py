@@ -117,9 +117,9 @@ class Capability(str, enum.Enum):
 UNMAPPED_CAPABILITIES: frozenset[Capability] = frozenset(
     {Capability.JOINT_STOP_BOUNCE, Capability.JOINT_STOP_SOFTNESS}
 )
-#: What robot models (URDF, MJCF) need beyond hand-written bodies; each adapter adds them to its declaration
-#: as its mapping lands and is tested (issue 22's ENGINE phase). Until then a robot scenario is refused
-#: up front with the capability message.
+#: What robot models (URDF, MJCF) need beyond hand-written bodies (docs/robots.md). Every adapter declares
+#: all but ``shape:trimesh``, which ODE and DART declare too; a scenario needing one its backend lacks is
+#: refused up front with the capability message.
 ROBOT_CAPABILITIES: frozenset[Capability] = frozenset(
     {
         Capability.SHAPE_COMPOUND,

@@ -5,8 +5,9 @@ Each engine is a child process (``python -m bench.robot <backend>``) that loads 
 then, where the adapter accepts the robot capabilities, times the adapter's construction (``create_backend``)
 and a whole run without a trace, with the adapter's ``_step`` wrapped by ``perf_counter`` calls: the runner's
 per-step overhead is (run time - construction - engine steps) / steps, which includes the position servos'
-seven ``set_motor`` calls per step and the reads. An engine whose adapter does not map robots yet (issue 22's
-ENGINE phase) is reported with its refusal: the section runs the arm on every engine that accepts it.
+seven ``set_motor`` calls per step and the reads. Every adapter maps the arm's capabilities (docs/robots.md);
+an engine that refuses it (one without them) is listed with its refusal, and a run that does not pass is
+measured all the same but noted (its figures would not be the arm's).
 """
 
 from __future__ import annotations
@@ -72,7 +73,9 @@ def render(figs: Sequence[RobotFigures]) -> list[str]:
         if f.build_s is None:
             out.append(f"| {f.backend} | | | | | {f.note} |")
         else:
-            out.append(f"| {f.backend} | {f.build_s:.3f} | {f.steps} | {f.engine_ms:.3f} | {f.runner_ms:.3f} | |")
+            out.append(
+                f"| {f.backend} | {f.build_s:.3f} | {f.steps} | {f.engine_ms:.3f} | {f.runner_ms:.3f} | {f.note} |"
+            )
     return [
         *out,
         "",
@@ -128,6 +131,7 @@ def _child(argv: Sequence[str]) -> int:
                 "steps": result.steps,
                 "engine_ms": spent["step"] / steps * 1e3,
                 "runner_ms": runner,
+                "note": "" if result.passed else f"the run {result.status}: {result.failure or 'see its verdicts'}",
             }
         )
     )

@@ -24,7 +24,7 @@ import numpy as np
 
 from ..errors import BackendNotInstalled, UnsupportedFeature
 from ..types import IDENTITY_QUAT, BodySpec, CompiledWorld, JointKind, JointSpec, Motion, Shape, ShapeKind
-from . import _meshes, _surfaces, _trees
+from . import _contact_params, _meshes, _surfaces, _trees
 from ._options import CONE_MAX_SWEEPS
 
 #: The detector of each ``collision_detector`` option value (``_options.DETECTOR_NAMES``, in that order).
@@ -125,6 +125,7 @@ def build(
     friction: str = "pyramid",
 ) -> Built:
     check_conventions()
+    _contact_params.apply()
     dw = dart.simulation.World(world.name)
     dw.setGravity(np.asarray(world.gravity, dtype=float))
     dw.setTimeStep(world.dt / engine_steps)

@@ -27,7 +27,7 @@ class DartOptions(BackendOptions):
     )  # fmt: skip
     max_engine_dt: float | None = option(
         None, "longest DART step in seconds (default: dt / substeps); shorter engine steps make deep landings "
-        "penetrate less, since DART corrects penetration at 1 mm/s at most", minimum=0.0, min_exclusive=True,
+        "penetrate less (a landing sinks one engine step of approach)", minimum=0.0, min_exclusive=True,
     )  # fmt: skip
     friction: str = option(
         "auto", "auto (default): cone when every pair that can touch has mu <= 100, else pyramid; cone: DART's "

@@ -161,18 +161,12 @@ class ScenarioItem(pytest.Item):
             self.user_properties.append(("backend", backend))
 
     def runtest(self) -> None:
-        from backends.errors import UnsupportedFeature
-        from backends.types import ROBOT_CAPABILITIES
         from runner.errors import PhysicsScenariosError
 
         if self.problem:
             raise ScenarioCaseError(self.problem)
         try:
             self._run()
-        except UnsupportedFeature as exc:
-            if exc.missing and exc.missing <= ROBOT_CAPABILITIES:  # a tracked gap: runs once the adapter maps them
-                pytest.xfail(f"refused up front until the adapter maps robots (issue 22, ENGINE phase): {exc}")
-            raise ScenarioCaseError(f"{type(exc).__name__}: {exc}") from None
         except PhysicsScenariosError as exc:  # bad input, missing engine, unsupported feature
             raise ScenarioCaseError(f"{type(exc).__name__}: {exc}") from None
 

@@ -21,13 +21,34 @@ PYBULLET_DATA = "@pybullet_data"
 
 
 class ModelFileError(Exception):
-    """A problem in a model file (or a file it names): the file, the line (0: unknown) and what is wrong."""
+    """A problem in a model file (or a file it names): the file, the line and column (1-based; 0: unknown)
+    and what is wrong. Without a column, it is that of ``near`` (the offending text, e.g. an attribute's
+    value) on the line, else of the line's first non-blank character (where its element starts)."""
 
-    def __init__(self, file: Path | str, line: int, message: str) -> None:
+    def __init__(self, file: Path | str, line: int, message: str, near: str = "", column: int = 0) -> None:
         super().__init__(message)
         self.file = str(file)
         self.line = line
         self.message = message
+        self.column = column or _column(self.file, line, near)
+
+
+def _column(file: str, line: int, near: str) -> int:
+    """The 1-based column of ``near`` on ``line`` of ``file`` (else of its first non-blank character; 0 when
+    the line is unknown or unreadable). Read only when an error is raised."""
+    if line <= 0:
+        return 0
+    try:
+        lines = Path(file).read_bytes().decode("utf-8", "replace").splitlines()
+    except OSError:
+        return 0
+    if line > len(lines):
+        return 0
+    text = lines[line - 1]
+    found = text.find(near) if near else -1
+    if found < 0:
+        found = len(text) - len(text.lstrip())
+    return found + 1
 
 
 @dataclass(frozen=True)
@@ -97,9 +118,11 @@ def resolve_package(uri: str, package_root: Path, model_file: Path, line: int) -
     else:
         root, target = model_file.parent.resolve(), (model_file.parent / uri).resolve()
     if not target.is_relative_to(root.resolve()):
-        raise ModelFileError(model_file, line, f"the mesh `{uri}` resolves to {target}, outside its root {root}")
+        raise ModelFileError(
+            model_file, line, f"the mesh `{uri}` resolves to {target}, outside its root {root}", near=uri
+        )
     if not target.is_file():
-        raise ModelFileError(model_file, line, f"the mesh `{uri}` does not exist (looked for {target})")
+        raise ModelFileError(model_file, line, f"the mesh `{uri}` does not exist (looked for {target})", near=uri)
     return target
 
 

@@ -62,7 +62,7 @@ def load_robots(model: Scenario, positions: Positions, base_dir: FsPath) -> dict
         try:
             desc = load_model(robot, base_dir)
         except ModelFileError as exc:
-            issues.append(Issue(exc.file, exc.line, 0, ".".join(str(p) for p in where), exc.message))
+            issues.append(Issue(exc.file, exc.line, exc.column, ".".join(str(p) for p in where), exc.message))
             continue
         out[name] = desc
         links = {link.name for link in desc.links}

@@ -54,8 +54,8 @@ def parse_xml(file: Path) -> Any:
     try:
         return etree.ElementTree(etree.fromstring(xml_bytes(file), parser))
     except etree.XMLSyntaxError as exc:
-        line = exc.lineno or 0
-        raise ModelFileError(file, line, f"malformed XML: {exc.msg}") from None
+        line, column = exc.position if exc.position else (exc.lineno or 0, 0)
+        raise ModelFileError(file, line or 0, f"malformed XML: {exc.msg}", column=column or 0) from None
 
 
 def _lines(tree: Any, tag: str) -> dict[str, int]:
@@ -101,6 +101,7 @@ def _check_structure(tree: Any, file: Path) -> tuple[dict[str, int], dict[str, i
                     file,
                     where,
                     f"joint `{joint.get('name')}` names {end} link `{ref}`, which the model does not define",
+                    near=f"<{end}",
                 )
         child = joint.find("child").get("link")
         if child in children:

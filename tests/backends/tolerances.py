@@ -86,16 +86,16 @@ _TOLERANCES: dict[str, dict[str, float]] = {
     "contact_force": {"default": 1e-6},
     # Resting height of a shape's centre above a plane, m.
     # pybullet: -1.2e-5 to -1.7e-5 m for box, sphere, capsule, cylinder (and the 30 degree ramp).
-    # dart: -3.77 mm for all four shapes after 1 s: the 1 cm drop lands 4.7 mm deep in one 0.01 s step,
-    # and DART removes penetration at 1 mm/s at most (ContactConstraint's max error-reduction velocity,
-    # not settable from dartpy; docs/backends/dart.md). The bound is that one step of approach.
+    # dart: the 1 cm drop lands 4.7 mm deep in one 0.01 s step; the ODE mapping's push-out (ERP 0.2, capped
+    # at 0.1 m/s, backends/dart/_contact_params.py) leaves 0.8^n of it, down to the 1e-5 m error allowance.
+    # (With DART's own 1 mm/s cap it was -3.77 mm after 1 s, and this bound 5e-3.)
     # mujoco: -1.2e-6 to -4.9e-6 m at rest for all four shapes, -1.1e-6 m sliding down the 30 degree ramp
     # (it hovered +2.2 mm before the Coulomb correction of docs/backends/mujoco.md).
-    "resting_height": {"default": 2e-3, "dart": 5e-3},
+    "resting_height": {"default": 2e-3},
     # Resting height of a convex hull box's centre (test_robot_contract.py), m: as resting_height (one step of
     # landing), the hull being the box's exact vertices. pybullet: +9.0e-5 m (the adapter's 1e-4 m hull margin,
     # outside the vertices; with PyBullet's own 1 mm margin it was +9.9e-4). Compound of two cubes: -2.0e-5 m.
-    "hull_resting_height": {"default": 2e-3, "dart": 5e-3},
+    "hull_resting_height": {"default": 2e-3},
     # Quaternion and angular velocity of a freely spinning cube after 0.5 s.
     # pybullet: 5.6e-17 (Bullet integrates the rotation exactly for constant omega).
     # ode: 1.5e-5 (w, z after 1 rad): ODE's default rotation update is first order, each step turns
@@ -128,11 +128,11 @@ _TOLERANCES: dict[str, dict[str, float]] = {
     # the semi-implicit Coulomb distance. Derived (these used ``friction``, 3 %): while the box slides, the
     # friction is mu*N along -x and N = m*(g + dv_z/dt), so x(stop) = v0^2/(2 mu g) - mu*dz exactly, dz being
     # the change of the box's height over the slide (it starts exactly touching and ends at the engine's
-    # resting depth). |dz| is bounded by ``resting_height`` (2 mm; dart 5 mm), so the relative error is at
+    # resting depth). |dz| is bounded by ``resting_height`` (2 mm), so the relative error is at
     # most mu*dz/d: 0.5*2e-3/0.398 = 2.5e-3 (mu 0.5), 0.8*2e-3/0.255 = 6.3e-3 (mu 0.8), 0.25*2e-3/0.815 =
-    # 6.1e-4 (mu 0.25); the largest, rounded up: 6.5e-3; dart 0.8*5e-3/0.255 = 1.6e-2.
+    # 6.1e-4 (mu 0.25); the largest, rounded up: 6.5e-3.
     # Measured: pybullet +9e-6, mujoco -4e-7 / +1.4e-5, worst of the four 2.6e-5.
-    "friction_stop": {"default": 6.5e-3, "dart": 1.6e-2},
+    "friction_stop": {"default": 6.5e-3},
     # One step of free fall read back at once, m: the contract says "exactly". Also states read right
     # after the build or a reset_body (pose, velocities, joint coordinates at 0). pybullet: < 1e-15.
     # ode: 4.9e-8 m (box z) and 5.3e-8 m (door x): float32 positions, one ulp at 2 m is 2.4e-7.

@@ -1,7 +1,7 @@
-"""The example robot scenarios (scenarios/robots/): they load and compile, every backend refuses them up
-front with the capability message until its adapter maps the robot capabilities (issue 22's ENGINE phase),
-and the expected numbers written in their files are re-derived here from the model files with tools we did
-not write (yourdfpy's forward kinematics, trimesh's stable poses, the URDF's inertials)."""
+"""The example robot scenarios (scenarios/robots/): they load and compile, every engine declares what they
+need (they run on all four: tests/backends/test_robot_contract.py, `pytest scenarios/robots`), and the expected
+numbers written in their files are re-derived here from the model files with tools we did not write
+(yourdfpy's forward kinematics, trimesh's stable poses, the URDF's inertials)."""
 
 from __future__ import annotations
 
@@ -11,7 +11,6 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from backends.errors import UnsupportedFeature
 from backends.registry import KNOWN_BACKENDS, check_capabilities, get_backend
 from backends.types import ROBOT_CAPABILITIES
 from runner.compile.program import build_program
@@ -36,7 +35,7 @@ def test_the_examples_exist() -> None:
 
 @pytest.mark.parametrize("path", ROBOTS, ids=[p.stem for p in ROBOTS])
 @pytest.mark.parametrize("engine", ENGINES)
-def test_refused_up_front_with_the_capability_message(path: Path, engine: str) -> None:
+def test_every_engine_accepts_them(path: Path, engine: str) -> None:
     if path.stem == "mjcf_box":
         pytest.importorskip("mujoco", reason="mujoco not installed (MJCF is read by MuJoCo's compiler)")
     try:
@@ -45,13 +44,8 @@ def test_refused_up_front_with_the_capability_message(path: Path, engine: str) -
         pytest.skip(f"{engine} not installed: {exc}")
     for case in load_all(path, None, True):
         world = build_program(case).world
-        needed = world.required_capabilities() & ROBOT_CAPABILITIES
-        missing = needed - cls.capabilities
-        if not missing:
-            continue  # this adapter maps the robot capabilities: the scenario runs (tests/integration)
-        with pytest.raises(UnsupportedFeature) as caught:
-            check_capabilities(cls, world)
-        assert all(c.value in str(caught.value) for c in missing), str(caught.value)
+        assert world.required_capabilities() & ROBOT_CAPABILITIES  # a robot: the check below is not vacuous
+        check_capabilities(cls, world)  # raises UnsupportedFeature with the capability message otherwise
 
 
 def test_kuka_targets_match_yourdfpy_forward_kinematics() -> None:

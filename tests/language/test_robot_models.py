@@ -68,14 +68,26 @@ def _issue(path: Path) -> tuple[str, int, str]:
     return issue.file, issue.line, issue.message
 
 
+def _column(path: Path) -> int:
+    with pytest.raises(ScenarioValidationError) as caught:
+        load_scenario(path)
+    return caught.value.issues[0].column
+
+
 def _line_of(text: str, needle: str) -> int:
     return next(i for i, line in enumerate(text.splitlines(), 1) if needle in line)
+
+
+def _column_of(text: str, needle: str) -> int:
+    """1-based, as the issues count columns."""
+    return next(line.index(needle) + 1 for line in text.splitlines() if needle in line)
 
 
 def test_missing_mesh_is_refused_at_its_line(tmp_path: Path) -> None:
     path = _scenario(tmp_path, GOOD_URDF, mesh="meshes/nothing.obj")
     file, line, message = _issue(path)
     assert file == str(tmp_path / "robot.urdf") and line == _line_of(GOOD_URDF, "MESH")
+    assert _column(path) == _column_of(GOOD_URDF, "MESH")  # at the file name
     assert "meshes/nothing.obj` does not exist" in message
 
 
@@ -83,6 +95,7 @@ def test_joint_naming_a_missing_link_is_refused_at_its_line(tmp_path: Path) -> N
     text = GOOD_URDF.replace('<child link="arm"/>', '<child link="hand"/>')
     file, line, message = _issue(_scenario(tmp_path, text))
     assert file.endswith("robot.urdf") and line == _line_of(text, 'child link="hand"')
+    assert _column(tmp_path / "s.yaml") == _column_of(text, '<child link="hand"')  # at the <child> element
     assert "names child link `hand`, which the model does not define" in message
 
 
@@ -91,6 +104,7 @@ def test_malformed_xml_is_refused_at_its_line(tmp_path: Path) -> None:
     file, line, message = _issue(_scenario(tmp_path, text))
     broken = _line_of(text, "</joint")  # the parser notices the unclosed tag where the next one starts
     assert file.endswith("robot.urdf") and broken <= line <= broken + 1 and message.startswith("malformed XML")
+    assert _column(tmp_path / "s.yaml") >= 1  # the parser's column
 
 
 def test_package_path_escaping_its_root_is_refused(tmp_path: Path) -> None:
@@ -98,6 +112,7 @@ def test_package_path_escaping_its_root_is_refused(tmp_path: Path) -> None:
     path = _scenario(tmp_path, GOOD_URDF, mesh="package://../../etc/passwd", extra=", package_root: pkgs")
     file, line, message = _issue(path)
     assert file.endswith("robot.urdf") and line == _line_of(GOOD_URDF, "MESH")
+    assert _column(path) == _column_of(GOOD_URDF, "MESH")
     assert "outside its root" in message and str((tmp_path / "pkgs").resolve()) in message
 
 
@@ -109,14 +124,35 @@ def test_package_path_resolves_under_the_root(tmp_path: Path) -> None:
     assert arm.shapes[0].shape.mesh is not None and arm.shapes[0].shape.mesh.source == "c.obj"
 
 
-def test_a_bad_model_exits_2_without_a_traceback(tmp_path: Path) -> None:
-    path = _scenario(tmp_path, GOOD_URDF.replace('<parent link="base"/>', '<parent link="nowhere"/>'))
+BAD_MODELS = {  # the issue's four bad models: (the URDF's text, what the error says, where it points)
+    "missing-mesh": (GOOD_URDF.replace("MESH", "meshes/nothing.obj"), "does not exist", "meshes/nothing.obj"),
+    "missing-link": (GOOD_URDF.replace('<parent link="base"/>', '<parent link="nowhere"/>'), "does not define",
+                     '<parent link="nowhere"'),
+    "malformed-xml": (GOOD_URDF.replace("</joint>", "</joint", 1), "malformed XML", None),
+    "package-escape": (GOOD_URDF.replace("MESH", "package://../../etc/passwd"), "outside its root",
+                       "package://../../etc/passwd"),
+}  # fmt: skip
+
+
+@pytest.mark.parametrize("kind", sorted(BAD_MODELS))
+def test_a_bad_model_exits_2_at_its_file_line_and_column(tmp_path: Path, kind: str) -> None:
+    """`validate` and `run` both refuse it with exit 2, no traceback, and ``robot.urdf:LINE:COLUMN``."""
+    text, says, near = BAD_MODELS[kind]
+    (tmp_path / "pkgs").mkdir()
+    path = _scenario(tmp_path, text, extra=", package_root: pkgs")
+    (tmp_path / "robot.urdf").write_text(text)  # as written (no MESH left to replace)
+    if near is None:
+        line, column = _issue(path)[1], _column(path)
+    else:
+        line, column = _line_of(text, near), _column_of(text, near)
     for command in (["validate", str(path)], ["run", str(path), "--no-trace"]):
         done = subprocess.run(
             [sys.executable, "-m", "runner", *command], capture_output=True, text=True, cwd=tmp_path, timeout=120
         )
-        assert done.returncode == 2, done.stderr
-        assert "Traceback" not in done.stderr and "robot.urdf:" in done.stderr + done.stdout
+        out = done.stderr + done.stdout
+        assert done.returncode == 2, out
+        assert "Traceback" not in out and says in out
+        assert f"robot.urdf:{line}:{column}: " in out and column >= 1, out
 
 
 def test_override_naming_a_missing_joint_is_refused_in_the_scenario(tmp_path: Path) -> None:

@@ -67,7 +67,7 @@ FILES = sorted({p for folder in FOLDERS for p in folder.rglob("*.yaml")})
 
 def _accepted(backend: str) -> int:
     """The cases of FILES that ``backend`` runs: all but those it refuses up front for a capability it
-    does not declare (no trace then; the robot examples until every adapter maps robots, issue 22)."""
+    does not declare (no trace then)."""
     cls = get_backend(backend)
     return sum(1 for case in load_files(FILES, None, True)
                if build_program(case).world.required_capabilities() <= cls.capabilities)  # fmt: skip

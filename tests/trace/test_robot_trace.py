@@ -1,7 +1,7 @@
 """A robot's trace: the scene draws each link's shapes (convex hulls as triangle lists) at their local poses,
 /bodies and /joints nest a robot's links and joints (`/bodies.arm.link.vel.z`), and the report's scene reads
-them back. No engine maps robots yet (issue 22's ENGINE phase), so the trace is written with the pure-Python
-backend made to accept the robot capabilities and gravity off: a scene check, not a physics one."""
+them back. The trace is PyBullet's run of the arm scenario (a real engine; the checks are of the scene and
+the names, which every engine writes alike)."""
 
 from __future__ import annotations
 
@@ -10,8 +10,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from backends.fake import FakeBackend
-from backends.types import Capability, ShapeKind
+from backends.types import ShapeKind
 from reports.scene3d.model import SceneModel, scene_model
 from reports.scene3d.scene_channel import read_scene_updates
 from reports.trace_reader import read_trace
@@ -26,14 +25,8 @@ ARM = ROOT / "scenarios" / "robots" / "kuka_arm.yaml"
 
 @pytest.fixture(scope="module")
 def trace(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    patch = pytest.MonkeyPatch()
-    patch.setattr(FakeBackend, "capabilities", frozenset(Capability))
-    try:
-        loaded = load_scenario(ARM, None, (("world.gravity", [0, 0, 0]),))
-        result = run_loaded(loaded, "fake", tmp_path_factory.mktemp("robot"))
-    finally:
-        patch.undo()
-    assert result.trace is not None
+    result = run_loaded(load_scenario(ARM), "pybullet", tmp_path_factory.mktemp("robot"))
+    assert result.passed and result.trace is not None
     return Path(result.trace)
 
 
