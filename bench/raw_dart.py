@@ -12,6 +12,7 @@ from typing import Any
 import dartpy as dart
 import numpy as np
 
+from backends.dart._reads import state_readers
 from backends.types import CompiledWorld, Motion, ShapeKind
 
 _DETECTORS = {
@@ -72,6 +73,7 @@ class DartLoop:
             w.addSkeleton(skeleton)
         self.free_at = np.array([i for i, b in enumerate(world.bodies) if b.motion is not Motion.STATIC], dtype=int)
         self.free = [self.skeletons[i] for i in self.free_at]
+        self.read_q, self.read_v = state_readers(self.free)  # two skeletons per call (a Chain of their roots)
         self.fixed_rows = np.zeros((len(world.bodies), 13))
         self.fixed_rows[:, :7] = [list(b.pos) + list(b.quat) for b in world.bodies]
 
@@ -79,12 +81,13 @@ class DartLoop:
         self.w.step()
 
     def read(self) -> np.ndarray:
-        """Two calls per free skeleton (getPositions, getVelocities: DART has no world-level state getter),
-        the rotation vectors turned into quaternions on arrays."""
+        """The cheapest read dartpy 6.20 offers: getPositions and getVelocities of a Chain between two free
+        skeletons' roots, two skeletons per call (DART has no world-level state getter; the adapter's
+        ``backends.dart._reads``), the rotation vectors turned into quaternions on arrays."""
         rows = self.fixed_rows.copy()
         if self.free:
-            q = np.concatenate([skeleton.getPositions() for skeleton in self.free]).reshape(-1, 6)
-            v = np.concatenate([skeleton.getVelocities() for skeleton in self.free]).reshape(-1, 6)
+            q = np.concatenate([read() for read in self.read_q]).reshape(-1, 6)
+            v = np.concatenate([read() for read in self.read_v]).reshape(-1, 6)
             angle = np.sqrt((q[:, :3] ** 2).sum(axis=1))
             small = angle < 1e-12
             scale = np.sin(angle / 2) / np.where(small, 1.0, angle)

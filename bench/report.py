@@ -397,9 +397,10 @@ def _batch(b: BatchFigures) -> list[str]:
 #: Causes found by profiling (cProfile, this instrumentation and old/new adapters interleaved in one
 #: process on the 100-box pile), for "what remains". Every item was measured; none is a guess.
 KNOWN_CAUSES = (
-    "The trace in the run's process: /tf and /bodies format 20 numbers per body per step and /contacts one "
-    "object per touching pair, as integers of nanounits, then MCAP chunks them with LZ4: 0.3-0.4 ms per step "
-    "for 100 bodies alone, 0.5-0.75 ms inside runs (the engine's step evicts the caches between steps). "
+    "The trace in the run's process: /tf and /bodies (protobuf bytes from templates, 20 doubles per body) and "
+    "/contacts (one templated message per touching pair), then MCAP chunks them with zstd: 0.09 ms per step "
+    "for 100 bodies alone, 0.10-0.14 ms inside runs (the engine's step evicts the caches between steps; CPU "
+    "time, medians of 3 interleaved; what is in it: below). "
     "`--trace-process` moves formatting and writing to a second process; the run pays 0.1-0.15 ms per step "
     "for it (packing a step's doubles, 16 steps per pipe write, starting the writer and waiting for it at the"
     " end). What it gains depends on a free core and varies between runs on this two-core virtual machine "
@@ -410,8 +411,8 @@ KNOWN_CAUSES = (
     "runs skip it; with the trace on it is the largest read on three engines (us per body per step, CPU time"
     " inside the step loop, 100-box pile): DART 6.4 (454 points; five dartpy fields per point, each a pybind "
     "property call of 0.13-0.2 us and no batched read in dartpy 6.20: read by the properties' own getters), "
-    "ODE 3.9 (413 contacts; four panda3d calls per contact, mapped unbound, plus feedback armed on each "
-    "contact joint in the step), PyBullet 3.0 (400 points; getContactPoints itself builds 400 tuples of 14 "
+    "ODE 2.7 (413 contacts; four panda3d calls per contact, mapped unbound, plus feedback armed on each "
+    "contact joint in the step), PyBullet 2.9 (400 points; getContactPoints itself builds 400 tuples of 14 "
     "fields, about 0.3 us per point, before any of ours), MuJoCo 0.7 (478 points read as arrays; the rest is"
     " grouping them per pair). The readers were sped up with the same numbers (old and new readers equal on "
     "every step of the pile; in-process, interleaved: DART -16 %, PyBullet -11 %, ODE -28 %, the kit's "
@@ -425,24 +426,57 @@ KNOWN_CAUSES = (
     "views of MjData; one datagram of float32 vectors). The hand-written loops read the same way (bench/"
     "raw_*.py), so the state reads cost the runner no more than the loop it is compared with.",
     "The runner's own work per step (runner/sim: blow-up check, energy watchdog, assertions, contact pairs, "
-    "the step loop) is 0.09 ms on MuJoCo, 0.13 on PyBullet, 0.13 on DART and 0.17 on ODE (CPU time, traced "
-    "runs, medians of 3 interleaved with the tree before; it was 0.15, 0.20, 0.25 and 0.28): the blow-up "
+    "the step loop) is 0.08-0.09 ms on every engine (CPU time, traced runs, medians of 3 interleaved; it was "
+    "0.15, 0.20, 0.25 and 0.28 on MuJoCo, PyBullet, DART and ODE before issue 19's first pass): the blow-up "
     "check takes one whole-array pass when every state "
     "is finite and slow (28 -> 8 us), the energy watchdog turns the angular velocity without rotation "
     "matrices (25 -> 16 us), touching pairs by name are made only when asked for, group reads index once. "
     "What is left is a few microseconds each of numpy calls on 100-element arrays and the step loop itself.",
-    "MuJoCo: the pile is a small world for MuJoCo (0.5 ms per step), so any fixed Python cost per step weighs"
-    " twice as much as on the other engines; the adapter's step adds about 0.03 ms to the custom Coulomb step"
-    " measured alone (more inside runs, as above). Contacts come from MuJoCo's geom filtering (no explicit "
-    "pairs since issue 19: the build is linear in the bodies, section 7).",
+    "MuJoCo: the pile is a small world for MuJoCo (0.37 ms per step), so any fixed Python cost per step weighs"
+    " four to six times as much as on the other engines: both MuJoCo targets leave 0.04 ms (1.10 x raw+reads) "
+    "and 0.11 ms (1.30 x raw) per step for everything beyond the engine, against 0.10 ms of trace (three "
+    "messages of 9, 6 and 4 KB a step, a third of it the MCAP writer's zstd and copies), 0.07 ms of contacts "
+    "(480 points grouped into 100 pairs: 0.04 ms of it the kit's grouping and the Contact tuples), 0.03 ms of "
+    "the adapter's step (the Coulomb step's Python), 0.03 ms of state reads and 0.08 ms of the runner (energy "
+    "watchdog 0.026, assertions 0.008, the step loop): CPU time, medians of 3 interleaved runs. Contacts come "
+    "from MuJoCo's geom filtering (no explicit pairs since issue 19: the build is linear in the bodies, "
+    "section 7).",
+    "DART: the adapter's step was 2.6 x DART's own (3.1 ms against 1.2): in worlds where a pair bounces with "
+    "a bounce_vel, each engine step collides first and read every contact point (five dartpy calls each) and "
+    "every body's motion to find the pairs approaching below bounce_vel. DART applies restitution only when "
+    "e*v > 0.1 m/s, so steps where the fastest two bodies cannot reach 0.1/e_max now read nothing "
+    "(backends/dart/_gate.py: 22 of 2,500 steps read on the pile) and the step is 1.47 ms. The collision "
+    "query itself (0.2-0.3 ms per step) stays in every step: DART's ODE detector keeps a per-pair contact "
+    "history that every query updates and that fills in later contacts (measured: a bouncy 12-box pile gets "
+    "44 points instead of 40 two steps later without it), so it is physics, not overhead, in general; on "
+    "the bench pile (every pair has four points, which the history never fills in) the raw loop without it "
+    "gives the same states at every step. DART's own step cannot reuse it: World.step collides again after "
+    "the velocity update, inside the constraint solver.",
     "ODE: dWorldStep evicts the caches, so the same Python per step costs 2-3 times more inside the step loop"
-    " than alone; what the adapter adds to the hand-written loop's step (0.3-0.4 ms per step on the pile: "
+    " than alone; what the adapter adds to the hand-written loop's step (0.3 ms per step on the pile: "
     "collision events drained from panda3d's queue and feedback armed on every contact joint, for the "
     "contacts' normal forces) is near panda3d's per-call floor (getJoint and setFeedback now mapped, not "
-    "looped).",
+    "looped). The pile runs ODE with `friction_pyramid: axes, impact_cfm: false` so that contacts are made "
+    "in C++ (autoCollide) as in the hand-written loop; with ODE's default settings (friction directions "
+    "following the slip and the impacts' own CFM, both per contact in a Python near-callback) the runner "
+    "with the full trace takes 4.3 ms per step instead of 3.2 (without a trace 3.9 instead of 2.6; CPU "
+    "time, medians of 3 interleaved), about 1.9 x the hand-written loop with reads, which cannot express "
+    "either.",
+    "Per step, on every engine: the trace writer costs 0.10-0.14 ms in the run's thread (it was 0.13-0.18): "
+    "/contacts keeps the gathered pair templates for the next step while the pairs stay the same (27 us "
+    "instead of 50 for 100 pairs), /tf and /bodies are two gathers of 9 and 6 KB (20 us), and the MCAP "
+    "writer's three log calls with its zstd compression (level 1, one thread) about 42 us; the bytes of "
+    "every message are the format's, so no cheaper encoding is open without a format change.",
+    "Batch (-j 2 on the 23 files' 44 cases, PyBullet, measured by hand beside section 5): the cases take 3.2 s "
+    "of -j 1's 4.3-4.5 s (the longest two 0.55 s each); the command's start-up is 0.45 s (imports) and "
+    "loading and validating every variant 0.16 s more. -j 2 uses the same CPU time as -j 1 (4.3-4.4 s user), "
+    "so it duplicates no work; it took 2.63 s (1.64 x, 97 % of the pure loop's 1.69 x) and 4.67 s (0.92 x) "
+    "in two runs a minute apart while other sessions loaded the two cores, and section 5's one round gave "
+    "0.97 x: on this shared machine the batch figure measures the other sessions, and needs a quiet machine "
+    "and several rounds.",
     "The adapters' and the runner's speed-ups behind these figures left every trace byte for byte the same "
-    "(35 per engine, 140 in all: every scenario and variant, compared before and after): a faster read "
-    "never changes the physics it reports.",
+    "(196 traces: every scenario and variant of scenarios/ on the four engines, and the bench pile, compared "
+    "before and after each change with cmp): a faster read never changes the physics it reports.",
 )
 
 

@@ -17,7 +17,7 @@ where proto3 would leave the field out. Both decode to the same message (the fie
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 from google.protobuf.timestamp_pb2 import Timestamp
@@ -182,7 +182,9 @@ class PairTemplates:
     Protobuf defines concatenated serialisations of a message as their merge, with repeated fields
     appended; so a step's message is a header (``head(count)``, serialised by google.protobuf) followed
     by one serialised single-element message per pair, each from a template cached per (a, b); a step
-    gathers them from one array of every template's bytes, then fills the slots (numpy throughout).
+    gathers them from one array of every template's bytes, then fills the slots (numpy throughout). The
+    gathered templates and slot positions are kept for the next step, which reuses them when its pairs are
+    the same ones in the same order (most steps of a run), and the header is kept per pair count.
     ``one(a, b, points, x, y)`` must build the single-element message through google.protobuf.
     """
 
@@ -197,6 +199,8 @@ class PairTemplates:
         self._length: list[int] = []
         self._slots: list[tuple[int, int, int]] = []  # byte offsets of points, x, y in each template
         self._arrays: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
+        self._heads: dict[int, bytes] = {}  # the header by pair count
+        self._last: _PairLayout | None = None
 
     def _add(self, a: int, b: int) -> None:
         points, x, y = 0x5AC3_9E71, *_sentinels(2, 3)
@@ -227,10 +231,22 @@ class PairTemplates:
 
     def render(self, pairs: np.ndarray) -> bytes:
         """``pairs``: (P, 5) rows of a, b, points, x, y (the backends' ``Contact`` rows)."""
-        head = self._head(len(pairs)).SerializeToString(deterministic=True)
+        head = self._heads.get(len(pairs))
+        if head is None:
+            head = self._heads[len(pairs)] = bytes(self._head(len(pairs)).SerializeToString(deterministic=True))
         if not len(pairs):
-            return bytes(head)
+            return head
         keys = pairs[:, 0].astype(np.int64) * self._n + pairs[:, 1].astype(np.int64)
+        last = self._last
+        if last is None or len(last.keys) != len(keys) or not np.array_equal(last.keys, keys):
+            last = self._last = self._layout(keys)
+        body = last.body.copy()
+        body[last.points_at] = pairs[:, 2].astype("<u4").view(np.uint8)
+        body[last.doubles_at] = np.ascontiguousarray(pairs[:, 3:5], dtype="<f8").view(np.uint8).ravel()
+        return head + body.tobytes()
+
+    def _layout(self, keys: np.ndarray) -> _PairLayout:
+        """The templates of these pairs one after the other, and where their slots are."""
         ids = self._lookup(keys)
         if (ids < 0).any():
             for k in np.unique(keys[ids < 0]).tolist():
@@ -243,9 +259,16 @@ class PairTemplates:
         out_start = np.cumsum(lengths) - lengths
         total = int(lengths.sum())
         gather = np.arange(total) + np.repeat(start[ids] - out_start, lengths)  # each template's bytes in turn
-        body = self._data.take(gather)
         at = slots[ids] + out_start[:, None]
-        body[_byte_index(at[:, 0], 4)] = pairs[:, 2].astype("<u4").view(np.uint8)
-        doubles = np.ascontiguousarray(pairs[:, 3:5], dtype="<f8")
-        body[_byte_index(at[:, 1:].ravel(), 8)] = doubles.view(np.uint8).ravel()
-        return head + body.tobytes()
+        return _PairLayout(keys.copy(), self._data.take(gather), _byte_index(at[:, 0], 4),
+                           _byte_index(at[:, 1:].ravel(), 8))  # fmt: skip
+
+
+class _PairLayout(NamedTuple):
+    """One step's pairs (their keys, in order): the templates' bytes and the byte indices of the slots. A run
+    whose pairs stay the same from step to step (a pile at rest) reuses it."""
+
+    keys: np.ndarray
+    body: np.ndarray  # uint8: every pair's template, in order
+    points_at: np.ndarray  # 4 bytes per pair
+    doubles_at: np.ndarray  # 16 bytes per pair: x, then y
