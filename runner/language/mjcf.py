@@ -148,35 +148,14 @@ def load_mjcf(file: Path) -> ModelDesc:
         count = int(model.body_jntnum[b])
         first = int(model.body_jntadr[b])
         kinds = [int(model.jnt_type[j]) for j in range(first, first + count)]
+        whole = None  # a body welded to its parent (no joint), or free (a free joint is no joint)
         if count == 0:
-            joints.append(
-                JointDesc(
-                    f"{names[b]}_weld",
-                    "fixed",
-                    parent,
-                    names[b],
-                    (1.0, 0.0, 0.0),
-                    vec(data.xpos[b]),
-                    None,
-                    None,
-                    lines.get(names[b], 0),
-                )
-            )
-            continue
-        if kinds == [int(mujoco.mjtJoint.mjJNT_FREE)]:
-            joints.append(
-                JointDesc(
-                    model.joint(first).name or f"{names[b]}_free",
-                    "free",
-                    parent,
-                    names[b],
-                    (1.0, 0.0, 0.0),
-                    vec(data.xpos[b]),
-                    None,
-                    None,
-                    lines.get(names[b], 0),
-                )
-            )
+            whole = (f"{names[b]}_weld", "fixed")
+        elif kinds == [int(mujoco.mjtJoint.mjJNT_FREE)]:
+            whole = (model.joint(first).name or f"{names[b]}_free", "free")
+        if whole is not None:
+            joints.append(JointDesc(whole[0], whole[1], parent, names[b], (1.0, 0.0, 0.0), vec(data.xpos[b]), None,
+                                    None, lines.get(names[b], 0)))  # fmt: skip
             continue
         if count != 1 or kinds[0] not in _JOINTS:
             raise ModelFileError(
