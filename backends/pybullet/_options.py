@@ -11,24 +11,26 @@ from ..errors import UnsupportedFeature
 DEFAULT_ITERATIONS = 50
 #: Solver sweeps per (stacked body)^2. Bullet's multibody solver is projected Gauss-Seidel (sequential
 #: impulses); a load crosses one contact per sweep, and the error of a chain of H contacts falls by about
-#: 1 - pi^2/H^2 per sweep, so the sweeps a column needs grow as H^2. Measured on ``box_pile.yaml`` (0.3 m
-#: boxes of 13.5 kg, dt 0.01, bounce 0.2, mu 5000; the column must settle below 2 cm/s): H 10 holds
-#: with 100-400 sweeps, H 20 needs 1600 (800: 0.008 m/s, 400: 0.015, 200: 0.13, 50-100: it falls), H 30
-#: needs 3200-3600 (1600: 0.026 m/s, 800: 0.069, 400: it falls). Below the need, Bullet's unconverged
-#: contacts act as soft springs and the column sways without damping until it buckles. 4 H^2 is the least
-#: that settled every measured height; a column of 4 (conformance 12) gets 64.
+#: 1 - pi^2/H^2 per sweep, so the sweeps a column needs grow as H^2. Below the need, Bullet's unconverged
+#: contacts act as soft springs: the column sways without damping (the whole column, speed growing with
+#: height) until it buckles. Measured on ``box_pile.yaml`` (0.3 m boxes of 13.5 kg, dt 0.01, bounce 0.2,
+#: mu 5000; settled = below 2 cm/s after 4 s): H 10 settles with 100-400 sweeps, H 20 with 1600 (800:
+#: 0.008 m/s, 400: 0.015, 200: 0.13, 50-100: it falls), H 30 with 3200-3600 (1600: 0.026 m/s, 800: 0.069,
+#: 400: it falls), so 4 H^2. Conformance 16 (a resting column, mu 1, 10 s, 1 mm/s) asks more: 5 boxes at
+#: 4 H^2 = 100 sweeps break loose at 9 s (0.010 m/s), at 8 H^2 = 200 they stay below 1e-4 m/s, as do 10
+#: at 800. 8 H^2 then; a column of 4 (conformance 12) gets 128.
 SWEEPS_PER_BODY_SQUARED = 8
-#: The tallest column the backend accepts. Measured: 40 boxes with 4 * 40^2 = 6400 sweeps still sway at
-#: 0.05 m/s after 4 s (a box thrown at 2.95 m/s at t = 1.28 s by the landing), 50 boxes fall whatever the
-#: sweeps (50-1600 at one step, 8-32 substeps of 50), and a step then costs ~50 ms per 1000 sweeps.
+#: The tallest column the backend accepts. Measured on ``box_pile.yaml``: 40 boxes with 6400 sweeps still
+#: sway at 0.05 m/s after 4 s (a box thrown at 2.95 m/s at t = 1.28 s by the landing), 50 boxes fall
+#: whatever the sweeps (50-1600 at one step, 8-32 substeps of 50); a step costs ~5 ms per 1000 sweeps.
 MAX_STACK = 30
 
 
 @dataclass(frozen=True)
 class PyBulletOptions(BackendOptions):
     solver_iterations: int | None = option(
-        None, "numSolverIterations of the constraint solver (default: 50, or 4 H^2 for a world starting with a "
-        "column of H > 3 bodies, see docs/backends/pybullet.md, Stacking)", minimum=1,
+        None, "numSolverIterations of the constraint solver (default: 50, or 8 H^2 for a world starting with a "
+        "column of H > 2 bodies, see docs/backends/pybullet.md, Stacking)", minimum=1,
     )  # fmt: skip
     deterministic_overlapping_pairs: bool = option(
         True, "sort broadphase pairs for run-to-run determinism (default true)"
@@ -48,6 +50,6 @@ def check_stack(stack: int) -> None:
         raise UnsupportedFeature(
             f"pybullet: the world starts with a column of {stack} bodies; PyBullet holds at most {MAX_STACK}: "
             f"its iterative contact solver needs about {SWEEPS_PER_BODY_SQUARED} x height^2 sweeps per step to keep "
-            "a column standing, and a column of 40 still swayed at 4 x 40^2 = 6400 (measured, "
-            "docs/backends/pybullet.md, Stacking); use mujoco (up to 50), dart or ode"
+            "a column standing, a column of 40 still swayed at 6400 and one of 50 fell at every setting tried "
+            "(measured, docs/backends/pybullet.md, Stacking); use mujoco (up to 50), dart or ode"
         )
