@@ -74,7 +74,8 @@ class MujocoBackend(Backend):
     def _build(self) -> None:
         world = self.world
         self._stack = stack_height(world)
-        check_stack(self._stack)
+        if self.options.engine_substeps is None:  # set by hand, the column is the scenario's to judge
+            check_stack(self._stack)
         self._nsteps = world.substeps * engine_substeps(self.options, world.dt / world.substeps, self._stack)
         self._h = world.dt / self._nsteps
         self._times = substep_times(world.dt, self._nsteps)

@@ -52,10 +52,11 @@ def engine_substeps(options: MujocoOptions, step: float, stack: int) -> int:
 
 
 def check_stack(stack: int) -> None:
-    """Refuse a column taller than MuJoCo can hold standing (:data:`MAX_STACK`)."""
+    """Refuse (when the backend picks the solver) a column taller than MuJoCo can hold standing (:data:`MAX_STACK`)."""
     if stack > MAX_STACK:
         raise UnsupportedFeature(
             f"mujoco: the world starts with a column of {stack} bodies; MuJoCo holds at most {MAX_STACK}: its soft "
             "contacts let a taller column lean and sway however short the step (100 boxes measured at 1 to 20 "
-            "engine steps per 10 ms, docs/backends/mujoco.md, Stacking); use dart or ode"
+            "engine steps per 10 ms, docs/backends/mujoco.md, Stacking); use dart, or set "
+            "backend_options.mujoco.engine_substeps to run it anyway"
         )
