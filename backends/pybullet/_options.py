@@ -45,7 +45,7 @@ def solver_iterations(options: PyBulletOptions, stack: int) -> int:
 
 
 def check_stack(stack: int) -> None:
-    """Refuse (when the backend picks the solver) a column taller than PyBullet can hold standing (:data:`MAX_STACK`)."""
+    """Refuse (when the backend picks the solver) a column taller than PyBullet holds (:data:`MAX_STACK`)."""
     if stack > MAX_STACK:
         raise UnsupportedFeature(
             f"pybullet: the world starts with a column of {stack} bodies; PyBullet holds at most {MAX_STACK}: "
