@@ -17,6 +17,7 @@ import dartpy as dart
 import numpy as np
 
 from .._kit import BackendOptions, KinematicPose, SubstepContacts, SubstepMean
+from .._kit.stacks import stack_height
 from ..base import Backend
 from ..errors import UnsupportedFeature
 from ..types import (
@@ -35,7 +36,7 @@ from ..types import (
 from . import _contacts, _surfaces
 from ._build import BodyHandle, JointHandle, build, place_free
 from ._gate import BounceGate
-from ._options import MAX_CONE_MU, DartOptions
+from ._options import MAX_CONE_MU, MAX_CONE_STACK, DartOptions
 from ._reads import state_readers
 
 _NAME = "dart"
@@ -304,9 +305,13 @@ def _friction_model(world: CompiledWorld, option: str) -> str:
 
     NsgsFrictionSolver fails above :data:`MAX_CONE_MU` (``_options``); a pair with such a mu (or inf) slides
     only under a tangential force 100 times its normal load, where the pyramid's direction hardly matters.
+    Nor does it hold a column taller than :data:`MAX_CONE_STACK` (``_options``): ``auto`` then takes the
+    pyramid (Dantzig's exact LCP), whose only cost is friction's direction on a floor's diagonal.
     """
     if option == "pyramid":
         return option
+    if option == "auto" and stack_height(world) > MAX_CONE_STACK:
+        return "pyramid"
     names = [b.name for b in world.bodies]
     for a, b in _surfaces.touching_pairs(world):
         mu = world.surface(names[a], names[b]).mu

@@ -9,6 +9,7 @@ import mujoco
 import numpy as np
 
 from .._kit import BackendOptions, KinematicPose, SubstepContacts, SubstepMean, group_by_pair, substep_times
+from .._kit.stacks import stack_height
 from ..base import Backend
 from ..errors import EngineFailure
 from ..geometry import quat_conj, quat_rotate
@@ -28,7 +29,7 @@ from ..types import (
 from . import _coulomb
 from ._bounce import Impacts
 from ._model import IMPEDANCE, KINEMATIC_MASS_RATIO, MU_MAX, build
-from ._options import MujocoOptions
+from ._options import MujocoOptions, check_stack, engine_substeps
 
 
 def _no_log_file() -> None:
@@ -72,7 +73,10 @@ class MujocoBackend(Backend):
 
     def _build(self) -> None:
         world = self.world
-        self._nsteps = world.substeps * self.options.engine_substeps
+        self._stack = stack_height(world)
+        if self.options.engine_substeps is None:  # set by hand, the column is the scenario's to judge
+            check_stack(self._stack)
+        self._nsteps = world.substeps * engine_substeps(self.options, world.dt / world.substeps, self._stack)
         self._h = world.dt / self._nsteps
         self._times = substep_times(world.dt, self._nsteps)
         self._layout = build(world, self.options, self._h)
@@ -286,6 +290,7 @@ class MujocoBackend(Backend):
             "engine": f"mujoco {mujoco.__version__}",
             "timestep": self._h,
             "engine_steps_per_step": self._nsteps,
+            "stack_height": self._stack,
             "integrator": "implicitfast",
             "cone": "elliptic",
             "solver": "Newton",

@@ -16,12 +16,13 @@ import numpy as np
 from panda3d.core import Datagram
 
 from .._kit import BackendOptions, KinematicPose, SubstepContacts, SubstepMean, substep_times
+from .._kit.stacks import stacks
 from ..base import Backend
 from ..types import BodyStates, Capability, Contact, JointKind, JointStates, Motion, Quat, Vec3
 from . import _native
 from ._build import JointHandle, axis_arg, build_scene, destroy_scene, panda_quat, set_motor
 from ._contacts import Collider
-from ._options import OdeOptions
+from ._options import OdeOptions, check_stack
 
 _ROTATIONAL = (JointKind.HINGE, JointKind.UNIVERSAL)
 
@@ -58,6 +59,8 @@ class OdeBackend(Backend):
 
     def _build_scene(self) -> None:
         world = self.world
+        self._stacks = stacks(world)
+        check_stack(self._stacks.landing)
         self._scene = build_scene(world, self.options)
         self._collider = Collider(
             self._scene, self.options.collide, self.options.contact_forces, f"ode-contacts-{id(self):x}",
@@ -87,6 +90,7 @@ class OdeBackend(Backend):
             "quickstep_iterations": o.quickstep_iterations,
             "erp": o.erp,
             "cfm": o.cfm,
+            "stack_height": self._stacks.tallest,
             "max_correcting_vel": o.max_correcting_vel,
             "impact_cfm": "min(cfm, 1e-4 * h * (1/m1 + 1/m2)) above 1 cm/s" if o.impact_cfm else "off (world cfm)",
             "space": o.space,

@@ -17,6 +17,7 @@ import numpy as np
 import pybullet as p
 
 from .._kit import BackendOptions, KinematicPose, SubstepContacts, SubstepMean, substep_times
+from .._kit.stacks import stack_height
 from ..base import Backend
 from ..types import (
     RIGID_BODY_CAPABILITIES,
@@ -33,7 +34,7 @@ from ..types import (
 from ._build import PLANE_HALF_SIZE, Layout, build, initial_rate, xyzw
 from ._frames import InertialFrames
 from ._impacts import ImpactErp
-from ._options import PyBulletOptions
+from ._options import PyBulletOptions, check_stack, solver_iterations
 from ._reads import ROW, ContactReader, base_rows
 from ._surfaces import FRICTION_CLAMP, SurfaceFit, fit_surfaces
 
@@ -100,10 +101,14 @@ class PyBulletBackend(Backend):
         # forever; threshold exactly g*h: a limit cycle that rocks the box]. Add 1.5 g*h (1.1 already
         # rests still; 1.5 leaves a margin).
         self._threshold = self._fit.restitution_threshold + _GRAVITY_MARGIN * math.hypot(*world.gravity) * self._h
+        self._stack = stack_height(world)
+        if self.options.solver_iterations is None:  # set by hand, the column is the scenario's to judge
+            check_stack(self._stack)
+        self._iterations = solver_iterations(self.options, self._stack)
         p.setPhysicsEngineParameter(
             fixedTimeStep=self._h,
             numSubSteps=0,
-            numSolverIterations=self.options.solver_iterations,
+            numSolverIterations=self._iterations,
             restitutionVelocityThreshold=self._threshold,
             contactBreakingThreshold=CONTACT_BREAKING_THRESHOLD,
             deterministicOverlappingPairs=int(self.options.deterministic_overlapping_pairs),
@@ -325,7 +330,8 @@ class PyBulletBackend(Backend):
             "fixed_time_step": self._h,
             "substeps": self.world.substeps,
             "num_sub_steps": 0,
-            "solver_iterations": self.options.solver_iterations,
+            "solver_iterations": self._iterations,
+            "stack_height": self._stack,
             "deterministic_overlapping_pairs": self.options.deterministic_overlapping_pairs,
             "restitution_velocity_threshold": self._threshold,
             "bounce_vel": self._fit.restitution_threshold,

@@ -1,0 +1,138 @@
+"""How tall a stack of bodies a world starts with (issue 17: settings a backend picks for a pile).
+
+Iterative and soft contact solvers lose accuracy with the number of contacts a load passes through: the
+bottom contact of a column of H bodies carries H weights, and the column's overturning moment about it
+grows as H^2 (H weights times a lever of H/2 body heights). Backends size their solver from :func:`stack_height`:
+the longest chain of dynamic bodies, each above the previous one along gravity with overlapping
+footprints, so that it will rest on it (docs/backends/*.md, "Stacking"). A column dropped with gaps counts
+as stacked. Nothing here imports an engine.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..types import BodySpec, CompiledWorld, Motion, Shape, ShapeKind
+
+#: Below this many metres of overlap, two footprints only touch (a grid of boxes side by side does not stack).
+_OVERLAP = 1e-9
+
+
+def _rotation(q: tuple[float, float, float, float]) -> np.ndarray:
+    w, x, y, z = q
+    return np.array(
+        [
+            [1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
+            [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
+            [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)],
+        ]
+    )
+
+
+def _extent(shape: Shape, rot: np.ndarray, axes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(low, high) offsets of ``shape`` (turned by ``rot``) along each of the three ``axes`` (rows)."""
+    local = axes @ rot  # each axis in the shape's frame
+    kind = shape.kind
+    if kind is ShapeKind.BOX:
+        half = np.abs(local) @ (0.5 * np.asarray(shape.size, dtype=np.float64))
+        return -half, half
+    if kind is ShapeKind.SPHERE:
+        r = np.full(3, shape.radius)
+        return -r, r
+    if kind in (ShapeKind.CAPSULE, ShapeKind.CYLINDER):
+        along = np.abs(local[:, 2]) * 0.5 * shape.length
+        if kind is ShapeKind.CAPSULE:
+            half = along + shape.radius
+        else:
+            half = along + shape.radius * np.sqrt(np.clip(1.0 - local[:, 2] ** 2, 0.0, 1.0))
+        return -half, half
+    if shape.mesh is not None and shape.mesh.vertices:
+        proj = np.asarray(shape.mesh.vertices, dtype=np.float64) @ local.T
+        return proj.min(axis=0), proj.max(axis=0)
+    return np.zeros(3), np.zeros(3)  # a plane or an empty shape: nothing to stand on
+
+
+def _bounds(body: BodySpec, axes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The body's bounding box along ``axes`` (rows: two horizontal, then up) at its start pose."""
+    rot = _rotation(body.quat)
+    origin = axes @ np.asarray(body.pos, dtype=np.float64)
+    lows, highs = [], []
+    for placed in body.placed_shapes():
+        centre = origin + axes @ (rot @ np.asarray(placed.pos, dtype=np.float64))
+        lo, hi = _extent(placed.shape, rot @ _rotation(placed.quat), axes)
+        lows.append(centre + lo)
+        highs.append(centre + hi)
+    if not lows:
+        return origin, origin
+    return np.min(lows, axis=0), np.max(highs, axis=0)
+
+
+def _axes(gravity: tuple[float, float, float]) -> np.ndarray:
+    """Two horizontal unit vectors and the up vector (-gravity; +z without gravity)."""
+    g = np.asarray(gravity, dtype=np.float64)
+    n = float(np.linalg.norm(g))
+    up = -g / n if n > 0.0 else np.array([0.0, 0.0, 1.0])
+    side = np.array([1.0, 0.0, 0.0]) if abs(up[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
+    e1 = side - up * float(side @ up)
+    e1 /= np.linalg.norm(e1)
+    return np.array([e1, np.cross(up, e1), up])
+
+
+#: A body whose bottom starts more than this above the top of the one under it is dropped onto it (it lands
+#: at sqrt(2 g 1 mm) = 0.14 m/s or faster); closer, it starts resting on it (conformance 12: 1e-5 m deep).
+LANDING_GAP = 1e-3
+
+
+@dataclass(frozen=True)
+class Stacks:
+    """The tallest starting column, and the tallest one in which some body is dropped onto the one below."""
+
+    tallest: int
+    landing: int
+
+
+def stacks(world: CompiledWorld) -> Stacks:
+    """How tall the world's starting columns are (0 without dynamic bodies).
+
+    Body B stands on body A when B's lowest point is above A's centre (along -gravity) and their footprints
+    (bounding boxes across gravity) overlap; a column is a chain of such bodies, and a landing column one
+    in which some body starts more than :data:`LANDING_GAP` above the highest body under it. O(n^2) in the
+    number of dynamic bodies, vectorised (10,000 bodies: well under a second).
+    """
+    axes = _axes(world.gravity)
+    dynamic = [b for b in world.bodies if b.motion is Motion.DYNAMIC]
+    if not dynamic:
+        return Stacks(0, 0)
+    bounds = [_bounds(b, axes) for b in dynamic]
+    lo = np.array([b[0] for b in bounds])
+    hi = np.array([b[1] for b in bounds])
+    centre = 0.5 * (lo[:, 2] + hi[:, 2])
+    order = np.argsort(lo[:, 2], kind="stable")
+    lo, hi, centre = lo[order], hi[order], centre[order]
+    height = np.ones(len(dynamic), dtype=np.int64)
+    landing = np.zeros(len(dynamic), dtype=np.int64)  # 0: no chain ending here has a dropped link
+    for k in range(1, len(dynamic)):
+        below = (
+            (centre[:k] < lo[k, 2])
+            & (np.minimum(hi[:k, 0], hi[k, 0]) - np.maximum(lo[:k, 0], lo[k, 0]) > _OVERLAP)
+            & (np.minimum(hi[:k, 1], hi[k, 1]) - np.maximum(lo[:k, 1], lo[k, 1]) > _OVERLAP)
+        )
+        if not below.any():
+            continue
+        height[k] = 1 + int(height[:k][below].max())
+        if lo[k, 2] - float(hi[:k, 2][below].max()) > LANDING_GAP:  # dropped onto the highest body below
+            landing[k] = height[k]
+        else:
+            best = int(landing[:k][below].max())
+            landing[k] = 1 + best if best else 0
+    return Stacks(int(height.max()), int(landing.max()))
+
+
+def stack_height(world: CompiledWorld) -> int:
+    """The number of dynamic bodies in the tallest column the world starts with (see :func:`stacks`)."""
+    return stacks(world).tallest
+
+
+__all__ = ["LANDING_GAP", "Stacks", "stack_height", "stacks"]
