@@ -76,6 +76,21 @@ def integrate_quat(q: Vector, ang_vel: Vector, dt: float) -> tuple[float, float,
     return quat_normalize(quat_mul(quat_from_axis_angle(ang_vel, w * dt), q))
 
 
+def quat_matrices(q: Vector | np.ndarray) -> np.ndarray:
+    """Rotation matrices of (w, x, y, z) quaternions, normalised first (a zero one is the identity): one
+    (3, 3) matrix for a 4-vector, (N, 3, 3) for an (N, 4) array."""
+    a = np.asarray(q, dtype=np.float64)
+    n = np.linalg.norm(a, axis=-1, keepdims=True)
+    a = a / np.where(n > 0.0, n, 1.0) + np.where(n > 0.0, 0.0, np.array([1.0, 0.0, 0.0, 0.0]))
+    w, x, y, z = np.moveaxis(a, -1, 0)
+    rows = (
+        (1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)),
+        (2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)),
+        (2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)),
+    )
+    return np.stack([np.stack(row, axis=-1) for row in rows], axis=-2)
+
+
 def quats_xyzw_to_wxyz(q: np.ndarray) -> np.ndarray:
     return q[..., [3, 0, 1, 2]]
 

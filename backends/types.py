@@ -54,6 +54,8 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
+from .geometry import quat_matrices
+
 Vec3 = tuple[float, float, float]
 Quat = tuple[float, float, float, float]  # (w, x, y, z)
 Rgba = tuple[float, float, float, float]
@@ -205,14 +207,7 @@ class BodySpec:
 
     def inertia_tensor(self) -> np.ndarray:
         """The full inertia tensor about the COM in the body frame: R diag(inertia) R^T."""
-        w, x, y, z = self.inertia_quat
-        r = np.array(
-            [
-                [1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
-                [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
-                [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)],
-            ]
-        )
+        r = quat_matrices(self.inertia_quat)
         return np.asarray(r @ np.diag(self.inertia) @ r.T, dtype=np.float64)
 
     def placed_shapes(self) -> tuple[PlacedShape, ...]:

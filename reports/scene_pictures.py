@@ -23,6 +23,7 @@ from typing import Any
 import numpy as np
 from PIL import Image
 
+from backends.geometry import quat_matrices
 from reports.runs import Run
 from reports.scene3d.framing import CameraSpec, frame_camera, local_box
 from reports.scene3d.model import SceneModel, scene_model
@@ -92,7 +93,7 @@ def _footprints(renderer: Any, scene: Any, camera: CameraSpec, model: SceneModel
             continue
         low, high = local_box(model, name)
         corners = np.array([[a[0], b[1], c[2]] for a in (low, high) for b in (low, high) for c in (low, high)])
-        world = corners @ _rotation(pose[1]).T + pose[0]
+        world = corners @ quat_matrices(pose[1]).T + pose[0]
         px = renderer.project(scene, camera, [pose[0], *world])
         centre = px[0] if np.isfinite(px[0]).all() else None
         seen = px[1:][np.isfinite(px[1:]).all(axis=1)]
@@ -108,12 +109,6 @@ def _footprints(renderer: Any, scene: Any, camera: CameraSpec, model: SceneModel
 
 def _centres(renderer: Any, scene: Any, camera: CameraSpec, model: SceneModel, t: float) -> list[list[float] | None]:
     return [f["px"] if f is not None else None for f in _footprints(renderer, scene, camera, model, t)]
-
-
-def _rotation(q: np.ndarray) -> np.ndarray:
-    from reports.scene3d.meshes import _matrix
-
-    return _matrix((float(q[0]), float(q[1]), float(q[2]), float(q[3])))
 
 
 def alike(a: np.ndarray, b: np.ndarray) -> bool:
@@ -156,8 +151,10 @@ def case_pictures(case: dict[str, Any], runs: dict[str, Run]) -> CasePictures:
                 same.backends.append(backend)
                 continue
             feet = _footprints(renderer, scene, camera, model, moment["t"])
-            bodies = {n: {**(f or {"px": None, "box": None}), "rgb": _rgb(model, n),
-                          "plane": model.shape.get(n) == "plane"} for n, f in zip(model.bodies, feet, strict=True)}
+            bodies = {
+                n: {**(f or {"px": None, "box": None}), "rgb": _rgb(model, n), "plane": model.shape.get(n) == "plane"}
+                for n, f in zip(model.bodies, feet, strict=True)
+            }
             groups.append((pixels, Picture(moment["t"], moment["label"], [backend], _png(image), bodies)))
         out.pictures.append([p for _, p in groups])
     out.replay = _replay(renderer, camera, models, scenes, case)

@@ -14,21 +14,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..geometry import quat_matrices
 from ..types import BodySpec, CompiledWorld, Motion, Shape, ShapeKind
 
 #: Below this many metres of overlap, two footprints only touch (a grid of boxes side by side does not stack).
 _OVERLAP = 1e-9
-
-
-def _rotation(q: tuple[float, float, float, float]) -> np.ndarray:
-    w, x, y, z = q
-    return np.array(
-        [
-            [1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
-            [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
-            [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)],
-        ]
-    )
 
 
 def _extent(shape: Shape, rot: np.ndarray, axes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -56,12 +46,12 @@ def _extent(shape: Shape, rot: np.ndarray, axes: np.ndarray) -> tuple[np.ndarray
 
 def _bounds(body: BodySpec, axes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """The body's bounding box along ``axes`` (rows: two horizontal, then up) at its start pose."""
-    rot = _rotation(body.quat)
+    rot = quat_matrices(body.quat)
     origin = axes @ np.asarray(body.pos, dtype=np.float64)
     lows, highs = [], []
     for placed in body.placed_shapes():
         centre = origin + axes @ (rot @ np.asarray(placed.pos, dtype=np.float64))
-        lo, hi = _extent(placed.shape, rot @ _rotation(placed.quat), axes)
+        lo, hi = _extent(placed.shape, rot @ quat_matrices(placed.quat), axes)
         lows.append(centre + lo)
         highs.append(centre + hi)
     if not lows:

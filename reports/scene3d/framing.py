@@ -16,6 +16,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from backends.geometry import quat_matrices
 from reports.scene3d.model import SceneModel
 
 __all__ = ["HEADING", "LAB_CAMERA", "PITCH", "CameraSpec", "frame_camera", "moving_bodies", "reach"]
@@ -106,19 +107,6 @@ def moving_bodies(models: Iterable[SceneModel]) -> list[str]:
     return list(out)
 
 
-def _rotations(quat: np.ndarray) -> np.ndarray:
-    q = quat / np.linalg.norm(quat, axis=1, keepdims=True)
-    w, x, y, z = q[:, 0], q[:, 1], q[:, 2], q[:, 3]
-    return np.stack(
-        [
-            np.stack([1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)], axis=1),
-            np.stack([2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)], axis=1),
-            np.stack([2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)], axis=1),
-        ],
-        axis=1,
-    )
-
-
 def _points(models: Sequence[SceneModel], bodies: Sequence[str], samples: int = 200) -> np.ndarray:
     """The corners of every framed body's box at sampled recorded poses, in world coordinates."""
     pts: list[np.ndarray] = []
@@ -135,7 +123,7 @@ def _points(models: Sequence[SceneModel], bodies: Sequence[str], samples: int = 
                 continue
             low, high = local_box(model, name)
             corners = np.array([[a[0], b[1], c[2]] for a in (low, high) for b in (low, high) for c in (low, high)])
-            world = np.einsum("sij,kj->ski", _rotations(quat[ok]), corners) + pos[ok][:, None, :]
+            world = np.einsum("sij,kj->ski", quat_matrices(quat[ok]), corners) + pos[ok][:, None, :]
             pts.append(world.reshape(-1, 3))
     return np.vstack(pts) if pts else np.zeros((0, 3))
 

@@ -13,6 +13,7 @@ from functools import lru_cache
 import numpy as np
 import trimesh
 
+from backends.geometry import quat_matrices
 from reports.scene3d.model import Primitive
 
 __all__ = ["Mesh", "primitive_mesh"]
@@ -63,18 +64,5 @@ def primitive_mesh(prim: Primitive) -> Mesh:
             vertices, normals = scaled[faces].reshape(-1, 3), smooth[faces].reshape(-1, 3)
         else:
             vertices, normals = _flat(scaled, np.asarray(unit.faces))
-    rot = _matrix(prim.quat)
+    rot = quat_matrices(prim.quat)
     return vertices @ rot.T + np.asarray(prim.position, float), normals @ rot.T
-
-
-def _matrix(q: tuple[float, float, float, float]) -> np.ndarray:
-    w, x, y, z = q
-    n = float(np.sqrt(w * w + x * x + y * y + z * z)) or 1.0
-    w, x, y, z = w / n, x / n, y / n, z / n
-    return np.array(
-        [
-            [1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
-            [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
-            [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)],
-        ]
-    )

@@ -30,6 +30,7 @@ from panda3d.core import (
     TransparencyAttrib,
 )
 
+from backends.geometry import quat_matrices
 from reports.scene3d.meshes import primitive_mesh
 from reports.scene3d.model import EntityVisual, Primitive, SceneModel
 
@@ -84,7 +85,7 @@ def _lines(prims: Sequence[Primitive]) -> Geom | None:
     prim = GeomLinestrips(Geom.UHStatic)
     row = 0
     for p, pts in strips:
-        rot = _rotation(p.quat)
+        rot = quat_matrices(p.quat)
         for q in np.asarray(pts, float) @ rot.T + np.asarray(p.position, float):
             vertex.addData3(*q.tolist())
             colour.addData4(*p.rgba)
@@ -94,12 +95,6 @@ def _lines(prims: Sequence[Primitive]) -> Geom | None:
     geom = Geom(data)
     geom.addPrimitive(prim)
     return geom
-
-
-def _rotation(q: tuple[float, float, float, float]) -> np.ndarray:
-    from reports.scene3d.meshes import _matrix
-
-    return _matrix(q)
 
 
 class PandaScene:
