@@ -23,7 +23,7 @@ from .batch import BatchFigures
 from .measure import RAW_LOOPS
 from .memory import MemoryFigures
 from .overhead import PROCESS, BackendFigures
-from .scaling import FULL_STEPS_UP_TO, Limit, SizeFigures, marginal
+from .scaling import FULL_STEPS_UP_TO, MIN_STEPS_BEYOND, Limit, SizeFigures, marginal
 
 TARGET_RATIO = 1.10  # runner with the full trace / the hand-written loop that reads every body each step
 TARGET_MEMORY = 1.10
@@ -302,7 +302,8 @@ def _scaling(figs: Sequence[SizeFigures], limits: Sequence[Limit], seconds: floa
            "*memory*: the child's peak RSS after the run minus its RSS with the engine imported, per body (at "
            "small sizes mostly the run's fixed cost: the marginal table gives the cost of a body); "
            f"*trace*: bytes per body per step (the ground included). Beyond {FULL_STEPS_UP_TO:,} bodies the "
-           f"runs are shorter in proportion (25 steps at 10,000).{took}", "",
+           f"runs are shorter in proportion, but at least {MIN_STEPS_BEYOND} steps (a run's fixed O(bodies) work over "
+           f"25 steps read as a per-step cost).{took}", "",
            "| backend | bodies | steps | engine ms/step | trace ms/step | runner ms/step | runner us/body/step "
            "| trace us/body/step | memory KiB/body | trace bytes/body/step | build (s) |",
            "|---|---|---|---|---|---|---|---|---|---|---|"]  # fmt: skip
