@@ -102,7 +102,7 @@ def main(argv: list[str] | None = None) -> int:
     notes: list[str] = []
     if "overhead" in args.sections and backends:
         log(f"overhead: {sizes['overhead']}")
-        results.overhead = overhead.run(backends, tuple(args.pile), args.duration, args.reps, log)  # type: ignore[arg-type]
+        results.overhead = overhead.run(backends, tuple(args.pile), args.duration, args.reps, log)
     if "scaling" in args.sections:
         log(f"scaling: {sizes['scaling']}")
         section = time.perf_counter()
@@ -112,7 +112,7 @@ def main(argv: list[str] | None = None) -> int:
     if "memory" in args.sections:
         log(f"memory: {sizes['memory']}")
         results.memory = memory.run([b for b in args.memory_backends if b in installed], args.memory_durations,
-                                    tuple(args.memory_pile), log)  # type: ignore[arg-type]  # fmt: skip
+                                    tuple(args.memory_pile), log)  # fmt: skip
     if "batch" in args.sections:
         files = batch.default_files()
         if args.quick:
@@ -122,7 +122,7 @@ def main(argv: list[str] | None = None) -> int:
     if "encoding" in args.sections:
         chosen = [b for b in (args.encoding_backends or installed) if b in installed]
         log(f"encoding: {sizes['encoding']}, {','.join(chosen)}")
-        results.encoding = encoding.run(chosen, tuple(args.pile), args.encoding_duration,  # type: ignore[arg-type]
+        results.encoding = encoding.run(chosen, tuple(args.pile), args.encoding_duration,
                                         args.encoding_reps, log)  # fmt: skip
     if "build" in args.sections:
         log(f"build: {sizes['build']}")
@@ -133,7 +133,7 @@ def main(argv: list[str] | None = None) -> int:
         results.robot = robot.run(installed, log)
     if "seed" in args.sections and is_installed(seed_loop.ENGINE):
         log(f"seed: {sizes['seed']}")
-        results.seed = seed_loop.run(tuple(args.pile), args.seed_duration, args.seed_reps, log)  # type: ignore[arg-type]
+        results.seed = seed_loop.run(tuple(args.pile), args.seed_duration, args.seed_reps, log)
     if "ray" in args.sections and not args.quick:  # CI runs the test itself (make test); --quick skips it
         log(f"ray: {ray_cluster.TEST}")
         results.ray = ray_cluster.run(log)

@@ -5,7 +5,6 @@ from __future__ import annotations
 import gc
 import importlib
 import importlib.util
-import inspect
 import os
 import time
 from dataclasses import dataclass
@@ -21,6 +20,7 @@ from runner.language.load import LoadedScenario, load_scenario
 from runner.sim.assertions import AssertionTracker
 from runner.sim.run import run_loaded
 from runner.sim.session import Session
+from runner.trace.process import BackgroundTraceWriter
 from runner.trace.writer import TraceWriter
 
 from . import instrument as ins
@@ -69,29 +69,20 @@ class RunnerTiming:
         return self.seconds - self.engine_build - self.engine_step - self.engine_reads - self.engine_inputs - self.trace
 
 
-def supports_trace_process() -> bool:
-    """Whether run_loaded can write the trace in a second process (runner/trace/process.py)."""
-    return "trace_process" in inspect.signature(run_loaded).parameters
-
-
 def run_runner(loaded: LoadedScenario, backend: str, out_dir: Path | None, trace_process: bool = False) -> RunnerTiming:
     cls = get_backend(backend)
-    targets = {
+    targets: dict[str, tuple[type, tuple[str, ...]]] = {
         "engine": (cls, ins.ENGINE_STEP + ins.ENGINE_READS + ins.ENGINE_INPUTS + ins.ENGINE_SETUP),
         "trace": (TraceWriter, ins.TRACE_METHODS),
         "assert": (AssertionTracker, ("on_step",)),
         "detect": (Session, ("_detect",)),
     }
-    try:  # the writer in a second process (proposed in the performance report): its calls cost the run
-        from runner.trace.process import BackgroundTraceWriter
-
-        targets["trace-process"] = (BackgroundTraceWriter, ins.TRACE_METHODS)
-    except ImportError:
-        pass
+    # the writer in a second process (--trace-process): its calls cost the run's process
+    targets["trace-process"] = (BackgroundTraceWriter, ins.TRACE_METHODS)
     gc.collect()
     with ins.timed(targets) as split:
         start = time.perf_counter()
-        result = run_loaded(loaded, backend, out_dir, **({"trace_process": True} if trace_process else {}))
+        result = run_loaded(loaded, backend, out_dir, trace_process=trace_process)
         seconds = time.perf_counter() - start
     size = os.path.getsize(result.trace) if result.trace else 0
     return RunnerTiming(

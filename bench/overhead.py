@@ -20,7 +20,7 @@ from runner.sim.run import trace_path
 from . import measure as m
 
 MODES = ("raw", "raw+reads", "runner+trace", "runner")
-PROCESS = "runner+trace-process"  # the trace written by a second process, when the runner can
+PROCESS = "runner+trace-process"  # the trace written by a second process (--trace-process)
 
 
 @dataclass
@@ -66,7 +66,7 @@ def run(
     world, steps = m.world_of(loaded)
     figures = {b: BackendFigures(b, len(world.bodies) - 1, steps) for b in backends}
     settings = {b: m.adapter_settings(b, world) for b in backends}
-    all_modes = MODES + ((PROCESS,) if m.supports_trace_process() else ())
+    all_modes = (*MODES, PROCESS)
     with tempfile.TemporaryDirectory(prefix="bench-overhead-") as tmp:
         out = Path(tmp)
         for rep in range(repetitions):

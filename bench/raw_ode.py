@@ -30,6 +30,19 @@ from backends.types import CompiledWorld, Motion, ShapeKind
 _STATIC, _DYNAMIC = 1, 4  # the adapter's category bits: static geoms collide with dynamic ones only
 
 
+def ode_body(w: Any, b: Any) -> Any:
+    """A dynamic body of the compiled world ``b`` in the OdeWorld ``w``: mass, inertia, pose, velocities."""
+    body = OdeBody(w)
+    mass = OdeMass()
+    mass.setParameters(b.mass, 0.0, 0.0, 0.0, *b.inertia, 0.0, 0.0, 0.0)
+    body.setMass(mass)
+    body.setPosition(*b.pos)
+    body.setQuaternion(Quat(*b.quat))
+    body.setLinearVel(*b.lin_vel)
+    body.setAngularVel(*b.ang_vel)
+    return body
+
+
 class OdeLoop:
     def __init__(self, world: CompiledWorld, s: Mapping[str, Any]) -> None:
         if s["collide"] != "auto":
@@ -56,14 +69,7 @@ class OdeLoop:
             geom.setCollideBits(BitMask32(_DYNAMIC if static else _STATIC | 2 | _DYNAMIC))
             body = None
             if not static:
-                body = OdeBody(w)
-                mass = OdeMass()
-                mass.setParameters(b.mass, 0.0, 0.0, 0.0, *b.inertia, 0.0, 0.0, 0.0)
-                body.setMass(mass)
-                body.setPosition(*b.pos)
-                body.setQuaternion(Quat(*b.quat))
-                body.setLinearVel(*b.lin_vel)
-                body.setAngularVel(*b.ang_vel)
+                body = ode_body(w, b)
                 geom.setBody(body)
             self.bodies.append(body)
             self.geoms.append(geom)

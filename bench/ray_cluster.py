@@ -39,7 +39,8 @@ def run(log: Callable[[str], None] = print) -> RayFigures:
         done = subprocess.run(cmd, cwd=ROOT, env=env, capture_output=True, text=True, timeout=1200, check=False)
         text, ok = done.stdout + done.stderr, done.returncode == 0
     except subprocess.TimeoutExpired as exc:
-        text, ok = f"{exc.stdout or ''}\nnot done within 1200 s", False
+        out = exc.stdout.decode(errors="replace") if isinstance(exc.stdout, bytes) else exc.stdout or ""
+        text, ok = f"{out}\nnot done within 1200 s", False
     wall = time.perf_counter() - start
     up = re.search(r"cluster up in ([0-9.]+) s", text)
     sweep = re.search(r"100 cases on the two-node cluster: ([0-9.]+) s", text)

@@ -336,8 +336,8 @@ def _scaling(figs: Sequence[SizeFigures], limits: Sequence[Limit], seconds: floa
         for (a, b, run_), (_, _, tr), (_, _, eng), kib, both in zip(
             marginal(mine), marginal(mine, "trace_ms"), marginal(mine, "engine_ms"), mem, traced, strict=True
         ):
-            trace = f"{tr * 1e3:.2f}" if both else "no trace¹"
-            out.append(f"| {backend} | {a:,} -> {b:,} | {run_ * 1e3:.2f} | {trace} | {eng * 1e3:.2f} "
+            trace_cell = f"{tr * 1e3:.2f}" if both else "no trace¹"
+            out.append(f"| {backend} | {a:,} -> {b:,} | {run_ * 1e3:.2f} | {trace_cell} | {eng * 1e3:.2f} "
                        f"| {kib:.1f} |")  # fmt: skip
     return [*out, ""]
 

@@ -114,7 +114,7 @@ def _child(argv: Sequence[str]) -> int:
         init(self, world)  # type: ignore[arg-type]
         spent["build"] += time.perf_counter() - start
 
-    cls._step, cls.__init__ = timed_step, timed_init  # type: ignore[method-assign, assignment]
+    cls._step, cls.__init__ = timed_step, timed_init  # type: ignore[method-assign]
     try:
         start = time.perf_counter()
         result = run_loaded(loaded, backend, None)

@@ -42,10 +42,11 @@ class SeedLoop:
     """The seed's loop (see the module docstring) on a compiled pile."""
 
     def __init__(self, world: Any, settings: dict[str, Any]) -> None:
-        from panda3d.core import Quat
-        from panda3d.ode import OdeBody, OdeBoxGeom, OdeJointGroup, OdeMass, OdePlaneGeom, OdeSimpleSpace, OdeWorld
+        from panda3d.ode import OdeBoxGeom, OdeJointGroup, OdePlaneGeom, OdeSimpleSpace, OdeWorld
 
         from backends.types import Motion, ShapeKind
+
+        from .raw_ode import ode_body
 
         self.h = world.dt
         self.collide_seconds = 0.0  # space.collide with the Python near-callback
@@ -68,12 +69,7 @@ class SeedLoop:
             else:
                 geom = OdeBoxGeom(self.space, *b.shape.size)
             if b.motion is not Motion.STATIC:
-                body = OdeBody(w)
-                mass = OdeMass()
-                mass.setParameters(b.mass, 0.0, 0.0, 0.0, *b.inertia, 0.0, 0.0, 0.0)
-                body.setMass(mass)
-                body.setPosition(*b.pos)
-                body.setQuaternion(Quat(*b.quat))
+                body = ode_body(w, b)
                 geom.setBody(body)
                 self.bodies.append(body)
             self.geoms.append(geom)
