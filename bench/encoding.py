@@ -180,12 +180,13 @@ def proto_tf_bodies(steps: Steps, path: Path, threads: int = COMPRESSION_THREADS
                                                                          data=c.schema_data),
                                         message_encoding="protobuf", context=context)
               for c in enc.channels()}  # fmt: skip
-        tf_log, bodies_log = ch["/tf"].log, ch["/bodies"].log
+        tf_log, bodies_logs = ch["/tf"].log, [ch[topic].log for topic in enc.body_topics]
         for t, rows in zip(steps.times.tolist(), steps.rows, strict=True):
             ns = round(t * 1e9)
             transforms, bodies = enc.transforms_and_bodies(ns, rows)
             tf_log(transforms, log_time=ns)
-            bodies_log(bodies, log_time=ns)
+            for log, data in zip(bodies_logs, bodies, strict=True):
+                log(data, log_time=ns)
         w.close()
 
 
@@ -203,7 +204,8 @@ def proto_tf_bodies_python_mcap(steps: Steps, path: Path) -> None:
         ns = round(t * 1e9)
         transforms, bodies = enc.transforms_and_bodies(ns, rows)
         w.add_message(ch["/tf"], ns, transforms, ns)
-        w.add_message(ch["/bodies"], ns, bodies, ns)
+        for topic, data in zip(enc.body_topics, bodies, strict=True):
+            w.add_message(ch[topic], ns, data, ns)
     w.finish()
     f.close()
 

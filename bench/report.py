@@ -317,10 +317,7 @@ def _scaling(figs: Sequence[SizeFigures], limits: Sequence[Limit], seconds: floa
     for lim in limits:
         out.append(f"| {lim.backend} | {lim.bodies:,} | | {lim.reason} | | | | | | | |")
     if untraced:
-        out += ["", f"¹ run without a trace: the trace writer refused the world ({'; '.join(untraced)}). Its "
-                    "per-trace protobuf messages have one field per body, and protobuf (upb) refuses a message "
-                    "description over 65,535 bytes: measured, at most 8,064 bodies can be traced "
-                    "(runner/trace/proto/scenario.py)."]  # fmt: skip
+        out += ["", f"¹ run without a trace: the trace writer refused the world ({'; '.join(untraced)})."]
     out += [
         "",
         "Marginal cost per added body per step (us), and memory per added body (KiB): linear growth keeps them "

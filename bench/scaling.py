@@ -34,8 +34,8 @@ from . import measure as m
 SHAPES: dict[int, tuple[int, int, int]] = {10: (5, 2, 1), 100: (5, 5, 4), 1000: (20, 10, 5), 10000: (101, 99, 1)}
 CPU_LIMIT_S = 120  # CPU seconds of one run (child process), build included: the engine's limit, whatever the load
 WALL_LIMIT_S = 900.0  # and a wall-clock backstop
-#: the trace writer's refusal of a world too large for its per-trace protobuf messages (one field per body:
-#: protobuf's upb refuses a message description over 65,535 bytes, about 8,000 bodies)
+#: the trace writer's refusal of a world it cannot describe in protobuf (no size does since /bodies is split
+#: every 8,000 bodies, docs/trace-format.md; kept so that such a refusal is reported, not a failed run)
 TRACE_REFUSED = "cannot build the trace's messages"
 FULL_STEPS_UP_TO = 1000  # bodies; beyond, the simulated time shrinks in proportion
 #: ... but never below this many steps: a run's fixed work (loading, compiling the assertions, the first

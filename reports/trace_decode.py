@@ -61,6 +61,8 @@ class MessageDecoder:
         self.bodies = bodies
         self.joints = joints
         self._index = {name: i for i, name in enumerate(bodies)}
+        #: topic -> (first index, names) of each part of /bodies and /joints (one part up to 8,000 names)
+        self._parts = {**tf.parts_by_topic(tf.TOPIC_BODIES, bodies), **tf.parts_by_topic(tf.TOPIC_JOINTS, joints)}
         self._factory = DecoderFactory()
         self._decoders: dict[int, Callable[[bytes], Any]] = {}
         self.out = Decoded()
@@ -78,8 +80,15 @@ class MessageDecoder:
             raise UnreadableMessage(f"a {schema.name} message does not decode: {exc}") from exc
 
     def add(self, topic: str, schema: Schema | None, message_encoding: str, t: float, data: bytes) -> None:
+        if schema is None:
+            return
+        part = self._parts.get(topic)
+        if part is not None:  # /bodies, /joints and their further parts
+            is_bodies = topic.startswith(tf.TOPIC_BODIES)
+            self._part(t, self._decode(schema, message_encoding, data), part, is_bodies)
+            return
         handler = self._handlers.get(topic)
-        if handler is None or schema is None:
+        if handler is None:
             return  # /scene and /audio are for viewers; unknown topics are someone else's
         handler(self, t, self._decode(schema, message_encoding, data))
 
@@ -96,25 +105,27 @@ class MessageDecoder:
         self.out.tf_times.append(t)
         self.out.poses.append(row)
 
-    def _bodies(self, t: float, msg: Any) -> None:
-        row: list[float] = []
-        for name in self.bodies:
-            b = _member(msg, name)
-            if b is None:
-                row += [math.nan] * 6
-                continue
-            v, w = b.vel, b.angvel
-            row += (v.x, v.y, v.z, w.x, w.y, w.z)
-        self.out.motion_times.append(t)
-        self.out.motions.append(row)
-
-    def _joints(self, t: float, msg: Any) -> None:
-        row: list[float] = []
-        for name in self.joints:
-            j = _member(msg, name)
-            row += (math.nan,) * 3 if j is None else (j.position, j.velocity, j.motor_force)
-        self.out.joint_times.append(t)
-        self.out.joint_rows.append(row)
+    def _part(self, t: float, msg: Any, part: tuple[int, list[str]], is_bodies: bool) -> None:
+        """One /bodies or /joints message: its names' values go into the step's row (a new row at a new
+        time; the parts of one step share theirs)."""
+        out = self.out
+        times, rows = (out.motion_times, out.motions) if is_bodies else (out.joint_times, out.joint_rows)
+        width = 6 if is_bodies else 3
+        if not times or times[-1] != t:
+            times.append(t)
+            rows.append([math.nan] * (width * len(self.bodies if is_bodies else self.joints)))
+        row, (first, names) = rows[-1], part
+        values: list[float] = []
+        for name in names:
+            m = _member(msg, name)
+            if m is None:
+                values += [math.nan] * width
+            elif is_bodies:
+                v, w = m.vel, m.angvel
+                values += (v.x, v.y, v.z, w.x, w.y, w.z)
+            else:
+                values += (m.position, m.velocity, m.motor_force)
+        row[width * first : width * (first + len(names))] = values
 
     def _state(self, t: float, msg: Any) -> None:
         out = self.out
@@ -165,8 +176,6 @@ class MessageDecoder:
 
     _handlers: dict[str, Callable[[MessageDecoder, float, Any], None]] = {
         tf.TOPIC_TF: _tf,
-        tf.TOPIC_BODIES: _bodies,
-        tf.TOPIC_JOINTS: _joints,
         tf.TOPIC_STATE: _state,
         tf.TOPIC_CONTACTS: _contacts,
         tf.TOPIC_EVENTS: _event,

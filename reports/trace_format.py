@@ -1,7 +1,7 @@
 """The MCAP trace format: the one place where the writer (runner/trace/) and the readers agree.
 
-Constants only; the format is described for users in docs/trace-format.md. A trace is one MCAP file per
-run and variant:
+Constants, and the one rule both sides compute (:func:`message_parts`); the format is described for users
+in docs/trace-format.md. A trace is one MCAP file per run and variant:
 
 * log time and publish time of every message = simulated time in integer nanoseconds
   (``round(t * 1e9)``); nothing in the file comes from the wall clock;
@@ -22,6 +22,7 @@ version and refuse it (:data:`TRACE_FORMAT_VERSION`, metadata key :data:`KEY_TRA
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from typing import Final
 
 #: bump when the layout of a channel or a metadata record changes meaning
@@ -67,6 +68,42 @@ TOPIC_EVENTS: Final = "/events"  # physics_scenarios.Event: time, name, source, 
 TOPIC_SOUNDS: Final = "/sounds"  # physics_scenarios.Sound: time, name, action, offset, volume
 TOPIC_AUDIO: Final = "/audio"  # foxglove.RawAudio: each sound's samples from where it starts playing
 TOPIC_VERDICTS: Final = "/verdicts"  # physics_scenarios.Verdicts: every verdict, at the end
+
+#: top-level fields per /bodies or /joints message. protobuf (upb) lays a message out in at most 65,535 bytes,
+#: 8 per message-typed field, and refuses a larger one (measured: 8,064 bodies fit, 8,065 do not); a larger
+#: world's bodies continue on /bodies/2, /bodies/3, ... (:func:`message_parts`, :func:`part_topic`)
+FIELDS_PER_MESSAGE: Final = 8000
+
+
+def message_parts(names: Sequence[str]) -> list[list[str]]:
+    """``names`` (bodies or joints, CompiledWorld order) split over the messages of /bodies or /joints: in
+    order, at most :data:`FIELDS_PER_MESSAGE` top-level fields each, where a robot's members (``arm.link_7``)
+    are one field, their robot's. One part (possibly empty) for up to that many fields."""
+    parts: list[list[str]] = [[]]
+    fields: set[str] = set()  # the current part's top-level fields
+    for name in names:
+        group = name.partition(".")[0]
+        if group not in fields:
+            if len(fields) == FIELDS_PER_MESSAGE:
+                parts.append([])
+                fields = set()
+            fields.add(group)
+        parts[-1].append(name)
+    return parts
+
+
+def part_topic(topic: str, part: int) -> str:
+    """The topic of part ``part`` (from 0) of /bodies or /joints: the topic itself, then ``<topic>/2``, ..."""
+    return topic if part == 0 else f"{topic}/{part + 1}"
+
+
+def parts_by_topic(topic: str, names: Sequence[str]) -> dict[str, tuple[int, list[str]]]:
+    """/bodies (or /joints) and its further parts -> (index of the part's first name, the part's names)."""
+    out, first = {}, 0
+    for k, part in enumerate(message_parts(names)):
+        out[part_topic(topic, k)] = (first, part)
+        first += len(part)
+    return out
 
 # ---- schema names -------------------------------------------------------------------------------
 SCHEMA_FRAME_TRANSFORMS: Final = "foxglove.FrameTransforms"

@@ -77,6 +77,6 @@ def check_stack(landing: int) -> None:
             f"ode: the world starts with a column of {landing} bodies dropped onto each other; ODE (single "
             f"precision) settles at most {MAX_LANDING_STACK}: its soft contacts (CFM 1e-5) let a taller landed "
             "column bend and creep, and a stiffer CFM makes its LCP fail and kick the column (measured at 25 "
-            "and 30 boxes, docs/backends/ode.md, Stacking); use pybullet (up to 30), dart, or start the "
-            "column resting"
+            "and 30 boxes, docs/backends/ode.md, Stacking); use mujoco (up to 50), pybullet (up to 30), dart, "
+            "or start the column resting"
         )

@@ -16,7 +16,7 @@ from rich.console import Console
 from rich.markup import escape
 
 from backends.types import Motion, Shape, ShapeKind
-from reports.trace_format import LAYOUT_FILE, TOPIC_TF
+from reports.trace_format import LAYOUT_FILE, TOPIC_BODIES, TOPIC_JOINTS, TOPIC_TF, parts_by_topic
 from runner.compile.program import Program, build_program
 from runner.errors import TraceError
 from runner.exec.exits import classify, most_severe
@@ -32,24 +32,29 @@ _EXPRESSION_FIELDS = ("value", "check", "always", "never", "eventually", "max_of
 _GROUP_MEMBERS = 3  # an array's name plots its first copies
 
 
+def _topics(topic: str, names: Sequence[str]) -> dict[str, str]:
+    """name -> the part of /bodies or /joints that holds it (/bodies/2 ... beyond 8,000)."""
+    return {name: t for t, (_, part) in parts_by_topic(topic, names).items() for name in part}
+
+
 def _quantity(name: str, program: Program) -> list[lt.PlotPath]:
     """The plot paths of one dotted name (nothing for time, parameters and unknown names)."""
-    bodies = {b.name for b in program.world.bodies}
-    joints = {j.name for j in program.world.joints}
+    bodies = _topics(TOPIC_BODIES, [b.name for b in program.world.bodies])
+    joints = _topics(TOPIC_JOINTS, [j.name for j in program.world.joints])
     head, _, rest = name.partition(".")
     if head == "state" and rest:
         return [lt.PlotPath(lt.state_path(rest), name)]
     if head in joints and rest in ("position", "velocity", "force"):
-        return [lt.PlotPath(lt.joint_path(head, rest), name)]
+        return [lt.PlotPath(lt.joint_path(head, rest, joints[head]), name)]
     members = [head] if head in bodies else program.groups.get(head, [])[:_GROUP_MEMBERS]
     field, _, component = rest.partition(".")
     out = []
     for body in members:
         if field == "speed":
-            out += [lt.PlotPath(lt.body_path(body, "vel", c), f"{body}.vel.{c}") for c in "xyz"]
+            out += [lt.PlotPath(lt.body_path(body, "vel", c, bodies[body]), f"{body}.vel.{c}") for c in "xyz"]
         elif field in ("pos", "vel", "angvel", "quat"):
             comps = [component] if component else ("wxyz" if field == "quat" else "xyz")
-            out += [lt.PlotPath(lt.body_path(body, field, c), f"{body}.{field}.{c}") for c in comps]
+            out += [lt.PlotPath(lt.body_path(body, field, c, bodies[body]), f"{body}.{field}.{c}") for c in comps]
     return out
 
 

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import json
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from itertools import chain
 from typing import Any
@@ -24,6 +24,12 @@ from runner.trace.proto.scenario import field_of, scenario_messages, with_state
 from runner.trace.slots import PairTemplates, SlotTemplate, quantize
 
 __all__ = ["Channel", "TraceEncoder", "dumps", "plain", "verdict_text"]
+
+
+def _slices(parts: Sequence[Sequence[str]]) -> list[tuple[int, int]]:
+    """Each part's rows: parts split the names in order."""
+    ends = np.cumsum([0, *(len(p) for p in parts)]).tolist()
+    return list(zip(ends[:-1], ends[1:], strict=True))
 
 
 @dataclass(frozen=True)
@@ -76,12 +82,20 @@ class TraceEncoder:
         self.bodies = list(bodies)
         self.joints = list(joints)
         self.messages = scenario_messages(self.bodies, self.joints)
-        width = len(tf.BODY_ROW)
+        width, jwidth = len(tf.BODY_ROW), len(tf.JOINT_FIELDS)
         self._rows = np.empty((len(self.bodies), width))
         self._tf = fx.transforms_template(self.bodies)
-        self._bodies = SlotTemplate(self._fill_bodies, width * len(self.bodies))
-        self._joints = SlotTemplate(self._fill_joints, len(tf.JOINT_FIELDS) * len(self.joints))
-        self._jrows = np.empty((len(self.joints), len(tf.JOINT_FIELDS)))
+        body_parts, joint_parts = tf.message_parts(self.bodies), tf.message_parts(self.joints)
+        #: /bodies, then /bodies/2 ... for a world of more than 8,000 bodies; likewise /joints
+        self.body_topics = [tf.part_topic(tf.TOPIC_BODIES, k) for k in range(len(body_parts))]
+        self.joint_topics = [tf.part_topic(tf.TOPIC_JOINTS, k) for k in range(len(joint_parts))] if self.joints else []
+        self._body_slices = _slices(body_parts)
+        self._joint_slices = _slices(joint_parts)
+        self._bodies = [SlotTemplate(self._filler(cls, part, self._fill_bodies), width * len(part))
+                        for cls, part in zip(self.messages.bodies, body_parts, strict=True)]  # fmt: skip
+        self._joints = [SlotTemplate(self._filler(cls, part, self._fill_joints), jwidth * len(part))
+                        for cls, part in zip(self.messages.joints, joint_parts, strict=True)]  # fmt: skip
+        self._jrows = np.empty((len(self.joints), jwidth))
         self._pairs = PairTemplates(len(self.bodies), self._contacts_head, self._contact_pair)
 
     # ---- schemas ----------------------------------------------------------------------------------
@@ -92,8 +106,8 @@ class TraceEncoder:
             (tf.TOPIC_TF, fx.FrameTransforms),
             (tf.TOPIC_SCENE, fx.SceneUpdate),
             (tf.TOPIC_LOG, fx.Log),
-            (tf.TOPIC_BODIES, m.bodies),
-            (tf.TOPIC_JOINTS, m.joints if self.joints else None),
+            *zip(self.body_topics, m.bodies, strict=True),
+            *zip(self.joint_topics, m.joints, strict=False),  # none when there are no joints
             (tf.TOPIC_CONTACTS, pb.Contacts),
             (tf.TOPIC_EVENTS, pb.Event),
             (tf.TOPIC_SOUNDS, pb.Sound),
@@ -109,18 +123,22 @@ class TraceEncoder:
         return Channel(tf.TOPIC_STATE, cls.DESCRIPTOR.full_name, pb.schema_data(cls))
 
     # ---- per step ---------------------------------------------------------------------------------
-    def _fill_bodies(self, values: np.ndarray) -> Any:
-        msg = self.messages.bodies()
+    @staticmethod
+    def _filler(cls: Any, names: Sequence[str], fill: Callable[[Any, Sequence[str], np.ndarray], Any]) -> Any:
+        return lambda values: fill(cls(), names, values)
+
+    @staticmethod
+    def _fill_bodies(msg: Any, names: Sequence[str], values: np.ndarray) -> Any:
         vx = tf.BODY_ROW.index("vel.x")
-        for name, row in zip(self.bodies, values.reshape(-1, len(tf.BODY_ROW)).tolist(), strict=True):
+        for name, row in zip(names, values.reshape(-1, len(tf.BODY_ROW)).tolist(), strict=True):
             b = field_of(msg, name)
             b.vel.x, b.vel.y, b.vel.z = row[vx : vx + 3]
             b.angvel.x, b.angvel.y, b.angvel.z = row[vx + 3 : vx + 6]
         return msg
 
-    def _fill_joints(self, values: np.ndarray) -> Any:
-        msg = self.messages.joints()
-        for name, row in zip(self.joints, values.reshape(-1, len(tf.JOINT_FIELDS)).tolist(), strict=True):
+    @staticmethod
+    def _fill_joints(msg: Any, names: Sequence[str], values: np.ndarray) -> Any:
+        for name, row in zip(names, values.reshape(-1, len(tf.JOINT_FIELDS)).tolist(), strict=True):
             j = field_of(msg, name)
             j.position, j.velocity, j.motor_force = row
         return msg
@@ -133,18 +151,22 @@ class TraceEncoder:
         pair = pb.ContactPair(a=self.bodies[a], b=self.bodies[b], points=points, depth=depth, normal_force=force)
         return pb.Contacts(pairs=[pair])
 
-    def transforms_and_bodies(self, ns: int, rows: np.ndarray) -> tuple[bytes, bytes]:
-        """/tf and /bodies for the step's (N, 13) body rows (``BodyStates.rows()``)."""
+    def transforms_and_bodies(self, ns: int, rows: np.ndarray) -> tuple[bytes, list[bytes]]:
+        """/tf and the /bodies messages (one per :attr:`body_topics`) for the step's (N, 13) body rows
+        (``BodyStates.rows()``)."""
         q = self._rows
         np.multiply(rows, 1e9, out=q)  # quantize() in place: one buffer per trace
         np.rint(q, out=q)
         np.divide(q, 1e9, out=q)
-        return self._tf.render(q, ns), self._bodies.render(q)
+        parts = zip(self._bodies, self._body_slices, strict=True)
+        return self._tf.render(q, ns), [t.render(q[a:b]) for t, (a, b) in parts]
 
-    def joints_message(self, position: np.ndarray, velocity: np.ndarray, motor_force: np.ndarray) -> bytes:
+    def joints_messages(self, position: np.ndarray, velocity: np.ndarray, motor_force: np.ndarray) -> list[bytes]:
+        """The /joints messages, one per :attr:`joint_topics`."""
         j = self._jrows
         j[:, 0], j[:, 1], j[:, 2] = position, velocity, motor_force
-        return self._joints.render(quantize(j))
+        q = quantize(j)
+        return [t.render(q[a:b]) for t, (a, b) in zip(self._joints, self._joint_slices, strict=True)]
 
     def contacts_message(self, contacts: Sequence[tuple[int, int, int, float, float]]) -> bytes:
         """/contacts from the backends' ``Contact`` rows (a, b, points, depth, normal_force)."""

@@ -48,16 +48,17 @@ class LayoutSpec:
     spheres: Sequence[tuple[Sequence[float], float]] = ()  # each body at its start: (centre, bounding radius)
 
 
-def body_path(body: str, field: str, component: str) -> str:
-    """The message path of ``<body>.<field>.<component>``: pose from /tf, velocities from /bodies."""
+def body_path(body: str, field: str, component: str, topic: str = tf.TOPIC_BODIES) -> str:
+    """The message path of ``<body>.<field>.<component>``: pose from /tf, velocities from /bodies (or the
+    part of it, ``topic``, that holds the body in a world of more than 8,000)."""
     if field in ("pos", "quat"):
         part = "translation" if field == "pos" else "rotation"
         return f'{tf.TOPIC_TF}.transforms[:]{{child_frame_id=="{body}"}}.{part}.{component}'
-    return f"{tf.TOPIC_BODIES}.{body}.{field}.{component}"
+    return f"{topic}.{body}.{field}.{component}"
 
 
-def joint_path(joint: str, field: str) -> str:
-    return f"{tf.TOPIC_JOINTS}.{joint}.{'motor_force' if field == 'force' else field}"
+def joint_path(joint: str, field: str, topic: str = tf.TOPIC_JOINTS) -> str:
+    return f"{topic}.{joint}.{'motor_force' if field == 'force' else field}"
 
 
 def state_path(variable: str) -> str:

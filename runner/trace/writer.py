@@ -321,9 +321,12 @@ class TraceWriter:
         enc = self._encoder
         transforms, bodies = enc.transforms_and_bodies(ns, states.rows())
         self._write(tf.TOPIC_TF, ns, transforms)
-        self._write(tf.TOPIC_BODIES, ns, bodies)
+        for topic, data in zip(enc.body_topics, bodies, strict=True):
+            self._write(topic, ns, data)
         if self._joint_names:
-            self._write(tf.TOPIC_JOINTS, ns, enc.joints_message(joints.position, joints.velocity, joints.motor_force))
+            messages = enc.joints_messages(joints.position, joints.velocity, joints.motor_force)
+            for topic, data in zip(enc.joint_topics, messages, strict=True):
+                self._write(topic, ns, data)
         self._write(tf.TOPIC_CONTACTS, ns, enc.contacts_message(contacts))
         if state_vars:
             if tf.TOPIC_STATE not in self._channels:

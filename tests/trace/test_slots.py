@@ -59,13 +59,14 @@ def test_bodies_joints_and_contacts_decode_to_what_google_protobuf_builds() -> N
     rng = np.random.default_rng(11)
     rows = rng.normal(size=(len(NAMES), W))
     _, bodies = enc.transforms_and_bodies(7, rows)
-    msg = enc.messages.bodies.FromString(bodies)
+    assert enc.body_topics == ["/bodies"] and len(bodies) == 1
+    msg = enc.messages.bodies[0].FromString(bodies[0])
     q = np.rint(rows * 1e9) / 1e9
     for i, name in enumerate(NAMES):
         b = getattr(msg, name)
         assert [b.vel.x, b.vel.y, b.vel.z, b.angvel.x, b.angvel.y, b.angvel.z] == q[i, 7:].tolist()
-    joints = enc.messages.joints.FromString(enc.joints_message(np.array([1.5, 0]), np.array([2, 0.0]),
-                                                               np.array([math.nan, 3e9])))  # fmt: skip
+    (data,) = enc.joints_messages(np.array([1.5, 0]), np.array([2, 0.0]), np.array([math.nan, 3e9]))
+    joints = enc.messages.joints[0].FromString(data)
     assert (joints.slider.position, joints.slider.velocity) == (1.5, 2.0) and math.isnan(joints.slider.motor_force)
     assert joints.hinge_2.motor_force == 3e9
     contacts = [(0, 2, 4, 0.001, 12.5), (3, 1, 1, 0.0, math.nan), (0, 2, 2, 1e-10, 0.0)]
@@ -97,12 +98,12 @@ def test_a_template_that_does_not_reproduce_protobuf_is_refused() -> None:
     messages = scenario_messages(["box"], [])
 
     def constant(values: np.ndarray) -> object:
-        msg = messages.bodies()
+        msg = messages.bodies[0]()
         msg.box.vel.x = 1.25  # not from values
         return msg
 
     def unstable(values: np.ndarray) -> object:
-        msg = messages.bodies()
+        msg = messages.bodies[0]()
         msg.box.vel.x = float(values[0])
         msg.box.vel.y = 1.0 if values[0] < 1.5 else 2.0  # depends on a value, not a slot
         return msg

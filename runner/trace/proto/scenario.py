@@ -9,6 +9,8 @@ are those of the initial values). Names are the language's identifiers (``[A-Za-
 valid protobuf field names as they are; ``json_name`` is set to the name itself so no consumer camel-cases
 it. A robot's links and joints (``arm.link_7``, docs/robots.md) are fields of a nested message per robot,
 so the paths read ``/bodies.arm.link_7.vel.z`` as the expressions do; traces without robots are unchanged.
+A world of more than 8,000 bodies (or joints) has a message per 8,000, on /bodies/2, ... (protobuf's limit on
+one message, :data:`reports.trace_format.FIELDS_PER_MESSAGE`).
 """
 
 from __future__ import annotations
@@ -19,9 +21,11 @@ from typing import Any
 
 from google.protobuf import descriptor_pb2, descriptor_pool, message_factory
 
+from reports import trace_format as tf
 from runner.trace.proto import physics_scenarios_pb2 as base
 
-__all__ = ["PACKAGE", "ScenarioMessages", "field_of", "scenario_messages", "state_field_type", "with_state"]
+__all__ = ["PACKAGE", "ScenarioMessages", "field_of", "part_name", "scenario_messages", "state_field_type",
+           "with_state"]
 
 PACKAGE = "physics_scenarios"
 FILE_NAME = "physics_scenarios_scenario.proto"
@@ -40,10 +44,11 @@ def state_field_type(value: Any) -> str:
 
 @dataclass(frozen=True)
 class ScenarioMessages:
-    """The message classes of one trace: ``bodies`` and ``joints``; ``state`` once its types are known."""
+    """The message classes of one trace: ``bodies`` and ``joints``, one class per part of their names
+    (:func:`reports.trace_format.message_parts`: one part up to 8,000); ``state`` once its types are known."""
 
-    bodies: Any
-    joints: Any
+    bodies: tuple[Any, ...]
+    joints: tuple[Any, ...]
     state: Any = None
     state_types: Mapping[str, str] = field(default_factory=dict)  # variable -> "bool" | "double" | "string"
 
@@ -88,28 +93,44 @@ def field_of(msg: Any, name: str) -> Any:
     return getattr(getattr(msg, group), leaf) if dot else getattr(msg, name)
 
 
-def _classes(file: descriptor_pb2.FileDescriptorProto, names: Sequence[str], with_base: bool) -> list[Any]:
+def _classes(files: Sequence[descriptor_pb2.FileDescriptorProto], names: Sequence[str], with_base: bool) -> list[Any]:
     pool = descriptor_pool.DescriptorPool()
     try:
         if with_base:
             pool.AddSerializedFile(base.DESCRIPTOR.serialized_pb)
-        pool.Add(file)
+        for file in files:
+            pool.Add(file)
         return [message_factory.GetMessageClass(pool.FindMessageTypeByName(f"{PACKAGE}.{n}")) for n in names]
     except TypeError as exc:  # protobuf's error for a descriptor it refuses (duplicate or bad names)
         raise ValueError(f"cannot build the trace's messages for these names: {exc}") from exc
 
 
+def part_name(message: str, part: int) -> str:
+    """``Bodies``, ``Bodies_2``, ...: the message of part ``part`` (from 0) of /bodies or /joints."""
+    return message if part == 0 else f"{message}_{part + 1}"
+
+
 def scenario_messages(bodies: Sequence[str], joints: Sequence[str]) -> ScenarioMessages:
-    """``physics_scenarios.Bodies`` and ``Joints`` for a scenario's bodies and joints (CompiledWorld order).
-    Raises ``ValueError`` for names protobuf refuses."""
-    file = descriptor_pb2.FileDescriptorProto(
-        name=FILE_NAME, package=PACKAGE, syntax="proto3", dependency=[base.DESCRIPTOR.name]
-    )
+    """``physics_scenarios.Bodies`` and ``Joints`` for a scenario's bodies and joints (CompiledWorld order),
+    one message per part of the names (``Bodies_2`` ... beyond 8,000, each part in a file of its own, so that
+    a channel's schema holds its part only). Raises ``ValueError`` for names protobuf refuses."""
+    body_parts, joint_parts = tf.message_parts(bodies), tf.message_parts(joints)
     motion = f".{base.BodyMotion.DESCRIPTOR.full_name}"
     joint = f".{base.JointState.DESCRIPTOR.full_name}"
-    _grouped(file, "Bodies", bodies, motion)
-    _grouped(file, "Joints", joints, joint)
-    return ScenarioMessages(*_classes(file, ("Bodies", "Joints"), with_base=True))
+    files: list[descriptor_pb2.FileDescriptorProto] = []
+    names: dict[str, list[str]] = {"Bodies": [], "Joints": []}
+    for k in range(max(len(body_parts), len(joint_parts))):
+        file = descriptor_pb2.FileDescriptorProto(
+            name=FILE_NAME if k == 0 else FILE_NAME.replace(".proto", f"_{k + 1}.proto"),
+            package=PACKAGE, syntax="proto3", dependency=[base.DESCRIPTOR.name],
+        )  # fmt: skip
+        for message, parts, type_name in (("Bodies", body_parts, motion), ("Joints", joint_parts, joint)):
+            if k < len(parts):
+                names[message].append(part_name(message, k))
+                _grouped(file, names[message][-1], parts[k], type_name)
+        files.append(file)
+    classes = _classes(files, names["Bodies"] + names["Joints"], with_base=True)
+    return ScenarioMessages(tuple(classes[: len(body_parts)]), tuple(classes[len(body_parts) :]))
 
 
 def with_state(messages: ScenarioMessages, state: Mapping[str, Any]) -> ScenarioMessages:
@@ -119,5 +140,5 @@ def with_state(messages: ScenarioMessages, state: Mapping[str, Any]) -> Scenario
     kinds = {"bool": _F.TYPE_BOOL, "double": _F.TYPE_DOUBLE, "string": _F.TYPE_STRING}
     file = descriptor_pb2.FileDescriptorProto(name=STATE_FILE_NAME, package=PACKAGE, syntax="proto3")
     _message(file, "State", [(name, kinds[kind], None) for name, kind in types.items()])
-    (state_class,) = _classes(file, ("State",), with_base=False)
+    (state_class,) = _classes([file], ("State",), with_base=False)
     return replace(messages, state=state_class, state_types=types)
