@@ -7,6 +7,7 @@ running the same cases through :class:`runner.exec.executors.LocalExecutor`, whi
 
 from __future__ import annotations
 
+import json
 import shutil
 import statistics
 import subprocess
@@ -44,6 +45,9 @@ class BatchFigures:
     ceiling: dict[int, list[float]] = field(default_factory=dict)
     #: wall seconds of `scenario validate FILES` (start-up and loading every variant: what -j cannot divide)
     serial: list[float] = field(default_factory=list)
+    #: jobs -> per repetition, the cases' own wall seconds (their cost.json files): summed, and the longest
+    case_sum: dict[int, list[float]] = field(default_factory=dict)
+    case_max: dict[int, list[float]] = field(default_factory=dict)
 
     def median(self, jobs: int) -> float:
         return statistics.median(self.seconds[jobs])
@@ -57,6 +61,21 @@ class BatchFigures:
 
     def serial_seconds(self) -> float:
         return statistics.median(self.serial) if self.serial else float("nan")
+
+    def contention(self, jobs: int) -> float:
+        """How much longer the cases took side by side: their summed wall time at ``jobs`` over at -j 1 (1.0: a
+        case runs as fast beside others as alone; NaN if not measured)."""
+        if not self.case_sum.get(jobs) or not self.case_sum.get(1):
+            return float("nan")
+        return statistics.median(self.case_sum[jobs]) / statistics.median(self.case_sum[1])
+
+    def ideal(self, jobs: int) -> float:
+        """The -j time if the cases ran side by side as fast as alone and split perfectly, bar the longest: the
+        serial part plus max(sum / jobs, longest case) of -j 1's case times (NaN if not measured)."""
+        if not self.case_sum.get(1):
+            return float("nan")
+        work, longest = statistics.median(self.case_sum[1]), statistics.median(self.case_max[1])
+        return self.serial_seconds() + max(work / jobs, longest)
 
     def ceiling_speedup(self, jobs: int) -> float:
         """What this machine gives perfectly parallel CPU work on ``jobs`` processes (NaN if not measured)."""
@@ -103,6 +122,10 @@ def run(
                 done = subprocess.run(_command(files, backend, j, out, cli), capture_output=True, cwd=ROOT, check=False)
                 fig.seconds.setdefault(j, []).append(time.perf_counter() - start)
                 fig.exit_codes.add(done.returncode)
+                walls = _case_walls(out)
+                if walls:
+                    fig.case_sum.setdefault(j, []).append(sum(walls))
+                    fig.case_max.setdefault(j, []).append(max(walls))
                 shutil.rmtree(out, ignore_errors=True)
                 fig.ceiling.setdefault(j, []).append(spin(j))
             if cli:
@@ -113,6 +136,17 @@ def run(
             times = ", ".join(f"-j {j} {fig.seconds[j][-1]:.2f}s (pure loop {fig.ceiling[j][-1]:.2f}s)" for j in jobs)
             log(f"  batch round {rep + 1}/{repetitions}: {times}")
     return fig
+
+
+def _case_walls(out: Path) -> list[float]:
+    """Each case's own wall seconds, from the cost files `scenario run` writes beside its traces."""
+    walls = []
+    for path in sorted(out.glob("*.cost.json")):
+        try:
+            walls.append(float(json.loads(path.read_text())["wall_seconds"]))
+        except (OSError, ValueError, KeyError, TypeError):
+            continue
+    return walls
 
 
 def _count_cases(files: Sequence[Path]) -> int:

@@ -159,6 +159,12 @@ def _targets(r: Results) -> list[str]:
         rest = (f"the command's start-up and loading of every variant (`scenario validate` on the same files) take "
                 f"{serial:.2f} s, {serial / b.median(1):.0%} of -j 1's time, which -j cannot divide; "
                 if serial == serial else "")  # fmt: skip
+        contention, ideal = b.contention(2), b.ideal(2)
+        if contention == contention:
+            rest += (f"side by side the cases took {contention:.2f}x their time alone (their summed wall time, "
+                     f"cost.json: shared caches and memory, which the pure loop does not touch); with none of "
+                     f"that, -j 2 would take {ideal:.2f} s (the serial part plus the larger of half the cases' "
+                     f"time and the longest case) against {b.median(2):.2f} s measured; ")  # fmt: skip
         rows.append(f"| batch -j 2 reaches >= {TARGET_CEILING:.0%} of the machine's parallel ceiling | {share:.0%} "
                     f"({s:.2f}x of {ceiling:.2f}x) | {_met(share >= TARGET_CEILING)} | the ceiling: a pure-Python loop "
                     f"split over 2 processes; {rest}load average {r.load[0]:.1f}-{r.load[1]:.1f} on "
@@ -385,6 +391,12 @@ def _batch(b: BatchFigures) -> list[str]:
         runs = ", ".join(f"{s:.2f}" for s in b.seconds[j])
         loops = ", ".join(f"{s:.2f}" for s in b.ceiling.get(j, []))
         out.append(f"| {j} | {runs} | {b.median(j):.2f} | {b.speedup(j):.2f} | {loops} | {b.ceiling_speedup(j):.2f} |")
+    if b.case_sum:
+        out += ["", "The cases' own wall time (their cost.json files), summed and the longest, per run: "
+                    + "; ".join(f"-j {j}: " + ", ".join(f"{t:.2f} ({m:.2f})" for t, m in
+                                                       zip(b.case_sum[j], b.case_max[j], strict=True))
+                                for j in sorted(b.case_sum))
+                    + "."]  # fmt: skip
     if b.serial:
         out += ["", f"The serial part: `scenario validate` on the same files (the command's start-up and the loading "
                     f"and validation of every variant, which every -j pays once) takes "
