@@ -189,11 +189,9 @@ def _reach(figs: Sequence[SizeFigures], limits: Sequence[Limit]) -> list[str]:
         stop = [lim for lim in limits if lim.backend == backend]
         if top:
             s = top[0]
-            trace = "no trace (the writer's limit, section 2)" if s.untraced else \
-                f"trace {s.trace_bytes_per_body_step:.1f} bytes/body/step"  # fmt: skip
             rows.append(f"| scaling table to {largest:,} bodies ({backend}) | runner {s.runner_us_per_body:.2f} "
-                        f"us/body/step, {s.kib_per_body:.1f} KiB/body, {trace} "
-                        f"| {'**not met** (no trace)' if s.untraced else 'met'} | section 2 |")  # fmt: skip
+                        f"us/body/step, {s.kib_per_body:.1f} KiB/body, trace {s.trace_bytes_per_body_step:.1f} "
+                        f"bytes/body/step | met | section 2 |")  # fmt: skip
         else:
             reached = max((s.bodies for s in figs if s.backend == backend), default=0)
             why = stop[0].reason if stop else "not run"
@@ -313,17 +311,13 @@ def _scaling(figs: Sequence[SizeFigures], limits: Sequence[Limit], seconds: floa
            "| backend | bodies | steps | engine ms/step | trace ms/step | runner ms/step | runner us/body/step "
            "| trace us/body/step | memory KiB/body | trace bytes/body/step | build (s) |",
            "|---|---|---|---|---|---|---|---|---|---|---|"]  # fmt: skip
-    untraced = sorted({s.untraced for s in figs if s.untraced})
     for s in figs:
-        trace = ("no trace¹", "no trace¹", "no trace¹") if s.untraced else (
-            f"{s.trace_ms:.3f}", f"{1e3 * s.trace_ms / s.bodies:.2f}", f"{s.trace_bytes_per_body_step:.1f}")
-        out.append(f"| {s.backend} | {s.bodies:,} | {s.timing.steps} | {s.engine_ms:.3f} | {trace[0]} "
-                   f"| {s.runner_ms:.3f} | {s.runner_us_per_body:.2f} | {trace[1]} "
-                   f"| {s.kib_per_body:.1f} | {trace[2]} | {s.timing.engine_build:.2f} |")  # fmt: skip
+        out.append(f"| {s.backend} | {s.bodies:,} | {s.timing.steps} | {s.engine_ms:.3f} | {s.trace_ms:.3f} "
+                   f"| {s.runner_ms:.3f} | {s.runner_us_per_body:.2f} | {1e3 * s.trace_ms / s.bodies:.2f} "
+                   f"| {s.kib_per_body:.1f} | {s.trace_bytes_per_body_step:.1f} "
+                   f"| {s.timing.engine_build:.2f} |")  # fmt: skip
     for lim in limits:
         out.append(f"| {lim.backend} | {lim.bodies:,} | | {lim.reason} | | | | | | | |")
-    if untraced:
-        out += ["", f"¹ run without a trace: the trace writer refused the world ({'; '.join(untraced)})."]
     out += [
         "",
         "Marginal cost per added body per step (us), and memory per added body (KiB): linear growth keeps them "
@@ -335,12 +329,10 @@ def _scaling(figs: Sequence[SizeFigures], limits: Sequence[Limit], seconds: floa
     for backend in sorted({s.backend for s in figs}):
         mine = sorted((s for s in figs if s.backend == backend), key=lambda s: s.bodies)
         mem = [(b.peak_kib - a.peak_kib) / (b.bodies - a.bodies) for a, b in zip(mine, mine[1:], strict=False)]
-        traced = [not (x.untraced or y.untraced) for x, y in zip(mine, mine[1:], strict=False)]
-        for (a, b, run_), (_, _, tr), (_, _, eng), kib, both in zip(
-            marginal(mine), marginal(mine, "trace_ms"), marginal(mine, "engine_ms"), mem, traced, strict=True
+        for (a, b, run_), (_, _, tr), (_, _, eng), kib in zip(
+            marginal(mine), marginal(mine, "trace_ms"), marginal(mine, "engine_ms"), mem, strict=True
         ):
-            trace_cell = f"{tr * 1e3:.2f}" if both else "no trace¹"
-            out.append(f"| {backend} | {a:,} -> {b:,} | {run_ * 1e3:.2f} | {trace_cell} | {eng * 1e3:.2f} "
+            out.append(f"| {backend} | {a:,} -> {b:,} | {run_ * 1e3:.2f} | {tr * 1e3:.2f} | {eng * 1e3:.2f} "
                        f"| {kib:.1f} |")  # fmt: skip
     return [*out, ""]
 

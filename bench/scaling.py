@@ -4,11 +4,11 @@ bytes per body per step, from 10 to 10,000 bodies.
 One instrumented run per size and backend, trace on, each in a child process (``python -m bench.scaling
 BACKEND BODIES DURATION``) so that its memory is its own: the peak RSS (VmHWM) after the run against the RSS
 with the engine imported gives the memory per body. Large piles run fewer steps (the simulated time is
-``duration x min(1, 1000 / bodies)``: 25 steps at 10,000 bodies at dt 0.004) so that the whole table stays
-within minutes; the figures are per step and per body. A run that needs more than :data:`CPU_LIMIT_S`
+``duration x min(1, 1000 / bodies)``, at least :data:`MIN_STEPS_BEYOND` steps) so that the whole table
+stays within minutes; the figures are per step and per body. A run that needs more than :data:`CPU_LIMIT_S`
 seconds of CPU (a limit the machine's load does not move) is reported as such, and that backend's larger
-sizes are not tried (the limit stated in results.md). A size whose trace the writer refuses
-(:data:`TRACE_REFUSED`) runs without it, and says so. The runner's part is everything but the engine (step,
+sizes are not tried (the limit stated in results.md); any other failure is reported as a limit too, with
+its last line of error. The runner's part is everything but the engine (step,
 reads, inputs, construction) and the trace writer; it must grow linearly with the body count: the marginal
 cost per body from the largest sizes should not exceed the one from 10 to 100.
 """
@@ -24,7 +24,7 @@ import sys
 import tempfile
 import time
 from collections.abc import Callable, Sequence
-from dataclasses import asdict, dataclass, replace
+from dataclasses import asdict, dataclass
 from pathlib import Path
 
 from . import measure as m
@@ -34,9 +34,6 @@ from . import measure as m
 SHAPES: dict[int, tuple[int, int, int]] = {10: (5, 2, 1), 100: (5, 5, 4), 1000: (20, 10, 5), 10000: (101, 99, 1)}
 CPU_LIMIT_S = 120  # CPU seconds of one run (child process), build included: the engine's limit, whatever the load
 WALL_LIMIT_S = 900.0  # and a wall-clock backstop
-#: the trace writer's refusal of a world it cannot describe in protobuf (no size does since /bodies is split
-#: every 8,000 bodies, docs/trace-format.md; kept so that such a refusal is reported, not a failed run)
-TRACE_REFUSED = "cannot build the trace's messages"
 FULL_STEPS_UP_TO = 1000  # bodies; beyond, the simulated time shrinks in proportion
 #: ... but never below this many steps: a run's fixed work (loading, compiling the assertions, the first
 #: step's name maps) is O(bodies) once per run, and spread over 25 steps at 9,999 bodies it read as a per-step
@@ -69,7 +66,6 @@ class SizeFigures:
     base_kib: int = 0  # RSS of the child before the scenario is loaded
     peak_kib: int = 0  # VmHWM after the run
     wall_seconds: float = 0.0  # the child process, start-up included
-    untraced: str = ""  # why this size ran without a trace (the trace could not be written), else ""
 
     def per_step(self, seconds: float) -> float:
         return seconds / max(self.timing.steps, 1)
@@ -107,10 +103,9 @@ class Limit:
     reason: str
 
 
-def measure(backend: str, bodies: int, duration: float, trace: bool = True) -> SizeFigures | Limit:
-    """One run in a child process; a size whose trace cannot be written runs again without it."""
-    cmd = [sys.executable, "-m", "bench.scaling", backend, str(bodies), repr(duration_for(bodies, duration)),
-           "trace" if trace else "no-trace"]  # fmt: skip
+def measure(backend: str, bodies: int, duration: float) -> SizeFigures | Limit:
+    """One run in a child process, with its trace."""
+    cmd = [sys.executable, "-m", "bench.scaling", backend, str(bodies), repr(duration_for(bodies, duration))]
     start = time.perf_counter()
     boxes = math.prod(shape_for(bodies))  # the figures and limits count the boxes actually built
     simulated = f"build and {duration_for(bodies, duration):g} s simulated"
@@ -124,9 +119,6 @@ def measure(backend: str, bodies: int, duration: float, trace: bool = True) -> S
         return Limit(backend, boxes, f"not done within {CPU_LIMIT_S} s of CPU time ({simulated})")
     if done.returncode != 0:
         last = (done.stderr.strip().splitlines() or [""])[-1]
-        if trace and TRACE_REFUSED in last:
-            again = measure(backend, bodies, duration, trace=False)
-            return again if isinstance(again, Limit) else replace(again, untraced=last.split(": ", 1)[-1])
         return Limit(backend, boxes, f"failed (exit {done.returncode}): {last}")
     data = json.loads(done.stdout.strip().splitlines()[-1])
     return SizeFigures(backend, boxes, m.RunnerTiming(**data["timing"]), data["base_kib"], data["peak_kib"], wall)
@@ -169,12 +161,11 @@ def _child(argv: Sequence[str]) -> int:
     from .memory import _peak_kib
 
     backend, bodies, duration = argv[0], int(argv[1]), float(argv[2])
-    traced = len(argv) < 4 or argv[3] == "trace"
     m.get_backend(backend)  # the adapter and its engine imported: the base is everything but the world
     base = _rss_kib()
     loaded = m.pile(shape_for(bodies), duration)
     with tempfile.TemporaryDirectory(prefix="bench-scaling-") as tmp:
-        timing = m.run_runner(loaded, backend, Path(tmp) if traced else None)
+        timing = m.run_runner(loaded, backend, Path(tmp))
     print(json.dumps({"timing": asdict(timing), "base_kib": base, "peak_kib": _peak_kib()}))
     return 0
 

@@ -9,7 +9,8 @@ among the plots, so the Plot panel has a body's z even when no assertion reads o
 from __future__ import annotations
 
 import math
-from collections.abc import Iterable, Sequence
+from collections.abc import Iterable, Mapping, Sequence
+from dataclasses import dataclass
 from pathlib import Path
 
 from rich.console import Console
@@ -32,21 +33,33 @@ _EXPRESSION_FIELDS = ("value", "check", "always", "never", "eventually", "max_of
 _GROUP_MEMBERS = 3  # an array's name plots its first copies
 
 
-def _topics(topic: str, names: Sequence[str]) -> dict[str, str]:
-    """name -> the part of /bodies or /joints that holds it (/bodies/2 ... beyond 8,000)."""
-    return {name: t for t, (_, part) in parts_by_topic(topic, names).items() for name in part}
+@dataclass(frozen=True)
+class _Names:
+    """What a scenario's names plot as, worked out once per scenario: the part of /bodies or /joints that
+    holds each body and joint (/bodies/2 ... beyond 8,000), and the arrays' copies."""
+
+    bodies: dict[str, str]
+    joints: dict[str, str]
+    groups: Mapping[str, list[str]]
+
+    @classmethod
+    def of(cls, program: Program) -> _Names:
+        def topics(topic: str, names: Sequence[str]) -> dict[str, str]:
+            return {name: t for t, (_, part) in parts_by_topic(topic, names).items() for name in part}
+
+        return cls(topics(TOPIC_BODIES, [b.name for b in program.world.bodies]),
+                   topics(TOPIC_JOINTS, [j.name for j in program.world.joints]), program.groups)  # fmt: skip
 
 
-def _quantity(name: str, program: Program) -> list[lt.PlotPath]:
+def _quantity(name: str, names: _Names) -> list[lt.PlotPath]:
     """The plot paths of one dotted name (nothing for time, parameters and unknown names)."""
-    bodies = _topics(TOPIC_BODIES, [b.name for b in program.world.bodies])
-    joints = _topics(TOPIC_JOINTS, [j.name for j in program.world.joints])
+    bodies, joints = names.bodies, names.joints
     head, _, rest = name.partition(".")
     if head == "state" and rest:
         return [lt.PlotPath(lt.state_path(rest), name)]
     if head in joints and rest in ("position", "velocity", "force"):
         return [lt.PlotPath(lt.joint_path(head, rest, joints[head]), name)]
-    members = [head] if head in bodies else program.groups.get(head, [])[:_GROUP_MEMBERS]
+    members = [head] if head in bodies else names.groups.get(head, [])[:_GROUP_MEMBERS]
     field, _, component = rest.partition(".")
     out = []
     for body in members:
@@ -58,7 +71,7 @@ def _quantity(name: str, program: Program) -> list[lt.PlotPath]:
     return out
 
 
-def _assertion_paths(assertion: object, program: Program) -> list[lt.PlotPath]:
+def _assertion_paths(assertion: object, names: _Names) -> list[lt.PlotPath]:
     if isinstance(assertion, A.ContactAssertion):
         a, b = assertion.contact
         return [lt.PlotPath(f'/contacts.pairs[:]{{a=="{x}"}}{{b=="{y}"}}.normal_force', f"contact {x}-{y} force")
@@ -68,7 +81,7 @@ def _assertion_paths(assertion: object, program: Program) -> list[lt.PlotPath]:
         text = getattr(assertion, field, None)
         if isinstance(text, str):
             for name in sorted(compile_expression(text).names):
-                out += _quantity(name, program)
+                out += _quantity(name, names)
     return out
 
 
@@ -91,8 +104,9 @@ def layout_spec(cases: Sequence[LoadedScenario]) -> lt.LayoutSpec:
             continue
         seen.add(key)
         program = build_program(case)
+        names = _Names.of(program)
         for assertion in case.model.assertions:
-            plots += _assertion_paths(assertion, program)
+            plots += _assertion_paths(assertion, names)
         if not any(p.value.startswith(TOPIC_TF) and p.value.endswith(".translation.z") for p in plots):
             body = _first_dynamic(program)
             if body is not None:

@@ -85,7 +85,7 @@ class TraceEncoder:
         width, jwidth = len(tf.BODY_ROW), len(tf.JOINT_FIELDS)
         self._rows = np.empty((len(self.bodies), width))
         self._tf = fx.transforms_template(self.bodies)
-        body_parts, joint_parts = tf.message_parts(self.bodies), tf.message_parts(self.joints)
+        body_parts, joint_parts = self.messages.body_parts, self.messages.joint_parts
         #: /bodies, then /bodies/2 ... for a world of more than 8,000 bodies; likewise /joints
         self.body_topics = [tf.part_topic(tf.TOPIC_BODIES, k) for k in range(len(body_parts))]
         self.joint_topics = [tf.part_topic(tf.TOPIC_JOINTS, k) for k in range(len(joint_parts))] if self.joints else []

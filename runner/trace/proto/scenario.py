@@ -49,6 +49,8 @@ class ScenarioMessages:
 
     bodies: tuple[Any, ...]
     joints: tuple[Any, ...]
+    body_parts: tuple[list[str], ...]  # the names each class of ``bodies`` holds
+    joint_parts: tuple[list[str], ...]
     state: Any = None
     state_types: Mapping[str, str] = field(default_factory=dict)  # variable -> "bool" | "double" | "string"
 
@@ -130,7 +132,8 @@ def scenario_messages(bodies: Sequence[str], joints: Sequence[str]) -> ScenarioM
                 _grouped(file, names[message][-1], parts[k], type_name)
         files.append(file)
     classes = _classes(files, names["Bodies"] + names["Joints"], with_base=True)
-    return ScenarioMessages(tuple(classes[: len(body_parts)]), tuple(classes[len(body_parts) :]))
+    return ScenarioMessages(tuple(classes[: len(body_parts)]), tuple(classes[len(body_parts) :]), tuple(body_parts),
+                            tuple(joint_parts))  # fmt: skip
 
 
 def with_state(messages: ScenarioMessages, state: Mapping[str, Any]) -> ScenarioMessages:
