@@ -70,7 +70,7 @@ def suite_properties(backend: str, loaded: LoadedScenario | None = None) -> dict
 
 def from_result(result: RunResult, loaded: LoadedScenario | None = None) -> JUnitCase:
     """A case of `scenario run`: failed assertions are a failure, an engine failure an error."""
-    from runner.ci.regression import verdict_text
+    from runner.ci.render import verdict_text
 
     case = JUnitCase(
         result.scenario, result.variant, result.backend, "passed", result.wall_seconds,
@@ -92,25 +92,31 @@ def from_result(result: RunResult, loaded: LoadedScenario | None = None) -> JUni
 def _known_limits(case: JUnitCase, result: RunResult) -> None:
     """A run that passed only because of known limits (expected failures) is ``<skipped>`` with them named:
     CI reports show it apart from a pass, and it does not fail the build."""
-    limits = [v for v in result.verdicts if v.status == "known limit"]
+    from runner.ci.render import known_limit_lines
+
+    limits = known_limit_lines(result)
     if limits:
         case.outcome, case.kind = "skipped", "known-limit"
-        case.message = "; ".join(f"known limit: {v.name} {v.message.removeprefix('known limit ')}" for v in limits)
+        case.message = "; ".join(limits)
 
 
 def from_outcome(outcome: CaseOutcome) -> JUnitCase:
-    """A case of `scenario check`: a divergence or a failed assertion is a failure; no baseline, a bad one or an
-    engine failure is an error."""
+    """A case of `scenario check`: a divergence or a failed assertion is a failure; no baseline, a bad one, or a
+    run that did not complete (bad input, an engine failure, a crash, a full disk) is an error, with the first
+    line `scenario run` gives."""
     from runner.ci.regression import comparison_lines, outcome_text
 
     loaded, result = outcome.loaded, outcome.result
     case = JUnitCase(
-        loaded.model.scenario, loaded.variant, outcome.backend, "passed", result.wall_seconds if result else 0.0,
+        loaded.model.scenario, loaded.variant, outcome.backend, "passed", outcome.run.wall_seconds,
         properties=suite_properties(outcome.backend, loaded),
-        output=f"trace: {result.trace}" if result is not None and result.trace else "",
+        output=f"trace: {outcome.run.trace}" if outcome.run.trace else "",
     )  # fmt: skip
+    exit = outcome.exit
     if outcome.outcome == "error":
-        case.outcome, case.kind, case.message, case.text = "error", outcome.error_kind, outcome.error, outcome.error
+        output = outcome.run.output.strip()[-2000:]
+        case.outcome, case.kind, case.message = "error", outcome.error_kind, exit.headline
+        case.text = outcome_text(outcome, details=output or None)
     elif outcome.outcome == "failure":
         case.outcome = "failure"
         reasons = []
@@ -119,7 +125,7 @@ def from_outcome(outcome: CaseOutcome) -> JUnitCase:
             reasons.append(comparison_lines(outcome.comparison)[0])
         if result is not None and not result.passed:
             case.kind = case.kind or "assertion"
-            reasons.append(f"{sum(not v.passed for v in result.verdicts)} assertion(s) failed")
+            reasons.append(outcome.run.exit.headline)  # "failed: 1 of 2 assertions: ..."
         case.message = "; ".join(reasons)
         case.text = outcome_text(outcome)
     elif result is not None:

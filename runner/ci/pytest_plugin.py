@@ -2,8 +2,12 @@
 
 Registered through the ``pytest11`` entry point ``runner.ci.pytest_plugin`` (or load it with
 ``-p runner.ci.pytest_plugin``; ``-p no:runner.ci.pytest_plugin`` turns it off). Item ids read
-``scenarios/factory_physics.yaml::door-stays-closed[pybullet]``; a failing item is reported as its verdict table
-(and, with a baseline, its first divergence), never as a traceback into the runner.
+``scenarios/factory_physics.yaml::door-stays-closed[pybullet]``. Each case runs through ``runner.exec`` as
+`scenario run` runs it, and its report starts with the first line `run` prints for it and `run`'s exit code
+(``failed: 1 of 2 assertions: stays-up [exit 1]``): a failed assertion (or a divergence from a baseline) is a
+pytest *failure* followed by the verdict table (and the first divergence); a case that does not complete
+(bad input, a capability its engine lacks, a missing engine, a crash, a full disk) is a pytest *error*,
+never a traceback into the runner. pytest's own exit code is then 1 for both (docs/reliability.md).
 
 It collects a ``.yaml``/``.yml`` file only when asked and only when the file is a scenario (a top-level
 ``schema_version:`` or ``scenario:`` key):
@@ -17,7 +21,7 @@ Options: ``--scenario-backends a,b`` (ini ``scenario_backends``; default every i
 ``--scenario-baseline DIR`` (ini ``scenario_baseline``: also compare each case with its golden file),
 ``--scenario-out DIR`` (traces and divergence plots; default ``.pytest_cache/d/scenario-traces``).
 A run that passes with known limits (an assertion's ``known_limits``: expected failures) is an xfail naming
-them; a known limit that passes fails the item (strict).
+them in `run`'s words; a known limit that passes fails the item (strict).
 Imports stay light here: the runner is imported only when a scenario file is collected.
 """
 
@@ -26,12 +30,9 @@ from __future__ import annotations
 import tempfile
 from collections.abc import Iterator
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any, NoReturn
 
 import pytest
-
-if TYPE_CHECKING:
-    from runner.sim.session import RunResult
 
 BASE_CASE = "base"  # runner.language.load.BASE_CASE: a file without variants runs as this one case
 _ROOTS = pytest.StashKey[tuple[list[Path], list[Path], list[Path]]]()
@@ -142,16 +143,13 @@ class ScenarioFile(pytest.File):
                 yield ScenarioItem.from_parent(self, name=f"{variant}[{backend}]", variant=variant, backend=backend)
 
 
-def _xfail_known_limits(result: RunResult | None) -> None:
-    """A run that passed with known limits (expected failures) is an xfail naming them, as `scenario run`
-    prints them; one whose known limit passes failed already (the runner's verdict)."""
-    limits = [v for v in result.verdicts if v.status == "known limit"] if result is not None else []
-    if limits:
-        pytest.xfail("; ".join(f"{v.name}: {v.message}" for v in limits))
-
-
 class ScenarioItem(pytest.Item):
-    """One scenario x variant x backend: it passes when every assertion passes (and the baseline matches)."""
+    """One scenario x variant x backend: it passes when every assertion passes (and the baseline matches).
+
+    The case runs in ``setup`` through runner.exec, as `scenario run` runs it. One that does not complete
+    (bad input, a capability its engine lacks, a missing engine, a crash, a full disk, a bug) is a pytest
+    *error* whose first line is the one `run` prints, with `run`'s exit code; a failed assertion or a
+    divergence is a *failure* (in ``runtest``); a pass with known limits an xfail naming them."""
 
     def __init__(self, *, variant: str, backend: str, problem: str = "", **kwargs: Any) -> None:
         super().__init__(**kwargs)
@@ -159,39 +157,52 @@ class ScenarioItem(pytest.Item):
         self.add_marker("scenario")
         if backend:
             self.user_properties.append(("backend", backend))
+        self._failure = ""  # the report of a failed assertion or a divergence, for runtest
+        self._limits: list[str] = []
 
-    def runtest(self) -> None:
-        from runner.errors import PhysicsScenariosError
-
-        if self.problem:
-            raise ScenarioCaseError(self.problem)
-        try:
-            self._run()
-        except PhysicsScenariosError as exc:  # bad input, missing engine, unsupported feature
-            raise ScenarioCaseError(f"{type(exc).__name__}: {exc}") from None
-
-    def _run(self) -> None:
+    def setup(self) -> None:
+        if self.problem:  # the file could not be read: `run` refuses it as bad input (exit 2)
+            _error(f"error: {self.problem}", 2)
         from backends.registry import engine_version
-        from runner.ci.regression import PASSED, check_case, outcome_text, verdict_text
+        from runner.errors import ExitCode, PhysicsScenariosError
+        from runner.exec.exits import classify
+
+        try:
+            self.user_properties.append(("engine_version", engine_version(self.backend)))
+            text, code, limits = self._run()
+        except PhysicsScenariosError as exc:  # refused before the case could run: an unknown backend
+            exit = classify(exc)
+            _error(exit.headline, exit.code)
+        self.user_properties.append(("exit_code", int(code)))
+        if code in (ExitCode.INTERRUPTED, ExitCode.TERMINATED):
+            raise KeyboardInterrupt  # pytest stops, as `run` does
+        if code not in (ExitCode.OK, ExitCode.ASSERTION_FAILED):
+            _error(text, code)
+        self._failure = text if code == ExitCode.ASSERTION_FAILED else ""
+        self._limits = limits
+
+    def _run(self) -> tuple[str, int, list[str]]:
+        """The case run (and checked): its report text, exit code, and known-limit lines."""
+        from runner.ci.regression import CaseOutcome, check_cases, outcome_text, run_cases
+        from runner.ci.render import known_limit_lines
         from runner.language.load import load_scenario
-        from runner.sim.run import run_loaded
 
         loaded = load_scenario(self.path, None if self.variant == BASE_CASE else self.variant)
-        self.user_properties.append(("engine_version", engine_version(self.backend)))
         baseline, out = _baseline(self.config), _out(self.config)
         if baseline is not None:
-            outcome = check_case(loaded, self.backend, baseline, out)
-            if outcome.outcome != PASSED:
-                raise ScenarioCaseError(outcome_text(outcome))
-            _xfail_known_limits(outcome.result)
-            return
-        result = run_loaded(loaded, self.backend, out)
-        if not result.passed:  # a known limit that now passes fails here: strict, as xfail(strict=True)
-            head = f"{loaded.model.scenario} · {loaded.variant} · {self.backend}: {result.status}"
-            failure = f"\n{result.failure}" if result.failure else ""
-            trace = f"\ntrace: {result.trace}" if result.trace else ""
-            raise ScenarioCaseError(f"{head}{failure}\n{verdict_text(result)}{trace}")
-        _xfail_known_limits(result)
+            (outcome,) = check_cases([(loaded, self.backend)], baseline, out)
+        else:
+            (res,) = run_cases([(loaded, self.backend)], out)
+            outcome = CaseOutcome(loaded, res, Path())
+        exit = outcome.exit
+        details = _details(outcome)
+        return outcome_text(outcome, details=details), exit.code, known_limit_lines(outcome.result)
+
+    def runtest(self) -> None:
+        if self._failure:  # a known limit that now passes fails here: strict, as xfail(strict=True)
+            raise ScenarioCaseError(_with_code(self._failure, 1))
+        if self._limits:  # expected failures: named with the words `run` prints
+            pytest.xfail("; ".join(self._limits))
 
     def repr_failure(self, excinfo: pytest.ExceptionInfo[BaseException], style: Any = None) -> Any:
         if isinstance(excinfo.value, ScenarioCaseError):
@@ -200,3 +211,37 @@ class ScenarioItem(pytest.Item):
 
     def reportinfo(self) -> tuple[Path, int | None, str]:
         return self.path, None, f"{self.path.name}::{self.name}"
+
+
+def _with_code(text: str, code: int) -> str:
+    """``<first line> [exit N]``: the first line `scenario run` prints for the case, and its exit code."""
+    first, _, rest = text.partition("\n")
+    return f"{first} [exit {code}]" + (f"\n{rest}" if rest else "")
+
+
+def _error(text: str, code: int) -> NoReturn:
+    """The item is a pytest error (raised in setup), reported as its text alone (pytest_runtest_makereport)."""
+    raise ScenarioCaseError(_with_code(text, code))
+
+
+@pytest.hookimpl(wrapper=True)
+def pytest_runtest_makereport(item: pytest.Item, call: pytest.CallInfo[None]) -> Any:
+    """A scenario item's error in setup is reported as its text, as a failure in the call is (repr_failure):
+    no traceback into the runner, and no exception name before `run`'s first line."""
+    report = yield
+    if isinstance(item, ScenarioItem) and call.excinfo is not None and call.when == "setup":
+        if isinstance(call.excinfo.value, ScenarioCaseError):
+            report.longrepr = str(call.excinfo.value)
+    return report
+
+
+def _details(outcome: Any) -> str:
+    """What explains a case that did not complete, as `run` prints it: every located issue, the engine's last
+    output of a crash, the trace it kept."""
+    res = outcome.run
+    lines = [str(i) for i in getattr(res.error, "issues", None) or []]
+    if res.status in ("crashed", "exited") and res.output.strip():
+        lines.append(res.output.strip()[-2000:])
+    if res.trace is not None:
+        lines.append(f"trace: {res.trace}")
+    return "\n".join(lines)

@@ -1,15 +1,20 @@
-"""Recording one case into its golden file and checking one case against it.
+"""Recording cases into golden files and checking cases against them, running them through ``runner.exec``.
 
-What `scenario baseline`, `scenario check` and the pytest plugin share. A case is recorded from the trace its
-run writes (read back with :mod:`reports.trace_reader`), so a golden file holds exactly what the trace holds.
+What `scenario baseline`, `scenario check` and the pytest plugin share. Each case runs as every command runs
+it (:class:`runner.exec.executors.LocalExecutor` or any executor: a worker process, its result or error with
+its class), so its verdict is the one `scenario run` gives: a case that does not complete (bad input, a
+capability its engine lacks, a missing engine, a crash, a full disk) ends with `run`'s exit code and first
+line, and is never compared. A case that completes is recorded from, or compared with, the trace its run
+wrote (read back with :mod:`reports.trace_reader`), so a golden file holds exactly what the trace holds.
 """
 
 from __future__ import annotations
 
-import io
 import tempfile
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 from reports.trace_reader import read_trace
 from runner.ci.golden import (
@@ -26,109 +31,168 @@ from runner.ci.golden import (
 )
 from runner.ci.golden_compare import Comparison, compare
 from runner.ci.golden_plot import write_divergence_plot
-from runner.errors import BackendError, ScenarioError, UnsupportedFeature
+from runner.ci.render import verdict_text
+from runner.errors import ExitCode
+from runner.exec.cases import CaseResult, case_of
+from runner.exec.executors import Executor, LocalExecutor
+from runner.exec.exits import Exit
 from runner.language.load import LoadedScenario
-from runner.sim.run import run_loaded
 from runner.sim.session import RunResult
 
+__all__ = ["CaseOutcome", "check_cases", "comparison_lines", "golden_path", "outcome_text",
+           "parse_tolerance_options", "record_cases"]  # fmt: skip
+
 PASSED, FAILURE, ERROR = "passed", "failure", "error"
+Pairs = Sequence[tuple[LoadedScenario, str]]  # (case, backend)
 
 
 @dataclass
 class CaseOutcome:
-    """One scenario x variant x backend checked against its golden file."""
+    """One scenario x variant x backend run and checked against its golden file."""
 
     loaded: LoadedScenario
-    backend: str
-    outcome: str  # passed | failure | error
+    run: CaseResult  # how the run ended (runner.exec)
     golden: Path
-    result: RunResult | None = None
     comparison: Comparison | None = None
     plot: Path | None = None
-    error: str = ""  # why it is an error: no or bad baseline, engine failure
-    error_kind: str = ""  # missing-baseline | bad-input | engine-failure
+    problem: str = ""  # why a completed run could not be compared: no baseline, a bad one, no trace
+    problem_kind: str = ""  # missing-baseline | bad-input
+
+    @property
+    def backend(self) -> str:
+        return self.run.case.backend
+
+    @property
+    def result(self) -> RunResult | None:
+        return self.run.result
 
     @property
     def label(self) -> str:
         return f"{self.loaded.model.scenario} · {self.loaded.variant} · {self.backend}"
+
+    @property
+    def diverges(self) -> bool:
+        return self.comparison is not None and not self.comparison.ok
+
+    @property
+    def exit(self) -> Exit:
+        """The run's exit (runner.exec.exits), unless it completed: then a baseline that cannot be used is bad
+        input (2), a failed assertion 1, a divergence 1 ("diverges: ..."), else the run's (0)."""
+        run = self.run.exit
+        if self.run.result is None or run.code not in (ExitCode.OK, ExitCode.ASSERTION_FAILED):
+            return run
+        if self.problem:
+            return Exit(ExitCode.BAD_INPUT, "error", self.problem)
+        if run.code == ExitCode.OK and self.comparison is not None and self.diverges:
+            first = comparison_lines(self.comparison)[0]  # "first divergence: t=..."
+            return Exit(ExitCode.ASSERTION_FAILED, "diverges", f"{first} (baseline {self.golden.name})")
+        return run
+
+    @property
+    def outcome(self) -> str:
+        """passed | failure (an assertion or a divergence) | error (anything that stopped the check)."""
+        code = self.exit.code
+        return PASSED if code == ExitCode.OK else FAILURE if code == ExitCode.ASSERTION_FAILED else ERROR
+
+    @property
+    def error_kind(self) -> str:
+        """For JUnit: missing-baseline | bad-input | engine-failure | output-error | internal-error."""
+        if self.problem_kind and self.exit.code == ExitCode.BAD_INPUT and self.exit.message == self.problem:
+            return self.problem_kind
+        return {ExitCode.BAD_INPUT: "bad-input", ExitCode.INTERNAL_ERROR: "internal-error",
+                ExitCode.OUTPUT_ERROR: "output-error"}.get(self.exit.code, "engine-failure")  # fmt: skip
 
 
 def golden_path(directory: Path, loaded: LoadedScenario, backend: str) -> Path:
     return directory / golden_name(loaded.model.scenario, loaded.variant, backend)
 
 
-def _run_and_read(loaded: LoadedScenario, backend: str, out_dir: Path | None) -> tuple[RunResult, object | None]:
+def run_cases(pairs: Pairs, out_dir: Path, executor: Executor | None = None,
+              on_result: Callable[[int, CaseResult], None] | None = None) -> list[CaseResult]:  # fmt: skip
+    """Each (case, backend) run as `scenario run` runs it, its trace in ``out_dir``; results in order."""
+    cases = [case_of(loaded, backend, out_dir) for loaded, backend in pairs]
+    return (executor or LocalExecutor()).run(cases, on_result)
+
+
+def _recording(res: CaseResult, every: int, tolerances: dict[str, Tol] | None = None) -> Recording | None:
+    """The completed run's trace as a recording (None: the run did not complete or left no finished trace)."""
+    if res.result is None or res.result.trace is None or not Path(res.result.trace).is_file():
+        return None
+    return record_from_trace(read_trace(res.result.trace), every, tolerances)
+
+
+def record_cases(pairs: Pairs, directory: Path, out_dir: Path | None = None, period: float | None = None,
+                 executor: Executor | None = None) -> list[tuple[CaseResult, Path, Recording | None]]:  # fmt: skip
+    """Run each case and write its golden file (its traces kept in ``out_dir`` if given). An existing file keeps
+    its tolerance lines and, unless ``period`` is given, its sampling. A case that did not complete writes
+    nothing (its recording is None; its result says why)."""
     with tempfile.TemporaryDirectory(prefix="scenario-baseline-") as tmp:
-        result = run_loaded(loaded, backend, out_dir if out_dir is not None else Path(tmp))
-        trace = read_trace(result.trace) if result.trace else None
-    if out_dir is None:
-        result.trace = None  # it was in the temporary folder
-    return result, trace
+        results = run_cases(pairs, out_dir if out_dir is not None else Path(tmp), executor)
+        done = []
+        for (loaded, backend), res in zip(pairs, results, strict=True):
+            path = golden_path(directory, loaded, backend)
+            previous = read_golden(path) if path.exists() else None
+            if period is not None or previous is None:
+                every = sample_every(loaded.model.world.dt, period)
+            else:
+                every = int(previous.header["every"])
+            tolerances = previous.tolerances if previous is not None else dict(DEFAULT_TOLERANCES)
+            rec = _recording(res, every, tolerances)
+            if rec is not None:
+                write_golden(path, rec)
+            if out_dir is None and res.result is not None:
+                res.result.trace = res.trace = None  # it was in the temporary folder
+            done.append((res, path, rec))
+    return done
 
 
-def record_case(
-    loaded: LoadedScenario, backend: str, directory: Path, out_dir: Path | None = None, period: float | None = None
-) -> tuple[RunResult, Path, Recording]:
-    """Run a case and write its golden file. An existing file keeps its tolerance lines and, unless ``period``
-    is given, its sampling."""
-    path = golden_path(directory, loaded, backend)
-    previous = read_golden(path) if path.exists() else None
-    result, trace = _run_and_read(loaded, backend, out_dir)
-    if trace is None:
-        raise BaselineError(f"{loaded.path}: the run of {loaded.variant} on {backend} wrote no trace to record")
-    dt = loaded.model.world.dt
-    if period is not None or previous is None:
-        every = sample_every(dt, period)
-    else:
-        every = int(previous.header["every"])
-    tolerances = previous.tolerances if previous is not None else dict(DEFAULT_TOLERANCES)
-    rec = record_from_trace(trace, every, tolerances)
-    write_golden(path, rec)
-    return result, path, rec
+def check_cases(pairs: Pairs, directory: Path, out_dir: Path, overrides: dict[str, Tol] | None = None,
+                executor: Executor | None = None,
+                on_outcome: Callable[[CaseOutcome], None] | None = None) -> list[CaseOutcome]:  # fmt: skip
+    """Run each case and compare it with its golden file; ``on_outcome`` sees each outcome, in case order,
+    as soon as it and the ones before it are done."""
+    outcomes: dict[int, CaseOutcome] = {}
+    shown = 0
+
+    def arrived(index: int, res: CaseResult) -> None:
+        nonlocal shown
+        loaded, backend = pairs[index]
+        outcomes[index] = check_case(loaded, res, directory, out_dir, overrides)
+        while shown in outcomes:
+            if on_outcome is not None:
+                on_outcome(outcomes[shown])
+            shown += 1
+
+    run_cases(pairs, out_dir, executor, arrived)
+    return [outcomes[i] for i in range(len(pairs))]
 
 
-def check_case(
-    loaded: LoadedScenario,
-    backend: str,
-    directory: Path,
-    out_dir: Path | None,
-    overrides: dict[str, Tol] | None = None,
-) -> CaseOutcome:
-    """Run a case and compare it with its golden file; failures and errors come back in the outcome."""
-    path = golden_path(directory, loaded, backend)
+def check_case(loaded: LoadedScenario, res: CaseResult, directory: Path, out_dir: Path | None,
+               overrides: dict[str, Tol] | None = None) -> CaseOutcome:  # fmt: skip
+    """Compare a case's run with its golden file (a run that did not complete is not compared)."""
+    path = golden_path(directory, loaded, res.case.backend)
+    outcome = CaseOutcome(loaded, res, path)
+    if outcome.exit.code not in (ExitCode.OK, ExitCode.ASSERTION_FAILED):
+        return outcome
     if not path.exists():
-        hint = f"record it with `scenario baseline {loaded.path} --backend {backend} --baseline {directory}`"
-        return CaseOutcome(
-            loaded, backend, ERROR, path, error=f"no baseline {path}; {hint}", error_kind="missing-baseline"
-        )
+        hint = f"record it with `scenario baseline {loaded.path} --backend {res.case.backend} --baseline {directory}`"
+        outcome.problem, outcome.problem_kind = f"no baseline {path}; {hint}", "missing-baseline"
+        return outcome
     try:
         expected = read_golden(path)
     except BaselineError as exc:
-        return CaseOutcome(loaded, backend, ERROR, path, error=str(exc), error_kind="bad-input")
-    try:
-        result, trace = _run_and_read(loaded, backend, out_dir)
-    except (ScenarioError, UnsupportedFeature) as exc:  # e.g. a feature this backend lacks: the others still run
-        return CaseOutcome(loaded, backend, ERROR, path, error=str(exc), error_kind="bad-input")
-    except BackendError as exc:
-        return CaseOutcome(loaded, backend, ERROR, path, error=str(exc), error_kind="engine-failure")
-    if result.status == "engine-failure" or trace is None:
-        return CaseOutcome(
-            loaded,
-            backend,
-            ERROR,
-            path,
-            result,
-            error=result.failure or "no trace written",
-            error_kind="engine-failure",
-        )
-    got = record_from_trace(trace, int(expected.header["every"]))
+        outcome.problem, outcome.problem_kind = str(exc), "bad-input"
+        return outcome
+    got = _recording(res, int(expected.header["every"]))
+    if got is None:
+        outcome.problem, outcome.problem_kind = f"the run left no finished trace to compare with {path}", "bad-input"
+        return outcome
     tolerances = Tolerances(overrides or {}, expected.tolerances)
-    comparison = compare(expected, got, tolerances)
-    plot = None
-    if not comparison.ok and out_dir is not None:
-        plot = write_divergence_plot(comparison, tolerances, out_dir / path.name.replace(".golden", ".divergence.svg"))
-    outcome = PASSED if comparison.ok and result.passed else FAILURE
-    return CaseOutcome(loaded, backend, outcome, path, result, comparison, plot)
+    outcome.comparison = compare(expected, got, tolerances)
+    if not outcome.comparison.ok and out_dir is not None:
+        plot = out_dir / path.name.replace(".golden", ".divergence.svg")
+        outcome.plot = write_divergence_plot(outcome.comparison, tolerances, plot)
+    return outcome
 
 
 def parse_tolerance_options(atol: list[str], rtol: list[str]) -> dict[str, Tol]:
@@ -148,27 +212,6 @@ def parse_tolerance_options(atol: list[str], rtol: list[str]) -> dict[str, Tol]:
                 raise UsageError(f"--{which} {item}: a tolerance must be a number >= 0")
             out.setdefault(key, {})[which] = number
     return {k: Tol(v.get("atol"), v.get("rtol")) for k, v in out.items()}
-
-
-def render(renderable: object, width: int = 120) -> str:
-    """Plain text of a rich renderable (no colour, no markup), for pytest reports and JUnit files."""
-    from rich.console import Console
-
-    buf = io.StringIO()
-    Console(file=buf, width=width, color_system=None, force_terminal=False, highlight=False).print(renderable)
-    return buf.getvalue()
-
-
-def verdict_text(result: RunResult, failures_only: bool = False) -> str:
-    from rich import box
-
-    from runner.cli.render import verdict_table
-
-    if not result.verdicts:
-        return ""
-    table = verdict_table(result, failures_only)
-    table.box = box.ASCII2  # plain ASCII: CI pages and JUnit viewers do not all draw box characters
-    return render(table)
 
 
 def comparison_lines(comparison: Comparison, plot: Path | None = None, limit: int = 6) -> list[str]:
@@ -192,11 +235,12 @@ def comparison_lines(comparison: Comparison, plot: Path | None = None, limit: in
     return lines
 
 
-def outcome_text(case: CaseOutcome) -> str:
-    """A failing or erroring case as text: what diverged, then the verdict table."""
-    parts = []
-    if case.error:
-        parts.append(f"{case.label}: {case.error}")
+def outcome_text(case: CaseOutcome, *, details: Any = None) -> str:
+    """A case that did not pass, as text: its first line (the one `scenario run` gives for the same run), what
+    diverged, then the verdict table; ``details``: more lines after the first (e.g. a crash's output)."""
+    parts = [case.exit.headline]
+    if details:
+        parts.append(str(details).rstrip())
     if case.comparison is not None:
         head = "matches its baseline" if case.comparison.ok else "diverges from its baseline"
         parts.append(f"{case.label}: {head} {case.golden}")

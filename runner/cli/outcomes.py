@@ -16,14 +16,15 @@ from rich.console import Console
 from rich.markup import escape
 
 from runner.ci.junit import JUnitCase, from_result, suite_properties
-from runner.cli.render import verdict_table
+from runner.ci.render import known_limit_lines, verdict_table
 from runner.errors import ExitCode
 from runner.exec.cases import CaseResult
 from runner.language.load import LoadedScenario
 from runner.sim.session import RunResult
 from runner.sim.verdicts import KNOWN_LIMIT
 
-__all__ = ["debug", "in_tests", "junit_case", "print_problem", "print_result", "print_summary", "summary_line"]
+__all__ = ["case_line", "debug", "in_tests", "junit_case", "print_problem", "print_result", "print_summary",
+           "summary_line"]
 
 
 def in_tests() -> bool:
@@ -76,8 +77,13 @@ def print_problem(err: Console, res: CaseResult) -> None:
 
 def summary_line(res: CaseResult, scenario: str, variant: str) -> str:
     """``  <scenario> · <variant> · <backend>: <first message line>`` for a case that did not pass."""
-    where = f"{escape(scenario)} · {escape(variant)} · {escape(res.case.backend)}"
-    label, _, rest = res.headline.partition(": ")
+    return case_line(scenario, variant, res.case.backend, res.headline)
+
+
+def case_line(scenario: str, variant: str, backend: str, headline: str) -> str:
+    """``  <scenario> · <variant> · <backend>: <label>: <message>``, the label in red (`run`, `check`)."""
+    where = f"{escape(scenario)} · {escape(variant)} · {escape(backend)}"
+    label, _, rest = headline.partition(": ")
     return f"  {where}: [red]{escape(label)}[/]" + (f": {escape(rest)}" if rest else "")
 
 
@@ -101,11 +107,8 @@ def print_summary(out: Console, results: list[CaseResult], names: list[tuple[str
 
 def known_limits(res: CaseResult) -> list[str]:
     """``known limit: <assertion> on <engine>: measured ...`` for each expected failure of a passed run
-    (the same line on every path: `run`, `-j`, `--isolate`, Ray, `compare`)."""
-    if not res.passed or res.result is None:
-        return []
-    return [f"known limit: {v.name} {v.message.removeprefix('known limit ')}" for v in res.result.verdicts
-            if v.status == KNOWN_LIMIT]  # fmt: skip
+    (the same line on every path: `run`, `-j`, `--isolate`, Ray, `compare`, `check`, the pytest plugin)."""
+    return known_limit_lines(res.result if res.passed else None)
 
 
 _KINDS = {

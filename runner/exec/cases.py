@@ -32,7 +32,7 @@ from runner.exec.transport import decode_error, encode_error, result_from_json, 
 from runner.sim.session import RunResult
 from runner.trace.output import Claim
 
-__all__ = ["Case", "CaseResult", "Files", "case_result", "estimate_cost", "named", "run_case"]
+__all__ = ["Case", "CaseResult", "Files", "case_of", "case_result", "estimate_cost", "named", "run_case"]
 
 Files = tuple[tuple[str, bytes], ...]  # (path relative to the scenario's folder, content)
 
@@ -89,6 +89,22 @@ def named(case: Case) -> Case:
         return case
     return replace(case, trace=str(trace_path(Path(case.out_dir), loaded, case.backend)),
                    scenario=case.scenario or loaded.model.scenario)  # fmt: skip
+
+
+def case_of(loaded: Any, backend: str, out_dir: Path | None, budget: float | None = None) -> Case:
+    """The case that runs ``loaded`` (a LoadedScenario) on ``backend`` as `scenario run` does: its trace in
+    ``out_dir`` (None: no trace), stopped after ``budget`` seconds (default: world.budget, else one hour)."""
+    from runner.language.load import BASE_CASE
+    from runner.sim.budget import DEFAULT_BUDGET
+    from runner.sim.run import trace_path
+
+    limit = budget if budget is not None else (loaded.model.world.budget or DEFAULT_BUDGET)
+    return Case(
+        str(loaded.path), None if loaded.variant == BASE_CASE else loaded.variant, backend, loaded.overrides,
+        None if out_dir is None else str(out_dir), cost=estimate_cost(loaded), budget=limit, sha256=loaded.sha256,
+        trace=None if out_dir is None else str(trace_path(out_dir, loaded, backend)),
+        scenario=loaded.model.scenario, loaded=loaded,
+    )  # fmt: skip
 
 
 def estimate_cost(loaded: Any) -> float:

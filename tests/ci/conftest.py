@@ -24,10 +24,10 @@ def cli(capsys: pytest.CaptureFixture[str], *args: str | Path) -> tuple[int, str
 @pytest.fixture(scope="session")
 def factory_goldens(tmp_path_factory: pytest.TempPathFactory) -> Path:
     """factory_physics.yaml, every variant, recorded on PyBullet at every step (about 1 s)."""
-    from runner.ci.regression import record_case
+    from runner.ci.regression import record_cases
     from runner.language.load import load_all
 
     directory = tmp_path_factory.mktemp("goldens")
-    for case in load_all(FACTORY, None, True, ()):
-        record_case(case, "pybullet", directory, None, period=0.0)
+    recorded = record_cases([(case, "pybullet") for case in load_all(FACTORY, None, True, ())], directory, period=0.0)
+    assert all(rec is not None for _, _, rec in recorded), [res.headline for res, _, _ in recorded]
     return directory

@@ -11,7 +11,7 @@ import pytest
 
 from backends.registry import engine_version
 from runner.ci.golden import read_golden
-from runner.ci.regression import check_case, golden_path
+from runner.ci.regression import check_cases, golden_path
 from runner.language.load import load_scenario
 
 from .conftest import FACTORY, cli
@@ -66,7 +66,7 @@ def test_changed_surface_fails_at_the_first_contact(
     assert any(t and t.startswith("box.") and t.endswith(("(m)", "(m/s)")) for t in texts)  # the axis names its unit
     assert f"plot: {svg}" in output
 
-    outcome = check_case(load_scenario(copy, "door-stays-closed"), "pybullet", factory_goldens, None)
+    (outcome,) = check_cases([(load_scenario(copy, "door-stays-closed"), "pybullet")], factory_goldens, tmp_path / "o")
     assert outcome.comparison is not None and outcome.comparison.first is not None
     assert all(c.first_over is None or c.first_over >= contact for c in outcome.comparison.changes)
     assert outcome.comparison.first.signal == "box.vel.z"  # the largest excess at that time: the rebound
@@ -126,7 +126,8 @@ def test_engine_version_change_warns_and_names_what_moved(
 
 
 def test_missing_baseline_is_bad_input(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
-    code, output = cli(capsys, "check", FACTORY, "--variant", "door-stays-closed", "--baseline", tmp_path)
+    code, output = cli(capsys, "check", FACTORY, "--variant", "door-stays-closed", "--baseline", tmp_path, "--out",
+                       tmp_path / "t")  # fmt: skip
     assert code == 2
     assert f"no baseline {golden_path(tmp_path, load_scenario(FACTORY, 'door-stays-closed'), 'pybullet')}" in output
     assert "record it with `scenario baseline" in output

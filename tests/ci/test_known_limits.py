@@ -130,6 +130,6 @@ def test_pytest_plugin_xfails_it_and_fails_when_it_passes(drop: Path, tmp_path: 
     done = pytest_run(tmp_path, "-p", PLUGIN, str(drop), "--scenario-backends", "fake", "-rfxX",
                       "--scenario-out", str(tmp_path / "out"), "-k", "not other")  # fmt: skip
     assert done.returncode == 1, done.stdout + done.stderr
-    assert f"XFAIL drop.yaml::limited[fake] - height: {MESSAGE}" in done.stdout
+    assert f"XFAIL drop.yaml::limited[fake] - known limit: height {MESSAGE.removeprefix('known limit ')}" in done.stdout
     assert "1 failed, 1 deselected, 1 xfailed" in done.stdout
     assert "FAILED drop.yaml::gone[fake]" in done.stdout and "known limit no longer needed" in done.stdout

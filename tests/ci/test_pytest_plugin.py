@@ -58,7 +58,8 @@ def test_items_pass_and_a_failure_shows_the_verdict_table(tmp_path: Path) -> Non
     assert "FAILED scen/drop.yaml::wrong[pybullet]" in done.stdout
     assert "1 failed, 5 passed, 1 deselected" in done.stdout
     report = done.stdout.split("= FAILURES =")[1].split("short test summary")[0]
-    assert "drop · wrong · pybullet: failed" in report
+    assert "failed: 1 of 1 assertions: stays-up [exit 1]" in report  # `scenario run`'s first line and exit code
+    assert "drop · wrong · pybullet" in report
     assert "| stays-up  | FAIL   | 1.13672  | 2 ± 0.001 | 0.400 |" in report  # measured: 2 - g dt^2 55
     assert "Traceback" not in report and "runner/" not in report and ".py:" not in report
 

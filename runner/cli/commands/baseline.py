@@ -54,26 +54,36 @@ def load_cases(files: list[Path], variant: str | None, sets: list[str] | None = 
 
 
 def execute(args: argparse.Namespace, out: Console, err: Console) -> int:
-    from runner.ci.regression import record_case
+    """Each case runs through runner.exec as `scenario run` runs it; one that does not complete records
+    nothing and the command exits as `run` would (the most severe code)."""
+    from runner.ci.regression import record_cases
+    from runner.cli.outcomes import print_problem
     from runner.errors import ExitCode, UsageError
+    from runner.exec.exits import most_severe
 
     if args.period is not None and not args.period >= 0:
         raise UsageError(f"--period {args.period}: expected seconds >= 0")
     backends = options.backend_names(args)
     cases = load_cases(args.files, args.variant, args.set)
-    failed = 0
-    for backend in backends:
-        for case in cases:
-            result, path, rec = record_case(case, backend, args.baseline, args.out, args.period)
-            every = int(rec.header["every"])
-            note = "" if result.passed else f" [yellow](recorded with status {result.status})[/]"
-            out.print(
-                f"recorded {case.model.scenario} · {case.variant} · {backend} -> {path} "
-                f"({len(rec.steps)} states every {every} step{'s' if every != 1 else ''}, {len(rec.events)} events, "
-                f"{len(rec.verdicts)} verdicts){note}"
-            )
-            failed += not result.passed
-    out.print(f"{len(cases) * len(backends)} baseline(s) written to {args.baseline}")
+    pairs = [(case, backend) for backend in backends for case in cases]
+    recorded = record_cases(pairs, args.baseline, args.out, args.period)
+    failed, written, codes = 0, 0, []
+    for (case, backend), (res, path, rec) in zip(pairs, recorded, strict=True):
+        if rec is None:
+            print_problem(err, res)
+            codes.append(res.exit.code)
+            continue
+        written += 1
+        every = int(rec.header["every"])
+        status = res.result.status if res.result is not None else res.status
+        note = "" if res.passed else f" [yellow](recorded with status {status})[/]"
+        out.print(
+            f"recorded {case.model.scenario} · {case.variant} · {backend} -> {path} "
+            f"({len(rec.steps)} states every {every} step{'s' if every != 1 else ''}, {len(rec.events)} events, "
+            f"{len(rec.verdicts)} verdicts){note}"
+        )
+        failed += not res.passed
+    out.print(f"{written} baseline(s) written to {args.baseline}")
     if failed:
         err.print(f"[yellow]warning:[/] {failed} run(s) did not pass; their goldens record that status")
-    return ExitCode.OK
+    return most_severe(codes) if codes else ExitCode.OK

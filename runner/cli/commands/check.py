@@ -1,9 +1,15 @@
-"""`scenario check`: run cases and compare them with their golden files (see `scenario baseline`)."""
+"""`scenario check`: run cases and compare them with their golden files (see `scenario baseline`).
+
+The cases run through ``runner.exec`` as `scenario run` runs them, so a case that does not complete ends with
+the exit code and first line `run` gives; one that completes is compared with its golden file. The command
+exits with the most severe of its cases' codes (runner.exec.exits.most_severe).
+"""
 
 from __future__ import annotations
 
 import argparse
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from rich.console import Console
 from rich.markup import escape
@@ -11,11 +17,16 @@ from rich.markup import escape
 from runner.cli import options
 from runner.cli.commands.baseline import add_case_options, load_cases
 
+if TYPE_CHECKING:
+    from runner.ci.regression import CaseOutcome
+
 NAME = "check"
 HELP = "run scenarios and compare them with their recorded baselines"
 
 
 def configure(parser: argparse.ArgumentParser) -> None:
+    from runner.exec.executors import add_arguments
+
     add_case_options(parser)
     parser.add_argument(
         "--out", type=Path, default=Path("traces"), help="folder for traces and divergence plots (default traces/)"
@@ -33,23 +44,30 @@ def configure(parser: argparse.ArgumentParser) -> None:
         "--rtol", action="append", default=[], metavar="[FIELD=]X", help="relative tolerance, as --atol"
     )
     parser.add_argument("--quiet", "-q", action="store_true", help="print only what diverges or fails")
+    add_arguments(parser)
 
 
 def execute(args: argparse.Namespace, out: Console, err: Console) -> int:
-    from runner.ci.regression import ERROR, PASSED, check_case, parse_tolerance_options, verdict_text
-    from runner.errors import ExitCode
+    from runner.ci.regression import PASSED, check_cases, parse_tolerance_options
+    from runner.cli.outcomes import case_line
+    from runner.errors import ScenarioError
+    from runner.exec.executors import make_executor
+    from runner.exec.exits import most_severe
 
     overrides = parse_tolerance_options(args.atol, args.rtol)
     backends = options.backend_names(args)
     cases = load_cases(args.files, args.variant, args.set)
-    outcomes = []
-    for backend in backends:
-        for case in cases:
-            outcome = check_case(case, backend, args.baseline, args.out, overrides)
-            outcomes.append(outcome)
-            _print(out, outcome, args.quiet)
-            if outcome.outcome != PASSED and outcome.result is not None and not outcome.result.passed:
-                out.print(verdict_text(outcome.result, failures_only=True), markup=False, end="")
+    try:
+        args.out.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise ScenarioError(f"cannot use {args.out} as the trace folder: {exc.strerror or exc}") from None
+    executor = make_executor(args.executor, args.jobs, args.ray_address)
+    try:
+        pairs = [(case, backend) for backend in backends for case in cases]
+        outcomes = check_cases(pairs, args.baseline, args.out, overrides, executor,
+                               lambda o: _print(out, err, o, args.quiet))  # fmt: skip
+    finally:
+        executor.close()
     _stale(err, args.baseline, cases, backends, args.variant)
     if args.junit:
         from runner.ci.junit import from_outcome, write_junit
@@ -58,37 +76,54 @@ def execute(args: argparse.Namespace, out: Console, err: Console) -> int:
     passed = sum(o.outcome == PASSED for o in outcomes)
     colour = "green" if passed == len(outcomes) else "red"
     out.print(f"[bold {colour}]{passed}/{len(outcomes)} cases match their baselines and pass[/]")
-    if any(o.error_kind == "engine-failure" for o in outcomes):
-        code = ExitCode.ENGINE_FAILURE
-    elif any(o.outcome == ERROR for o in outcomes):
-        code = ExitCode.BAD_INPUT
-    else:
-        code = ExitCode.OK if passed == len(outcomes) else ExitCode.ASSERTION_FAILED
-    if args.out is not None and outcomes:
+    for o in outcomes:  # the same lines as `run`'s summary
+        names = (o.loaded.model.scenario, o.loaded.variant, o.backend)
+        if o.outcome != PASSED:
+            out.print(case_line(*names, o.exit.headline))
+        elif o.exit.code == 0:
+            from runner.ci.render import known_limit_lines
+
+            for text in known_limit_lines(o.result):
+                out.print(f"  {' · '.join(map(escape, names))}: [yellow]{escape(text)}[/]", highlight=False)
+    code = most_severe(o.exit.code for o in outcomes)
+    if any(o.run.trace is not None for o in outcomes):
         from runner.cli.layouts import leave_layout
 
         return leave_layout(err, [args.out], cases, code)  # foxglove-layout.json beside the traces
     return code
 
 
-def _print(out: Console, outcome, quiet: bool) -> None:  # noqa: ANN001 - CaseOutcome
-    from runner.ci.regression import ERROR, PASSED, comparison_lines
+def _print(out: Console, err: Console, outcome: CaseOutcome, quiet: bool) -> None:
+    """One case as it ends: what stopped it (stderr, as `run` prints it), or how it compares."""
+    from runner.ci.regression import PASSED, comparison_lines
+    from runner.ci.render import verdict_text
+    from runner.cli.outcomes import print_problem, print_result
 
     label = escape(outcome.label)
-    if outcome.outcome == ERROR:
-        out.print(f"[bold red]error[/] {label}: {escape(outcome.error)}")
+    result = outcome.result
+    if result is None:
+        print_problem(err, outcome.run)
+        return
+    if outcome.run.output.strip():
+        err.print(escape(outcome.run.output.rstrip()), highlight=False)  # what the engine printed
+    if result.status == "engine-failure":
+        print_result(out, result, quiet)
         return
     comparison = outcome.comparison
-    if outcome.outcome == PASSED:
+    if outcome.problem:
+        out.print(f"[bold red]error[/] {label}: {escape(outcome.problem)}")
+    elif outcome.outcome == PASSED:
         if not quiet:
             out.print(f"[green]ok[/] {label} matches {escape(str(outcome.golden))}")
-    elif comparison is not None and not comparison.ok:
+    elif outcome.diverges:
         out.print(f"[bold red]DIVERGES[/] {label} from {escape(str(outcome.golden))}")
     else:
         out.print(f"[bold red]FAIL[/] {label}: matches its baseline, but assertions fail")
     if comparison is not None and (not quiet or outcome.outcome != PASSED):
         for line in comparison_lines(comparison, outcome.plot):
             out.print(f"  {escape(line)}")
+    if not result.passed:
+        out.print(verdict_text(result, failures_only=True), markup=False, end="")
 
 
 def _stale(err: Console, directory: Path, cases: list, backends: list[str], variant: str | None) -> None:

@@ -60,7 +60,7 @@ def execute(args: argparse.Namespace, out: Console, err: Console) -> int:
 
 
 def _live(args: argparse.Namespace, out: Console, err: Console, script: list) -> int:  # noqa: ANN001
-    from runner.cli.render import verdict_table
+    from runner.ci.render import verdict_table
     from runner.language.load import load_all
     from runner.view.app import view_scenario
 
