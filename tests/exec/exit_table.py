@@ -5,12 +5,16 @@
 Rows (one scenario each): a runtime expression error, a `send` loop, an engine abort (a 1 ug box on
 ODE: SIGABRT inside the engine), a full disk (a 32 KiB tmpfs as the output folder; without root, a
 32 KiB RLIMIT_FSIZE, the same ENOSPC/EFBIG path), a missing engine (`ghost`: registered by
-``tests/exec/ghost/sitecustomize.py`` in every process, found but not importable) and a failed
-assertion. Columns: ``run`` serially, with ``-j 2``, ``--isolate``, ``--trace-process``, on Ray
-(``--executor ray`` on a cluster started here with ``ray start --head``, stopped after) and as the row
-of ``compare`` (whose own exit code follows its rule, 0 when every run passes, else 1; the row gives
-the code ``run`` gives). A cell is the exit code and the first line of the case's message. The tests in
-``tests/exec/test_exit_codes.py`` run the same cells.
+``tests/exec/ghost/sitecustomize.py`` in every process, found but not importable), a capability the
+engine lacks (a universal joint on PyBullet), a failed assertion, and known limits. Columns: ``run``
+serially, with ``-j 2``, ``--isolate``, ``--trace-process``, on Ray (``--executor ray`` on a cluster
+started here with ``ray start --head``, stopped after), as the row of ``compare`` (whose own exit code
+follows its rule, 0 when every run passes, else 1; the row gives the code ``run`` gives), ``check``
+(against a golden file recorded first with ``scenario baseline`` where the run completes) and the
+pytest plugin (``pytest -p runner.ci.pytest_plugin``: the item's first line ends with ``[exit N]``, the
+code ``run`` gives; pytest itself exits 0 or 1). A cell is the exit code and the first line of the
+case's message. Then `compare`'s agreement outcomes: its own exit code with ``--max-divergence``. The
+tests in ``tests/exec/test_exit_codes.py`` run the same cells.
 """
 
 from __future__ import annotations
@@ -60,13 +64,20 @@ assertions:
 """
 
 
+UNIVERSAL = """\
+joints:
+  hook: {type: universal, bodies: [box, environment], axis: [1, 0, 0], axis2: [0, 1, 0]}
+"""
+
+
 @dataclass(frozen=True)
 class Row:
     name: str
     backend: str
     text: str
-    code: int  # the exit code every path must give (compare: its row)
+    code: int  # the exit code every path must give (compare: its row; pytest: the [exit N] of its report)
     full_disk: bool = False
+    variant: str | None = None  # the variant `run` picks (the first): `check` and pytest would run them all
 
 
 ROWS = [
@@ -79,23 +90,54 @@ ROWS = [
         "  ground: {plane: {}, motion: static}\n"
         "  grain: {box: [0.003, 0.003, 0.003], mass: 1e-9, pos: [0, 0, 0.1]}\n", 3),
     Row("full disk (32 KiB --out)", "pybullet", (ROOT / "scenarios" / "factory_physics.yaml").read_text(), 74,
-        full_disk=True),
+        full_disk=True, variant="door-stays-closed"),
     Row("missing engine", "ghost", BOX.format(name="ghosted"), 3),
+    Row("capability refused (universal joint on PyBullet)", "pybullet", BOX.format(name="hooked") + UNIVERSAL, 2),
     Row("failed assertion", "pybullet",
         BOX.format(name="fails") + "assertions:\n  - {name: flies, at: end, check: box.pos.z > 10}\n", 1),
     Row("known limit (expected failure)", "pybullet", BOX.format(name="limited") + LIMITED.format(near=0.1), 0),
     Row("known limit that passes", "pybullet", BOX.format(name="unlimited") + LIMITED.format(near=0), 1),
 ]  # fmt: skip
 
-PATHS = ["serial", "-j 2", "--isolate", "--trace-process", "ray", "compare"]
+LANDING = """\
+schema_version: 1
+scenario: landing
+world: {dt: 0.01, duration: 1.0}
+bodies:
+  ground: {plane: {}, motion: static}
+  box: {box: [0.4, 0.4, 0.4], density: 500, pos: [0, 0, 0.5]}
+"""
+
+
+@dataclass(frozen=True)
+class Agreement:
+    """A row of `compare`'s agreement outcomes: every run passes; its exit code follows --max-divergence."""
+
+    name: str
+    max_divergence: float
+    code: int
+
+
+#: PyBullet and MuJoCo land the box within 2.3 mm of each other (measured: the largest gap, at 0.45 s), far
+#: inside 0.05 m and far outside 1e-6 m: which side of the threshold they fall on does not hang on rounding
+AGREEMENT_BACKENDS = "pybullet,mujoco"
+AGREEMENTS = [
+    Agreement("engines agree within --max-divergence 0.05 m", 0.05, 0),
+    Agreement("engines differ beyond --max-divergence 1e-6 m", 1e-6, 1),
+]
+
+PATHS = ["serial", "-j 2", "--isolate", "--trace-process", "ray", "compare", "check", "pytest"]
+#: pytest's report of an item (its short summary's word), by the exit code `run` gives: pytest exits 0 or 1
+PYTEST_KINDS = {0: "XFAIL", 1: "FAILED"}  # any other code: "ERROR"
 
 
 @dataclass(frozen=True)
 class Cell:
-    code: int  # the command's exit code (compare: the row's code)
+    code: int  # the command's exit code (compare: the row's code; pytest: the item's [exit N])
     line: str  # the first line of the case's message, the output folder written OUT
     command_code: int  # the command's own exit code
     output: str
+    kind: str = ""  # pytest: how it reported the item (PASSED, FAILED, ERROR, XFAIL)
 
 
 def _source(folder: Path, row: Row) -> Path:
@@ -140,29 +182,61 @@ def _limits(limits: dict[str, int]) -> None:
         resource.setrlimit(resource.RLIMIT_FSIZE, (limits["fsize"], limits["fsize"]))
 
 
-def command(path: str, source: Path, backend: str, out: Path, ray: str = "auto") -> list[str]:
+def command(path: str, source: Path, backend: str, out: Path, ray: str = "auto",
+            variant: str | None = None) -> list[str]:  # fmt: skip
+    """The command of one cell (``check``: against the baselines in ``source``'s folder's ``../baselines``)."""
     cli = [sys.executable, "-m", "runner"]
     if path == "compare":
         return [*cli, "compare", str(source), "--backends", backend, "--out", str(out), "-j", "2"]
+    if path in ("check", "baseline"):
+        chosen = ["--variant", variant] if variant else []
+        return [*cli, path, str(source), "--backend", backend, "--baseline", str(source.parent.parent / "baselines"),
+                *(["--out", str(out)] if path == "check" else []), *chosen]  # fmt: skip
+    if path == "pytest":  # the plugin, as `pytest scenarios/` runs it in CI (docs/ci.md)
+        chosen = ["-k", variant] if variant else []
+        return [sys.executable, "-m", "pytest", "-p", "runner.ci.pytest_plugin", "-p", "no:cacheprovider", "-rA",
+                "-vv", "--scenario-backends", backend, "--scenario-out", str(out), *chosen, str(source)]  # fmt: skip
     extra = {"serial": [], "-j 2": ["-j", "2"], "--isolate": ["--isolate"], "--trace-process": ["--trace-process"],
              "ray": ["--executor", "ray", "--ray-address", ray]}[path]  # fmt: skip
     return [*cli, "run", str(source), "--backend", backend, "--out", str(out), *extra]
 
 
 _ROW_LINE = re.compile(r"^ {6}(.*) \[exit (\d+)\]$")  # compare: "      <first line> [exit N]"
-_CASE_LINE = re.compile(r"^  \S+ · \S+ · \S+: (.*)$")  # run's summary: "  <scenario> · <variant> · <backend>: ..."
+_CASE_LINE = re.compile(r"^  \S+ · \S+ · \S+: (.*)$")  # run's and check's summary: "  <scenario> · <variant> · ..."
+_PYTEST_LINE = re.compile(r"^(PASSED|FAILED|ERROR|XFAIL|XPASS) \S+(?: - (.*))?$")  # pytest's short summary
+_EXIT = re.compile(r"^(.*) \[exit (\d+)\]$")  # the plugin's first line: "<run's first line> [exit N]"
+
+
+def _pytest_cell(stdout: str) -> tuple[int, str, str]:
+    """The item's exit code (its ``[exit N]``; 0 for a pass or an xfail), first line and pytest's word for it."""
+    for raw in stdout.splitlines():
+        match = _PYTEST_LINE.match(raw)
+        if match:
+            kind, line = match.group(1), match.group(2) or ""
+            found = _EXIT.match(line)
+            if found:
+                return int(found.group(2)), found.group(1), kind
+            return (0 if kind in ("PASSED", "XFAIL") else -1), line, kind
+    return -1, "", ""
 
 
 def run_cell(row: Row, path: str, base: Path, ray: str = "auto") -> Cell:
     """Run ``row`` on ``path`` in a fresh folder under ``base`` (``ray``: the cluster's address)."""
     work = base / f"{re.sub(r'[^a-z0-9]+', '_', row.name)}-{re.sub(r'[^a-z0-9]+', '_', path)}"
     source = _source(work / "src", row)
+    (work / "pytest.ini").write_text("[pytest]\n")  # pytest's rootdir: nothing of this repository's config
+    env = {k: v for k, v in environment().items() if not k.startswith("PYTEST_")}
+    if path == "check":  # its golden file first, where the run completes (a failed assertion is recorded too)
+        subprocess.run(command("baseline", source, row.backend, work, variant=row.variant), capture_output=True,
+                       timeout=600, env=env, cwd=work)  # fmt: skip
     with output_folder(work, row.full_disk) as (out, limits):
-        done = subprocess.run(command(path, source, row.backend, out, ray), capture_output=True, text=True, timeout=600,
-                              env=environment(), cwd=work, preexec_fn=lambda: _limits(limits))  # fmt: skip
+        done = subprocess.run(command(path, source, row.backend, out, ray, row.variant), capture_output=True, text=True,
+                              timeout=600, env=env, cwd=work, preexec_fn=lambda: _limits(limits))  # fmt: skip
     text = done.stdout + done.stderr
-    code, line = done.returncode, ""
-    for raw in done.stdout.splitlines():
+    code, line, kind = done.returncode, "", ""
+    if path == "pytest":
+        code, line, kind = _pytest_cell(done.stdout)
+    for raw in done.stdout.splitlines() if path != "pytest" else ():
         match = (_ROW_LINE if path == "compare" else _CASE_LINE).match(raw)
         if match:
             line = match.group(1)
@@ -172,7 +246,20 @@ def run_cell(row: Row, path: str, base: Path, ray: str = "auto") -> Cell:
     if not line:  # refused before any case ran: the command's first error line
         line = next((x for x in done.stderr.splitlines() if x.strip()), "")
     line = line.replace(str(out / "traces"), "OUT").replace(str(out), "OUT").replace(str(work), "WORK")
-    return Cell(code, line.strip(), done.returncode, text)
+    return Cell(code, line.strip(), done.returncode, text, kind)
+
+
+def agreement_cell(row: Agreement, base: Path) -> Cell:
+    """`compare` of the landing box on PyBullet and MuJoCo with ``--max-divergence``; the line is its headline."""
+    work = base / f"agreement-{re.sub(r'[^a-z0-9]+', '_', row.name)}"
+    source = work / "landing.yaml"
+    work.mkdir(parents=True)
+    source.write_text(LANDING)
+    cmd = [sys.executable, "-m", "runner", "compare", str(source), "--backends", AGREEMENT_BACKENDS, "--out",
+           str(work / "out"), "-j", "2", "--max-divergence", f"{row.max_divergence:g}"]  # fmt: skip
+    done = subprocess.run(cmd, capture_output=True, text=True, timeout=600, env=environment(), cwd=work)
+    line = next((x for x in done.stdout.splitlines() if " runs pass" in x), "")
+    return Cell(done.returncode, line.strip(), done.returncode, done.stdout + done.stderr)
 
 
 @contextlib.contextmanager
@@ -211,7 +298,16 @@ def table(paths: list[str], threads: int = 2, ray: str = "auto") -> list[tuple[R
         return [(r, {p: futures[r.name, p].result() for p in paths}) for r in ROWS]
 
 
-def markdown(rows: list[tuple[Row, dict[str, Cell]]], paths: list[str]) -> str:
+def agreements(threads: int = 2) -> list[tuple[Agreement, Cell]]:
+    from concurrent.futures import ThreadPoolExecutor
+
+    with tempfile.TemporaryDirectory(prefix="exit-table-") as tmp, ThreadPoolExecutor(threads) as pool:
+        futures = [pool.submit(agreement_cell, row, Path(tmp)) for row in AGREEMENTS]
+        return [(row, f.result()) for row, f in zip(AGREEMENTS, futures, strict=True)]
+
+
+def markdown(rows: list[tuple[Row, dict[str, Cell]]], paths: list[str],
+             agreed: list[tuple[Agreement, Cell]] | None = None) -> str:  # fmt: skip
     lines = ["| failure | " + " | ".join(f"`{p}`" for p in paths) + " |", "|---" * (len(paths) + 1) + "|"]
     for row, cells in rows:
         lines.append(f"| {row.name} | " + " | ".join(str(cells[p].code) for p in paths) + " |")
@@ -223,6 +319,15 @@ def markdown(rows: list[tuple[Row, dict[str, Cell]]], paths: list[str]) -> str:
     compare = [f"{row.name} {cells['compare'].command_code}" for row, cells in rows if "compare" in cells]
     if compare:
         lines += ["", "`compare`'s own exit code: " + ", ".join(compare) + "."]
+    plugin = [f"{row.name} {cells['pytest'].kind}" for row, cells in rows if "pytest" in cells]
+    if plugin:
+        own = sorted({f"{cells['pytest'].command_code}" for _, cells in rows if "pytest" in cells})
+        lines += ["", "pytest's report of the item: " + ", ".join(plugin) + "; pytest's own exit code: "
+                  f"{', '.join(own)} (0 for the expected failure, else 1)."]  # fmt: skip
+    if agreed:
+        lines += ["", f"`compare`'s agreement outcomes (a box landing on {AGREEMENT_BACKENDS}, every run passes):", "",
+                  "| outcome | `compare` | headline |", "|---|---|---|"]  # fmt: skip
+        lines += [f"| {row.name} | {cell.code} | {cell.line} |" for row, cell in agreed]
     return "\n".join(lines) + "\n"
 
 
@@ -237,11 +342,13 @@ def main(argv: list[str] | None = None) -> int:
             rows = table(paths, ray=address)
     else:
         rows = table(paths)
-    text = markdown(rows, paths)
+    agreed = agreements()
+    text = markdown(rows, paths, agreed)
     sys.stdout.write(text)
     if args.markdown:
         args.markdown.write_text(text)
     bad = [(r.name, p, c.code) for r, cells in rows for p, c in cells.items() if c.code != r.code]
+    bad += [(r.name, "compare", c.code) for r, c in agreed if c.code != r.code]
     lines = [(r.name, sorted({c.line for c in cells.values()})) for r, cells in rows]
     for name, p, code in bad:
         sys.stderr.write(f"{name} on {p}: exit {code}\n")

@@ -1,11 +1,13 @@
-"""One exit code and one first message line per kind of failure, whatever runs the case (issue 14).
+"""One exit code and one first message line per kind of failure, whatever runs the case (issues 14, 27).
 
 The cells of ``tests/exec/exit_table.py`` (the script that prints the table for docs/reliability.md), run
 as a user runs the command: a runtime expression error, a `send` loop, an engine abort, a full disk, a
-missing engine, a failed assertion, a known limit (an expected failure: exit 0) and a known limit that
-passes (exit 1), each serially, with ``-j 2``, ``--isolate``, ``--trace-process``,
-on Ray (a cluster started with ``ray start --head``, when the ``ray`` extra is installed) and as a row of
-``compare``. About a minute (30 commands, two at a time), plus about 40 s for Ray.
+missing engine, a capability the engine lacks, a failed assertion, a known limit (an expected failure:
+exit 0) and a known limit that passes (exit 1), each serially, with ``-j 2``, ``--isolate``,
+``--trace-process``, on Ray (a cluster started with ``ray start --head``, when the ``ray`` extra is
+installed), as a row of ``compare``, through ``check`` (against a golden file recorded first) and through
+the pytest plugin; then `compare`'s agreement outcomes with ``--max-divergence``. About 4 minutes on the
+shared 2-core machine (74 commands and 9 baselines, two at a time), plus about 40 s for Ray.
 """
 
 from __future__ import annotations
@@ -19,7 +21,19 @@ from pathlib import Path
 import pytest
 
 from backends.registry import is_installed
-from tests.exec.exit_table import PATHS, ROWS, Cell, Row, environment, ray_cluster, table
+from tests.exec.exit_table import (
+    AGREEMENTS,
+    PATHS,
+    PYTEST_KINDS,
+    ROWS,
+    Agreement,
+    Cell,
+    Row,
+    agreements,
+    environment,
+    ray_cluster,
+    table,
+)
 
 pytestmark = pytest.mark.slow
 NEEDED = {"ode": is_installed("ode"), "pybullet": is_installed("pybullet")}
@@ -63,6 +77,38 @@ is an expected failure); a full disk under its report is 74."""
     assert own == {r.name: 74 if r.full_disk else 1 if r.code else 0 for r in ROWS}
 
 
+@pytest.mark.parametrize("row", ROWS, ids=[r.name for r in ROWS])
+def test_pytest_reports_each_row_as_run_judges_it(cells: dict[str, dict[str, Cell]], row: Row) -> None:
+    """The plugin's item carries `run`'s first line and exit code (checked above with every path); pytest's own
+    verdict is of the same kind: an error for what stopped the case (bad input, a refused capability, a
+    missing engine, a crash, a full disk), a failure for a failed assertion, an xfail for a known limit; and
+    pytest exits by its own rule, 1 when an item failed or errored, else 0."""
+    cell = cells[row.name]["pytest"]
+    assert cell.kind == PYTEST_KINDS.get(row.code, "ERROR"), cell.output[-3000:]
+    assert cell.command_code == (0 if row.code == 0 else 1), cell.output[-3000:]
+
+
+def test_check_exits_as_run(cells: dict[str, dict[str, Cell]]) -> None:
+    """`check`'s own exit code is its case's (most_severe of one): the code `run` gives, on every row."""
+    assert {n: found["check"].command_code for n, found in cells.items()} == {r.name: r.code for r in ROWS}
+
+
+@pytest.fixture(scope="module")
+def agreed() -> dict[str, Cell]:
+    if not (NEEDED["pybullet"] and is_installed("mujoco")):
+        pytest.skip("engine not installed: pybullet and mujoco are compared")
+    return {row.name: cell for row, cell in agreements()}
+
+
+@pytest.mark.parametrize("row", AGREEMENTS, ids=[r.name for r in AGREEMENTS])
+def test_compare_agreement_outcomes(agreed: dict[str, Cell], row: Agreement) -> None:
+    """Every assertion passes; with --max-divergence, engines apart by more than it fail `compare` (exit 1),
+    engines within it pass (exit 0)."""
+    cell = agreed[row.name]
+    assert cell.code == row.code, cell.output[-3000:]
+    assert "Traceback" not in cell.output, cell.output[-3000:]
+
+
 def test_the_ray_column_ran(cells: dict[str, dict[str, Cell]]) -> None:
     if not HAS_RAY:
         pytest.skip("the `ray` extra is not installed: pip install 'physics-scenarios[ray]'")
@@ -94,6 +140,6 @@ def test_known_limits_exit_alike_in_sweep_and_pytest(tmp_path: Path, row: Row) -
     assert (tmp_path / "sweep" / "sweep.csv").read_text().count(f",{verdict},") == 2  # both dt
     summary = done["pytest"].stdout
     if row.code == 0:
-        assert "1 xfailed" in summary and "XFAIL limit.yaml::base[pybullet] - rests: known limit on pybullet" in summary
+        assert "1 xfailed" in summary and "XFAIL limit.yaml::base[pybullet] - known limit: rests on pybullet" in summary
     else:
         assert "1 failed" in summary and "known limit no longer needed: rests on pybullet now passes" in summary
