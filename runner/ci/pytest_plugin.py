@@ -162,7 +162,7 @@ class ScenarioItem(pytest.Item):
 
     def setup(self) -> None:
         if self.problem:  # the file could not be read: `run` refuses it as bad input (exit 2)
-            _error(f"error: {self.problem}", 2)
+            self._error(f"error: {self.problem}", 2)
         from backends.registry import engine_version
         from runner.errors import ExitCode, PhysicsScenariosError
         from runner.exec.exits import classify
@@ -172,14 +172,19 @@ class ScenarioItem(pytest.Item):
             text, code, limits = self._run()
         except PhysicsScenariosError as exc:  # refused before the case could run: an unknown backend
             exit = classify(exc)
-            _error(exit.headline, exit.code)
-        self.user_properties.append(("exit_code", int(code)))
+            self._error(exit.headline, exit.code)
         if code in (ExitCode.INTERRUPTED, ExitCode.TERMINATED):
             raise KeyboardInterrupt  # pytest stops, as `run` does
         if code not in (ExitCode.OK, ExitCode.ASSERTION_FAILED):
-            _error(text, code)
+            self._error(text, code)
+        self.user_properties.append(("exit_code", int(code)))
         self._failure = text if code == ExitCode.ASSERTION_FAILED else ""
         self._limits = limits
+
+    def _error(self, text: str, code: int) -> NoReturn:
+        """The item is a pytest error (raised in setup), reported as its text alone (pytest_runtest_makereport)."""
+        self.user_properties.append(("exit_code", int(code)))
+        raise ScenarioCaseError(_with_code(text, code))
 
     def _run(self) -> tuple[str, int, list[str]]:
         """The case run (and checked): its report text, exit code, and known-limit lines."""
@@ -217,11 +222,6 @@ def _with_code(text: str, code: int) -> str:
     """``<first line> [exit N]``: the first line `scenario run` prints for the case, and its exit code."""
     first, _, rest = text.partition("\n")
     return f"{first} [exit {code}]" + (f"\n{rest}" if rest else "")
-
-
-def _error(text: str, code: int) -> NoReturn:
-    """The item is a pytest error (raised in setup), reported as its text alone (pytest_runtest_makereport)."""
-    raise ScenarioCaseError(_with_code(text, code))
 
 
 @pytest.hookimpl(wrapper=True)
