@@ -6,9 +6,11 @@ for it (``--require-agreement``, or a run beyond ``--max-divergence``). It says,
 
 * the engines that miss a known truth (stated by a joint's constraint or an analytic reference), each
   judged on its own: "dart misses the truth by up to 1.2 cm (door off the slider's line) from 1.04 s";
+* with ``--reference``, the engines that diverge from that engine's run where no truth is known;
 * the engines that depart from a majority where no truth is known (reports.consensus), with the cause
   when the data show one (reports.causes): "ode departs from the other 3 from 1.08 s by up to 3.15 cm
   (box position); its door sits 8.11 mm off the slider's line, ...";
+* the engines that meet a truth the majority they depart from misses (the truth wins: they are not named);
 * the quantities on which no majority formed, with the groups;
 * else "4 engines agree".
 
@@ -67,6 +69,7 @@ def headline(runs: Sequence[dict[str, Any]], quantities: Sequence[dict[str, Any]
     total = sum(r["assertions"]["total"] for r in runs)
     broken = [r for r in runs if r["status"] not in ("passed", "failed")]
     misses: list[dict[str, Any]] = []
+    diverges: list[dict[str, Any]] = []
     departures: list[dict[str, Any]] = []
     overruled: list[dict[str, Any]] = []
     split: list[dict[str, Any]] = []
@@ -74,8 +77,12 @@ def headline(runs: Sequence[dict[str, Any]], quantities: Sequence[dict[str, Any]
         common = {"quantity": q["id"], "label": q["label"], "unit": q["unit"], "threshold": q["threshold"]}
         verdict = q.get("agreement")
         if verdict is None:
-            misses += [{"backend": b, **common, "max": q["deviation"][b]["max"],
-                        "from": q["deviation"][b]["first_over"]} for b in q["diverging"]]  # fmt: skip
+            found = [{"backend": b, **common, "max": q["deviation"][b]["max"],
+                      "from": q["deviation"][b]["first_over"]} for b in q["diverging"]]  # fmt: skip
+            if q["truth"]["kind"] == "reference":
+                diverges += [{**d, "reference": q["truth"]["backend"]} for d in found]
+            else:
+                misses += found
             continue
         departures += [{"backend": d["backend"], **common, "majority": d["majority"], "max": d["max"],
                         "from": d["from"]} for d in verdict["departures"] if not d.get("overruled")]  # fmt: skip
@@ -86,17 +93,18 @@ def headline(runs: Sequence[dict[str, Any]], quantities: Sequence[dict[str, Any]
     leaving = _by_backend(departures)
     for d in leaving:
         d["cause"] = (causes or {}).get(d["backend"])
-    firsts = [d["from"] for d in misses + departures + split if d["from"] is not None]
+    firsts = [d["from"] for d in misses + diverges + departures + split if d["from"] is not None]
     return _words({
         "assertions": {"passed": failed == 0 and not broken, "failed": failed, "total": total,
                        "runs_not_finished": len(broken), "not_finished": [r["label"] for r in broken]},
-        "agreement": {"agrees": not (misses or departures or split), "required": required,
+        "agreement": {"agrees": not (misses or diverges or departures or split), "required": required,
                       "engines": sum(r.get("end_time") is not None for r in runs), "quantities": len(quantities),
                       "diverging": sum(bool(q["diverging"]) or bool(q.get("agreement", {}).get("no_majority_from")
                                                                       is not None) for q in quantities),
                       "first_over": min(firsts) if firsts else None,
-                      "backends": sorted({d["backend"] for d in misses + departures}),
-                      "misses": _by_backend(misses), "departures": leaving, "no_majority": split,
+                      "backends": sorted({d["backend"] for d in misses + diverges + departures}),
+                      "misses": _by_backend(misses), "diverges": _by_backend(diverges), "departures": leaving,
+                      "no_majority": split,
                       "truth_wins": _by_backend(overruled)},
         "within_max_divergence": all(r.get("within_max_divergence") is not False for r in runs),
     })  # fmt: skip
@@ -131,7 +139,7 @@ def merge(parts: Sequence[dict[str, Any]], names: Sequence[str] = ()) -> dict[st
                       "diverging": sum(x["diverging"] for x in g), "first_over": min(firsts) if firsts else None,
                       "cases_diverging": sum(not x["agrees"] for x in g),
                       "backends": sorted({b for x in g for b in x["backends"]}),
-                      "misses": across("misses"), "departures": across("departures"),
+                      "misses": across("misses"), "diverges": across("diverges"), "departures": across("departures"),
                       "truth_wins": across("truth_wins"),
                       "no_majority": [{**s, "case": n}
                                       for n, x in zip(names, g, strict=True) for s in x["no_majority"]]},
@@ -163,6 +171,10 @@ def _agreement_words(g: dict[str, Any], cases: int) -> list[str]:
         when = f" from {d['from']:g} s" if d["from"] is not None else ""
         said.append(f"{d['backend']} misses the truth{_in_cases(d, cases)} by up to {amount(d['max'], d['unit'])} "
                     f"({d['label']}{_more(d)}){when}")  # fmt: skip
+    for d in g["diverges"]:
+        when = f" from {d['from']:g} s" if d["from"] is not None else ""
+        said.append(f"{d['backend']} diverges from {d['reference']}'s run{_in_cases(d, cases)} by up to "
+                    f"{amount(d['max'], d['unit'])} ({d['label']}{_more(d)}){when}")  # fmt: skip
     for d in g["departures"]:
         others = (f"the other {len(d['majority'])}" if len(d["majority"]) == g["engines"] - 1
                   else f"the majority ({', '.join(d['majority'])})")  # fmt: skip

@@ -149,6 +149,9 @@ def _agreement_list(h: dict[str, Any]) -> str:
         groups = " | ".join(", ".join(x) for x in s["groups"])
         items.append(f'<li class="split">{where}no majority on {escape(s["label"])} from {s["from"]:g} s: '
                      f"{escape(groups)}</li>")
+    for d in g["diverges"]:
+        items.append(f'<li class="diverges"><b>{escape(d["backend"])}</b> diverges from {escape(d["reference"])}\'s '
+                     f"run by up to {fmt_amount(d['max'], d['unit'])} ({escape(', '.join(d['quantities']))})</li>")
     for d in g["misses"]:
         items.append(f'<li class="miss"><b>{escape(d["backend"])}</b> misses the truth by up to '
                      f"{fmt_amount(d['max'], d['unit'])} ({escape(', '.join(d['quantities']))})</li>")
