@@ -95,11 +95,13 @@ def write_report(
     reference: str | None = None,
     max_divergence: float | None = None,
     references: Sequence[Reference] = (),
+    require_agreement: bool = False,
 ) -> ReportFiles:
     """Read the runs named by ``paths`` (trace, partial trace, outcome or cost files, or folders) and
     write the reports into ``out_dir``; ``references`` are analytic truths (reports.truth.Reference)."""
     runs = load_runs(paths)
-    doc = build_document(runs, reference=reference, max_divergence=max_divergence, references=references)
+    doc = build_document(runs, reference=reference, max_divergence=max_divergence, references=references,
+                         require_agreement=require_agreement)
     out_dir = Path(out_dir)
     try:
         out_dir.mkdir(parents=True, exist_ok=True)

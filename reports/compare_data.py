@@ -6,10 +6,11 @@ traces' resolution. ``report.json`` is this document; the HTML and markdown page
 (plus the traces' poses, shapes and sounds for pictures and audio). The layout is documented in
 docs/report-schema.md and checked by docs/report.schema.json; :mod:`reports.build` writes it.
 
-Each case says first how every engine, the reference included, compares with the truth where one is
-known (values the assertions state, analytic references, what joints allow: reports.truth), then how
-the rest compares with the reference engine (reports.quantities), and a headline that keeps assertions
-and agreement apart (reports.headline).
+Each case says first how every engine compares with the truth where one is known (values the
+assertions state, analytic references, what joints allow: reports.truth), then how the engines compare
+with each other where none is (reports.quantities, reports.consensus; with an explicit ``reference``,
+how each compares with that engine's run), why an engine departs where the data show it
+(reports.causes), and a headline that keeps assertions and agreement apart (reports.headline).
 """
 
 from __future__ import annotations
@@ -25,17 +26,18 @@ import yaml
 from backends.registry import REFERENCE_BACKEND
 from reports import divergence as dv
 from reports import trace_format as tf
+from reports.causes import joint_sag
 from reports.events_data import compare_events
 from reports.headline import headline, merge
 from reports.moments import key_moments
-from reports.quantities import KINDS, UNITS, quantities
+from reports.quantities import KINDS, UNITS, quantities, truth_wins
 from reports.runs import ReportError, Run
 from reports.trace_reader import Trace
 from reports.truth import Reference, stated_values
 
 __all__ = ["REPORT_FORMAT", "build_document", "default_reference", "round9"]
 
-REPORT_FORMAT = 2
+REPORT_FORMAT = 3
 REFERENCE_PREFERENCE = REFERENCE_BACKEND
 
 
@@ -169,12 +171,16 @@ def _run_entry(run: Run, qs: list[dict[str, Any]], max_divergence: float | None)
 
 
 def _case(runs: list[Run], reference: str, thresholds: dict[str, float], max_div: float | None,
-          references: list[Reference]) -> dict[str, Any]:  # fmt: skip
+          references: list[Reference], explicit: bool, required: bool) -> dict[str, Any]:  # fmt: skip
     ref = next((r for r in runs if r.backend == reference), None)
     first = next((r for r in runs if r.trace is not None), None)
     meta = first.trace.scenario if first is not None and first.trace is not None else {}
-    qs = quantities(runs, ref, thresholds, references)
+    qs = quantities(runs, ref, thresholds, references, explicit)
+    stated = stated_values(runs)
+    truth_wins(qs, stated)
     entries = [_run_entry(r, qs, max_div) for r in runs]
+    departing = [d["backend"] for q in qs for d in q.get("agreement", {}).get("departures", [])]
+    causes = joint_sag(runs, qs, departing)
     dt = float(meta[tf.KEY_DT]) if tf.KEY_DT in meta else None
     duration = float(meta[tf.KEY_DURATION]) if tf.KEY_DURATION in meta else None
     case: dict[str, Any] = {
@@ -185,10 +191,10 @@ def _case(runs: list[Run], reference: str, thresholds: dict[str, float], max_div
         "dt": dt,
         "duration": duration,
         "reference": reference if ref is not None else None,
-        "headline": headline(entries, qs),
+        "headline": headline(entries, qs, causes, required),
         "runs": entries,
         "verdicts": _verdict_matrix(runs),
-        "stated": stated_values(runs),
+        "stated": stated,
         "quantities": qs,
         "trajectories": {r.backend: _trajectory(r) for r in runs},
         "events": compare_events(runs, reference),
@@ -214,14 +220,19 @@ def build_document(
     max_divergence: float | None = None,
     thresholds: dict[str, float] | None = None,
     references: Sequence[Reference] = (),
+    require_agreement: bool = False,
 ) -> dict[str, Any]:
-    """The report as JSON data. ``reference`` defaults to :func:`default_reference` of the runs' backends;
-    ``max_divergence`` (metres) makes a run whose position quantities (bodies, sliders, joint drift) stray
-    further from their truth a failure, and is then the position threshold; ``thresholds`` override the
-    defaults per physical kind (``position`` in m, ``angle`` in rad); ``references`` are analytic truths."""
+    """The report as JSON data. Where no truth is known the engines are compared with each other, unless
+    ``reference`` names an engine to measure them against; the events are matched against ``reference``,
+    which defaults to :func:`default_reference` of the runs' backends. ``max_divergence`` (metres) makes a
+    run whose position quantities (bodies, sliders, joint drift) stray further from their truth a failure,
+    and is then the position threshold; ``thresholds`` override the defaults per physical kind
+    (``position`` in m, ``angle`` in rad); ``references`` are analytic truths; ``require_agreement`` makes
+    disagreement (an engine that misses a truth or departs, or no majority) fail the report."""
     if not runs:
         raise ReportError("no runs to report on")
     names = sorted({r.backend for r in runs})
+    explicit = reference is not None
     reference = reference or default_reference(names)
     if reference not in names:
         raise ReportError(f"the reference `{reference}` is not among the runs' backends ({', '.join(names)})")
@@ -229,7 +240,7 @@ def build_document(
     limits.update({k: float(v) for k, v in (thresholds or {}).items() if k in KINDS})
     if max_divergence is not None:
         limits["position"] = float(max_divergence)
-    backends = [reference, *[n for n in names if n != reference]]
+    backends = [reference, *[n for n in names if n != reference]] if explicit else names
     rank = {b: i for i, b in enumerate(backends)}
     groups: dict[tuple[str, str], list[Run]] = {}
     for run in runs:
@@ -237,19 +248,22 @@ def build_document(
     orders = {s: _variant_order([r for r in runs if r.scenario == s]) for s, _ in groups}
     keys = sorted(groups, key=lambda k: (k[0], orders[k[0]].get(k[1], len(orders[k[0]])), k[1]))
     truths = list(references)
-    cases = [_case(sorted(groups[k], key=lambda r: rank[r.backend]), reference, limits, max_divergence, truths)
-             for k in keys]  # fmt: skip
+    cases = [_case(sorted(groups[k], key=lambda r: rank[r.backend]), reference, limits, max_divergence, truths,
+                   explicit, require_agreement) for k in keys]  # fmt: skip
     all_runs = [r for c in cases for r in c["runs"]]
+    top = merge([c["headline"] for c in cases], [c["variant"] for c in cases])
     return {
         "report_format": REPORT_FORMAT,
         "generator": _generator(),
         "reference": reference,
+        "comparison": "reference" if explicit else "engines",
+        "require_agreement": require_agreement,
         "backends": backends,
         "thresholds": {k: round9(v) for k, v in limits.items()},
         "units": dict(UNITS),
         "max_divergence": max_divergence,
-        "passed": all(r["ok"] for r in all_runs),
-        "headline": merge([c["headline"] for c in cases]),
+        "passed": top["badge"] == "PASS",
+        "headline": top,
         "summary": {
             "cases": len(cases),
             "runs": len(all_runs),

@@ -1,9 +1,10 @@
 """report.html: one self-contained page that works offline and makes no request.
 
-At the top, the verdict in words (assertions and agreement apart, reports.headline) and a matrix of
-variants x backends; per case, a section of about two screens: runs, how every engine compares with the
-truth (stated values, analytic references, joint constraints; the reference engine's own deviation
-beside the others'), then with the reference engine where no truth is known, pictures of the moments
+At the top, the verdict in words (assertions and agreement apart, reports.headline), the engines that
+depart (with the documented cause the data show) and the splits, and a matrix of variants x backends;
+per case, a section of about two screens: runs, how every engine compares with the truth (stated values,
+analytic references, joint constraints), then how the engines compare with each other where no truth is
+known (or with the engine named by --reference), pictures of the moments
 that matter, and, collapsed, the side-by-side 3D replay, the charts, trajectories, events and sounds,
 every verdict, engines and cost.
 
@@ -26,6 +27,7 @@ from reports import html_case as hc
 from reports.audio import trace_audio
 from reports.charts import render
 from reports.charts.style import looks as make_looks
+from reports.headline import amount as fmt_amount
 from reports.html_charts import deviation_charts, event_charts, trajectory_charts
 from reports.runs import Run
 from reports.scene_pictures import CasePictures
@@ -60,7 +62,7 @@ def _overview(doc: dict[str, Any]) -> str:
             a = r["assertions"]
             ok = r["status"] == "passed"
             first = r["agreement"]["first_over"]
-            agree = "agrees" if not r["agreement"]["diverging"] else f"diverges from {first:g} s"
+            agree = "agrees" if not r["agreement"]["diverging"] else f"{hc.agreement_word(case, b)} from {first:g} s"
             label = f"{a['passed']}/{a['total']}" if ok else r["label"]
             out.append(f'<td><span class="{"ok" if ok else "bad"}">{"✓" if ok else "✗"} {escape(label)}</span> · '
                        f'<span class="{"ok" if not r["agreement"]["diverging"] else "bad"}">{agree}</span></td>')
@@ -93,16 +95,18 @@ def _case(doc: dict[str, Any], case: dict[str, Any], index: int, runs: dict[str,
     known, against_ref = hc.quantity_tables(case, backends)
     stated = hc.stated_table(case, backends)
     meta = (f"{escape(case['scenario'])} · {escape(str(case['scenario_file']))} · {_dt_text(case['dt'])} · "
-            f"{end:g} s simulated · reference <b>{escape(str(case['reference']))}</b>")  # fmt: skip
+            f"{end:g} s simulated · {'reference' if doc['comparison'] == 'reference' else 'events matched against'} "
+            f"<b>{escape(str(case['reference']))}</b>")  # fmt: skip
     parts = [
         f'<section class="case" id="case-{index}"><h2>{escape(case["variant"])} '
         f'{hc.badge(h["badge"] == "PASS", h["badge"])}<span class="headline">{escape(h["text"])}</span></h2>',
+        _agreement_list(h),
         f'<p class="meta">{meta}</p>',
         hc.runs_table(case, looks, links),
         "<h3>Against the truth: values the scenario states and what the joints allow (every engine, the "
         "reference included)</h3>" if stated or known else "",
         stated, known,
-        f"<h3>Against {escape(str(case['reference']))}'s run, where no truth is known</h3>" if against_ref else "",
+        f"<h3>{_unknown_title(doc, case)}, where no truth is known</h3>" if against_ref else "",
         against_ref,
         "<h3>Moments</h3>",
         hc.moments_html(case, pictures),
@@ -118,6 +122,40 @@ def _case(doc: dict[str, Any], case: dict[str, Any], index: int, runs: dict[str,
     parts.append(f"<details><summary>Engines and cost</summary>{hc.engines_table(case)}</details>")
     parts.append("</section>")
     return "".join(parts)
+
+
+def _unknown_title(doc: dict[str, Any], case: dict[str, Any]) -> str:
+    if doc["comparison"] == "reference":
+        return f"Against {escape(str(case['reference']))}'s run"
+    return "The engines compared with each other (groups that agree within the threshold; a majority names who departs)"
+
+
+def _agreement_list(h: dict[str, Any]) -> str:
+    """The departures (with their documented causes) and the splits of the headline, one line each."""
+    g = h["agreement"]
+    items = []
+    for d in g["departures"]:
+        c = d.get("cause")
+        cause = ""
+        if c:
+            cause = (f" — {escape(c['body'])} {fmt_amount(c['measured'], 'm')} off its joint: the sag ERP "
+                     f"{c['erp']:g} / CFM {c['cfm']:g} predict for {c['load']:.4g} N at h = {c['h']:g} s is "
+                     f"{fmt_amount(c['predicted'], 'm')} (± {c['margin']:.0%}); <code>{escape(c['link'])}</code>")
+        items.append(f'<li class="departure" data-backend="{escape(d["backend"])}"><b>{escape(d["backend"])}</b> '
+                     f"departs from {escape(', '.join(d['majority']))} from {d['from']:g} s, up to "
+                     f"{fmt_amount(d['max'], d['unit'])} ({escape(', '.join(d['quantities']))}){cause}</li>")
+    for s in g["no_majority"]:
+        where = f"{escape(s['case'])}: " if "case" in s else ""
+        groups = " | ".join(", ".join(x) for x in s["groups"])
+        items.append(f'<li class="split">{where}no majority on {escape(s["label"])} from {s["from"]:g} s: '
+                     f"{escape(groups)}</li>")
+    for d in g["diverges"]:
+        items.append(f'<li class="diverges"><b>{escape(d["backend"])}</b> diverges from {escape(d["reference"])}\'s '
+                     f"run by up to {fmt_amount(d['max'], d['unit'])} ({escape(', '.join(d['quantities']))})</li>")
+    for d in g["misses"]:
+        items.append(f'<li class="miss"><b>{escape(d["backend"])}</b> misses the truth by up to '
+                     f"{fmt_amount(d['max'], d['unit'])} ({escape(', '.join(d['quantities']))})</li>")
+    return f'<ul class="agreement">{"".join(items)}</ul>' if items else ""
 
 
 def _joint_kinds(runs: dict[str, Run]) -> dict[str, str]:
@@ -177,19 +215,22 @@ def render_html(doc: dict[str, Any], runs: list[Run], pictures: list[CasePicture
         sections.append(_case(doc, case, i, case_runs, pictures[i], links[i], charts))
     h = doc["headline"]
     s = doc["summary"]
+    elsewhere = (f"against <b>{escape(doc['reference'])}</b>'s run elsewhere" if doc["comparison"] == "reference"
+                 else "compared with the other engines elsewhere (no engine is the truth)")
     truth = ("each engine is measured against the truth where one is known (stated values, joint constraints, "
-             f"analytic references) and against <b>{escape(doc['reference'])}</b>'s run elsewhere")  # fmt: skip
+             f"analytic references) and {elsewhere}")  # fmt: skip
     layout_link = (f' · <a href="{escape(layout)}">Foxglove layout</a> (open a trace in Foxglove, then import it)'
                    if layout else "")  # fmt: skip
     specs = json.dumps(charts, separators=(",", ":"), sort_keys=True, allow_nan=False)
     gate = " and --max-divergence" if doc["max_divergence"] is not None else ""
+    gate += "; the engines must agree (--require-agreement)" if doc["require_agreement"] else ""
     return (
         '<!DOCTYPE html>\n<html lang="en"><head><meta charset="utf-8">'
         '<meta name="viewport" content="width=device-width, initial-scale=1">'
         f'<link rel="icon" href="data:,"><title>{escape(title)}</title><style>{_asset("report.css")}</style></head>'
         f"<body><h1>{escape(title)}</h1>"
         f'<p class="verdict">{hc.badge(h["badge"] == "PASS", h["badge"])}<span class="headline" id="headline">'
-        f'{escape(h["text"])}</span></p>'
+        f'{escape(h["text"])}</span></p>{_agreement_list(h)}'
         f'<p class="meta">{s["ok"]}/{s["runs"]} runs pass their assertions{gate} · '
         f"{h['agreement']['quantities']} quantities compared, {h['agreement']['diverging']} beyond their threshold · "
         f"{truth} · {_thresholds(doc)}{layout_link} · "

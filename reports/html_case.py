@@ -13,8 +13,8 @@ from reports.charts.style import Look
 from reports.html_charts import truth_name
 from reports.scene_pictures import HEIGHT, WIDTH, CasePictures
 
-__all__ = ["badge", "fmt", "key", "moments_html", "replay_html", "runs_table", "stated_table", "quantity_tables",
-           "verdict_matrix", "events_table", "engines_table"]  # fmt: skip
+__all__ = ["agreement_word", "badge", "fmt", "groups_text", "key", "moments_html", "replay_html", "runs_table",
+           "stated_table", "quantity_tables", "verdict_matrix", "events_table", "engines_table"]  # fmt: skip
 
 GAP = 8
 
@@ -49,6 +49,21 @@ def _worst(case: dict[str, Any], backend: str) -> tuple[dict[str, Any], float] |
     return worst
 
 
+def agreement_word(case: dict[str, Any], backend: str) -> str:
+    """How a run that is named on some quantity strays: it departs from a majority of the engines, misses a
+    known truth, or diverges from the reference engine's run."""
+    kinds = {q["truth"]["kind"] for q in case["quantities"] if backend in q["diverging"]}
+    words = [w for k, w in (("engines", "departs"), ("reference", "diverges")) if k in kinds]
+    if kinds - {"engines", "reference"}:
+        words.insert(0, "misses the truth")
+    return " and ".join(words) or "agrees"
+
+
+def groups_text(q: dict[str, Any]) -> str:
+    """The groups of engines that agree on ``q`` at the end (a majority first), e.g. "dart, mujoco | ode"."""
+    return " | ".join(", ".join(g) for g in q["agreement"]["groups"])
+
+
 def runs_table(case: dict[str, Any], looks: dict[str, Look], links: dict[str, str | None]) -> str:
     head = ("backend", "run", "assertions", "agreement", "largest deviation / threshold", "trace", "wall time")
     out = ['<table class="runs"><tr>', *(f"<th>{h}</th>" for h in head), "</tr>"]
@@ -64,7 +79,7 @@ def runs_table(case: dict[str, Any], looks: dict[str, Look], links: dict[str, st
         div = r["agreement"]["diverging"]
         if div:
             labels = [q["label"] for q in case["quantities"] if q["id"] in div]
-            agree = f'<span class="bad">{len(div)} diverge{"s" if len(div) == 1 else ""} from ' \
+            agree = f'<span class="bad">{agreement_word(case, b)} from ' \
                     f'{fmt(r["agreement"]["first_over"], "s")}</span>: {escape(", ".join(labels))}'  # fmt: skip
         else:
             agree = '<span class="ok">within thresholds</span>'
@@ -123,11 +138,23 @@ def stated_table(case: dict[str, Any], backends: list[str]) -> str:
     return "".join(out)
 
 
+def _judged(q: dict[str, Any]) -> str:
+    """What the engines concluded on a quantity without a truth: the groups, who departs, no majority."""
+    a = q["agreement"]
+    said = [escape(groups_text(q))]
+    for d in a["departures"]:
+        said.append(f'<span class="bad">{escape(d["backend"])} departs from {fmt(d["from"], "s")}, up to '
+                    f'{fmt(d["max"], q["unit"])}</span>')  # fmt: skip
+    if a["no_majority_from"] is not None:
+        said.append(f'<span class="close">no majority from {fmt(a["no_majority_from"], "s")}</span>')
+    return "<br>".join(said)
+
+
 def _quantity_rows(qs: list[dict[str, Any]], backends: list[str], reference: str | None) -> list[str]:
     out = []
     for q in qs:
         truth = q["truth"]
-        source = escape(truth.get("source") or truth_name(q))
+        source = _judged(q) if "agreement" in q else escape(truth.get("source") or truth_name(q))
         out.append(f"<tr><th>{escape(q['label'])}</th><td>{source}</td>"
                    f"<td class='num'>{fmt(q['threshold'], q['unit'])}</td>")  # fmt: skip
         for b in backends:
@@ -136,7 +163,7 @@ def _quantity_rows(qs: list[dict[str, Any]], backends: list[str], reference: str
                 text = "is the truth here" if truth["kind"] == "reference" and b == reference else "–"
                 out.append(f'<td class="muted">{text}</td>')
                 continue
-            over = d["first_over"] is not None
+            over = b in q["diverging"]
             when = f" from {fmt(d['first_over'], 's')}" if over else ""
             out.append(f'<td class="num{" bad" if over else ""}" title="largest at t = {fmt(d["max_time"], "s")}, '
                        f'RMS {fmt(d["rms"], q["unit"])}">{fmt(d["max"], q["unit"])}{when}</td>')  # fmt: skip
@@ -145,13 +172,17 @@ def _quantity_rows(qs: list[dict[str, Any]], backends: list[str], reference: str
 
 
 def quantity_tables(case: dict[str, Any], backends: list[str]) -> tuple[str, str]:
-    """(the quantities with a known truth, those measured against the reference engine) as tables."""
-    head = ("<tr><th>quantity</th><th>truth</th><th>threshold</th>"
-            + "".join(f"<th>{escape(b)}</th>" for b in backends) + "</tr>")  # fmt: skip
-    known = [q for q in case["quantities"] if q["truth"]["kind"] != "reference"]
-    ref = [q for q in case["quantities"] if q["truth"]["kind"] == "reference"]
+    """(the quantities with a known truth, those where none is: among the engines or against the reference
+    engine) as tables."""
+    unknown = ("reference", "engines")
+    known = [q for q in case["quantities"] if q["truth"]["kind"] not in unknown]
+    ref = [q for q in case["quantities"] if q["truth"]["kind"] in unknown]
     tables = []
-    for qs in (known, ref):
+    for qs, what in ((known, "truth"), (ref, "engines that agree | the others")):
+        if ref and qs is ref and ref[0]["truth"]["kind"] == "reference":
+            what = "against"
+        head = (f"<tr><th>quantity</th><th>{what}</th><th>threshold</th>"
+                + "".join(f"<th>{escape(b)}</th>" for b in backends) + "</tr>")  # fmt: skip
         rows = _quantity_rows(qs, backends, case["reference"])
         tables.append(f'<table class="quantities">{head}{"".join(rows)}</table>' if rows else "")
     return tables[0], tables[1]

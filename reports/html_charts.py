@@ -33,6 +33,8 @@ def truth_name(q: dict[str, Any]) -> str:
     truth = q["truth"]
     if truth["kind"] == "reference":
         return f"{truth['backend']}'s run"
+    if truth["kind"] == "engines":
+        return "the engines it is judged with"
     if truth["kind"] == "constraint":
         return "the joint's constraint (0)"
     return "the analytic reference"

@@ -11,6 +11,8 @@ from typing import Any
 from reports.charts import render
 from reports.charts.specs import Rule, Series, line_chart
 from reports.charts.style import looks as make_looks
+from reports.headline import amount
+from reports.html_case import agreement_word, groups_text
 from reports.html_charts import quantity_axis, truth_name
 from reports.scene_pictures import CasePictures
 
@@ -77,19 +79,35 @@ def _case_pictures(i: int, case: dict[str, Any], images: dict[str, bytes]) -> li
     return shots
 
 
+def _agreement_lines(h: dict[str, Any]) -> list[str]:
+    """The departures with their documented causes, one bullet each (the headline's words say the rest)."""
+    out = []
+    for d in h["agreement"]["departures"]:
+        c = d.get("cause")
+        if c:
+            out.append(f"- **{d['backend']}** departs: {c['body']} {amount(c['measured'], 'm')} off its joint, the sag "
+                       f"ERP {c['erp']:g} / CFM {c['cfm']:g} predict for {c['load']:.4g} N at h = {c['h']:g} s: "
+                       f"{amount(c['predicted'], 'm')} (± {c['margin']:.0%}); see `{c['link']}`")  # fmt: skip
+    return ["", *out] if out else []
+
+
 def render_markdown(doc: dict[str, Any], images: dict[str, bytes], links: list[dict[str, str | None]],
                     layout: str | None) -> str:  # fmt: skip
     backends = doc["backends"]
     h, s, t = doc["headline"], doc["summary"], doc["thresholds"]
     scenarios = ", ".join(dict.fromkeys(c["scenario"] for c in doc["cases"]))
     limit = f"; `--max-divergence` {doc['max_divergence']:g} m" if doc["max_divergence"] is not None else ""
+    limit += "; `--require-agreement`" if doc["require_agreement"] else ""
+    elsewhere = (f"against **{doc['reference']}**'s run elsewhere" if doc["comparison"] == "reference" else
+                 "compared with the other engines elsewhere (no engine is the truth: a majority names the engines "
+                 "that depart)")  # fmt: skip
     out = [
         f"## Backend comparison: {scenarios} — {'✅ PASS' if h['badge'] == 'PASS' else '❌ FAIL'}: {h['text']}",
         "",
         f"{s['ok']}/{s['runs']} runs pass their assertions. Each engine is measured against the truth where one is "
-        f"known (values the assertions state, joint constraints, analytic references) and against "
-        f"**{doc['reference']}**'s run elsewhere. Thresholds: positions {t['position']:g} m, angles "
-        f"{t['angle']:.3g} rad ({math.degrees(t['angle']):.3g}°){limit}.",
+        f"known (values the assertions state, joint constraints, analytic references) and {elsewhere}. Thresholds: "
+        f"positions {t['position']:g} m, angles {t['angle']:.3g} rad ({math.degrees(t['angle']):.3g}°){limit}.",
+        *_agreement_lines(h),
         "",
         "| variant | verdict | " + " | ".join(backends) + " |",
         "|---|---|" + "---|" * len(backends),
@@ -105,7 +123,8 @@ def render_markdown(doc: dict[str, Any], images: dict[str, bytes], links: list[d
                 continue
             a = r["assertions"]
             ok = r["status"] == "passed"
-            agree = "agrees" if not r["agreement"]["diverging"] else f"diverges from {r['agreement']['first_over']:g} s"
+            first = r["agreement"]["first_over"]
+            agree = "agrees" if not r["agreement"]["diverging"] else f"{agreement_word(case, b)} from {first:g} s"
             limits = (
                 f", ⚠️ {a['known_limits']} known limit{'s' * (a['known_limits'] > 1)}" if a.get("known_limits") else ""
             )
@@ -125,7 +144,16 @@ def render_markdown(doc: dict[str, Any], images: dict[str, bytes], links: list[d
         mark = "✅" if ch["badge"] == "PASS" else "❌"
         out.append(f"| {_cell(case['variant'])} | {mark} {_cell(ch['text'])} | " + " | ".join(cells) + " |")
         for q in case["quantities"]:
-            if q["diverging"]:
+            verdict = q.get("agreement")
+            if verdict is not None and (q["diverging"] or verdict["no_majority_from"] is not None):
+                who = "; ".join(f"{d['backend']} departs from {', '.join(d['majority'])} from {d['from']:g} s, up to "
+                                f"{_num(d['max'], q['unit'])}" for d in verdict["departures"])  # fmt: skip
+                split = (f"no majority from {verdict['no_majority_from']:g} s"
+                         if verdict["no_majority_from"] is not None else "")  # fmt: skip
+                lines.append(f"- `{case['variant']}` · **{q['label']}** (engines compared, threshold "
+                             f"{q['threshold']:g} {q['unit']}; groups {_cell(groups_text(q))}): "
+                             f"{'; '.join(x for x in (who, split) if x)}")  # fmt: skip
+            elif q["diverging"]:
                 who = ", ".join(f"{b} {_num(q['deviation'][b]['max'], q['unit'])}" for b in q["diverging"])
                 lines.append(f"- `{case['variant']}` · **{q['label']}** (against {truth_name(q)}, threshold "
                              f"{q['threshold']:g} {q['unit']}): {who}, from {q['first_over']:g} s")  # fmt: skip

@@ -40,7 +40,8 @@ def key_moments(case: dict[str, Any], end: float, dt: float) -> list[dict[str, A
     firsts = [(q["first_over"], q) for q in case["quantities"] if q["first_over"] is not None]
     if firsts:
         t, q = min(firsts, key=lambda item: item[0])
-        who = ", ".join(b for b in q["diverging"] if q["deviation"][b]["first_over"] == t)
+        departed = {d["backend"]: d["from"] for d in q.get("agreement", {}).get("departures", [])}
+        who = ", ".join(b for b in q["diverging"] if departed.get(b, q["deviation"].get(b, {}).get("first_over")) == t)
         found.append((1, float(t), f"first divergence: {q['label']} ({who})"))
     found.append((0, float(end), "end"))
     merged: list[dict[str, Any]] = []

@@ -6,7 +6,9 @@
 * ``--backend NAMES`` (``-b``): one name, a comma-separated list, repeatable; ``all`` is every installed engine;
 * ``--variant NAME`` / ``--all-variants``;
 * ``--set KEY=VALUE`` wherever a scenario is loaded;
-* ``--baseline DIR``: the folder of golden files, for ``baseline`` and ``check`` alike.
+* ``--baseline DIR``: the folder of golden files, for ``baseline`` and ``check`` alike;
+* ``--reference NAME``, ``--max-divergence VALUE``, ``--require-agreement``: how ``compare`` and ``report``
+  judge the engines (docs/report-schema.md).
 """
 
 from __future__ import annotations
@@ -21,6 +23,7 @@ __all__ = [
     "ALL",
     "add_backend",
     "add_baseline_dir",
+    "add_judgement",
     "add_overrides",
     "add_scenario_files",
     "add_variant_choice",
@@ -73,6 +76,26 @@ def add_baseline_dir(parser: argparse.ArgumentParser) -> None:
         help=f"folder of the golden files (default {DEFAULT_BASELINE_DIR}/)",
     )  # fmt: skip
     parser.add_argument("--dir", type=Path, dest="baseline", help=argparse.SUPPRESS)  # its former name in `baseline`
+
+
+def add_judgement(parser: argparse.ArgumentParser) -> None:
+    """``--reference``, ``--max-divergence`` and ``--require-agreement`` of ``compare`` and ``report``."""
+    parser.add_argument(
+        "--reference", metavar="NAME",
+        help="measure every engine against this backend's run where no truth is known (default: the engines are "
+        "compared with each other and the ones that depart from a majority are named)",
+    )  # fmt: skip
+    parser.add_argument(
+        "--max-divergence", type=float, metavar="VALUE",
+        help="fail a backend whose positions (m: bodies, sliders, joint drift) stray further than VALUE from their "
+        "truth (where none is known: from the engines it is judged with, or from --reference's run); also the "
+        "report's position threshold",
+    )  # fmt: skip
+    parser.add_argument(
+        "--require-agreement", action="store_true",
+        help="fail (exit 1) when the engines disagree: one misses a known truth or departs from the majority, or "
+        "no majority forms (default: agreement is reported, the exit code follows the assertions)",
+    )
 
 
 def _names(values: list[str] | None, default: str) -> Iterator[str]:

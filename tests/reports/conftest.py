@@ -1,7 +1,9 @@
 """Fixtures for the comparison reports: one real `scenario compare` run shared by the tests that read it.
 
 The shared run compares factory_physics.yaml (door-stays-closed) on ode, pybullet and the crash test
-backend (SIGSEGV after 30 steps), two at a time: about 4 s on an idle 2-core machine.
+backend (SIGSEGV after 30 steps), two at a time: about 4 s on an idle 2-core machine. The demo's comparison
+(`make demo`: every variant on the four engines, about 15 s) and the robot arm's (kuka_arm.yaml on the four
+engines, about 12 s) are shared too, for the judgement among engines.
 """
 
 from __future__ import annotations
@@ -20,6 +22,8 @@ from backends.registry import is_installed
 ROOT = Path(__file__).resolve().parents[2]
 FACTORY = ROOT / "scenarios" / "factory_physics.yaml"
 INTERVALS = ROOT / "scenarios" / "factory_intervals.yaml"
+KUKA = ROOT / "scenarios" / "robots" / "kuka_arm.yaml"
+ENGINES = ("dart", "mujoco", "ode", "pybullet")
 CLI = [sys.executable, "-m", "runner"]
 
 
@@ -59,6 +63,27 @@ def compare_run(tmp_path_factory: pytest.TempPathFactory) -> CompareRun:
         "-j", "2", "--timeout", "300", "--out", str(out),
     )  # fmt: skip
     return CompareRun(done, out)
+
+
+def _four_engines(tmp_path_factory: pytest.TempPathFactory, name: str, *args: str) -> CompareRun:
+    for engine in ENGINES:
+        if not is_installed(engine):
+            pytest.skip(f"engine not installed: {engine}")
+    out = tmp_path_factory.mktemp(name)
+    done = scenario("compare", *args, "--backends", ",".join(ENGINES), "-j", "2", "--out", str(out))
+    return CompareRun(done, out)
+
+
+@pytest.fixture(scope="session")
+def demo_compare(tmp_path_factory: pytest.TempPathFactory) -> CompareRun:
+    """`make demo`'s comparison: factory_physics.yaml, every variant, on the four engines."""
+    return _four_engines(tmp_path_factory, "demo", str(FACTORY), "--all-variants")
+
+
+@pytest.fixture(scope="session")
+def kuka_compare(tmp_path_factory: pytest.TempPathFactory) -> CompareRun:
+    """kuka_arm.yaml on the four engines."""
+    return _four_engines(tmp_path_factory, "kuka", str(KUKA))
 
 
 @dataclass

@@ -146,6 +146,37 @@ def test_the_headline_says_what_report_json_says(browser: Browser, compare_run: 
     assert browser.problems() == []
 
 
+@pytest.mark.slow
+@pytest.mark.parametrize("which", ["demo_compare", "kuka_compare"])
+def test_the_judgement_among_engines_shows_as_report_json_says(browser: Browser, which: str,
+                                                               request: pytest.FixtureRequest) -> None:
+    """`make demo`'s comparison and the robot arm's (the four engines; about 15 s and 12 s to run): the page's
+    headline is report.json's, word for word, at the top and in every case, and the engines named as departing
+    are listed with the documented cause the data show."""
+    run: CompareRun = request.getfixturevalue(which)
+    assert run.done.returncode == 0, run.done.stdout + run.done.stderr
+    _open(browser, run.out / "report.html")
+    doc = run.doc
+    found = browser.evaluate("""(() => ({
+      badge: document.querySelector('p.verdict .badge').textContent,
+      text: document.getElementById('headline').textContent,
+      departures: [...document.querySelectorAll('body > ul.agreement li.departure')].map(li => [li.dataset.backend,
+        li.querySelector('code') ? li.querySelector('code').textContent : null]),
+      cases: [...document.querySelectorAll('section.case')].map(s => [s.querySelector('h2 .badge').textContent,
+        s.querySelector('h2 .headline').textContent]) }))()""")
+    h = doc["headline"]
+    assert (found["badge"], found["text"]) == (h["badge"], h["text"]) and h["badge"] == "PASS"
+    assert found["cases"] == [[c["headline"]["badge"], c["headline"]["text"]] for c in doc["cases"]]
+    assert found["departures"] == [[d["backend"], d["cause"]["link"] if d.get("cause") else None]
+                                   for d in h["agreement"]["departures"]]  # fmt: skip
+    if which == "demo_compare":  # ODE departs, and its soft slider's sag is why
+        assert found["departures"] == [["ode", "docs/backends/ode.md#deviations-from-textbook-physics-odes-own-kept"]]
+    else:  # ODE departs (its servo), or, once its servo matches the others', the four agree
+        assert found["departures"] in ([["ode", None]], [])
+        assert ("4 engines agree" in h["text"]) == (not found["departures"])
+    assert browser.problems() == []
+
+
 def test_every_body_shows_in_every_picture(browser: Browser, compare_run: CompareRun) -> None:
     _open(browser, compare_run.out / "report.html")
     found = browser.evaluate(PICTURES)

@@ -33,28 +33,35 @@ def test_a_stated_range_gives_the_distance_outside_and_the_margin_inside() -> No
     assert _cell({"value": None, "expected": "held over the window"}) is None  # a window states no value
 
 
-def _run(backend: str, failed: int = 0, status: str = "passed", diverging: tuple[str, ...] = ()) -> dict[str, Any]:
+def _run(backend: str, failed: int = 0, status: str = "passed") -> dict[str, Any]:
     return {"backend": backend, "status": status, "label": "crashed (signal 11)" if status == "crashed" else status,
-            "assertions": {"total": 9, "passed": 9 - failed, "failed": failed}}  # fmt: skip
+            "assertions": {"total": 9, "passed": 9 - failed, "failed": failed},
+            "end_time": None if status == "crashed" else 6.0}  # fmt: skip
 
 
 def _q(label: str, diverging: list[str], first: float | None) -> dict[str, Any]:
-    return {"id": label, "label": label, "diverging": diverging, "first_over": first}
+    """A quantity against a known truth (a joint's constraint): 1 cm threshold, 2 cm off where it diverges."""
+    return {"id": label, "label": label, "unit": "m", "threshold": 0.01, "truth": {"kind": "constraint"},
+            "diverging": diverging, "first_over": first,
+            "deviation": {b: {"max": 0.02, "first_over": first} for b in diverging}}  # fmt: skip
 
 
 def test_the_headline_says_assertions_and_agreement_apart() -> None:
+    """The badge is the assertions' (and the runs' finishing); agreement is said in words beside it."""
     good = headline([_run("ode"), _run("dart")], [_q("box position", [], None)])
-    assert good["badge"] == "PASS" and good["text"] == "assertions pass · quantities agree"
+    assert good["badge"] == "PASS" and good["text"] == "assertions pass · 2 engines agree"
     drift = headline([_run("ode"), _run("dart")], [_q("a", ["dart"], 1.08), _q("b", ["dart"], 1.04), _q("c", [], None)])
-    assert drift["badge"] == "FAIL" and drift["text"] == "assertions pass · 2 quantities diverge from 1.04 s"
+    assert drift["badge"] == "PASS"  # an engine that misses a truth is named, not failed (without --require-agreement)
+    assert drift["text"] == "assertions pass · dart misses the truth by up to 2 cm (b and 1 more quantity) from 1.04 s"
     assert drift["assertions"]["passed"] and not drift["agreement"]["agrees"]
     assert drift["agreement"]["backends"] == ["dart"]
     broken = headline([_run("ode", failed=1), _run("crash", status="crashed")], [])
+    assert broken["badge"] == "FAIL"
     assert broken["text"] == "1 assertion fails · 1 run crashed (signal 11) · no quantity compared"
-    both = merge([good, drift, broken])
+    both = merge([good, drift, broken], ["good", "drift", "broken"])
     assert both["badge"] == "FAIL"
-    assert both["text"] == ("1 assertion fails · 1 run crashed (signal 11) · 2 quantities diverge in 1 of 3 cases "
-                            "from 1.04 s")
+    assert both["text"] == ("1 assertion fails · 1 run crashed (signal 11) · dart misses the truth in 1 of 3 cases "
+                            "by up to 2 cm (b and 1 more quantity) from 1.04 s")
 
 
 def test_moments_are_the_start_failures_close_calls_first_divergence_and_end() -> None:

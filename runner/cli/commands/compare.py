@@ -3,8 +3,9 @@
 compare = run (in worker processes, in parallel: runner.exec) + report: the report is built from the files
 the runs left (traces, partial traces of crashed runs, outcome and cost files) by the same function as
 `scenario report`. Each row says what `scenario run` says for the same case (runner.exec.exits); the
-command's own exit code is 0 when every backend passes every assertion (and stays within
---max-divergence), 1 otherwise, 2 for bad input found before anything ran.
+command's own exit code follows the report's headline: 0 when every backend passes every assertion, 1
+otherwise (and when the engines disagree only with --require-agreement, beyond --max-divergence only with
+that option), 2 for bad input found before anything ran.
 """
 
 from __future__ import annotations
@@ -35,22 +36,13 @@ def configure(parser: argparse.ArgumentParser) -> None:
     options.add_backend(parser, options.ALL)
     options.add_variant_choice(parser)
     parser.add_argument(
-        "--reference", metavar="NAME",
-        help="the backend the others are measured against (default: ode if compared, else the first compared "
-        "backend in name order)",
-    )  # fmt: skip
-    parser.add_argument(
         "--out", type=Path, default=DEFAULT_OUT, metavar="DIR",
         help=f"folder for report.html/.md/.json; traces go to DIR/traces (default: {DEFAULT_OUT}/)",
     )  # fmt: skip
     parser.add_argument(
         "-j", "--jobs", type=int, default=os.cpu_count() or 1, metavar="N", help="runs at a time (default: CPUs)"
     )
-    parser.add_argument(
-        "--max-divergence", type=float, metavar="VALUE",
-        help="fail a backend whose positions (m: bodies, sliders, joint drift) stray further than VALUE from their "
-        "truth (the reference backend where no truth is known); also the report's position threshold",
-    )  # fmt: skip
+    options.add_judgement(parser)
     parser.add_argument(
         "--timeout", type=float, default=None, metavar="S",
         help="stop a run after S seconds and report it as timed out (default: the scenario's world.budget, "
@@ -86,6 +78,7 @@ def _check(args: argparse.Namespace) -> None:
 
 def execute(args: argparse.Namespace, out: Console, err: Console) -> int:
     from reports.build import ReportError, write_report
+    from runner.cli.commands.report import print_verdict
     from runner.cli.outcomes import known_limits, print_problem
     from runner.exec.executors import LocalExecutor, check_outputs
     from runner.trace.output import write_error
@@ -120,9 +113,8 @@ def execute(args: argparse.Namespace, out: Console, err: Console) -> int:
         write_layouts([args.out / "traces"], cases)  # foxglove-layout.json beside the traces (the report links it)
     inputs = [Path(r.trace) if r.trace is not None else Path(r.outcome_file) if r.outcome_file else None for r in runs]
     try:
-        files = write_report(
-            [p for p in inputs if p is not None], args.out, reference=args.reference, max_divergence=args.max_divergence
-        )
+        files = write_report([p for p in inputs if p is not None], args.out, reference=args.reference,
+                             max_divergence=args.max_divergence, require_agreement=args.require_agreement)  # fmt: skip
     except ReportError as exc:
         cause = exc.__cause__
         if isinstance(cause, OSError):  # a full disk is an output error (74), a bad folder bad input (2)
@@ -131,10 +123,7 @@ def execute(args: argparse.Namespace, out: Console, err: Console) -> int:
         return ExitCode.BAD_INPUT
     if args.junit is not None:
         _write_junit(args.junit, runs, [loaded for loaded, _ in work])
-    s, h = files.document["summary"], files.document["headline"]
-    colour = "green" if files.passed else "red"
-    out.print(f"[bold {colour}]{s['ok']}/{s['runs']} runs pass[/] (reference {files.document['reference']}): "
-              f"{h['badge']}, {h['text']}")  # fmt: skip
+    print_verdict(out, files.document)
     out.print(f"report: {files.html}  (also {files.markdown.name}, {files.json.name}; traces in {args.out / 'traces'})")
     return ExitCode.OK if files.passed else ExitCode.ASSERTION_FAILED
 

@@ -5,9 +5,12 @@ from __future__ import annotations
 import argparse
 import math
 from pathlib import Path
+from typing import Any
 
 from rich.console import Console
+from rich.markup import escape
 
+from runner.cli import options
 from runner.errors import ExitCode, UsageError
 
 NAME = "report"
@@ -22,16 +25,7 @@ def configure(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--out", type=Path, required=True, metavar="DIR", help="folder for report.html, report.md and report.json"
     )
-    parser.add_argument(
-        "--reference", metavar="NAME",
-        help="the backend the others are measured against (default: ode if present, else the first backend in name "
-        "order)",
-    )  # fmt: skip
-    parser.add_argument(
-        "--max-divergence", type=float, metavar="VALUE",
-        help="fail a backend whose positions (m: bodies, sliders, joint drift) stray further than VALUE from their "
-        "truth (the reference backend where no truth is known); also the report's position threshold",
-    )  # fmt: skip
+    options.add_judgement(parser)
 
 
 def execute(args: argparse.Namespace, out: Console, err: Console) -> int:
@@ -40,13 +34,23 @@ def execute(args: argparse.Namespace, out: Console, err: Console) -> int:
     if args.max_divergence is not None and not (args.max_divergence >= 0 and math.isfinite(args.max_divergence)):
         raise UsageError(f"Invalid `--max-divergence`. Expected a number >= 0. Received: {args.max_divergence}")
     try:
-        files = write_report(args.traces, args.out, reference=args.reference, max_divergence=args.max_divergence)
+        files = write_report(args.traces, args.out, reference=args.reference, max_divergence=args.max_divergence,
+                             require_agreement=args.require_agreement)  # fmt: skip
     except ReportError as exc:
         err.print(f"[bold red]error:[/] {exc}")
         return ExitCode.BAD_INPUT
-    s, h = files.document["summary"], files.document["headline"]
-    colour = "green" if files.passed else "red"
-    out.print(f"[bold {colour}]{s['ok']}/{s['runs']} runs pass[/] (reference {files.document['reference']}): "
-              f"{h['badge']}, {h['text']}")  # fmt: skip
+    print_verdict(out, files.document)
     out.print(f"report: {files.html}  (also {files.markdown.name}, {files.json.name})")
     return ExitCode.OK if files.passed else ExitCode.ASSERTION_FAILED
+
+
+def print_verdict(out: Console, doc: dict[str, Any]) -> None:
+    """The report's headline on the console, and the documented cause of each departure."""
+    s, h = doc["summary"], doc["headline"]
+    colour = "green" if h["badge"] == "PASS" else "red"
+    against = f"against {doc['reference']}" if doc["comparison"] == "reference" else "engines compared with each other"
+    out.print(f"[bold {colour}]{h['badge']}[/] {s['ok']}/{s['runs']} runs pass ({escape(against)}): "
+              f"{escape(h['text'])}", highlight=False)  # fmt: skip
+    for d in h["agreement"]["departures"]:
+        if d.get("cause"):
+            out.print(f"  {escape(d['backend'])}: see {escape(d['cause']['link'])}", highlight=False)
