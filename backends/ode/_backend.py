@@ -18,7 +18,7 @@ from panda3d.core import Datagram
 from .._kit import BackendOptions, KinematicPose, SubstepContacts, SubstepMean, substep_times
 from .._kit.stacks import stacks
 from ..base import Backend
-from ..types import BodyStates, Capability, Contact, JointKind, JointStates, Motion, Quat, Vec3
+from ..types import BodyStates, Capability, Contact, JointKind, JointStates, Motion, Precision, Quat, Vec3
 from . import _native
 from ._build import JointHandle, axis_arg, build_scene, destroy_scene, panda_quat, set_motor
 from ._contacts import Collider
@@ -37,6 +37,8 @@ class OdeBackend(Backend):
     name = "ode"
     engine_distribution = "panda3d"
     capabilities = frozenset(Capability)
+    #: panda3d builds ODE with dSINGLE: every state is a float32 (dGetConfiguration says "ODE_single_precision")
+    precision = Precision.FLOAT32
     Options: ClassVar[type[BackendOptions]] = OdeOptions
     #: panda3d turns a failed C++ assertion (nassert) into AssertionError; ODE's own fatal errors abort.
     engine_errors: ClassVar[tuple[type[BaseException], ...]] = (AssertionError,)
