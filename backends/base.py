@@ -88,6 +88,7 @@ from .types import (
     JointSpec,
     JointStates,
     Motion,
+    Precision,
     Quat,
     Vec3,
 )
@@ -105,6 +106,9 @@ class Backend(abc.ABC):
     engine_distribution: ClassVar[str]
     #: What this backend can simulate; checked before a run starts.
     capabilities: ClassVar[frozenset[Capability]]
+    #: The format the engine keeps its state in (its rounding: docs/semantics.md, "Rounding"); the same
+    #: as the registry entry's ``precision`` (tests/backends/test_backend_contract.py).
+    precision: ClassVar[Precision]
     #: The scenario's ``backend_options.<name>`` block, typed (backends._kit.options).
     Options: ClassVar[type[BackendOptions]] = BackendOptions
     #: The exception types the engine itself raises; only these become EngineFailure.

@@ -22,6 +22,7 @@ from .types import (
     JointKind,
     JointStates,
     Motion,
+    Precision,
     Quat,
     Vec3,
 )
@@ -30,6 +31,7 @@ from .types import (
 class FakeBackend(Backend):
     name = "fake"
     engine_distribution = "numpy"
+    precision = Precision.FLOAT64
     capabilities: ClassVar[frozenset[Capability]] = ALL_SHAPES | {
         Capability.KINEMATIC,
         Capability.JOINT_SLIDER,

@@ -20,7 +20,7 @@ from typing import Any
 from ._kit.options import BackendOptions
 from .base import Backend
 from .errors import BackendNotInstalled, UnknownBackend, UnsupportedFeature
-from .types import Capability, CompiledWorld
+from .types import Capability, CompiledWorld, Precision
 
 
 @dataclass(frozen=True)
@@ -33,6 +33,8 @@ class BackendEntry:
     description: str
     hidden: bool = False  # test-only backends are not listed by `scenario backends`
     options: str = "backends._kit.options:BackendOptions"  # "module:Class" of its backend_options, engine-free
+    #: the format of the engine's state, as its adapter declares it (Backend.precision), engine-free
+    precision: Precision = Precision.FLOAT64
 
     @property
     def hint(self) -> str:
@@ -74,6 +76,7 @@ _KNOWN: dict[str, BackendEntry] = {
         "ode",
         "the Open Dynamics Engine through panda3d.ode: the reference",
         options="backends.ode._options:OdeOptions",
+        precision=Precision.FLOAT32,
     ),
     "pybullet": BackendEntry(
         "pybullet",

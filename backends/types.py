@@ -86,6 +86,22 @@ class JointKind(str, enum.Enum):
     UNIVERSAL = "universal"
 
 
+class Precision(str, enum.Enum):
+    """The floating-point format an engine keeps its state in (positions, velocities, masses, forces).
+
+    Each step rounds every stored number to it, so a state carries rounding that grows with the number
+    of steps: docs/semantics.md ("Rounding") bounds it by ``n * eps * scale`` and the expressions' name
+    ``eps`` gives an assertion the running engine's :attr:`eps`."""
+
+    FLOAT32 = "float32"
+    FLOAT64 = "float64"
+
+    @property
+    def eps(self) -> float:
+        """Machine epsilon: the gap between 1 and the next number (2^-23 for float32, 2^-52 for float64)."""
+        return 2.0**-23 if self is Precision.FLOAT32 else 2.0**-52
+
+
 class Capability(str, enum.Enum):
     """What a backend can do. The runner checks a world's needs against these before a run starts."""
 

@@ -30,6 +30,7 @@ from ..types import (
     JointKind,
     JointStates,
     Motion,
+    Precision,
     Quat,
     Vec3,
 )
@@ -45,6 +46,7 @@ _NAME = "dart"
 class DartBackend(Backend):
     name: ClassVar[str] = _NAME
     engine_distribution: ClassVar[str] = "dartpy"
+    precision: ClassVar[Precision] = Precision.FLOAT64  # Eigen doubles throughout
     #: Every robot capability: compound bodies, COM offsets, convex hulls and static triangle meshes (both as
     #: DART MeshShapes, ``_meshes``), excluded pairs (the solver's BodyNodeCollisionFilter).
     capabilities: ClassVar[frozenset[Capability]] = RIGID_BODY_CAPABILITIES | ROBOT_CAPABILITIES

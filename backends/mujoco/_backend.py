@@ -23,6 +23,7 @@ from ..types import (
     JointKind,
     JointStates,
     Motion,
+    Precision,
     Quat,
     Vec3,
 )
@@ -57,6 +58,7 @@ class MujocoBackend(Backend):
 
     name: ClassVar[str] = "mujoco"
     engine_distribution: ClassVar[str] = "mujoco"
+    precision: ClassVar[Precision] = Precision.FLOAT64  # mjtNum is double
     #: no shape:trimesh: MuJoCo collides with a mesh's convex hull only (docs/backends/mujoco.md)
     capabilities: ClassVar[frozenset[Capability]] = RIGID_BODY_CAPABILITIES | (
         ROBOT_CAPABILITIES - {Capability.SHAPE_TRIMESH}

@@ -18,7 +18,7 @@ from panda3d.core import Datagram
 from .._kit import BackendOptions, KinematicPose, SubstepContacts, SubstepMean, substep_times
 from .._kit.stacks import stacks
 from ..base import Backend
-from ..types import BodyStates, Capability, Contact, JointKind, JointStates, Motion, Quat, Vec3
+from ..types import BodyStates, Capability, Contact, JointKind, JointStates, Motion, Precision, Quat, Vec3
 from . import _native
 from ._build import JointHandle, axis_arg, build_scene, destroy_scene, panda_quat, set_motor
 from ._contacts import Collider
@@ -37,6 +37,8 @@ class OdeBackend(Backend):
     name = "ode"
     engine_distribution = "panda3d"
     capabilities = frozenset(Capability)
+    #: panda3d builds ODE with dSINGLE: every state is a float32 (dGetConfiguration says "ODE_single_precision")
+    precision = Precision.FLOAT32
     Options: ClassVar[type[BackendOptions]] = OdeOptions
     #: panda3d turns a failed C++ assertion (nassert) into AssertionError; ODE's own fatal errors abort.
     engine_errors: ClassVar[tuple[type[BaseException], ...]] = (AssertionError,)
@@ -127,8 +129,9 @@ class OdeBackend(Backend):
                 stepper(h)
             else:
                 limits = [self._limit(j) for j in joints]
+                frames = [self._frame(j) for j in joints]
                 stepper(h)
-                self._motor_mean.add([self._motor(k, j, limits[k]) for k, j in enumerate(joints)])
+                self._motor_mean.add([self._motor(k, j, limits[k], frames[k]) for k, j in enumerate(joints)])
             collider.after_step(report=report)
             if every:
                 self._substep_contacts.add(collider.contacts())
@@ -178,13 +181,28 @@ class OdeBackend(Backend):
         pos = self._position(handle)[0]
         return 1 if pos <= lo else 2 if pos >= hi else 0
 
-    def _motor(self, k: int, handle: JointHandle, limit: int) -> float:
+    @staticmethod
+    def _frame(handle: JointHandle) -> tuple[Any, Any] | None:
+        """The joint's axis and the lever from its anchor to the body's COM at the start of the step: the
+        geometry ODE builds the step's constraint rows with (``getInfo2``), hence its feedback's."""
+        if handle.feedback is None or handle.fmax <= 0.0:
+            return None
+        j, kind = handle.joint, handle.spec.kind
+        if kind is JointKind.SLIDER:
+            return j.getAxis(), None
+        axis = j.getAxis() if kind is JointKind.HINGE else j.getAxis1()
+        return axis, handle.body.getPosition() - j.getAnchor()
+
+    def _motor(self, k: int, handle: JointHandle, limit: int, frame: tuple[Any, Any] | None) -> float:
         """The force (torque) the motor applied along the joint's coordinate in the step just taken.
 
         Off a stop the motor is an LCP row and joint feedback has its force; at a stop ODE applies
         +-fmax (times the fudge factor when powering away) directly to the bodies, outside feedback.
+        The feedback is resolved with the axis and lever of the step's start (``frame``): read after the
+        step, a link turning at 3 rad/s under a 500 N joint force moves its lever by 3 mm in 10 ms and
+        the torque read by 1.6 N m (kuka_arm: 301.6 N m from a row bounded at 300).
         """
-        if handle.feedback is None or handle.fmax <= 0.0:
+        if handle.feedback is None or handle.fmax <= 0.0 or frame is None:
             return 0.0
         if limit:
             if handle.spec.lo == handle.spec.hi:
@@ -193,13 +211,12 @@ class OdeBackend(Backend):
             if (limit == 1 and handle.vel > 0.0) or (limit == 2 and handle.vel < 0.0):
                 fm *= self._fudge[k]
             return -fm
-        fb, j = handle.feedback, handle.joint
+        fb = handle.feedback
         force = fb.getForce1()
-        if handle.spec.kind is JointKind.SLIDER:
-            return _dot(force, j.getAxis())
+        axis, r = frame
+        if r is None:  # a slider
+            return _dot(force, axis)
         # Moment about the anchor: the anchor rows' forces have none, the motor row is along the axis.
-        axis = j.getAxis() if handle.spec.kind is JointKind.HINGE else j.getAxis1()
-        r = handle.body.getPosition() - j.getAnchor()
         return _dot(fb.getTorque1() + r.cross(force), axis)
 
     # --- reading -------------------------------------------------------------------------------------

@@ -27,6 +27,7 @@ from ..types import (
     JointKind,
     JointStates,
     Motion,
+    Precision,
     Quat,
     ShapeKind,
     Vec3,
@@ -62,6 +63,8 @@ class PyBulletBackend(Backend):
 
     name: ClassVar[str] = _NAME
     engine_distribution: ClassVar[str] = "pybullet"
+    #: Bullet's btScalar is double in pybullet's build (BT_USE_DOUBLE_PRECISION)
+    precision: ClassVar[Precision] = Precision.FLOAT64
     capabilities: ClassVar[frozenset[Capability]] = RIGID_BODY_CAPABILITIES | {
         Capability.SHAPE_COMPOUND,
         Capability.SHAPE_CONVEX,

@@ -18,13 +18,14 @@ BODY_FIELDS = {
 }
 BODY_SCALARS = ("speed", "energy")
 JOINT_FIELDS = ("position", "velocity", "force")
-GLOBALS = ("time", "dt", "duration", "g", "gravity.x", "gravity.y", "gravity.z")
+GLOBALS = ("time", "dt", "duration", "g", "gravity.x", "gravity.y", "gravity.z", "eps")
 RESERVED = frozenset(
     {
         "time",
         "dt",
         "duration",
         "g",
+        "eps",
         "gravity",
         "state",
         "param",

@@ -43,6 +43,8 @@ class StateResolver:
         params: dict[str, Any],
         snapshot: Snapshot,
         functions: dict[str, Callable[[Sequence[Any]], Any]],
+        *,
+        eps: float,
     ):
         self.world = world
         self.body_index = {b.name: i for i, b in enumerate(world.bodies)}
@@ -62,6 +64,7 @@ class StateResolver:
             "gravity.x": gx,
             "gravity.y": gy,
             "gravity.z": gz,
+            "eps": eps,  # the running engine's machine epsilon (backends.types.Precision)
         }
 
     def value(self, name: str) -> Any:

@@ -166,6 +166,7 @@ class Session:
                 "playing": lambda a: self.intervals.is_playing(str(a[0])),
                 "count": lambda a: self.event_counts.get(str(a[0]), 0),
             },
+            eps=backend.precision.eps,
         )
         self.tracker = AssertionTracker(model.assertions, program.expressions, backend.name, self.dt)
         self.traverser = SolidTraverser(program.nodes, program.colliders)

@@ -18,7 +18,7 @@ import pytest
 from backends.base import Backend
 from backends.errors import ContractViolation, EngineFailure
 from backends.geometry import integrate_quat, quat_from_axis_angle, quat_rotate
-from backends.registry import get_backend
+from backends.registry import entry, get_backend
 from backends.types import (
     Capability,
     CompiledWorld,
@@ -27,6 +27,7 @@ from backends.types import (
     Motion,
     Motor,
     PairSurface,
+    Precision,
     Shape,
     ShapeKind,
     Surface,
@@ -55,6 +56,22 @@ def test_free_fall(backend_name: str) -> None:
             assert s.pos[0, 2] == pytest.approx(z0 - G * dt * dt * n * (n + 1) / 2, abs=eps), f"step {n}"
         assert np.allclose(s.pos[0, :2], 0.0, atol=eps)
         assert np.allclose(s.ang_vel[0], 0.0, atol=eps)
+
+
+def test_declared_precision_is_the_format_of_the_state(backend_name: str, backend_cls: type[Backend]) -> None:
+    """An engine declares the format it keeps its state in (docs/semantics.md, Rounding): a body placed at
+    coordinates that float32 cannot hold reads back exactly as stored in that format, and the registry
+    (engine-free) says the same as the adapter."""
+    assert backend_cls.precision is entry(backend_name).precision
+    pos = (0.1, 0.2, 1.0 / 3.0)  # none is a float32: each rounds by about 1e-9 relative
+    weightless = w.world("still", [w.box("box", (0.3, 0.3, 0.3), pos, density=500.0)], gravity=(0.0, 0.0, 0.0))
+    with make_backend(backend_name, weightless) as sim:
+        sim.step()  # nothing moves it
+        read = tuple(float(x) for x in sim.body_states().pos[0])
+    stored = pos if backend_cls.precision is Precision.FLOAT64 else tuple(float(np.float32(x)) for x in pos)
+    assert read == stored
+    assert Precision.FLOAT32.eps == 2.0**-23 == float(np.finfo(np.float32).eps)
+    assert Precision.FLOAT64.eps == 2.0**-52 == float(np.finfo(np.float64).eps)
 
 
 # 2. one-step force -----------------------------------------------------------------------------------

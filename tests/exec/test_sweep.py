@@ -101,7 +101,7 @@ def test_metrics_are_the_last_recorded_state(tmp_path: Path) -> None:
     result = run_loaded(loaded, "pybullet", tmp_path)
     texts = ["max(crate.pos.z)", "min(crate.pos.z)", "count('start')", "contact('crate_0', 'ground')", "time",
              "sum(crate.vel.z)"]  # fmt: skip
-    values = final_values(loaded, Path(result.trace), texts)
+    values = final_values(loaded, Path(result.trace), texts, "pybullet")
     trace = read_trace(result.trace)
     z = [trace.bodies[f"crate_{i}"].pos[-1][2] for i in range(3)]
     assert values["max(crate.pos.z)"] == max(z) and values["min(crate.pos.z)"] == min(z)

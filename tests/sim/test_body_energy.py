@@ -59,7 +59,7 @@ def test_energy_of_a_body_with_a_com_offset_and_turned_principal_axes_and_of_a_g
     rows = np.hstack([rng.normal(size=(2, 3)), quats / np.linalg.norm(quats, axis=1)[:, None], rng.normal(size=(2, 6))])
     snap = Snapshot()
     snap.bodies = BodyStates.from_rows(rows)
-    resolver = StateResolver(world, {"both": ["plain", "link"]}, {}, {}, snap, {})
+    resolver = StateResolver(world, {"both": ["plain", "link"]}, {}, {}, snap, {}, eps=2.0**-52)
     want = [expected(s, rows[i, 0:3], rows[i, 3:7], rows[i, 7:10], rows[i, 10:13]) for i, s in enumerate(specs)]
     assert resolver.value("plain.energy") == pytest.approx(want[0], rel=1e-12)
     assert resolver.value("link.energy") == pytest.approx(want[1], rel=1e-12)

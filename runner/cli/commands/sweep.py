@@ -170,8 +170,10 @@ def execute(args: argparse.Namespace, out: Console, err: Console) -> int:
     finally:
         executor.close()
     metrics = [
-        final_values(loaded, Path(r.result.trace), args.metric) if args.metric and r.result and r.result.trace else {}
-        for loaded, r in zip(loads, results, strict=True)
+        final_values(loaded, Path(r.result.trace), args.metric, label["backend"])
+        if args.metric and r.result and r.result.trace
+        else {}
+        for loaded, r, label in zip(loads, results, labels, strict=True)
     ]
     table = build_table(args.file, grid, labels, results, metrics, args.metric)
     args.out.mkdir(parents=True, exist_ok=True)
@@ -187,11 +189,13 @@ def execute(args: argparse.Namespace, out: Console, err: Console) -> int:
     return status_code(results)  # the most severe case: bad input or a missing engine in some case is exit 2/3
 
 
-def final_values(loaded: Any, trace_path: Path, expressions: Sequence[str]) -> dict[str, Any]:
-    """Each expression evaluated on the last recorded state of a trace (bodies, joints, state variables,
-    contacts and event counts; ``playing()`` has no recorded state and is refused)."""
+def final_values(loaded: Any, trace_path: Path, expressions: Sequence[str], backend: str) -> dict[str, Any]:
+    """Each expression evaluated on the last recorded state of a trace that ``backend`` wrote (bodies, joints,
+    state variables, contacts and event counts, ``eps`` its precision's; ``playing()`` has no recorded state
+    and is refused)."""
     import numpy as np
 
+    from backends.registry import entry
     from backends.types import BodyStates, JointStates
     from reports.trace_reader import TraceReadError, read_trace
     from runner.compile.program import build_program
@@ -227,7 +231,8 @@ def final_values(loaded: Any, trace_path: Path, expressions: Sequence[str]) -> d
         "count": lambda a: sum(e.name == str(a[0]) for e in trace.events),
         "playing": refuse,
     }
-    resolver = StateResolver(world, program.groups, state, dict(loaded.model.params), snap, functions)
+    eps = entry(backend).precision.eps
+    resolver = StateResolver(world, program.groups, state, dict(loaded.model.params), snap, functions, eps=eps)
     out: dict[str, Any] = {}
     for text in expressions:
         try:
