@@ -34,16 +34,18 @@ _KINDS = {"revolute": "hinge", "continuous": "hinge", "prismatic": "slider", "fi
 
 
 def xml_bytes(file: Path) -> bytes:
-    """The file's bytes with its XML declaration blanked (same length: lines and columns stay): pybullet_data
-    ships files declaring `version="0.0"`, which XML parsers refuse and every simulator reads."""
+    """The file's bytes with the quirks pybullet's loader reads past blanked (each byte replaced by a space, so
+    lines and columns stay): every XML declaration (pybullet_data declares `version="0.0"`, which XML
+    parsers refuse, and two files declare it after a comment or a blank line), and NUL bytes (humanoid.urdf
+    ends with one: "Extra content at the end of the document"). docs/robots.md lists them."""
     import re
 
     try:
         raw = file.read_bytes()
     except OSError as exc:
         raise ModelFileError(file, 0, f"cannot read the model file: {exc.strerror}") from None
-    found = re.match(rb"\A(\xef\xbb\xbf)?<\?xml[^>]*\?>", raw)
-    return raw if found is None else b" " * found.end() + raw[found.end() :]
+    blanked = re.sub(rb"<\?xml\s[^>]*\?>", lambda m: b" " * len(m.group(0)), raw.replace(b"\x00", b" "))
+    return blanked
 
 
 def parse_xml(file: Path) -> Any:
@@ -135,7 +137,7 @@ def load_mesh(path: Path, scale: tuple[float, float, float], file: Path, line: i
     return Mesh(vertices=vertices, faces=faces, source=path.name)
 
 
-def _shape(geometry: Any, file: Path, package_root: Path, mesh_lines: dict[str, int], hull: bool) -> Shape:
+def _shape(geometry: Any, file: Path, package_root: Path | None, mesh_lines: dict[str, int], hull: bool) -> Shape:
     g = geometry
     if g.box is not None:
         return Shape(ShapeKind.BOX, size=vec(g.box.size))
@@ -147,10 +149,22 @@ def _shape(geometry: Any, file: Path, package_root: Path, mesh_lines: dict[str, 
     mesh = g.mesh
     line = mesh_lines.get(mesh.filename, 0)
     target = resolve_package(mesh.filename, package_root, file, line)
-    s = mesh.scale
-    scale = (1.0, 1.0, 1.0) if s is None else vec(np.broadcast_to(np.asarray(s, dtype=float), (3,)))
+    scale = _mesh_scale(mesh.scale, file, line)
     kind = ShapeKind.CONVEX if hull else ShapeKind.TRIMESH
     return Shape(kind, mesh=load_mesh(target, scale, file, line, hull))
+
+
+def _mesh_scale(scale: Any, file: Path, line: int) -> tuple[float, float, float]:
+    """`scale` as the loaders read it: none is 1; one number scales every axis; three are x, y, z; pybullet
+    reads the first three of more (pybullet_data's racecar writes `scale="1 1 1 1"`)."""
+    if scale is None:
+        return (1.0, 1.0, 1.0)
+    values = np.atleast_1d(np.asarray(scale, dtype=float)).ravel()
+    if values.size == 1:
+        values = np.repeat(values, 3)
+    if values.size < 3 or not np.all(np.isfinite(values[:3])):
+        raise ModelFileError(file, line, f"mesh scale {list(values)} is not 1 or 3 numbers", near="scale")
+    return vec(values[:3])
 
 
 def _pose(matrix: np.ndarray) -> tuple[tuple[float, float, float], tuple[float, float, float, float]]:
@@ -180,7 +194,7 @@ def _walk(root: str, joints: list[Any]) -> Iterator[Any]:
             stack.append(joint.child)
 
 
-def load_urdf(file: Path, package_root: Path, static_root: bool, static_triangles: bool) -> ModelDesc:
+def load_urdf(file: Path, package_root: Path | None, static_root: bool, static_triangles: bool) -> ModelDesc:
     """Parse ``file``; links' frames by forward kinematics at the zero configuration (model frame). The
     meshes of a static root are its triangles when ``static_triangles``, else (and for every moving link)
     convex hulls."""
