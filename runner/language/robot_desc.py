@@ -83,6 +83,8 @@ class ModelDesc:
     root: str  # the root link
     links: tuple[LinkDesc, ...]
     joints: tuple[JointDesc, ...]
+    #: what the loader decided that the file left open (a joint started inside its limits, ...), for the user
+    notes: tuple[str, ...] = ()
 
     def link(self, name: str) -> LinkDesc:
         return next(link for link in self.links if link.name == name)

@@ -24,8 +24,10 @@ from pathlib import Path
 
 import numpy as np
 
-from backends.types import PlacedShape, ShapeKind
+from backends.geometry import quat_matrices
+from backends.types import ShapeKind
 from runner.language.robot_desc import ModelDesc, data_root
+from runner.language.urdf_rules import shape_points
 
 #: gap between the model's lowest collision point and the ground at the start (m)
 CLEARANCE = 0.01
@@ -101,48 +103,17 @@ def find_models(paths: Sequence[str], exclude: Sequence[str] = ()) -> list[Model
     return list(found.values())
 
 
-def _corners(placed: PlacedShape) -> np.ndarray:
-    """Points bounding one shape, in the link frame (box corners; a sphere's, cylinder's or capsule's bounding
-    box; a mesh's vertices)."""
-    s = placed.shape
-    if s.kind in (ShapeKind.CONVEX, ShapeKind.TRIMESH) and s.mesh is not None:
-        local = np.asarray(s.mesh.vertices, dtype=float).reshape(-1, 3)
-    else:
-        if s.kind == ShapeKind.BOX:
-            half = np.asarray(s.size, dtype=float) / 2
-        elif s.kind == ShapeKind.SPHERE:
-            half = np.full(3, s.radius)
-        elif s.kind == ShapeKind.CYLINDER:
-            half = np.array([s.radius, s.radius, s.length / 2])
-        elif s.kind == ShapeKind.CAPSULE:
-            half = np.array([s.radius, s.radius, s.length / 2 + s.radius])
-        else:
-            return np.zeros((0, 3))
-        signs = np.array([[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)], dtype=float)
-        local = signs * half
-    return local @ _matrix(placed.quat).T + np.asarray(placed.pos, dtype=float)
-
-
-def _matrix(q: tuple[float, float, float, float]) -> np.ndarray:
-    w, x, y, z = q
-    return np.array(
-        [
-            [1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
-            [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
-            [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)],
-        ]
-    )
-
-
 def lowest_point(desc: ModelDesc) -> float:
     """The lowest z of the model's collision shapes at its zero configuration, in the model frame (0 if it has
     none but planes)."""
     lows = []
     for link in desc.links:
         for placed in link.shapes:
-            points = _corners(placed)
+            if placed.shape.kind is ShapeKind.PLANE:
+                continue
+            points = shape_points(placed)
             if len(points):
-                world = points @ _matrix(link.quat).T + np.asarray(link.pos, dtype=float)
+                world = points @ quat_matrices(link.quat).T + np.asarray(link.pos, dtype=float)
                 lows.append(float(world[:, 2].min()))
     return min(lows) if lows else 0.0
 
