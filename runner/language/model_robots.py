@@ -82,8 +82,9 @@ class Robot(Strict):
     mjcf: str | None = Field(None, description="An MJCF file (a subset, docs/robots.md), as `urdf`.")
     package_root: str | None = Field(
         None,
-        description="Where `package://NAME/...` points: `<package_root>/NAME/...` (as `urdf`); default the "
-        "folder holding the model file's folder. A path that leaves the root is refused.",
+        description="Where `package://NAME/...` points: `<package_root>/NAME/...` (as `urdf`); default: looked "
+        "for beside the model file, in the folders above it, then on ROS_PACKAGE_PATH. A path that leaves the "
+        "root is refused.",
     )
     pos: Vec3 = Field((0.0, 0.0, 0.0), description="Where the model's root frame is placed (world frame).")
     hpr: Vec3 | None = Field(None, description="Heading, pitch, roll of the root frame in degrees.")
