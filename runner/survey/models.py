@@ -1,7 +1,7 @@
 """The survey's models and the scenario each one runs in (docs/robots.md, "The survey").
 
-A model is a ``.urdf`` file whose root is ``<robot>``, or an ``.xml`` file whose root is ``<mujoco>`` with a
-``<worldbody>`` (an ``<include>``d fragment has none and is no model). Each is run unmodified in a minimal
+A model is a ``.urdf`` (or ``.xml``) file whose root is ``<robot>``, or an ``.xml`` file with a ``<worldbody>``
+(MJCF's; an ``<include>``d fragment has none and is no model). Each is run unmodified in a minimal
 scenario built in memory:
 
 * a static ground plane at z = 0, gravity -9.81 m/s^2 along z, ``dt`` = 0.002 s (MuJoCo's default
@@ -65,12 +65,11 @@ def _kind(path: Path) -> str | None:
         tag = _root_tag(path)
         if tag == "robot":
             return "urdf"
-        if tag == "mujoco":
-            try:
-                text = path.read_bytes()
-            except OSError:
-                return None
-            return "mjcf" if b"<worldbody" in text else None
+        try:
+            text = path.read_bytes()
+        except OSError:
+            return None
+        return "mjcf" if tag is not None and b"<worldbody" in text else None  # MJCF's own element
     return None
 
 
