@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass, field
 
 from runner.errors import ExitCode
@@ -60,7 +61,8 @@ class Survey:
 
 
 def _escape(text: str) -> str:
-    one_line = " ".join(text.split()).replace("|", "\\|")
+    short = re.sub(r"(?:/[^\s/:`']+)+/([^\s/:`']+)", r"\1", text)  # absolute paths as their file names
+    one_line = " ".join(short.split()).replace("|", "\\|")
     return one_line if len(one_line) <= _SHOWN else one_line[: _SHOWN - 1] + "…"
 
 

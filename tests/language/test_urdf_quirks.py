@@ -62,3 +62,62 @@ def test_a_missing_package_names_package_root(tmp_path: Path, monkeypatch: pytes
         load_scenario(_scenario(tmp_path, GOOD_URDF, mesh="package://nowhere_pkg/m.obj"))
     message = caught.value.issues[0].message
     assert "package `nowhere_pkg`" in message and "package_root" in message and "ROS_PACKAGE_PATH" in message
+
+
+RULES_URDF = """\
+<robot name="rules">
+  <link name="base">
+    <inertial><mass value="2"/><inertia ixx="0.1" ixy="0" ixz="0" iyy="0.1" iyz="0" izz="0.1"/></inertial>
+  </link>
+  <link name="flange"><collision><origin xyz="0 0 0.05"/><geometry><sphere radius="0.02"/></geometry></collision></link>
+  <joint name="weld" type="fixed"><parent link="base"/><child link="flange"/><origin xyz="0.3 0 0" rpy="0 0 1.5707963267948966"/></joint>
+  <link name="arm"><collision><geometry><box size="0.1 0.2 0.4"/></geometry></collision></link>
+  <joint name="elbow" type="revolute"><parent link="flange"/><child link="arm"/><origin xyz="0 0.1 0"/>
+    <axis xyz="0 0 1"/><limit lower="0.5" upper="1.0" effort="1" velocity="1"/></joint>
+  <link name="slide"><inertial><mass value="1"/><inertia ixx="0" ixy="0" ixz="0" iyy="0" iyz="0" izz="0"/></inertial></link>
+  <joint name="rail" type="prismatic"><parent link="arm"/><child link="slide"/><axis xyz="1 0 0"/>
+    <limit lower="1" upper="-1" effort="1" velocity="1"/></joint>
+</robot>
+"""
+
+
+def _rules(tmp_path: Path):  # type: ignore[no-untyped-def]
+    path = _scenario(tmp_path, RULES_URDF, extra=", fixed: true")
+    return load_scenario(path).robots["bot"]
+
+
+def test_a_massless_link_on_a_fixed_joint_merges_into_its_parent(tmp_path: Path) -> None:
+    """flange (no <inertial>) is welded 0.3 m along x, turned 90 deg about z: its sphere, 5 cm up in its own
+    frame, sits on base at (0.3, 0, 0.05); the elbow hangs from base now."""
+    desc = _rules(tmp_path)
+    assert [link.name for link in desc.links] == ["base", "arm", "slide"]
+    (placed,) = desc.link("base").shapes
+    assert np.allclose(placed.pos, (0.3, 0.0, 0.05), atol=1e-12) and placed.shape.radius == 0.02
+    elbow = next(j for j in desc.joints if j.name == "elbow")
+    assert elbow.parent == "base" and "weld" not in {j.name for j in desc.joints}
+
+
+def test_a_moving_link_without_inertial_gets_pybullets_default(tmp_path: Path) -> None:
+    """1 kg, the inertia of its box (0.1 x 0.2 x 0.4 m): m/12 (b^2 + c^2), ... about its centre."""
+    arm = _rules(tmp_path).link("arm")
+    expected = np.diag([0.2**2 + 0.4**2, 0.1**2 + 0.4**2, 0.1**2 + 0.2**2]) / 12.0
+    assert arm.mass == 1.0 and np.allclose(np.asarray(arm.inertia), expected, rtol=1e-12)
+
+
+def test_a_zero_tensor_gets_a_usable_one(tmp_path: Path) -> None:
+    """slide has mass and a zero tensor and no shape: a 1 cm solid sphere's, 2/5 m r^2."""
+    slide = _rules(tmp_path).link("slide")
+    assert np.allclose(np.asarray(slide.inertia), np.eye(3) * 0.4 * 1.0 * 0.01**2, rtol=1e-12)
+
+
+def test_a_start_outside_the_limits_is_clamped_and_lower_above_upper_is_no_limit(tmp_path: Path) -> None:
+    """elbow's 0 is below [0.5, 1.0]: it starts at 0.5 rad (arm's frame turned 0.5 rad about z), its limits
+    count from there, [0, 0.5]; rail's lower > upper is pybullet's "no limit"."""
+    desc = _rules(tmp_path)
+    elbow = next(j for j in desc.joints if j.name == "elbow")
+    rail = next(j for j in desc.joints if j.name == "rail")
+    assert (elbow.lo, elbow.hi) == pytest.approx((0.0, 0.5), abs=1e-15) and rail.lo is None and rail.hi is None
+    # arm's frame: base -> weld (turn 90 deg) -> elbow origin, then the 0.5 rad start: 90 deg + 0.5 rad about z
+    w, x, y, z = desc.link("arm").quat
+    assert (x, y) == pytest.approx((0.0, 0.0), abs=1e-12) and 2 * np.arctan2(z, w) == pytest.approx(np.pi / 2 + 0.5)
+    assert any("elbow" in note and "starts at 0.5" in note for note in desc.notes)
