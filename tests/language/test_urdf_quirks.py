@@ -10,6 +10,7 @@ import pytest
 
 from runner.errors import ScenarioValidationError
 from runner.language.load import load_scenario
+from runner.language.robot_desc import ModelDesc
 from tests.language.test_robot_models import DATA, GOOD_URDF, _issue, _line_of, _scenario
 
 CUBE = np.array([[float(c) for c in line.split()[1:4]] for line in (DATA / "cube.obj").read_text().splitlines()
@@ -70,18 +71,20 @@ RULES_URDF = """\
     <inertial><mass value="2"/><inertia ixx="0.1" ixy="0" ixz="0" iyy="0.1" iyz="0" izz="0.1"/></inertial>
   </link>
   <link name="flange"><collision><origin xyz="0 0 0.05"/><geometry><sphere radius="0.02"/></geometry></collision></link>
-  <joint name="weld" type="fixed"><parent link="base"/><child link="flange"/><origin xyz="0.3 0 0" rpy="0 0 1.5707963267948966"/></joint>
+  <joint name="weld" type="fixed"><parent link="base"/><child link="flange"/>
+    <origin xyz="0.3 0 0" rpy="0 0 1.5707963267948966"/></joint>
   <link name="arm"><collision><geometry><box size="0.1 0.2 0.4"/></geometry></collision></link>
   <joint name="elbow" type="revolute"><parent link="flange"/><child link="arm"/><origin xyz="0 0.1 0"/>
     <axis xyz="0 0 1"/><limit lower="0.5" upper="1.0" effort="1" velocity="1"/></joint>
-  <link name="slide"><inertial><mass value="1"/><inertia ixx="0" ixy="0" ixz="0" iyy="0" iyz="0" izz="0"/></inertial></link>
+  <link name="slide">
+    <inertial><mass value="1"/><inertia ixx="0" ixy="0" ixz="0" iyy="0" iyz="0" izz="0"/></inertial></link>
   <joint name="rail" type="prismatic"><parent link="arm"/><child link="slide"/><axis xyz="1 0 0"/>
     <limit lower="1" upper="-1" effort="1" velocity="1"/></joint>
 </robot>
 """
 
 
-def _rules(tmp_path: Path):  # type: ignore[no-untyped-def]
+def _rules(tmp_path: Path) -> ModelDesc:
     path = _scenario(tmp_path, RULES_URDF, extra=", fixed: true")
     return load_scenario(path).robots["bot"]
 
