@@ -4,7 +4,8 @@ A link's body frame is its URDF link frame (MJCF: body frame) at the model's zer
 the robot's ``pos``/``hpr``; its inertial frame is the model's tensor diagonalised (principal moments and
 the rotation to their axes); its shapes keep their local poses. A model's root is static when ``fixed``
 (an MJCF model's world body always is); joints to a static link are joints to the environment. A joint's
-two links never touch (URDF's convention; MuJoCo's parent-child rule), nor the pairs the scenario excludes.
+two links never touch (URDF's convention; MuJoCo's parent-child rule), nor the pairs the scenario excludes,
+nor any two links of a model without ``self_collision`` (a URDF's default, as pybullet's ``loadURDF``).
 """
 
 from __future__ import annotations
@@ -134,6 +135,9 @@ def compile_robots(
             excluded.append((f"{name}.{joint.parent}", f"{name}.{joint.child}"))
             joints.append(_joint(name, robot, desc, joint))
         excluded.extend((f"{name}.{a}", f"{name}.{b}") for a, b in robot.exclude)
+        if not robot.collides_with_itself:  # pybullet's default for URDF: no two links of the model touch
+            links = group[name]
+            excluded.extend((a, b) for i, a in enumerate(links) for b in links[i + 1 :])
     members = {**arrays, **group}
     for a, b in model.exclude_contacts:
         for x in members.get(a, [a]):

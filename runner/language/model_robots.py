@@ -82,8 +82,9 @@ class Robot(Strict):
     mjcf: str | None = Field(None, description="An MJCF file (a subset, docs/robots.md), as `urdf`.")
     package_root: str | None = Field(
         None,
-        description="Where `package://NAME/...` points: `<package_root>/NAME/...` (as `urdf`); default the "
-        "folder holding the model file's folder. A path that leaves the root is refused.",
+        description="Where `package://NAME/...` points: `<package_root>/NAME/...` (as `urdf`); default: looked "
+        "for beside the model file, in the folders above it, then on ROS_PACKAGE_PATH. A path that leaves the "
+        "root is refused.",
     )
     pos: Vec3 = Field((0.0, 0.0, 0.0), description="Where the model's root frame is placed (world frame).")
     hpr: Vec3 | None = Field(None, description="Heading, pitch, roll of the root frame in degrees.")
@@ -95,6 +96,11 @@ class Robot(Strict):
     )
     joints: dict[Name, RobotJoint] = Field(default_factory=dict, description="Overrides per joint of the model.")
     links: dict[Name, RobotLink] = Field(default_factory=dict, description="Overrides per link of the model.")
+    self_collision: bool | None = Field(
+        None,
+        description="Whether the model's links touch each other (a joint's two links never do): default off "
+        "for URDF (pybullet's default), on for MJCF (MuJoCo's).",
+    )
     exclude: list[tuple[Name, Name]] = Field(
         default_factory=list,
         description="Link pairs that never touch, beyond the adjacent ones (a joint's two links never touch).",
@@ -112,6 +118,11 @@ class Robot(Strict):
     @property
     def file(self) -> str:
         return self.urdf if self.urdf is not None else str(self.mjcf)
+
+    @property
+    def collides_with_itself(self) -> bool:
+        """`self_collision`, or its default for the format (URDF: off, as pybullet; MJCF: on, as MuJoCo)."""
+        return self.self_collision if self.self_collision is not None else self.format == "mjcf"
 
     @property
     def format(self) -> Literal["urdf", "mjcf"]:

@@ -83,6 +83,8 @@ class ModelDesc:
     root: str  # the root link
     links: tuple[LinkDesc, ...]
     joints: tuple[JointDesc, ...]
+    #: what the loader decided that the file left open (a joint started inside its limits, ...), for the user
+    notes: tuple[str, ...] = ()
 
     def link(self, name: str) -> LinkDesc:
         return next(link for link in self.links if link.name == name)
@@ -108,10 +110,50 @@ def resolve_file(text: str, base_dir: Path) -> Path:
     return (base_dir / text).resolve()
 
 
-def resolve_package(uri: str, package_root: Path, model_file: Path, line: int) -> Path:
-    """`package://NAME/rest` -> `<package_root>/NAME/rest`; a plain path is relative to the model file.
-    A result outside its root (the package root, or the model's folder) is refused."""
-    if uri.startswith("package://"):
+#: how many folders above the model's own a `package://` name is looked for in (ROS's `<pkg>/urdf/x.urdf` is 1)
+PACKAGE_SEARCH_UP = 4
+
+
+def package_bases(package: str, model_file: Path) -> list[Path]:
+    """Where `package://NAME/...` may live when the robot names no `package_root`, in order: the model's
+    folder and the folders above it (``PACKAGE_SEARCH_UP``), then each ROS_PACKAGE_PATH entry. Each
+    place holds the package as `NAME/`, or is the package itself (its folder is called NAME)."""
+    import os
+
+    places = [model_file.parent.resolve(), *list(model_file.parent.resolve().parents)[:PACKAGE_SEARCH_UP]]
+    places += [Path(p).resolve() for p in os.environ.get("ROS_PACKAGE_PATH", "").split(os.pathsep) if p]
+    bases: list[Path] = []
+    for place in places:
+        for base in ([place] if place.name == package else []) + [place / package]:
+            if base not in bases:
+                bases.append(base)
+    return bases
+
+
+def resolve_package(uri: str, package_root: Path | None, model_file: Path, line: int) -> Path:
+    """`package://NAME/rest` -> `<package_root>/NAME/rest`, or without a package root the first of
+    :func:`package_bases` holding `rest`; a plain path is relative to the model file. A result outside its
+    root (the package, or the model's folder) is refused."""
+    if uri.startswith("package://") and package_root is None:
+        package, _, rest = uri[len("package://") :].partition("/")
+        bases = package_bases(package, model_file)
+        for base in bases:
+            target = (base / rest).resolve()
+            if not target.is_relative_to(base):
+                raise ModelFileError(
+                    model_file, line, f"the mesh `{uri}` resolves to {target}, outside its root {base}", near=uri
+                )
+            if target.is_file():
+                return target
+        raise ModelFileError(
+            model_file,
+            line,
+            f"the mesh `{uri}` was not found in the package `{package}` (looked in {', '.join(map(str, bases[:3]))}"
+            f"{', ...' if len(bases) > 3 else ''}); set the robot's `package_root` to the folder holding "
+            f"`{package}/`, or ROS_PACKAGE_PATH",
+            near=uri,
+        )
+    if uri.startswith("package://") and package_root is not None:
         root, target = package_root, (package_root / uri[len("package://") :]).resolve()
     elif uri.startswith("file://"):
         root, target = model_file.parent.resolve(), Path(uri[len("file://") :]).resolve()
@@ -122,7 +164,8 @@ def resolve_package(uri: str, package_root: Path, model_file: Path, line: int) -
             model_file, line, f"the mesh `{uri}` resolves to {target}, outside its root {root}", near=uri
         )
     if not target.is_file():
-        raise ModelFileError(model_file, line, f"the mesh `{uri}` does not exist (looked for {target})", near=uri)
+        hint = "; set the robot's `package_root`" if uri.startswith("package://") else ""
+        raise ModelFileError(model_file, line, f"the mesh `{uri}` does not exist (looked for {target}){hint}", near=uri)
     return target
 
 

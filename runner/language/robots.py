@@ -19,10 +19,13 @@ from runner.language.yaml_source import Positions
 FIELD_NAMES = frozenset({"pos", "vel", "angvel", "quat", "speed", "energy", "position", "velocity", "force"})
 
 
-def package_root(robot: Robot, model_file: FsPath, base_dir: FsPath) -> FsPath:
+def package_root(robot: Robot, model_file: FsPath, base_dir: FsPath) -> FsPath | None:
+    """The robot's `package_root`; None: `package://` names are looked for near the model file and on
+    ROS_PACKAGE_PATH (runner.language.robot_desc.package_bases)."""
+    del model_file  # the search starts from it (package_bases)
     if robot.package_root is not None:
         return resolve_file(robot.package_root, base_dir)
-    return model_file.parent.parent
+    return None
 
 
 def load_model(robot: Robot, base_dir: FsPath) -> ModelDesc:
@@ -40,7 +43,7 @@ def load_model(robot: Robot, base_dir: FsPath) -> ModelDesc:
 
 
 @lru_cache(maxsize=32)
-def _read(kind: str, file: FsPath, packages: FsPath, fixed: bool, triangles: bool, mtime_ns: int) -> ModelDesc:
+def _read(kind: str, file: FsPath, packages: FsPath | None, fixed: bool, triangles: bool, mtime_ns: int) -> ModelDesc:
     """One model file's description, read once per content version (every variant of a scenario, and every
     scenario of a folder, shares it; the file's modification time keys an edited file anew)."""
     del mtime_ns  # part of the cache key only

@@ -11,7 +11,9 @@ from __future__ import annotations
 
 import io
 import math
+import re
 from collections.abc import Iterator
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
@@ -27,23 +29,32 @@ from runner.language.robot_desc import (
     resolve_package,
     vec,
 )
+from runner.language.urdf_rules import merge_massless_fixed, usable_inertia
 
 #: A name expressions can read as `<robot>.<name>` (the language's identifiers).
 _IDENT = r"^[A-Za-z_][A-Za-z0-9_]*$"
-_KINDS = {"revolute": "hinge", "continuous": "hinge", "prismatic": "slider", "fixed": "fixed"}
+_KINDS = {
+    "revolute": "hinge",
+    "continuous": "hinge",
+    "prismatic": "slider",
+    "fixed": "fixed",
+    "spherical": "ball",  # pybullet's extension (humanoid.urdf): a ball joint at the child's origin
+    "floating": "free",  # no joint: the child is a free body, as pybullet and MuJoCo load it
+}
 
 
 def xml_bytes(file: Path) -> bytes:
-    """The file's bytes with its XML declaration blanked (same length: lines and columns stay): pybullet_data
-    ships files declaring `version="0.0"`, which XML parsers refuse and every simulator reads."""
-    import re
+    """The file's bytes with the quirks pybullet's loader reads past blanked (each byte replaced by a space, so
+    lines and columns stay): every XML declaration (pybullet_data declares `version="0.0"`, which XML
+    parsers refuse, and two files declare it after a comment or a blank line), and NUL bytes (humanoid.urdf
+    ends with one: "Extra content at the end of the document"). docs/robots.md lists them."""
 
     try:
         raw = file.read_bytes()
     except OSError as exc:
         raise ModelFileError(file, 0, f"cannot read the model file: {exc.strerror}") from None
-    found = re.match(rb"\A(\xef\xbb\xbf)?<\?xml[^>]*\?>", raw)
-    return raw if found is None else b" " * found.end() + raw[found.end() :]
+    blanked = re.sub(rb"<\?xml\s[^>]*\?>", lambda m: b" " * len(m.group(0)), raw.replace(b"\x00", b" "))
+    return blanked
 
 
 def parse_xml(file: Path) -> Any:
@@ -58,13 +69,55 @@ def parse_xml(file: Path) -> Any:
         raise ModelFileError(file, line or 0, f"malformed XML: {exc.msg}", column=column or 0) from None
 
 
+#: geometry the loaders read; pybullet's <plane> and <cdf> (signed-distance field) are refused, named
+_GEOMETRY = {
+    "box",
+    "sphere",
+    "cylinder",
+    "mesh",
+    "capsule",
+}
+_XACRO = re.compile(r"\$\((?!optenv\s)|\$\{")
+
+
+def _check_geometry(tree: Any, file: Path) -> None:
+    """Every <geometry> is one the loaders read, and no xacro expression is left (but `$(optenv ...)`)."""
+    for geometry in tree.getroot().iter("geometry"):
+        for shape in geometry:
+            if isinstance(shape.tag, str) and shape.tag not in _GEOMETRY:
+                what = {"plane": "pybullet's implicit <plane> (the scenario's `plane` body is the ground)",
+                        "cdf": "pybullet's signed-distance field <cdf>"}.get(shape.tag, f"<{shape.tag}>")  # fmt: skip
+                raise ModelFileError(file, shape.sourceline or 0, f"geometry {what} is not simulated here")
+    for element in tree.getroot().iter():
+        for key, value in element.attrib.items():
+            if _XACRO.search(value):
+                raise ModelFileError(
+                    file, element.sourceline or 0, f"`{key}` holds a xacro expression {value!r}: run xacro first",
+                    near=value,
+                )  # fmt: skip
+
+
+def _yourdfpy_text(file: Path) -> bytes:
+    """What yourdfpy reads: the file as pybullet reads it. <capsule> becomes <cylinder> (made a capsule again
+    from the tree), `$(optenv NAME default)` (xacro, left in husky.urdf) the variable or its default, and
+    commas between numbers (bike.urdf: `xyz="0.07, 0, -0.69"`) spaces, as pybullet's number reader skips them."""
+    import os
+
+    text = re.sub(rb"<(/?)capsule\b", rb"<\1cylinder", xml_bytes(file))
+
+    def optenv(m: re.Match[bytes]) -> bytes:
+        return os.environ.get(m.group(1).decode(), m.group(2).decode()).encode()
+
+    text = re.sub(rb"\$\(optenv\s+(\S+)\s*([^)]*)\)", optenv, text)
+    return re.sub(rb'="[-+0-9.eE,\s]*,[-+0-9.eE,\s]*"', lambda m: m.group(0).replace(b",", b" "), text)
+
+
 def _lines(tree: Any, tag: str) -> dict[str, int]:
     return {e.get("name"): e.sourceline or 0 for e in tree.getroot().iter(tag) if e.get("name")}
 
 
 def _check_structure(tree: Any, file: Path) -> tuple[dict[str, int], dict[str, int]]:
     """Names and references, with the line of each problem; returns the links' and joints' lines."""
-    import re
 
     root = tree.getroot()
     if root.tag != "robot":
@@ -79,7 +132,12 @@ def _check_structure(tree: Any, file: Path) -> tuple[dict[str, int], dict[str, i
                     f"{kind} name `{name}` is not an identifier (letters, digits, `_`); expressions could not read it",
                 )
     if not links:
+        soft = root.find("deformable")
+        if soft is not None:
+            what = "a deformable body (pybullet's <deformable>), which no engine here simulates"
+            raise ModelFileError(file, soft.sourceline or 0, what)
         raise ModelFileError(file, root.sourceline or 0, "the model has no <link>")
+    _check_geometry(tree, file)
     children: dict[str, str] = {}
     for joint in root.iter("joint"):
         line = joint.sourceline or 0
@@ -88,7 +146,11 @@ def _check_structure(tree: Any, file: Path) -> tuple[dict[str, int], dict[str, i
         kind = joint.get("type", "")
         if kind not in _KINDS:
             raise ModelFileError(
-                file, line, f"joint `{joint.get('name')}` has type `{kind}`; supported: {', '.join(_KINDS)}"
+                file,
+                line,
+                f"joint `{joint.get('name')}` has type `{kind}`, which no engine here simulates"
+                f"{' (a planar joint: motion in a plane, on none of the four engines)' if kind == 'planar' else ''}"
+                f"; supported: {', '.join(_KINDS)}",
             )
         for end in ("parent", "child"):
             element = joint.find(end)
@@ -113,6 +175,17 @@ def _check_structure(tree: Any, file: Path) -> tuple[dict[str, int], dict[str, i
     return links, joints
 
 
+def _capsules(tree: Any) -> set[tuple[str, int]]:
+    """(link, index of its <collision>) of every capsule: pybullet's extension, radius and length (the
+    cylinder between the two half-spheres' centres) along the local z, as our capsule."""
+    found = set()
+    for link in tree.getroot().iter("link"):
+        for k, collision in enumerate(link.findall("collision")):
+            if collision.find("geometry/capsule") is not None:
+                found.add((str(link.get("name")), k))
+    return found
+
+
 def _mesh_lines(tree: Any) -> dict[str, int]:
     return {e.get("filename"): e.sourceline or 0 for e in tree.getroot().iter("mesh") if e.get("filename")}
 
@@ -135,7 +208,7 @@ def load_mesh(path: Path, scale: tuple[float, float, float], file: Path, line: i
     return Mesh(vertices=vertices, faces=faces, source=path.name)
 
 
-def _shape(geometry: Any, file: Path, package_root: Path, mesh_lines: dict[str, int], hull: bool) -> Shape:
+def _shape(geometry: Any, file: Path, package_root: Path | None, mesh_lines: dict[str, int], hull: bool) -> Shape:
     g = geometry
     if g.box is not None:
         return Shape(ShapeKind.BOX, size=vec(g.box.size))
@@ -147,10 +220,50 @@ def _shape(geometry: Any, file: Path, package_root: Path, mesh_lines: dict[str, 
     mesh = g.mesh
     line = mesh_lines.get(mesh.filename, 0)
     target = resolve_package(mesh.filename, package_root, file, line)
-    s = mesh.scale
-    scale = (1.0, 1.0, 1.0) if s is None else vec(np.broadcast_to(np.asarray(s, dtype=float), (3,)))
+    scale = _mesh_scale(mesh.scale, file, line)
     kind = ShapeKind.CONVEX if hull else ShapeKind.TRIMESH
     return Shape(kind, mesh=load_mesh(target, scale, file, line, hull))
+
+
+def _mesh_scale(scale: Any, file: Path, line: int) -> tuple[float, float, float]:
+    """`scale` as the loaders read it: none is 1; one number scales every axis; three are x, y, z; pybullet
+    reads the first three of more (pybullet_data's racecar writes `scale="1 1 1 1"`)."""
+    if scale is None:
+        return (1.0, 1.0, 1.0)
+    values = np.atleast_1d(np.asarray(scale, dtype=float)).ravel()
+    if values.size == 1:
+        values = np.repeat(values, 3)
+    if values.size < 3 or not np.all(np.isfinite(values[:3])):
+        raise ModelFileError(file, line, f"mesh scale {list(values)} is not 1 or 3 numbers", near="scale")
+    return vec(values[:3])
+
+
+def _start(lo: float | None, hi: float | None) -> float:
+    """Where a joint starts: 0, clamped into its limits (a1, aliengo and kuka_iiwa/model_vr_limits put 0
+    outside them; pybullet leaves such a joint outside and its stop then throws the robot)."""
+    if lo is None or hi is None:
+        return 0.0
+    return float(min(max(0.0, lo), hi))
+
+
+def _motion(kind: str, axis: np.ndarray, q: float) -> np.ndarray:
+    """The joint's own motion by ``q`` (rad or m) along its unit ``axis``, as a 4x4 matrix."""
+    out = np.eye(4)
+    if q == 0.0:
+        return out
+    if kind == "prismatic":
+        out[:3, 3] = axis * q
+        return out
+    k = np.array([[0, -axis[2], axis[1]], [axis[2], 0, -axis[0]], [-axis[1], axis[0], 0]])
+    out[:3, :3] = np.eye(3) + math.sin(q) * k + (1 - math.cos(q)) * (k @ k)  # Rodrigues
+    return out
+
+
+def _default_mass(link: LinkDesc) -> LinkDesc:
+    """A link without <inertial> that is not merged away (runner.language.urdf_rules) gets pybullet's
+    default, 1 kg (DART's too), its inertia then from its shapes (``usable_inertia``); a link named
+    `world` keeps none, as in pybullet."""
+    return replace(link, mass=1.0)
 
 
 def _pose(matrix: np.ndarray) -> tuple[tuple[float, float, float], tuple[float, float, float, float]]:
@@ -180,7 +293,7 @@ def _walk(root: str, joints: list[Any]) -> Iterator[Any]:
             stack.append(joint.child)
 
 
-def load_urdf(file: Path, package_root: Path, static_root: bool, static_triangles: bool) -> ModelDesc:
+def load_urdf(file: Path, package_root: Path | None, static_root: bool, static_triangles: bool) -> ModelDesc:
     """Parse ``file``; links' frames by forward kinematics at the zero configuration (model frame). The
     meshes of a static root are its triangles when ``static_triangles``, else (and for every moving link)
     convex hulls."""
@@ -188,9 +301,10 @@ def load_urdf(file: Path, package_root: Path, static_root: bool, static_triangle
 
     tree = parse_xml(file)
     link_lines, joint_lines = _check_structure(tree, file)
+    capsules = _capsules(tree)
     mesh_lines = _mesh_lines(tree)
     try:
-        urdf = yourdfpy.URDF.load(io.BytesIO(xml_bytes(file)), build_scene_graph=False, load_meshes=False)
+        urdf = yourdfpy.URDF.load(io.BytesIO(_yourdfpy_text(file)), build_scene_graph=False, load_meshes=False)
     except Exception as exc:  # noqa: BLE001 - yourdfpy raises ValueError/TypeError/AttributeError on bad values
         raise ModelFileError(file, 0, f"cannot read the URDF: {exc}") from None
     robot = urdf.robot
@@ -199,19 +313,27 @@ def load_urdf(file: Path, package_root: Path, static_root: bool, static_triangle
     root = next(link.name for link in robot.links if link.name not in children)
     frames = {root: np.eye(4)}
     descs: list[JointDesc] = []
+    notes: list[str] = []
     for joint in _walk(root, list(robot.joints)):
-        frame = frames[joint.parent] @ np.asarray(joint.origin if joint.origin is not None else np.eye(4))
-        frames[joint.child] = frame
+        at_joint = frames[joint.parent] @ np.asarray(joint.origin if joint.origin is not None else np.eye(4))
         kind = _KINDS[joint.type]
         axis = np.asarray(joint.axis if joint.axis is not None else (1.0, 0.0, 0.0), dtype=float)
-        if kind != "fixed" and np.linalg.norm(axis) < 1e-12:
+        if kind in ("hinge", "slider") and np.linalg.norm(axis) < 1e-12:
             raise ModelFileError(file, joint_lines.get(joint.name, 0), f"joint `{joint.name}` has a zero axis")
-        world_axis = frame[:3, :3] @ (axis / max(float(np.linalg.norm(axis)), 1e-300))
+        unit = axis / max(float(np.linalg.norm(axis)), 1e-300)
+        world_axis = at_joint[:3, :3] @ unit
         lo = hi = None
         if joint.type in ("revolute", "prismatic") and joint.limit is not None:
             lo, hi = joint.limit.lower, joint.limit.upper
         if lo is not None and hi is not None and lo > hi:
-            raise ModelFileError(file, joint_lines.get(joint.name, 0), f"joint `{joint.name}` has lower > upper")
+            lo = hi = None  # pybullet's convention: lower > upper is no limit (cube_no_rotation.urdf)
+        start = _start(lo, hi)
+        if start != 0.0:
+            notes.append(f"joint `{joint.name}`: 0 is outside its limits [{lo:g}, {hi:g}]; it starts at {start:g}, "
+                         "and its position counts from there")  # fmt: skip
+            lo, hi = float(lo) - start, float(hi) - start  # type: ignore[arg-type]
+        frame = at_joint @ _motion(joint.type, unit, start)
+        frames[joint.child] = frame
         descs.append(
             JointDesc(
                 joint.name,
@@ -226,6 +348,7 @@ def load_urdf(file: Path, package_root: Path, static_root: bool, static_triangle
             )
         )
     links: list[LinkDesc] = []
+    no_inertial = {link.name for link in robot.links if link.inertial is None and link.name != "world"}
     for link in robot.links:
         line = link_lines.get(link.name, 0)
         inertial = link.inertial
@@ -242,9 +365,12 @@ def load_urdf(file: Path, package_root: Path, static_root: bool, static_triangle
         tensor = rot @ tensor @ rot.T  # the inertial frame's tensor, in the link frame
         hull = not (static_root and link.name == root and static_triangles)
         shapes = []
-        for collision in link.collisions:
+        for k, collision in enumerate(link.collisions):
             pos, quat = _pose(np.asarray(collision.origin) if collision.origin is not None else np.eye(4))
-            shapes.append(PlacedShape(_shape(collision.geometry, file, package_root, mesh_lines, hull), pos, quat))
+            shape = _shape(collision.geometry, file, package_root, mesh_lines, hull)
+            if (link.name, k) in capsules:
+                shape = Shape(ShapeKind.CAPSULE, radius=shape.radius, length=shape.length)
+            shapes.append(PlacedShape(shape, pos, quat))
         pos, quat = _pose(frames[link.name])
         links.append(
             LinkDesc(
@@ -259,4 +385,7 @@ def load_urdf(file: Path, package_root: Path, static_root: bool, static_triangle
                 line,
             )
         )
-    return ModelDesc(str(file), root, tuple(links), tuple(descs))
+    links, descs = merge_massless_fixed(root, links, descs)
+    links = [_default_mass(link) if link.name in no_inertial else link for link in links]
+    links = [usable_inertia(link) for link in links]
+    return ModelDesc(str(file), root, tuple(links), tuple(descs), tuple(notes))

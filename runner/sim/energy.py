@@ -3,9 +3,11 @@
 Nothing in a scene does work on its dynamic bodies except what the scenario drives (gravity is in the
 energy), so their total mechanical energy
 
-    E = sum over dynamic bodies of  1/2 m |v|^2  +  1/2 w^T I_world w  -  m g.p
+    E = sum over dynamic bodies of  1/2 m |v_c|^2  +  1/2 w^T I_world w  -  m g.p_c
 
-(``I_world = R diag(I) R^T``: the compiled principal inertia turned by the body's orientation) cannot
+at each body's centre of mass (``p_c = p + R com``, ``v_c = v + w x R com``: the states are the body
+frame's, a robot link's COM is off its frame) with its full inertia tensor in world axes (``I_world = R
+R_i diag(I) R_i^T R^T``, ``R_i`` the principal axes in the body frame, ``BodySpec.inertia_quat``) cannot
 rise: restitution <= 1 gives back at most what an impact took, friction and damping only remove energy,
 ideal joints do no work. An engine that creates energy (the MuJoCo pile of 100 boxes throws its top box
 up at 29.5 m/s) is an engine failure, reported like a blow-up.
@@ -43,7 +45,7 @@ from collections import deque
 
 import numpy as np
 
-from backends.types import BodyStates, CompiledWorld, JointStates, Motion
+from backends.types import IDENTITY_QUAT, BodyStates, CompiledWorld, JointStates, Motion
 from runner.errors import EnergyGain
 
 __all__ = ["GAIN_FRACTION", "WINDOW_STEPS", "EnergyWatch", "body_energies"]
@@ -55,21 +57,48 @@ GAIN_FRACTION = 0.25
 _ROUNDING = 4 * float(np.finfo(float).eps)
 
 
+def _rotate(q: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """Each row of ``v`` turned by its quaternion (w, x, y, z) of ``q``: t = 2 u x v, then v + s t + u x t."""
+    s, u = q[:, 0:1], q[:, 1:4]
+    t = 2.0 * np.cross(u, v)
+    return v + s * t + np.cross(u, t)
+
+
 def body_energies(
-    states: BodyStates, index: np.ndarray | slice, mass: np.ndarray, inertia: np.ndarray, gravity: np.ndarray
+    states: BodyStates,
+    index: np.ndarray | slice,
+    mass: np.ndarray,
+    inertia: np.ndarray,
+    gravity: np.ndarray,
+    com: np.ndarray | None = None,
+    tensor: np.ndarray | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
-    """(kinetic, total) mechanical energy of the bodies ``index`` (J): translational and rotational
-    kinetic energy, plus the gravitational -m g.p."""
-    s, x, y, z = states.quat[index].T
-    wx, wy, wz = states.ang_vel[index].T
+    """(kinetic, total) mechanical energy of the bodies ``index`` (J): translational kinetic energy of the
+    centre of mass, rotational about it, plus the gravitational -m g.p_com. The states are those of the body
+    frames; ``com`` (N, 3) places each centre of mass in its body frame (None: at the origin) and ``tensor``
+    (N, 3, 3) is each inertia tensor about it in the body frame (None: ``inertia``, principal moments along
+    the body axes)."""
+    quat = states.quat[index]
+    w = states.ang_vel[index]
+    s, x, y, z = quat.T
+    wx, wy, wz = w.T
     # R^T w, the body-frame angular velocity: w turned by the inverse quaternion (s, -u), u = (x, y, z),
-    # without its matrix: t = 2 (-u) x w, then w + s t + (-u) x t.
+    # without its matrix: t = 2 (-u) x w, then w + s t + (-u) x t (written out: the check runs every step).
     tx, ty, tz = 2.0 * (z * wy - y * wz), 2.0 * (x * wz - z * wx), 2.0 * (y * wx - x * wy)
     bx, by, bz = wx + s * tx + (z * ty - y * tz), wy + s * ty + (x * tz - z * tx), wz + s * tz + (y * tx - x * ty)
-    v = states.lin_vel[index]
-    ix, iy, iz = inertia.T
-    kinetic = 0.5 * mass * np.add.reduce(v * v, axis=1) + 0.5 * (ix * bx * bx + iy * by * by + iz * bz * bz)
-    return kinetic, kinetic - mass * (states.pos[index] @ gravity)
+    pos, v = states.pos[index], states.lin_vel[index]
+    if com is not None:
+        offset = _rotate(quat, com)  # R com: from the body frame's origin to the COM, world axes
+        pos = pos + offset
+        v = v + np.cross(w, offset)  # the COM's velocity (the states give the origin's)
+    if tensor is None:
+        ix, iy, iz = inertia.T
+        rotational = ix * bx * bx + iy * by * by + iz * bz * bz
+    else:
+        body_w = np.stack((bx, by, bz), axis=1)
+        rotational = np.einsum("ni,nij,nj->n", body_w, tensor, body_w)
+    kinetic = 0.5 * mass * np.add.reduce(v * v, axis=1) + 0.5 * rotational
+    return kinetic, kinetic - mass * (pos @ gravity)
 
 
 class EnergyWatch:
@@ -85,6 +114,13 @@ class EnergyWatch:
         self.rows: np.ndarray | slice = slice(first, first + self.index.size) if contiguous else self.index
         self.mass = np.array([world.bodies[i].mass for i in self.index], float)
         self.inertia = np.array([world.bodies[i].inertia for i in self.index], float).reshape(-1, 3)
+        bodies = [world.bodies[i] for i in self.index]
+        offset = any(b.com != (0.0, 0.0, 0.0) for b in bodies)
+        turned = any(b.inertia_quat != IDENTITY_QUAT for b in bodies)
+        #: each COM in its body frame, and each full tensor in the body frame (None: not needed, as for every
+        #: hand-written body, whose frame is its inertial frame)
+        self.com = np.array([b.com for b in bodies], float).reshape(-1, 3) if offset else None
+        self.tensor = np.array([b.inertia_tensor() for b in bodies], float).reshape(-1, 3, 3) if turned else None
         self.gravity = np.asarray(world.gravity, float)
         self.motors = np.array([k for k, j in enumerate(world.joints) if j.motor is not None], dtype=int)
         self.dt = world.dt
@@ -110,7 +146,7 @@ class EnergyWatch:
         if self.motors.size:
             power = np.nan_to_num(joints.motor_force[self.motors] * joints.velocity[self.motors])
             self.work += float(np.abs(power).sum()) * self.dt
-        kinetic, energy = body_energies(states, self.rows, self.mass, self.inertia, self.gravity)
+        kinetic, energy = body_energies(states, self.rows, self.mass, self.inertia, self.gravity, self.com, self.tensor)
         total = float(energy.sum()) - self.work
         entry = (total, energy)
         if self._driven:
@@ -147,7 +183,7 @@ class EnergyWatch:
         raise EnergyGain(
             f"energy gain: body `{name}` gained {gains[k]:.4g} J at t = {t:.4f} s on {self.backend} (the bodies' "
             f"energy rose {rise:.4g} J above its level at t = {self._reference_at:.4f} s with no work done on "
-            f"them, beyond the bound of {bound:.4g} J; docs/semantics.md, \"Energy watchdog\")",
+            f'them, beyond the bound of {bound:.4g} J; docs/semantics.md, "Energy watchdog")',
             backend=self.backend,
             body=name,
             time=t,

@@ -1,0 +1,96 @@
+"""What a URDF leaves to its loader, decided as the established loaders decide it (docs/robots.md, "Rules").
+
+* **Massless links on fixed joints** (frames such as Franka Panda's `panda_link8`, a tool flange, a
+  `base_footprint` child) are merged into their parent, as MuJoCo's ``fusestatic`` and pybullet's
+  ``URDF_MERGE_FIXED_LINKS`` do: the link's collision shapes move onto the parent at the same place, the
+  joints hanging from it hang from the parent, and the link and its fixed joint are gone (not addressable).
+  A chain of them merges into its first ancestor that stays.
+* **A link with mass but no usable inertia** (the tensor all zero, or a principal moment not above
+  ``DEGENERATE`` times the largest):
+  the inertia of its collision shapes' bounding box, about its centre of mass, with its mass; this is
+  pybullet's default for every link (``btCompoundShape::calculateLocalInertia``, the AABB box formula),
+  kept here only where the file gives nothing usable (MuJoCo refuses such a moving body). A link with no
+  collision shape either gets a solid sphere of radius ``FALLBACK_RADIUS``.
+* **A tensor that violates A + B >= C** (no body has one) is kept as written: pybullet, DART and ODE run it;
+  MuJoCo's compiler refuses it, so the MuJoCo backend refuses it up front, naming the body.
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+
+from backends.geometry import quat_conj, quat_mul, quat_rotate
+from backends.types import PlacedShape
+from runner.language.robot_desc import JointDesc, LinkDesc, vec
+
+#: a principal moment at most this fraction of the largest is none (cube_no_rotation.urdf: 5.6e-17 of 0.215)
+DEGENERATE = 1e-12
+#: radius (m) of the solid sphere whose inertia a shapeless link of unusable inertia gets
+FALLBACK_RADIUS = 0.01
+
+
+def merge_massless_fixed(
+    root: str, links: list[LinkDesc], joints: list[JointDesc]
+) -> tuple[list[LinkDesc], list[JointDesc]]:
+    """``links`` and ``joints`` (parents first) with every massless link on a fixed joint merged into its parent."""
+    by_name = {link.name: link for link in links}
+    into: dict[str, str] = {}  # merged link -> the link that holds it now
+    kept_joints: list[JointDesc] = []
+    for joint in joints:
+        parent = into.get(joint.parent, joint.parent)
+        child = by_name[joint.child]
+        if joint.kind == "fixed" and child.mass <= 0 and joint.child != root:
+            holder = by_name[parent]
+            moved = tuple(_into_frame(holder, child, placed) for placed in child.shapes)
+            by_name[parent] = replace(holder, shapes=holder.shapes + moved)
+            into[joint.child] = parent
+            continue
+        kept_joints.append(joint if parent == joint.parent else replace(joint, parent=parent))
+    kept_links = [by_name[link.name] for link in links if link.name not in into]
+    return kept_links, kept_joints
+
+
+def _into_frame(holder: LinkDesc, link: LinkDesc, placed: PlacedShape) -> PlacedShape:
+    """``placed`` (in ``link``'s frame) in ``holder``'s frame; both frames are given in the model frame."""
+    world_pos = np.add(link.pos, quat_rotate(link.quat, placed.pos))
+    back = quat_conj(holder.quat)
+    pos = quat_rotate(back, vec(world_pos - np.asarray(holder.pos)))
+    return replace(placed, pos=pos, quat=quat_mul(back, quat_mul(link.quat, placed.quat)))
+
+
+def usable_inertia(link: LinkDesc) -> LinkDesc:
+    """``link`` with the bounding-box inertia when it has mass and its tensor is unusable (module docstring)."""
+    tensor = np.asarray(link.inertia, dtype=float)
+    moments = np.linalg.eigvalsh((tensor + tensor.T) / 2)
+    if link.mass <= 0:
+        return link
+    if moments.min() > DEGENERATE * moments.max():
+        return link
+    corners = [shape_points(placed) for placed in link.shapes]
+    points = np.concatenate(corners) if corners else np.zeros((0, 3))
+    if len(points):
+        lo, hi = points.min(axis=0), points.max(axis=0)
+        box = hi - lo
+        com = (lo + hi) / 2
+        moments = link.mass / 12.0 * np.array([box[1] ** 2 + box[2] ** 2, box[0] ** 2 + box[2] ** 2,
+                                               box[0] ** 2 + box[1] ** 2])  # fmt: skip
+    else:
+        moments, com = np.zeros(3), np.asarray(link.com)
+    moments = np.maximum(moments, 0.4 * link.mass * FALLBACK_RADIUS**2)  # a flat or point-like box: never 0
+    d = np.asarray(link.com) - com  # about the link's own COM: the box's tensor shifted (parallel axes)
+    full = np.diag(moments) + link.mass * ((d @ d) * np.eye(3) - np.outer(d, d))
+    return replace(link, inertia=(vec(full[0]), vec(full[1]), vec(full[2])))
+
+
+def shape_points(placed: PlacedShape) -> np.ndarray:
+    """Points bounding one shape in its link's frame: the corners of its local bounding box, turned and placed."""
+    s = placed.shape
+    if s.mesh is not None:
+        local = np.asarray(s.mesh.vertices, dtype=float).reshape(-1, 3)
+    else:
+        radius, length = s.radius, s.length
+        half = np.asarray(s.size, dtype=float) / 2 if any(s.size) else np.array([radius, radius, length / 2 or radius])
+        local = np.array([[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)], dtype=float) * half
+    return np.array([np.add(placed.pos, quat_rotate(placed.quat, vec(p))) for p in local])

@@ -1,0 +1,1 @@
+"""`scenario robots survey`: real URDF and MJCF models, unmodified, on every engine (docs/robots.md)."""

@@ -1,0 +1,68 @@
+"""The robot survey over real models nobody on the project wrote (issue 28's acceptance): pybullet's bundled
+data (its URDFs and MJCFs; the 1,000 generated objects of `random_urdfs/` left out) and dm_control's suite,
+each unmodified on a ground plane under gravity (`scenario robots survey`, docs/robots.md "The survey"),
+on every installed engine.
+
+The target, per engine: at least 90 % of the models run to the end; every other cell is refused before
+the run with what is missing named; none crashes (exit 70, a signal) and none fails at t = 0.
+
+Cost: the survey's cases are loading (meshes and their hulls) and building the world more than stepping,
+so ``SECONDS`` of simulated time (0.5 s, 250 steps at the survey's dt = 2 ms) keeps it to a few minutes on
+two cores; the energy watchdog still sees the landing (the models start 1 cm above the ground). The table
+is written to the test's temporary folder (and printed on failure).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import dm_control  # the `dev` extra: dm_control's suite of MJCF models
+import pytest
+
+from backends.registry import KNOWN_BACKENDS, is_installed
+from runner.survey.models import find_models
+from runner.survey.run import run_survey
+from runner.survey.table import CRASHED, FAILED, RAN, REFUSED, Survey, markdown
+
+pytestmark = pytest.mark.slow
+SECONDS = 0.5
+TARGET = 0.90
+ENGINES = [n for n, e in KNOWN_BACKENDS.items() if not e.hidden and is_installed(n)]
+SUITE = str(Path(dm_control.__file__).parent / "suite")
+CORPORA = {
+    "urdf": (["@pybullet_data"], ["random_urdfs/*", "*.xml"]),
+    "mjcf": (["@pybullet_data/mjcf", SUITE], []),
+}
+
+
+@pytest.fixture(scope="module", params=sorted(CORPORA))
+def survey(request: pytest.FixtureRequest, tmp_path_factory: pytest.TempPathFactory) -> Survey:
+    paths, exclude = CORPORA[str(request.param)]
+    models = find_models(paths, exclude)
+    assert len(models) >= (90 if request.param == "urdf" else 40)  # the corpus is there (pybullet_data, dm_control)
+    done = run_survey(models, ENGINES, SECONDS, jobs=2)
+    (tmp_path_factory.mktemp("survey") / f"{request.param}.md").write_text(markdown(done))
+    return done
+
+
+@pytest.mark.parametrize("engine", ENGINES)
+def test_at_least_90_percent_run_on_each_engine(survey: Survey, engine: str) -> None:
+    counts = survey.totals(engine)
+    assert counts[RAN] >= TARGET * sum(counts.values()), f"{engine}: {counts}\n{markdown(survey)}"
+
+
+@pytest.mark.parametrize("engine", ENGINES)
+def test_nothing_crashes_or_fails_at_the_start(survey: Survey, engine: str) -> None:
+    bad = {
+        label: cells[engine]
+        for label, cells in survey.rows.items()
+        if cells[engine].kind == CRASHED or (cells[engine].kind == FAILED and cells[engine].text.startswith("t = 0 "))
+    }
+    assert not bad, f"{engine}: {bad}"
+
+
+@pytest.mark.parametrize("engine", ENGINES)
+def test_every_refusal_names_what_is_missing(survey: Survey, engine: str) -> None:
+    """A refusal is the language's or the engine's message (exit 2), located and naming the feature."""
+    refused = [(label, cells[engine].text) for label, cells in survey.rows.items() if cells[engine].kind == REFUSED]
+    assert all(len(text) > 20 for _, text in refused), refused
