@@ -46,8 +46,12 @@ SHAPES = ("Boxes3D", "Ellipsoids3D", "Cylinders3D", "Capsules3D", "Mesh3D", "Ass
 #: what the assertions read, written out from the scenario files (box_pile: count 5, every crate)
 BY_HAND = {
     "box-pile__base": [f"crate_{k}.{q}" for q in ("speed", "pos.z", "pos.x", "pos.y") for k in range(5)],
-    "kuka-arm__base": ["arm.lbr_iiwa_link_7.pos.z", "arm.lbr_iiwa_joint_2.position", "arm.lbr_iiwa_link_7.pos.x",
-                       "arm.lbr_iiwa_link_7.pos.y"],  # fmt: skip
+    "kuka-arm__base": [
+        "arm.lbr_iiwa_link_7.pos.z",
+        "arm.lbr_iiwa_joint_2.position",
+        "arm.lbr_iiwa_link_7.pos.x",
+        "arm.lbr_iiwa_link_7.pos.y",
+    ],  # fmt: skip
     "cartpole-pendulum__base": ["cartpole.slider_to_cart.position", "cartpole.cart_to_pole.position"],
 }
 
