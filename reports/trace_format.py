@@ -164,6 +164,9 @@ KEY_BODY_SPECS: Final = "body_specs"  # JSON list: name, motion, shape, size, ra
 KEY_JOINTS: Final = "joints"  # JSON list of names
 KEY_JOINT_SPECS: Final = "joint_specs"  # JSON list: name, kind, body, other, axis
 KEY_STATE: Final = "state"  # JSON list of state variable names
+#: JSON list of the quantities the assertions read (runner.compile.asserted): `box.pos.z`, `crate_4.speed`,
+#: `slider.position`, `state.door_open`, `contact(box, door)`; absent from traces written before it
+KEY_ASSERTED: Final = "asserted"
 SCENARIO_KEYS: Final = (
     KEY_NAME,
     KEY_VARIANT,

@@ -11,7 +11,9 @@ from typing import Any
 
 from backends.errors import EngineFailure
 from backends.registry import check_capabilities, get_backend
+from reports import trace_format as tf
 from runner import interrupts
+from runner.compile.asserted import asserted_quantities
 from runner.compile.program import build_program
 from runner.errors import TraceError
 from runner.language.load import LoadedScenario
@@ -119,6 +121,7 @@ def run_loaded(
             state_names=list(loaded.model.state),
             extra={
                 "overrides": json.dumps([[k, v] for k, v in loaded.overrides], default=str),
+                tf.KEY_ASSERTED: json.dumps(asserted_quantities(program)),
                 **({"record_every": str(record_every)} if record_every > 1 else {}),
             },
         )

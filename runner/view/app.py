@@ -99,15 +99,16 @@ def _still(pos: Sequence[float], quat: Sequence[float]) -> tuple[Any, Any, Any]:
 
 
 def view_traces(paths: Sequence[Path], *, at: float = 0.0, paused: bool = False, speed: float = 1.0,
-                offscreen: bool = False, script: Sequence[ScriptEntry] = ()) -> None:  # fmt: skip
-    """Replay ``paths`` side by side until the window is closed."""
+                offscreen: bool = False, script: Sequence[ScriptEntry] = (), camera: str = "auto") -> str:  # fmt: skip
+    """Replay ``paths`` side by side until the window is closed; where the replay was then (time, mode)."""
     problem = display_problem(offscreen)
     if problem:
         raise ViewUnavailable(problem)
     from runner.view.replay import Replay
 
-    replay = Replay(paths, offscreen=offscreen, at=at, paused=paused, speed=speed, script=script)
+    replay = Replay(paths, offscreen=offscreen, at=at, paused=paused, speed=speed, script=script, camera=camera)
     try:
         replay.run()
     finally:
         replay.window.destroy()
+    return f"replay closed at t = {replay.t:.3f} s ({'playing' if replay.playing else 'paused'})"

@@ -2,9 +2,14 @@
 
 Each trace gets its own region of the window and its own :class:`reports.scene3d.PandaScene`, built from
 the trace alone by :func:`reports.scene3d.scene_model` (the report's pictures read it the same way); one
-orbit camera moves them all. The slider (or ``arrow_left``/``arrow_right``, one recorded step; ``home``
-/``end``) sets the time; ``space`` or F3 plays and pauses, F5/F6 change the speed. The heads-up lines
-show each run's events, sounds playing and verdicts decided up to the time shown.
+orbit camera moves them all, framed on every run's moving bodies (``camera="lab"``: the lab's). The
+replay opens playing (``paused=True``: paused). The slider (or ``arrow_left``/``arrow_right``, one recorded
+step; ``home``/``end``) sets the time and pauses; ``space`` or F3 plays and pauses, F4 steps, F5/F6 change
+the speed. The heads-up lines show each run's events, sounds playing and verdicts decided up to the time shown.
+
+The slider's callback comes from Panda3D's event queue, a frame after the value is set: it is told from a
+person's drag by the value itself (the slider holds the last time the replay put there, to float32
+precision, unless someone moved it), never by a flag raised around the assignment.
 """
 
 from __future__ import annotations
@@ -26,6 +31,11 @@ from runner.view.live import FRAME, MAX_SPEED, MIN_SPEED
 from runner.view.script import ScriptEntry
 
 __all__ = ["Replay", "label_of"]
+
+#: the slider keeps its value as a float32 (Panda3D's PN_stdfloat): a value within this fraction of the
+#: replay's length (1e-5, a hundred times float32's precision, far below a pixel of the slider) is the
+#: replay's own
+SLIDER_ECHO = 1e-5
 
 
 def label_of(trace: Trace) -> str:
@@ -55,7 +65,8 @@ class Replay:
     """The window replaying ``paths``; :meth:`run` until it is closed."""
 
     def __init__(self, paths: Sequence[Path], *, offscreen: bool = False, at: float = 0.0, paused: bool = False,
-                 speed: float = 1.0, script: Sequence[ScriptEntry] = ()) -> None:  # fmt: skip
+                 speed: float = 1.0, script: Sequence[ScriptEntry] = (), camera: str = "auto") -> None:  # fmt: skip
+        from reports.scene3d.framing import LAB_CAMERA, frame_camera
         from reports.scene3d.panda import PandaScene
         from runner.view.window import ViewWindow
 
@@ -71,7 +82,8 @@ class Replay:
         scenes = [PandaScene(r.model) for r in self.runs]
         starts = [r.model.pose(b, 0.0) for r in self.runs for b in r.model.bodies if r.model.shape.get(b) != "plane"]
         targets = [p[0].tolist() for p in starts if p is not None]
-        self.window = ViewWindow(title, scenes, self.hud, offscreen=offscreen, targets=targets,
+        cam = LAB_CAMERA if camera == "lab" else frame_camera([r.model for r in self.runs]).with_aspect(4 / 3)
+        self.window = ViewWindow(title, scenes, self.hud, offscreen=offscreen, targets=targets, camera=cam,
                                  labels=[label_of(r.trace) for r in self.runs])  # fmt: skip
         self.window.on_input = self.on_input
         self.window.on_action = self.on_action
@@ -80,7 +92,7 @@ class Replay:
         self.speed = min(MAX_SPEED, max(MIN_SPEED, speed))
         self.script = list(script)
         self._scripted = bool(script)
-        self._moving_slider = False
+        self._on_slider = self.t  # the time the replay last put on the slider
         self.slider = self._slider()
 
     def _slider(self) -> Any:
@@ -91,9 +103,13 @@ class Replay:
                             pos=(0, 0, 0.08), command=self._slid)  # fmt: skip
 
     def _slid(self) -> None:
-        if not self._moving_slider:
-            self.t = float(self.slider["value"])
-            self.playing = False
+        """The slider moved: by a person (a value the replay did not put there: go there and pause), or by
+        :meth:`_show`'s own assignment, whose callback arrives a frame later (nothing to do)."""
+        value = float(self.slider.getValue())
+        if abs(value - self._on_slider) <= SLIDER_ECHO * max(self.end, 1.0):
+            return
+        self.t = min(max(value, 0.0), self.end)
+        self.playing = False
 
     def on_input(self, name: str) -> None:
         k = int(np.searchsorted(self.times, self.t + 1e-9, side="right")) - 1
@@ -141,9 +157,9 @@ class Replay:
         self.hud.mode = "replay, playing" if self.playing else "replay, paused"
         for scene in self.window.scenes:
             scene.show(self.t)
-        self._moving_slider = True
-        self.slider["value"] = self.t
-        self._moving_slider = False
+        if self.t != self._on_slider:
+            self._on_slider = self.t
+            self.slider["value"] = self.t
 
     def _run_script(self, now: float) -> None:
         for entry in list(self.script):

@@ -8,9 +8,13 @@ xdotool, pictured by the X server (Pillow's ImageGrab, not our code).
   hold: the trace's metadata holds the scenario file's hash (the file gained the variant) and the file
   itself as an attachment. The pictures stay in /tmp/view-live-{1,2,3}.png.
 * `scenario view A.mcap B.mcap --paused --at 5`: two runs side by side; the box and the door are drawn
-  where each trace puts them (Panda3D's lens projects the recorded positions into each half).
+  where each trace puts them (Panda3D's lens, with the camera framed on the runs as the replay frames it,
+  projects the recorded positions into each half).
+* `scenario view A.mcap --paused`, then space, one second, space: the replay plays (the time it closes at
+  has advanced by at least 0.5 s and by no more than the wall time between the two keys), and the box is
+  drawn where the trace puts it at that time. Without `--paused` it opens playing.
 
-About 40 s on an idle 2-core machine (6 s of real-time play, then five headless runs).
+About 50 s on an idle 2-core machine (8 s of real-time play, then five headless runs).
 """
 
 from __future__ import annotations
@@ -23,7 +27,8 @@ import numpy as np
 import pytest
 
 from backends.registry import installed_backends
-from reports.scene3d.framing import LAB_CAMERA
+from reports.scene3d.framing import frame_camera
+from reports.scene3d.model import scene_model
 from reports.trace_reader import read_trace
 from runner.language.load import load_scenario
 from tests.view.conftest import CLI, FACTORY, ROOT, assert_same_run, copy_scenario, quiet_env, scenario
@@ -150,7 +155,8 @@ def test_a_replay_draws_each_body_where_its_trace_puts_it(xdisplay: str, tmp_pat
     assert proc.returncode == 0, err
     n = len(traces)
     width = WINDOW[0] // n
-    spec = LAB_CAMERA.with_aspect(width / WINDOW[1])  # each run gets an equal slice, the lab's camera
+    models = [scene_model(read_trace(p)) for p in traces]
+    spec = frame_camera(models).with_aspect(width / WINDOW[1])  # each run gets an equal slice, framed on them all
     for i, path in enumerate(traces):
         trace = read_trace(path)
         k = int(np.searchsorted(trace.times, 5.0 + 1e-9)) - 1
@@ -158,3 +164,66 @@ def test_a_replay_draws_each_body_where_its_trace_puts_it(xdisplay: str, tmp_pat
         for body, rgb in (("box", BOX), ("door", DOOR)):
             px = project(spec, (width, WINDOW[1]), trace.bodies[body].pos[k])
             assert found_near(half, px, rgb), f"{body} of {path.name} not drawn at {px}"
+
+
+def _replay(display: str, trace: Path, *args: str) -> subprocess.Popen[str]:
+    return subprocess.Popen([*CLI, "view", str(trace), *args], cwd=ROOT, env=quiet_env(DISPLAY=display),
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)  # fmt: skip
+
+
+def _closed_at(out: str) -> tuple[float, str]:
+    """(time, playing or paused) from the line the command prints when the replay window closes."""
+    line = next(x for x in out.splitlines() if x.startswith("replay closed at t = "))
+    number, _, mode = line.removeprefix("replay closed at t = ").partition(" s (")
+    return float(number), mode.rstrip(")")
+
+
+def test_a_replay_plays_pauses_and_opens_playing(xdisplay: str, tmp_path: Path) -> None:
+    variant = "door-opens-with-the-box-on-it"
+    done = scenario("run", str(FACTORY), "--variant", variant, "--out", str(tmp_path), "--quiet")
+    assert done.returncode in (0, 1), done.stderr
+    trace = tmp_path / f"factory-physics__{variant}__pybullet.mcap"
+    proc = _replay(xdisplay, trace, "--paused")
+    try:
+        window, box = find_window(xdisplay, proc)
+        time.sleep(1.0)
+        xdo(xdisplay, "windowfocus", "--sync", window)
+        xdo(xdisplay, "key", "space")  # play
+        started = time.monotonic()
+        time.sleep(1.0)
+        xdo(xdisplay, "key", "space")  # pause
+        played = time.monotonic() - started
+        time.sleep(0.5)  # a few frames drawn paused
+        image = grab(xdisplay, box)
+        save(image, "/tmp/view-replay-played.png")
+        xdo(xdisplay, "key", "Escape")
+        out, err = proc.communicate(timeout=60)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+    assert proc.returncode == 0, err
+    t, mode = _closed_at(out)
+    # at x1 the time advances with the wall clock: 1 s of play, give or take when each key event was handled
+    # (xdotool to X to the next Panda3D frame); the upper bound allows the second key's frame to be 0.25 s
+    # late on a loaded machine (the lag the live view also allows itself, docs/view.md)
+    assert mode == "paused"
+    assert 0.5 <= t <= played + 0.25, (t, played)
+    data = read_trace(trace)
+    k = int(np.searchsorted(data.times, t + 1e-9)) - 1
+    spec = frame_camera([scene_model(data)]).with_aspect(WINDOW[0] / WINDOW[1])
+    px = project(spec, WINDOW, data.bodies["box"].pos[k])
+    assert found_near(image, px, BOX), f"the box not drawn at {px} (t = {t})"
+
+    proc = _replay(xdisplay, trace)  # without --paused: it plays by itself
+    try:
+        window, _ = find_window(xdisplay, proc)
+        time.sleep(1.5)
+        xdo(xdisplay, "windowfocus", "--sync", window)
+        xdo(xdisplay, "key", "Escape")
+        out, err = proc.communicate(timeout=60)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+    assert proc.returncode == 0, err
+    t, mode = _closed_at(out)
+    assert mode == "playing" and t >= 0.5, (t, mode)

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import importlib.util
 import json
 import math
 from pathlib import Path
@@ -33,6 +34,8 @@ def configure(run: argparse.ArgumentParser) -> None:
     options.add_variant_choice(run)
     run.add_argument("--out", type=Path, default=DEFAULT_OUT, help="folder for the traces (default: traces/)")
     run.add_argument("--no-trace", action="store_true", help="do not write traces")
+    run.add_argument("--rerun", action="store_true",
+                     help="also write each trace as a Rerun recording, <trace>.rrd (the `viewers` extra)")  # fmt: skip
     options.add_overrides(run)
     out = run.add_mutually_exclusive_group()
     out.add_argument("--quiet", "-q", action="store_true", help="print only failures and the summary")
@@ -134,6 +137,10 @@ def _check(args: argparse.Namespace) -> None:
         )
     if args.timeout is not None and not (args.timeout > 0 and math.isfinite(args.timeout)):
         raise UsageError(f"Invalid `--timeout`. Expected a positive number of seconds. Received: {args.timeout}")
+    if args.rerun and args.no_trace:
+        raise UsageError("`--rerun` converts the traces; it does not combine with `--no-trace`")
+    if args.rerun and importlib.util.find_spec("rerun") is None:
+        raise ScenarioError("--rerun: rerun-sdk is not installed (pip install '.[viewers]')")
     if args.isolate and args.executor != "local":
         raise UsageError("`--isolate` runs each case in a local process of its own; it does not combine with Ray")
 
@@ -186,6 +193,11 @@ def _execute(
         from runner.cli.layouts import leave_layout
 
         code = leave_layout(err, [out_dir], cases, code)  # the 3D scene, asserted quantities, events, log
+    if args.rerun:
+        from runner.cli.commands.export import export_rrds, rrd_path
+
+        traces = [Path(r.trace) for r in results if r.trace is not None and Path(r.trace).exists()]
+        export_rrds([(t, rrd_path(t)) for t in traces], err)
     return code
 
 

@@ -25,12 +25,14 @@ def configure(parser: argparse.ArgumentParser) -> None:
                         help="on closing the window, write the inputs played into FILE as a new variant")  # fmt: skip
     parser.add_argument("--speed", type=float, default=1.0,
                         help="simulated seconds per wall-clock second (default 1; F5/F6 change it)")  # fmt: skip
-    parser.add_argument("--paused", action="store_true", help="start paused (F3 runs, F4 steps)")
+    parser.add_argument("--paused", action="store_true",
+                        help="start paused (F3 runs, F4 steps); a replay otherwise opens playing")  # fmt: skip
     parser.add_argument("--out", type=Path, default=DEFAULT_OUT,
                         help=f"folder for the live run's trace (default {DEFAULT_OUT}/; overwritten)")  # fmt: skip
     parser.add_argument("--at", type=float, default=0.0, metavar="T", help="replay: start at simulated time T")
-    parser.add_argument("--camera", choices=("lab", "auto"), default="lab",
-                        help="lab: the seed's, (1,-8,5) pitch -25 (default); auto: framing the bodies")  # fmt: skip
+    parser.add_argument("--camera", choices=("lab", "auto"), default=None,
+                        help="lab: the seed's, (1,-8,5) pitch -25 (default live); auto: framing the bodies "
+                             "(default replaying)")  # fmt: skip
     parser.add_argument("--script", type=Path, metavar="FILE",
                         help="timed inputs, screenshots and closing from a YAML file (docs/view.md)")  # fmt: skip
     parser.add_argument("--offscreen", action="store_true",
@@ -51,8 +53,9 @@ def execute(args: argparse.Namespace, out: Console, err: Console) -> int:
             raise UsageError("--record and --variant apply to a scenario file, not to traces")
         from runner.view.app import view_traces
 
-        view_traces(traces, at=args.at, paused=args.paused, speed=args.speed, offscreen=args.offscreen,
-                    script=script)  # fmt: skip
+        where = view_traces(traces, at=args.at, paused=args.paused, speed=args.speed, offscreen=args.offscreen,
+                            script=script, camera=args.camera or "auto")  # fmt: skip
+        out.print(where, highlight=False)
         return ExitCode.OK
     if len(args.files) != 1:
         raise UsageError("`scenario view` runs one scenario file at a time")
@@ -70,7 +73,7 @@ def _live(args: argparse.Namespace, out: Console, err: Console, script: list) ->
         raise BackendNotInstalled(f"Backend `{args.backend}` is not installed. Install it with: {hint}")
     (loaded,) = load_all(args.files[0], args.variant, False)
     outcome = view_scenario(loaded, args.backend, args.out, record=args.record, speed=args.speed, paused=args.paused,
-                            offscreen=args.offscreen, script=script, camera=args.camera)  # fmt: skip
+                            offscreen=args.offscreen, script=script, camera=args.camera or "lab")  # fmt: skip
     for warning in outcome.warnings:
         err.print(f"[yellow]warning:[/] {escape(warning)}", markup=True)
     result = outcome.result
