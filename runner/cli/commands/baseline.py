@@ -73,7 +73,7 @@ def execute(args: argparse.Namespace, out: Console, err: Console) -> int:
                 f"{len(rec.verdicts)} verdicts){note}"
             )
             failed += not result.passed
-    out.print(f"{len(cases) * len(backends)} baseline(s) written to {args.baseline}")
+    out.print(f"{len(cases) * len(backends)} baseline(s) written to {args.baseline}", markup=False)
     if failed:
         err.print(f"[yellow]warning:[/] {failed} run(s) did not pass; their goldens record that status")
     return ExitCode.OK

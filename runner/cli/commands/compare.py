@@ -99,7 +99,8 @@ def execute(args: argparse.Namespace, out: Console, err: Console) -> int:
     jobs = [_case(args, loaded, b, overrides) for loaded, b in work]
     check_outputs(jobs, args.force)
     _check_reports(args.out, args.force)
-    out.print(f"comparing {len(cases)} case(s) on {', '.join(backends)}: {len(work)} runs, {args.jobs} at a time")
+    out.print(f"comparing {len(cases)} case(s) on {', '.join(backends)}: {len(work)} runs, {args.jobs} at a time",
+              markup=False)  # fmt: skip
 
     def done(index: int, res: CaseResult) -> None:
         loaded = work[index][0]
@@ -133,9 +134,10 @@ def execute(args: argparse.Namespace, out: Console, err: Console) -> int:
         _write_junit(args.junit, runs, [loaded for loaded, _ in work])
     s, h = files.document["summary"], files.document["headline"]
     colour = "green" if files.passed else "red"
-    out.print(f"[bold {colour}]{s['ok']}/{s['runs']} runs pass[/] (reference {files.document['reference']}): "
-              f"{h['badge']}, {h['text']}")  # fmt: skip
-    out.print(f"report: {files.html}  (also {files.markdown.name}, {files.json.name}; traces in {args.out / 'traces'})")
+    out.print(f"[bold {colour}]{s['ok']}/{s['runs']} runs pass[/] (reference {escape(files.document['reference'])}): "
+              f"{escape(h['badge'])}, {escape(h['text'])}")  # fmt: skip
+    out.print(f"report: {files.html}  (also {files.markdown.name}, {files.json.name}; traces in {args.out / 'traces'})",
+              markup=False)  # fmt: skip
     return ExitCode.OK if files.passed else ExitCode.ASSERTION_FAILED
 
 

@@ -7,6 +7,7 @@ import math
 from pathlib import Path
 
 from rich.console import Console
+from rich.markup import escape
 
 from runner.errors import ExitCode, UsageError
 
@@ -42,11 +43,11 @@ def execute(args: argparse.Namespace, out: Console, err: Console) -> int:
     try:
         files = write_report(args.traces, args.out, reference=args.reference, max_divergence=args.max_divergence)
     except ReportError as exc:
-        err.print(f"[bold red]error:[/] {exc}")
+        err.print(f"[bold red]error:[/] {escape(str(exc))}")
         return ExitCode.BAD_INPUT
     s, h = files.document["summary"], files.document["headline"]
     colour = "green" if files.passed else "red"
-    out.print(f"[bold {colour}]{s['ok']}/{s['runs']} runs pass[/] (reference {files.document['reference']}): "
-              f"{h['badge']}, {h['text']}")  # fmt: skip
-    out.print(f"report: {files.html}  (also {files.markdown.name}, {files.json.name})")
+    out.print(f"[bold {colour}]{s['ok']}/{s['runs']} runs pass[/] (reference {escape(files.document['reference'])}): "
+              f"{escape(h['badge'])}, {escape(h['text'])}")  # fmt: skip
+    out.print(f"report: {files.html}  (also {files.markdown.name}, {files.json.name})", markup=False)
     return ExitCode.OK if files.passed else ExitCode.ASSERTION_FAILED
