@@ -54,9 +54,12 @@ def build_parser() -> tuple[argparse.ArgumentParser, dict[str, ModuleType]]:
 
 
 def _console(stderr: bool) -> Console:
-    """A console that wraps to the terminal, or to a wide page in logs and pipes (CI)."""
+    """A console that wraps to the terminal, or to a wide page in logs and pipes (CI). Emoji codes are off:
+    text from a scenario or a location (`file.yaml:100:1`) holds `:100:`, which rich would print as an emoji;
+    markup in such text is escaped where it is printed (``rich.markup.escape``)."""
     probe = Console(stderr=stderr)
-    return Console(stderr=stderr, highlight=False, soft_wrap=True, width=None if probe.is_terminal else 160)
+    width = None if probe.is_terminal else 160
+    return Console(stderr=stderr, highlight=False, soft_wrap=True, width=width, emoji=False)
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -91,7 +94,8 @@ def _report(exc: BaseException, err: Console) -> int:
             exc.add_note(f"raised in a worker process:\n{remote}")
         raise exc
     if isinstance(exc, KeyboardInterrupt):
-        err.print(f"{exit.label} ({'SIGTERM' if isinstance(exc, Terminated) else 'Ctrl-C'}); {exit.message}")
+        signal = "SIGTERM" if isinstance(exc, Terminated) else "Ctrl-C"
+        err.print(f"{exit.label} ({signal}); {exit.message}", markup=False)
         return exit.code
     issues = getattr(exc, "issues", None)
     if isinstance(exc, ScenarioValidationError) and issues:

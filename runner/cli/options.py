@@ -66,7 +66,7 @@ def add_overrides(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--set", action="append", default=[], metavar="KEY=VALUE",
         help="replace a value by its dotted path, e.g. world.dt=0.01 or params.count=50 (repeatable); only values "
-        "the file declares (a misspelt parameter is an error)",
+        "the file declares (a misspelt parameter is an error); applied after the variant's own `set:`, so it wins",
     )  # fmt: skip
 
 

@@ -6,6 +6,7 @@ from collections.abc import Mapping
 from typing import Any
 
 from rich.console import Console
+from rich.markup import escape
 from rich.table import Table
 
 PASS, FAIL, LIMIT = "✅", "❌", "⚠️"
@@ -249,9 +250,10 @@ def console(matrix: Mapping[str, Any], out: Console, quiet: bool = False) -> Non
             run = c["runs"][b]
             if run["status"] not in RAN:
                 first = run["message"].strip().splitlines()[-1:] if run["message"] else []
-                out.print(f"[red]{c['id']} on {b}: {run['status']}[/]" + (f": {first[0]}" if first else ""))
+                last = f": {escape(first[0])}" if first else ""
+                out.print(f"[red]{escape(c['id'])} on {b}: {run['status']}[/]{last}")
     for p in matrix.get("audit", []):
-        out.print(f"[red]{p['case']} {p['check']} on {p['backend']}: {p['problem']}[/]")
+        out.print(f"[red]{escape(p['case'])} {escape(p['check'])} on {p['backend']}: {escape(p['problem'])}[/]")
     colour = "green" if matrix["passed"] else "red"
     out.print(f"[bold {colour}]{totals(matrix)}[/] on {', '.join(backends)}")
 

@@ -23,7 +23,10 @@ from runner.language.explain import fmt, group_member
 
 MAX_LENGTH = 2000
 MAX_NODES = 500
-MAX_POWER = 1e6
+#: Integers stay exact up to 2**53 (a float's mantissa); a larger one becomes a float, so that no value
+#: grows without bound (`floor(1e308)*floor(1e308)` would be a 2,000-bit integer, and squaring it each step
+#: would take gigabytes).
+MAX_EXACT_INT = 2**53
 
 
 class ExpressionError(ValueError):
@@ -63,10 +66,21 @@ def _aggregate(f: Callable[..., Any]) -> Callable[..., Any]:
     return wrapped
 
 
-def _safe_pow(a: float, b: float) -> float:
-    if abs(b) > 64 or abs(a) > MAX_POWER:
-        raise EvaluationError("power too large")
-    return float(a) ** b
+def bounded(value: Any) -> Any:
+    """``value``, with an integer beyond :data:`MAX_EXACT_INT` turned into a float (±inf beyond the float
+    range, as float arithmetic gives: ``1e308 * 10`` is inf). Anything else is returned as it is."""
+    if type(value) is int and not -MAX_EXACT_INT <= value <= MAX_EXACT_INT:
+        try:
+            return float(value)
+        except OverflowError:
+            return math.inf if value > 0 else -math.inf
+    return value
+
+
+def _power(a: float, b: float) -> float:
+    """``a ** b`` as a float: a negative base with a fractional exponent is NaN (never a complex number),
+    an overflow too (through the caller); bounded in time whatever the operands."""
+    return math.pow(a, b)
 
 
 def _is_number(value: Any) -> bool:
@@ -89,8 +103,8 @@ def _arithmetic(op: Callable[[Any, Any], Any]) -> Callable[[Any, Any], Any]:
         if not (_is_number(a) and _is_number(b)):
             raise EvaluationError(f"arithmetic needs numbers, found {_kind(a)} and {_kind(b)}")
         try:
-            return op(a, b)
-        except (ZeroDivisionError, OverflowError):
+            return bounded(op(bounded(a), bounded(b)))
+        except (ZeroDivisionError, OverflowError, ValueError):  # ValueError: math.pow(-1, 0.5)
             return math.nan
 
     return run
@@ -99,7 +113,7 @@ def _arithmetic(op: Callable[[Any, Any], Any]) -> Callable[[Any, Any], Any]:
 def _nan_on_math_error(fn: Callable[..., Any]) -> Callable[..., Any]:
     def run(*args: Any) -> Any:
         try:
-            return fn(*args)
+            return bounded(fn(*(bounded(a) for a in args)))
         except ExpressionError:
             raise
         except (ValueError, OverflowError, ZeroDivisionError):  # sqrt(-1), log(0), round(inf)...
@@ -162,7 +176,7 @@ _BIN = {
     ast.Div: _arithmetic(operator.truediv),
     ast.FloorDiv: _arithmetic(operator.floordiv),
     ast.Mod: _arithmetic(operator.mod),
-    ast.Pow: _arithmetic(_safe_pow),
+    ast.Pow: _arithmetic(_power),
 }
 _CMP = {
     ast.Eq: operator.eq,
@@ -222,7 +236,7 @@ class Expression:
         value = self.evaluate(resolver)
         if not _is_number(value):
             raise EvaluationError(f"cannot evaluate {self.text!r}: expected a number, found {_kind(value)}")
-        return float(value)
+        return float(bounded(value))
 
 
 def _dotted(node: ast.AST) -> str | None:
@@ -263,7 +277,7 @@ class _Compiler:
             raise self.fail(node, "expression too long")
         if isinstance(node, ast.Constant):
             if isinstance(node.value, bool | int | float | str):
-                value = node.value
+                value = bounded(node.value)
                 return lambda r: value
             raise self.fail(node, f"constant {node.value!r} not allowed")
         if isinstance(node, ast.Name | ast.Attribute):
@@ -276,16 +290,16 @@ class _Compiler:
                 constant = CONSTANTS[name]
                 return lambda r: constant
             self.names.add(name)
-            return self.shown(node, lambda r: r.value(name))
+            return self.shown(node, lambda r: bounded(r.value(name)))
         if isinstance(node, ast.BinOp) and type(node.op) in _BIN:
             op, left, right = _BIN[type(node.op)], self.compile(node.left), self.compile(node.right)
             return self.shown(node, lambda r: op(left(r), right(r)))
         if isinstance(node, ast.UnaryOp):
             operand = self.compile(node.operand)
             if isinstance(node.op, ast.USub):
-                return lambda r: -operand(r)
+                return lambda r: -bounded(operand(r))
             if isinstance(node.op, ast.UAdd):
-                return lambda r: +operand(r)
+                return lambda r: +bounded(operand(r))
             if isinstance(node.op, ast.Not):
                 return lambda r: not operand(r)
         if isinstance(node, ast.BoolOp):

@@ -1,4 +1,4 @@
-"""Load a scenario file: YAML -> overrides -> variant -> parameters -> validated model -> checks.
+"""Load a scenario file: YAML -> variant -> overrides -> parameters -> validated model -> checks.
 
 Every problem becomes a :class:`ScenarioValidationError` naming file:line:column, the field, what was
 expected and what was found. Nothing here runs user text: parameters are substituted as whole values.
@@ -243,13 +243,6 @@ def load_scenario(
 ) -> LoadedScenario:
     """Load ``path`` as the given variant (``None``: the base case)."""
     text, data, positions = read_source(path)  # a copy of its own
-    for key, value in overrides:
-        argument = f"--set {key}"
-        try:
-            target = _set_path(data, key, value)
-        except _SetError as exc:
-            raise ScenarioValidationError([Issue(COMMAND_LINE, 0, 0, argument, str(exc))]) from None
-        positions.overridden[target] = argument
     variants = data.get("variants") if isinstance(data.get("variants"), dict) else {}
     chosen = variant if variant not in (None, BASE_CASE) else None
     if chosen is not None:
@@ -259,6 +252,13 @@ def load_scenario(
                 [positions.issue(("variants",), f"unknown variant `{chosen}`; this file has: {names}", at_key=True)]
             )
         _apply_variant(data, variants[chosen], ("variants", chosen), positions)
+    for key, value in overrides:  # after the variant: `--set` beats a variant's `set:` for the same path
+        argument = f"--set {key}"
+        try:
+            target = _set_path(data, key, value)
+        except _SetError as exc:
+            raise ScenarioValidationError([Issue(COMMAND_LINE, 0, 0, argument, str(exc))]) from None
+        positions.overridden[target] = argument
     params = data.get("params") if isinstance(data.get("params"), dict) else {}
     issues: list[Issue] = []
     data = _substitute(data, params, (), positions, issues, _Budget(positions.text_size))

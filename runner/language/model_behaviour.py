@@ -4,8 +4,9 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING, Annotated, Any, Literal, Union
 
-from pydantic import Discriminator, Field, Tag, field_validator, model_validator
+from pydantic import AfterValidator, Discriminator, Field, Tag, field_validator, model_validator
 
+from runner.language.expressions import bounded
 from runner.language.model_base import (
     EventName,
     Expr,
@@ -23,7 +24,8 @@ from runner.language.model_base import (
 
 IntervalId = Annotated[str, Field(pattern=r"^[A-Za-z_][A-Za-z0-9_-]*$", max_length=64)]
 Blend = Literal["noBlend", "easeIn", "easeOut", "easeInOut"]
-StateValue = bool | int | float | str
+#: A state variable's or a parameter's value; an integer beyond 2**53 becomes a float, as in expressions.
+StateValue = Annotated[bool | int | float | str, AfterValidator(bounded)]
 
 
 # --- collision solids (Panda3D CollisionNode / CollisionHandlerEvent) --------------------------------

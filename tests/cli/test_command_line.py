@@ -120,3 +120,30 @@ def test_the_pytest_plugin_collects_what_a_folder_stands_for() -> None:
     )  # fmt: skip
     collected = sorted({line.split("::")[0] for line in done.stdout.splitlines() if "::" in line})
     assert collected == [str(p.relative_to(ROOT)) for p in scenario_files([ROOT / "scenarios"])], done.stdout[-2000:]
+
+
+VARIANT = """\
+schema_version: 1
+scenario: small
+params: {h: 1.0}
+world: {dt: 0.01, duration: 0.5}
+bodies:
+  ball: {sphere: 0.1, mass: 1, pos: [0, 0, 1]}
+variants:
+  short:
+    set: {world.duration: 0.2, params.h: 2.0}
+    assertions:
+      - {name: ends, at: end, value: time + 0*param.h, near: 0.3, tol: 1e-9}
+      - {name: param, at: end, value: param.h, near: 3.0, tol: 0}
+"""
+
+
+def test_set_beats_a_variants_set_for_the_same_path(capsys: pytest.CaptureFixture[str], tmp_path: Path) -> None:
+    """The variant's `set:` silently beat `--set` (the variant was applied last); the rule: the command line
+    is applied after the variant, so it wins for every path both set, on every command that loads."""
+    path = small(tmp_path, VARIANT)
+    code, out, err = run(capsys, "run", path, "--variant", "short", "--set", "world.duration=0.3", "--set",
+                         "params.h=3.0", "--backend", "pybullet", "--no-trace")  # fmt: skip
+    assert code == 0, out + err
+    code, out, err = run(capsys, "run", path, "--variant", "short", "--backend", "pybullet", "--no-trace")
+    assert code == 1 and "failed: 2 of 2 assertions: ends, param" in out + err, out + err

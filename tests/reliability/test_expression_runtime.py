@@ -114,3 +114,56 @@ def test_the_command_exits_2_and_the_trace_is_finished_with_the_error(tmp_path: 
     trace = read_trace(tmp_path / "out" / "rt__base__fake.mcap")
     assert trace.status == "error" and "box.pos.z + 'a' > 0" in json.dumps(trace.summary)
     assert trace.times.tolist() == [0.0]  # stopped at the first check, after the first recorded state
+
+
+BIG = "1" * 400  # an integer literal beyond the float range, in YAML
+SQUARING = f"""\
+schema_version: 1
+scenario: sq
+world: {{dt: 0.01, duration: 0.5}}
+state: {{s: 3, b: {BIG}, t: 0}}
+bodies:
+  box: {{box: [0.3, 0.3, 0.3], density: 500, pos: [0, 0, 1]}}
+inputs: [{{at: 0, event: sq, repeat: {{every: 0.01, count: 45}}}}]
+on:
+  sq: [{{calc: {{s: "state.s * state.s * floor(1e308)"}}}}, {{set: {{t: {BIG}}}}}]
+assertions:
+  - {{name: bounded, at: end, check: "state.s == inf and state.b > 1e300 and state.t > 1e300"}}
+  - {{name: value, at: end, value: "floor(1e308)*floor(1e308)", min: 0}}
+"""
+
+
+@pytest.mark.parametrize("options", [[], ["--no-trace"], ["--trace-process"], ["-j", "2"]])
+def test_integers_are_bounded_on_every_path(tmp_path: Path, options: list[str]) -> None:
+    """Squaring an integer state 45 times would be 3**(2**45) (terabytes; the probe saw 5.7 GB with
+    --no-trace, a run that never ended with --trace-process, and OverflowError, exit 70, serially): integers
+    beyond 2**53 become floats, inf beyond their range, in calc, set, state, assertion values."""
+    path = tmp_path / "sq.yaml"
+    path.write_text(SQUARING)
+    done = subprocess.run(
+        [sys.executable, "-m", "runner", "run", str(path), "--backend", "fake", "--out", str(tmp_path / "out"),
+         *options],
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )  # fmt: skip
+    assert done.returncode == 0, done.stdout + done.stderr
+    assert "2/2 assertions" in done.stdout + done.stderr
+
+
+def test_an_integer_overflow_in_a_time_is_a_located_error(tmp_path: Path) -> None:
+    path = tmp_path / "t.yaml"
+    path.write_text(BASE + 'assertions:\n  - {name: a, at: "floor(1e308)*floor(1e308)", check: box.pos.z > 0}\n')
+    done = subprocess.run(
+        [sys.executable, "-m", "runner", "validate", str(path)], capture_output=True, text=True, timeout=120
+    )
+    assert done.returncode == 2, done.stderr
+    assert f"{path}:9:19:" in done.stderr and "expected a finite time" in done.stderr and "inf" in done.stderr
+
+
+def test_a_negative_base_to_a_fractional_power_is_nan_not_complex(tmp_path: Path) -> None:
+    """`(z-1)**0.5` was a complex number, then a type error (exit 2); docs/language.md says NaN, and NaN
+    is false."""
+    result = run(tmp_path, 'assertions:\n  - {name: a, at: end, check: "(box.pos.z - 2)**0.5 > 0 or True"}\n'
+                 '  - {name: b, at: end, check: "(box.pos.z - 2)**0.5 > 0"}\n')  # fmt: skip
+    assert [v.passed for v in result.verdicts] == [True, False]

@@ -144,3 +144,25 @@ def test_scenario_text_is_printed_as_text_not_markup(tmp_path: Path) -> None:
     inspect = scenario("inspect", "out/markup__base__fake.mcap", cwd=tmp_path)
     assert inspect.returncode == 0 and "Traceback" not in inspect.stderr, inspect.stderr
     assert "[/e]" in inspect.stdout and "[/x]" in inspect.stdout and "[bold]y" in inspect.stdout
+
+
+def test_emoji_codes_in_locations_and_names_are_printed_as_text(tmp_path: Path) -> None:
+    """Every error on line 100 printed as `file.yaml💯29:`: Rich replaced the emoji code `:100:` in the
+    location (and `:smile:` in a name) unless the console is told not to."""
+    folder = tmp_path / "[bold]d:smile:"
+    folder.mkdir()
+    bad = "# padding\n" * 97 + MARKUP.replace("dt: 0.04", 'dt: "[bold]x :100: [red]"')  # world: on line 100
+    (folder / "bad.yaml").write_text(bad)
+    named = MARKUP.replace("[bold]y", "[bold]y :100: :smile:")
+    (folder / "m.yaml").write_text(named)
+    shown = "[bold]d:smile:/bad.yaml:100:"
+    done = scenario("validate", "[bold]d:smile:/bad.yaml", cwd=tmp_path)
+    assert done.returncode == 2 and shown in done.stderr and "'[bold]x :100: [red]'" in done.stderr, done.stderr
+    run = scenario("run", "[bold]d:smile:/m.yaml", "--backend", "fake", "--out", "out:100:", cwd=tmp_path)
+    assert run.returncode == 1 and "[bold]y :100: :smile:" in run.stdout, run.stdout + run.stderr
+    assert "out:100:/markup__base__fake.mcap" in run.stdout
+    inspect = scenario("inspect", "out:100:/markup__base__fake.mcap", cwd=tmp_path)
+    assert inspect.returncode == 0 and "[bold]y :100: :smile:" in inspect.stdout, inspect.stdout
+    emoji = ("\N{HUNDRED POINTS SYMBOL}", "\N{SMILING FACE WITH OPEN MOUTH AND SMILING EYES}")
+    for output in (done.stderr, run.stdout, run.stderr, inspect.stdout):
+        assert not any(e in output for e in emoji), output

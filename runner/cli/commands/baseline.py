@@ -6,6 +6,7 @@ import argparse
 from pathlib import Path
 
 from rich.console import Console
+from rich.markup import escape
 
 from backends.registry import DEFAULT_BACKEND
 from runner.cli import options
@@ -78,12 +79,12 @@ def execute(args: argparse.Namespace, out: Console, err: Console) -> int:
         status = res.result.status if res.result is not None else res.status
         note = "" if res.passed else f" [yellow](recorded with status {status})[/]"
         out.print(
-            f"recorded {case.model.scenario} · {case.variant} · {backend} -> {path} "
+            f"recorded {escape(case.model.scenario)} · {escape(case.variant)} · {backend} -> {escape(str(path))} "
             f"({len(rec.steps)} states every {every} step{'s' if every != 1 else ''}, {len(rec.events)} events, "
             f"{len(rec.verdicts)} verdicts){note}"
         )
         failed += not res.passed
-    out.print(f"{written} baseline(s) written to {args.baseline}")
+    out.print(f"{written} baseline(s) written to {args.baseline}", markup=False)
     if failed:
         err.print(f"[yellow]warning:[/] {failed} run(s) did not pass; their goldens record that status")
     return most_severe(codes) if codes else ExitCode.OK

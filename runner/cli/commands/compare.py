@@ -92,7 +92,8 @@ def execute(args: argparse.Namespace, out: Console, err: Console) -> int:
     jobs = [_case(args, loaded, b, overrides) for loaded, b in work]
     check_outputs(jobs, args.force)
     _check_reports(args.out, args.force)
-    out.print(f"comparing {len(cases)} case(s) on {', '.join(backends)}: {len(work)} runs, {args.jobs} at a time")
+    out.print(f"comparing {len(cases)} case(s) on {', '.join(backends)}: {len(work)} runs, {args.jobs} at a time",
+              markup=False)  # fmt: skip
 
     def done(index: int, res: CaseResult) -> None:
         loaded = work[index][0]
@@ -124,7 +125,8 @@ def execute(args: argparse.Namespace, out: Console, err: Console) -> int:
     if args.junit is not None:
         _write_junit(args.junit, runs, [loaded for loaded, _ in work])
     print_verdict(out, files.document)
-    out.print(f"report: {files.html}  (also {files.markdown.name}, {files.json.name}; traces in {args.out / 'traces'})")
+    out.print(f"report: {files.html}  (also {files.markdown.name}, {files.json.name}; traces in {args.out / 'traces'})",
+              markup=False)  # fmt: skip
     return ExitCode.OK if files.passed else ExitCode.ASSERTION_FAILED
 
 

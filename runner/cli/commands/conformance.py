@@ -73,7 +73,7 @@ def execute(args: argparse.Namespace, out: Console, err: Console) -> int:
         args.markdown.parent.mkdir(parents=True, exist_ok=True)
         args.markdown.write_text(text, encoding="utf-8")
     console(matrix, out, quiet=args.quiet)
-    out.print(f"  matrix: {args.out / 'conformance.md'}, {args.out / 'conformance.json'}")
+    out.print(f"  matrix: {args.out / 'conformance.md'}, {args.out / 'conformance.json'}", markup=False)
     if matrix["passed"]:
         return ExitCode.OK
     return ExitCode.ENGINE_FAILURE if broken(matrix) else ExitCode.ASSERTION_FAILED

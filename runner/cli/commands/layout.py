@@ -35,5 +35,5 @@ def execute(args: argparse.Namespace, out: Console, err: Console) -> int:
         path = write_layout(args.out, spec)
     except OSError as exc:
         raise ScenarioError(f"cannot write {args.out / LAYOUT_FILE}: {exc.strerror or exc}") from None
-    err.print(f"layout: {path} (Foxglove: Layouts, Import from file)")
+    err.print(f"layout: {path} (Foxglove: Layouts, Import from file)", markup=False)
     return ExitCode.OK

@@ -37,10 +37,10 @@ def execute(args: argparse.Namespace, out: Console, err: Console) -> int:
         files = write_report(args.traces, args.out, reference=args.reference, max_divergence=args.max_divergence,
                              require_agreement=args.require_agreement)  # fmt: skip
     except ReportError as exc:
-        err.print(f"[bold red]error:[/] {exc}")
+        err.print(f"[bold red]error:[/] {escape(str(exc))}")
         return ExitCode.BAD_INPUT
     print_verdict(out, files.document)
-    out.print(f"report: {files.html}  (also {files.markdown.name}, {files.json.name})")
+    out.print(f"report: {files.html}  (also {files.markdown.name}, {files.json.name})", markup=False)
     return ExitCode.OK if files.passed else ExitCode.ASSERTION_FAILED
 
 

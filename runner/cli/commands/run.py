@@ -242,7 +242,7 @@ class _Shown:
 
 
 def _progress(err: Console) -> Progress:
-    return Progress(TextColumn("{task.description}"), BarColumn(), TextColumn("{task.percentage:>3.0f}%"),
+    return Progress(TextColumn("{task.description}", markup=False), BarColumn(), TextColumn("{task.percentage:>3.0f}%"),
                     TimeRemainingColumn(), console=err, transient=True, auto_refresh=False)  # fmt: skip
 
 

@@ -25,6 +25,7 @@ from pathlib import Path
 from typing import Any
 
 from rich.console import Console
+from rich.markup import escape
 from rich.table import Table
 
 from backends.registry import DEFAULT_BACKEND
@@ -318,18 +319,19 @@ def to_csv(table: dict[str, Any]) -> str:
 def _print(out: Console, table: dict[str, Any], folder: Path, svg: bool, quiet: bool) -> None:
     rows = table["rows"]
     if not quiet:
-        t = Table(title=f"sweep of {table['file']}", title_justify="left")
+        t = Table(title=f"sweep of {escape(str(table['file']))}", title_justify="left")
         for col in [*table["parameters"], "variant", "backend", "status", "assertions", *table["metrics"]]:
             t.add_column(col.removeprefix("params."), overflow="fold")
         for row in rows:
             status = row["status"] if row["status"] != "passed" else "[green]passed[/]"
             metrics = [_short(row["metrics"][m]) for m in table["metrics"]]
-            t.add_row(*(_short(row["params"][n]) for n in table["parameters"]), row["variant"], row["backend"],
+            t.add_row(*(escape(_short(row["params"][n])) for n in table["parameters"]), row["variant"], row["backend"],
                       status, f"{row['passed']}/{row['passed'] + row['failed']}", *metrics)  # fmt: skip
         out.print(t)
     passed = sum(r["status"] == "passed" for r in rows)
-    out.print(f"[bold]{passed}/{len(rows)} cases passed[/]; table: {folder / 'sweep.csv'}, {folder / 'sweep.json'}"
-              + (f", plot: {folder / 'sweep.svg'}" if svg else ""))  # fmt: skip
+    plot = f", plot: {folder / 'sweep.svg'}" if svg else ""
+    files = f"table: {folder / 'sweep.csv'}, {folder / 'sweep.json'}{plot}"
+    out.print(f"[bold]{passed}/{len(rows)} cases passed[/]; {escape(files)}")
 
 
 def _short(v: Any) -> str:
