@@ -96,9 +96,12 @@ class CaseOutcome:
 
     @property
     def error_kind(self) -> str:
-        """For JUnit: missing-baseline | bad-input | engine-failure | output-error | internal-error."""
+        """For JUnit, as `run`'s report names it: missing-baseline | bad-input | engine-failure | engine-crash |
+        output-error | internal-error."""
         if self.problem_kind and self.exit.code == ExitCode.BAD_INPUT and self.exit.message == self.problem:
             return self.problem_kind
+        if self.run.status in ("crashed", "timed-out", "exited"):
+            return "engine-crash"
         return {ExitCode.BAD_INPUT: "bad-input", ExitCode.INTERNAL_ERROR: "internal-error",
                 ExitCode.OUTPUT_ERROR: "output-error"}.get(self.exit.code, "engine-failure")  # fmt: skip
 

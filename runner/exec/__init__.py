@@ -1,7 +1,8 @@
 """Running cases elsewhere: one child-process protocol, and the executors built on it.
 
 Every way of running a case outside the command's process goes through it: ``scenario run`` (serially,
-``-j N``, ``--isolate``, ``--trace-process``), Ray, ``compare``, ``sweep`` and the conformance suite.
+``-j N``, ``--isolate``, ``--trace-process``), Ray, ``compare``, ``sweep``, ``baseline``, ``check``, the
+pytest plugin and the conformance suite.
 
 * :mod:`runner.exec.pool`: the parent's side: worker processes (forked), jobs, time limits, signals
   passed on, and how each job ended (returned, crashed by signal N, timed out, interrupted);

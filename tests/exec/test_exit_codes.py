@@ -6,8 +6,9 @@ missing engine, a capability the engine lacks, a failed assertion, a known limit
 exit 0) and a known limit that passes (exit 1), each serially, with ``-j 2``, ``--isolate``,
 ``--trace-process``, on Ray (a cluster started with ``ray start --head``, when the ``ray`` extra is
 installed), as a row of ``compare``, through ``check`` (against a golden file recorded first) and through
-the pytest plugin; then `compare`'s agreement outcomes with ``--max-divergence``. About 4 minutes on the
-shared 2-core machine (74 commands and 9 baselines, two at a time), plus about 40 s for Ray.
+the pytest plugin; then `compare`'s agreement outcomes with ``--max-divergence``. 72 commands and 9
+baselines, two at a time, and 2 comparisons: 10 min 17 s with Ray on the shared 2-core machine while other
+work ran.
 """
 
 from __future__ import annotations
