@@ -14,6 +14,7 @@ from typing import Any, ClassVar
 
 import numpy as np
 from panda3d.core import Datagram
+from panda3d.core import Quat as PandaQuat
 
 from .._kit import BackendOptions, KinematicPose, SubstepContacts, SubstepMean, substep_times
 from .._kit.stacks import stacks
@@ -29,6 +30,30 @@ _ROTATIONAL = (JointKind.HINGE, JointKind.UNIVERSAL)
 
 def _dot(a: Any, b: Any) -> float:
     return float(a[0] * b[0] + a[1] * b[1] + a[2] * b[2])
+
+
+def _inertia_along(body: Any, handle: JointHandle) -> float:
+    """The body's inertia along the joint's coordinate: its mass for a slider, its moment about the
+    joint's axis through the anchor for a hinge (the first axis of a universal joint)."""
+    mass = body.getMass()
+    if handle.spec.kind is JointKind.SLIDER:
+        return float(mass.getMagnitude())
+    j = handle.joint
+    axis = j.getAxis() if handle.spec.kind is JointKind.HINGE else j.getAxis1()
+    local = PandaQuat(body.getQuaternion()).conjugate().xform(axis)  # the axis in the body (COM) frame
+    tensor = mass.getInertialTensor()
+    about_com = sum(local[a] * tensor.getCell(a, b) * local[b] for a in range(3) for b in range(3))
+    lever = (body.getPosition() - j.getAnchor()).cross(axis)
+    return float(about_com + mass.getMagnitude() * lever.lengthSquared())
+
+
+def _effective_inertia(handle: JointHandle) -> float:
+    """1 / (1/I1 + 1/I2) of the joint's two bodies along its coordinate (the environment: 1/I2 = 0)."""
+    inverse = 1.0 / _inertia_along(handle.body, handle)
+    other = handle.joint.getBody(1)
+    if other is not None and not other.isEmpty():
+        inverse += 1.0 / _inertia_along(other, handle)
+    return 1.0 / inverse
 
 
 class OdeBackend(Backend):
@@ -129,6 +154,9 @@ class OdeBackend(Backend):
                 stepper(h)
             else:
                 limits = [self._limit(j) for j in joints]
+                for k, j in enumerate(joints):
+                    if limits[k]:
+                        self._fudge_away(k, j, limits[k], h)
                 frames = [self._frame(j) for j in joints]
                 stepper(h)
                 self._motor_mean.add([self._motor(k, j, limits[k], frames[k]) for k, j in enumerate(joints)])
@@ -180,6 +208,26 @@ class OdeBackend(Backend):
             return 0
         pos = self._position(handle)[0]
         return 1 if pos <= lo else 2 if pos >= hi else 0
+
+    def _fudge_away(self, k: int, handle: JointHandle, limit: int, h: float) -> None:
+        """At a stop with the motor powering away from it, ODE applies fmax x the fudge factor to the bodies
+        for the step instead of its velocity row (``dxJointLimitMotor::addLimot``): with the fudge at 1
+        (ODE's default) a motor reversed at its stop throws the joint far past its target rate for that
+        step (a 1 kg bob on a 0.5 m lever, fmax 100 N m: -3.8 rad/s for a target of -1). The fudge is set
+        so that fmax x fudge brings the joint's rate to the target in the step, from the effective inertia
+        of the joint's own bodies about it (at most 1: never more than fmax). Bodies further along a chain
+        only add inertia, so the step falls short rather than past, and the velocity row finishes the job
+        the next step, off the stop."""
+        vel, fmax = handle.vel, handle.fmax
+        if handle.feedback is None or fmax <= 0.0 or not ((limit == 1 and vel > 0.0) or (limit == 2 and vel < 0.0)):
+            return
+        if handle.spec.lo == handle.spec.hi:
+            return  # both stops at once: ODE switches the motor off
+        rate = self._position(handle)[1]
+        inertia = _effective_inertia(handle)
+        fudge = min(1.0, inertia * abs(vel - rate) / (fmax * h)) if math.isfinite(rate) else 1.0
+        handle.joint.setParamFudgeFactor(*axis_arg(handle), fudge)
+        self._fudge[k] = handle.joint.getParamFudgeFactor(*axis_arg(handle))  # as ODE stores it (float32)
 
     @staticmethod
     def _frame(handle: JointHandle) -> tuple[Any, Any] | None:

@@ -453,3 +453,30 @@ def test_a_saturated_hinge_motor_reads_fmax_while_its_link_whirls() -> None:
     # (its hinge, a velocity constraint in maximal coordinates, drifts outward and ERP pulls it back)
     assert max(speeds) > 15.0
     assert max(abs(f - fmax) for f in forces) < 1e-4
+
+
+def test_a_motor_reversed_at_its_stop_does_not_kick_the_joint() -> None:
+    """At its stop, a motor powering away is applied by ODE as fmax x the fudge factor for one step, not as
+    a velocity row. With the fudge at ODE's default 1 the offset bob (0.2517 kg m^2 about the hinge) driven
+    at fmax 100 N m is thrown to -3.8 rad/s for a target of -1 and ends 0.028 rad ahead of the path; the
+    adapter sets the fudge to what the joint's inertia needs to reach the target in the step. Bounds: the
+    step reaches at most the target rate (never past it), and the joint then follows the target rate from
+    the stop within one step's travel, |vel| h = 0.01 rad (gravity, 4.9 N m into the stop, makes the step
+    fall short by 4.9 h / I = 0.19 rad/s)."""
+    fmax, h = 100.0, 0.01
+    world = w.offset_hinge(lo=-0.5, hi=0.5)
+    hinge = dataclasses.replace(world.joints[0], motor=Motor(1.0, fmax))
+    with make_backend("ode", dataclasses.replace(world, joints=(hinge,))) as sim:
+        for _ in range(100):
+            sim.step()
+        assert sim.joint_states().position[0] == pytest.approx(0.5, abs=1e-3)  # pushed into the hi stop
+        sim.set_motor(0, -1.0, fmax)
+        sim.step()
+        first = sim.joint_states()
+        for _ in range(49):
+            sim.step()
+        last = sim.joint_states()
+    assert -1.0 - 1e-6 <= first.velocity[0] < 0.0
+    assert abs(first.motor_force[0]) < fmax  # the fudged force ODE applied, below fmax
+    assert last.velocity[0] == pytest.approx(-1.0, abs=1e-4)
+    assert abs(last.position[0] - (0.5 - 1.0 * 50 * h)) <= 1.0 * h
