@@ -10,7 +10,9 @@
   the inertia of its collision shapes' bounding box, about its centre of mass, with its mass; this is
   pybullet's default for every link (``btCompoundShape::calculateLocalInertia``, the AABB box formula),
   kept here only where the file gives nothing usable (MuJoCo refuses such a moving body). A link with no
-  collision shape either gets a solid sphere of radius ``FALLBACK_RADIUS``.
+  collision shape keeps the file's moments ixx, iyy, izz when only the products of inertia make the tensor
+  impossible (biped2d_pybullet's sliders: ODE's solver aborts on the 1 cm sphere's tiny inertia there),
+  else gets a solid sphere of radius ``FALLBACK_RADIUS``.
 * **A tensor that violates A + B >= C** (no body has one; MuJoCo's compiler refuses it, eleven pybullet_data
   URDFs have one): balanced as MuJoCo's ``balanceinertia`` does, on every engine (``_balanced``), so that
   every engine, and the energy watchdog, simulate the same body.
@@ -71,6 +73,11 @@ def usable_inertia(link: LinkDesc) -> LinkDesc:
         return link
     if moments.min() > DEGENERATE * moments.max():
         return _balanced(link, moments, axes)
+    diagonal = np.diag(tensor)
+    a, b, c = np.sort(diagonal)
+    if not link.shapes and a > DEGENERATE * c and a + b >= c:  # only the products of inertia are impossible
+        full = np.diag(diagonal)
+        return replace(link, inertia=(vec(full[0]), vec(full[1]), vec(full[2])))
     corners = [shape_points(placed) for placed in link.shapes]
     points = np.concatenate(corners) if corners else np.zeros((0, 3))
     if len(points):
