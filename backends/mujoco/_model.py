@@ -100,19 +100,6 @@ class ContactParams:
     solreffriction: tuple[float, float]
 
 
-def refuse_unbalanced_inertia(body: BodySpec) -> None:
-    """MuJoCo's compiler refuses principal moments with A + B < C ("inertia must satisfy A + B >= C"; no real
-    body has them; five pybullet_data URDFs do): refused before the build, naming the body."""
-    if body.motion is not Motion.DYNAMIC:
-        return
-    a, b, c = sorted(body.inertia)
-    if a + b < c:
-        raise UnsupportedFeature(
-            f"mujoco: body `{body.name}` has principal moments {a:.6g}, {b:.6g}, {c:.6g} kg m^2 (A + B < C, which no "
-            "real body has and MuJoCo refuses; its `balanceinertia` would replace them by their mean)"
-        )
-
-
 def plan_tree(world: CompiledWorld) -> dict[str, Edge]:
     """Every body's place in the tree, parents before children (static bodies first)."""
     motion = {b.name: b.motion for b in world.bodies}
@@ -121,8 +108,6 @@ def plan_tree(world: CompiledWorld) -> dict[str, Edge]:
         return None if name is None or motion[name] is Motion.STATIC else name
 
     links: dict[str | None, list[int]] = {None: [], **{b.name: [] for b in world.bodies}}
-    for body in world.bodies:
-        refuse_unbalanced_inertia(body)
     for i, joint in enumerate(world.joints):
         if joint.kind not in _JOINT and joint.kind is not JointKind.FIXED:
             raise UnsupportedFeature(f"mujoco: joint `{joint.name}` is {joint.kind.value}, not supported")

@@ -69,24 +69,22 @@ def parse_xml(file: Path) -> Any:
         raise ModelFileError(file, line or 0, f"malformed XML: {exc.msg}", column=column or 0) from None
 
 
-#: geometry the loaders read; pybullet's <plane> and <cdf> (signed-distance field) are refused, named
-_GEOMETRY = {
-    "box",
-    "sphere",
-    "cylinder",
-    "mesh",
-    "capsule",
+#: collision geometry pybullet reads and no engine here simulates, by its tag
+_REFUSED_GEOMETRY = {
+    "plane": "pybullet's implicit <plane> (the scenario's `plane` body is the ground)",
+    "cdf": "pybullet's signed-distance field <cdf>",
 }
 _XACRO = re.compile(r"\$\((?!optenv\s)|\$\{")
 
 
 def _check_geometry(tree: Any, file: Path) -> None:
-    """Every <geometry> is one the loaders read, and no xacro expression is left (but `$(optenv ...)`)."""
-    for geometry in tree.getroot().iter("geometry"):
+    """Every collision <geometry> is one the loaders read (other elements in a <geometry>, such as the
+    <material> racecar.urdf puts there, are read past, as pybullet does), and no xacro expression is left
+    (but `$(optenv ...)`)."""
+    for geometry in tree.getroot().iterfind("link/collision/geometry"):
         for shape in geometry:
-            if isinstance(shape.tag, str) and shape.tag not in _GEOMETRY:
-                what = {"plane": "pybullet's implicit <plane> (the scenario's `plane` body is the ground)",
-                        "cdf": "pybullet's signed-distance field <cdf>"}.get(shape.tag, f"<{shape.tag}>")  # fmt: skip
+            if isinstance(shape.tag, str) and shape.tag in _REFUSED_GEOMETRY:
+                what = _REFUSED_GEOMETRY[shape.tag]
                 raise ModelFileError(file, shape.sourceline or 0, f"geometry {what} is not simulated here")
     for element in tree.getroot().iter():
         for key, value in element.attrib.items():
@@ -100,7 +98,7 @@ def _check_geometry(tree: Any, file: Path) -> None:
 def _yourdfpy_text(file: Path) -> bytes:
     """What yourdfpy reads: the file as pybullet reads it. <capsule> becomes <cylinder> (made a capsule again
     from the tree), `$(optenv NAME default)` (xacro, left in husky.urdf) the variable or its default, and
-    commas between numbers (bike.urdf: `xyz="0.07, 0, -0.69"`) spaces, as pybullet's number reader skips them."""
+    numbers as pybullet's reader takes them (:func:`_numbers`)."""
     import os
 
     text = re.sub(rb"<(/?)capsule\b", rb"<\1cylinder", xml_bytes(file))
@@ -109,7 +107,21 @@ def _yourdfpy_text(file: Path) -> bytes:
         return os.environ.get(m.group(1).decode(), m.group(2).decode()).encode()
 
     text = re.sub(rb"\$\(optenv\s+(\S+)\s*([^)]*)\)", optenv, text)
-    return re.sub(rb'="[-+0-9.eE,\s]*,[-+0-9.eE,\s]*"', lambda m: m.group(0).replace(b",", b" "), text)
+    return re.sub(rb'="([-+0-9.eE,\s]*)"', lambda m: b'="' + _numbers(m.group(1)) + b'"', text)
+
+
+_NUMBER = re.compile(rb"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?")
+
+
+def _numbers(value: bytes) -> bytes:
+    """A list of numbers as pybullet's reader takes it: commas are separators, and each item is its longest
+    leading number (strtod: biped2d_pybullet.urdf writes `-1.57.`); an item with none is left to fail."""
+    items = value.replace(b",", b" ").split()
+    out = []
+    for item in items:
+        found = _NUMBER.match(item)
+        out.append(found.group(0) if found else item)
+    return b" ".join(out)
 
 
 def _lines(tree: Any, tag: str) -> dict[str, int]:

@@ -10,9 +10,12 @@
   the inertia of its collision shapes' bounding box, about its centre of mass, with its mass; this is
   pybullet's default for every link (``btCompoundShape::calculateLocalInertia``, the AABB box formula),
   kept here only where the file gives nothing usable (MuJoCo refuses such a moving body). A link with no
-  collision shape either gets a solid sphere of radius ``FALLBACK_RADIUS``.
-* **A tensor that violates A + B >= C** (no body has one) is kept as written: pybullet, DART and ODE run it;
-  MuJoCo's compiler refuses it, so the MuJoCo backend refuses it up front, naming the body.
+  collision shape keeps the file's moments ixx, iyy, izz when only the products of inertia make the tensor
+  impossible (biped2d_pybullet's sliders: ODE's solver aborts on the 1 cm sphere's tiny inertia there),
+  else gets a solid sphere of radius ``FALLBACK_RADIUS``.
+* **A tensor that violates A + B >= C** (no body has one; MuJoCo's compiler refuses it, eleven pybullet_data
+  URDFs have one): balanced as MuJoCo's ``balanceinertia`` does, on every engine (``_balanced``), so that
+  every engine, and the energy watchdog, simulate the same body.
 """
 
 from __future__ import annotations
@@ -27,6 +30,8 @@ from runner.language.robot_desc import JointDesc, LinkDesc, vec
 
 #: a principal moment at most this fraction of the largest is none (cube_no_rotation.urdf: 5.6e-17 of 0.215)
 DEGENERATE = 1e-12
+#: a shortfall of A + B below C up to this fraction of C is rounding, not a wrong tensor
+ROUNDING = 1e-9
 #: radius (m) of the solid sphere whose inertia a shapeless link of unusable inertia gets
 FALLBACK_RADIUS = 0.01
 
@@ -63,11 +68,16 @@ def _into_frame(holder: LinkDesc, link: LinkDesc, placed: PlacedShape) -> Placed
 def usable_inertia(link: LinkDesc) -> LinkDesc:
     """``link`` with the bounding-box inertia when it has mass and its tensor is unusable (module docstring)."""
     tensor = np.asarray(link.inertia, dtype=float)
-    moments = np.linalg.eigvalsh((tensor + tensor.T) / 2)
+    moments, axes = np.linalg.eigh((tensor + tensor.T) / 2)
     if link.mass <= 0:
         return link
     if moments.min() > DEGENERATE * moments.max():
-        return link
+        return _balanced(link, moments, axes)
+    diagonal = np.diag(tensor)
+    a, b, c = np.sort(diagonal)
+    if not link.shapes and a > DEGENERATE * c and a + b >= c:  # only the products of inertia are impossible
+        full = np.diag(diagonal)
+        return replace(link, inertia=(vec(full[0]), vec(full[1]), vec(full[2])))
     corners = [shape_points(placed) for placed in link.shapes]
     points = np.concatenate(corners) if corners else np.zeros((0, 3))
     if len(points):
@@ -81,6 +91,18 @@ def usable_inertia(link: LinkDesc) -> LinkDesc:
     moments = np.maximum(moments, 0.4 * link.mass * FALLBACK_RADIUS**2)  # a flat or point-like box: never 0
     d = np.asarray(link.com) - com  # about the link's own COM: the box's tensor shifted (parallel axes)
     full = np.diag(moments) + link.mass * ((d @ d) * np.eye(3) - np.outer(d, d))
+    return replace(link, inertia=(vec(full[0]), vec(full[1]), vec(full[2])))
+
+
+def _balanced(link: LinkDesc, moments: np.ndarray, axes: np.ndarray) -> LinkDesc:
+    """A tensor no body has (principal moments A + B < C) made one as MuJoCo's ``balanceinertia`` does: the
+    three moments become their mean, about the same axes. A shortfall within rounding (``ROUNDING`` of C; a
+    flat plate has A + B = C exactly) lowers C to A + B instead."""
+    a, b, c = moments  # ascending
+    if a + b >= c:
+        return link
+    fixed = np.array([a, b, a + b]) if c - (a + b) <= ROUNDING * c else np.full(3, moments.mean())
+    full = axes @ np.diag(fixed) @ axes.T
     return replace(link, inertia=(vec(full[0]), vec(full[1]), vec(full[2])))
 
 

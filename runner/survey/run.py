@@ -7,8 +7,8 @@ from collections.abc import Callable
 from runner.exec.cases import Case, CaseResult
 from runner.exec.executors import make_executor
 from runner.survey.cases import Refusal, survey_cases
-from runner.survey.models import ModelFile
-from runner.survey.table import CRASHED, REFUSED, Cell, Survey, cell_of
+from runner.survey.models import ROBOT, ModelFile
+from runner.survey.table import CRASHED, RAN, REFUSED, Cell, Survey, cell_of
 
 #: wall-clock seconds one run may take (a model that stalls an engine is a failed cell, not a stuck survey)
 DEFAULT_TIMEOUT = 300.0
@@ -27,6 +27,7 @@ def run_survey(
     survey = Survey(list(backends), duration)
     cases: list[Case] = []
     owners: list[str] = []
+    notes: dict[str, str] = {}
     for model in models:
         built = survey_cases(model, backends, duration, timeout)
         if isinstance(built, Refusal):
@@ -37,9 +38,14 @@ def run_survey(
         survey.rows[model.label] = {}
         cases += built
         owners += [model.label] * len(built)
+        loaded = built[0].loaded if built else None
+        notes[model.label] = "; ".join(loaded.robots[ROBOT].notes) if loaded is not None else ""
 
     def done(index: int, res: CaseResult) -> None:
-        survey.rows[owners[index]][res.case.backend] = cell_of(res)
+        cell = cell_of(res)
+        if cell.kind == RAN and notes[owners[index]]:  # what the loader decided for the file (a start clamped, ...)
+            cell = Cell(RAN, notes[owners[index]])
+        survey.rows[owners[index]][res.case.backend] = cell
         if on_model is not None and len(survey.rows[owners[index]]) == len(backends):
             on_model(owners[index])
 

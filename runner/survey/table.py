@@ -61,7 +61,7 @@ class Survey:
 
 
 def _escape(text: str) -> str:
-    short = re.sub(r"(?:/[^\s/:`']+)+/([^\s/:`']+)", r"\1", text)  # absolute paths as their file names
+    short = re.sub(r"(?<![\w.~-])(?:/[^\s/:`']+)+/([^\s/:`']+)", r"\1", text)  # absolute paths as file names
     one_line = " ".join(short.split()).replace("|", "\\|")
     return one_line if len(one_line) <= _SHOWN else one_line[: _SHOWN - 1] + "…"
 

@@ -30,8 +30,13 @@ def _assertion(path: Path, name: str) -> dict[str, object]:
 
 
 def test_the_examples_exist() -> None:
-    assert {p.name for p in ROBOTS} == {"kuka_arm.yaml", "cartpole_pendulum.yaml", "duck_drop.yaml", "mjcf_box.yaml",
-                                        "pendulum5.yaml"}
+    assert {p.name for p in ROBOTS} == {
+        "kuka_arm.yaml",
+        "cartpole_pendulum.yaml",
+        "duck_drop.yaml",
+        "mjcf_box.yaml",
+        "pendulum5.yaml",
+    }
 
 
 @pytest.mark.parametrize("path", ROBOTS, ids=[p.stem for p in ROBOTS])

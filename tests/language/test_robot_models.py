@@ -30,7 +30,7 @@ GOOD_URDF = """\
   </link>
   <link name="arm">
     <inertial><origin xyz="0 0 0.25" rpy="0 0.3 0"/><mass value="2"/>
-      <inertia ixx="0.05" ixy="0.01" ixz="0" iyy="0.04" iyz="0" izz="0.01"/></inertial>
+      <inertia ixx="0.05" ixy="0.01" ixz="0" iyy="0.04" iyz="0" izz="0.03"/></inertial>
     <collision><origin xyz="0 0 0.25"/><geometry><mesh filename="MESH"/></geometry></collision>
   </link>
   <joint name="shoulder" type="revolute">

@@ -124,3 +124,21 @@ def test_a_start_outside_the_limits_is_clamped_and_lower_above_upper_is_no_limit
     w, x, y, z = desc.link("arm").quat
     assert (x, y) == pytest.approx((0.0, 0.0), abs=1e-12) and 2 * np.arctan2(z, w) == pytest.approx(np.pi / 2 + 0.5)
     assert any("elbow" in note and "starts at 0.5" in note for note in desc.notes)
+
+
+def test_numbers_as_pybullet_reads_them(tmp_path: Path) -> None:
+    """Commas separate numbers (bike.urdf) and an item is its leading number (biped2d_pybullet's `-1.57.`)."""
+    text = GOOD_URDF.replace('<origin xyz="0 0 0.1" rpy="0 0 0.5"/>', '<origin xyz="0, 0, 0.1" rpy="0 0 0.5."/>')
+    assert text != GOOD_URDF
+    desc = load_scenario(_scenario(tmp_path, text)).robots["bot"]
+    w, x, y, z = desc.link("arm").quat
+    assert 2 * np.arctan2(z, w) == pytest.approx(0.5, abs=1e-12) and desc.link("arm").pos[2] == pytest.approx(0.1)
+
+
+def test_an_inertia_no_body_has_is_balanced_as_mujoco_does(tmp_path: Path) -> None:
+    """Principal moments 0.01, 0.01, 0.05 (A + B < C): each becomes their mean, 0.07 / 3 (balanceinertia)."""
+    text = GOOD_URDF.replace('ixx="0.05" ixy="0.01" ixz="0" iyy="0.04" iyz="0" izz="0.03"',
+                             'ixx="0.01" ixy="0" ixz="0" iyy="0.01" iyz="0" izz="0.05"')  # fmt: skip
+    assert text != GOOD_URDF
+    tensor = np.asarray(load_scenario(_scenario(tmp_path, text)).robots["bot"].link("arm").inertia)
+    assert np.allclose(np.linalg.eigvalsh(tensor), 0.07 / 3, rtol=1e-12)
