@@ -18,7 +18,7 @@ from panda3d.core import Datagram
 from .._kit import BackendOptions, KinematicPose, SubstepContacts, SubstepMean, substep_times
 from .._kit.stacks import stacks
 from ..base import Backend
-from ..types import BodyStates, Capability, Contact, JointKind, JointStates, Motion, Quat, Vec3
+from ..types import MODEL_FILE_CAPABILITIES, BodyStates, Capability, Contact, JointKind, JointStates, Motion, Quat, Vec3
 from . import _native
 from ._build import JointHandle, axis_arg, build_scene, destroy_scene, panda_quat, set_motor
 from ._contacts import Collider
@@ -36,7 +36,8 @@ class OdeBackend(Backend):
 
     name = "ode"
     engine_distribution = "panda3d"
-    capabilities = frozenset(Capability)
+    #: everything but what only an engine building a robot from its model file runs (MJCF on MuJoCo)
+    capabilities = frozenset(Capability) - MODEL_FILE_CAPABILITIES
     Options: ClassVar[type[BackendOptions]] = OdeOptions
     #: panda3d turns a failed C++ assertion (nassert) into AssertionError; ODE's own fatal errors abort.
     engine_errors: ClassVar[tuple[type[BaseException], ...]] = (AssertionError,)
