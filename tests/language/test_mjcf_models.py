@@ -134,3 +134,22 @@ def test_options_model_needs_the_models_step_and_gravity(tmp_path: Path) -> None
     assert "dt / substeps (0.01 s) must be the model's timestep 0.02 s" in caught.value.issues[0].message
     path.write_text(path.read_text().replace("dt: 0.01", "dt: 0.02"))
     assert load_scenario(path).model.world.options == "model"
+
+
+def test_a_placed_robot_starts_where_the_description_puts_it_on_mujoco(tmp_path: Path) -> None:
+    """MuJoCo builds the robot from its file in a frame at `pos`/`hpr`: its bodies start at the poses the
+    compiled world gives them (the description's forward kinematics moved by the placement), to rounding."""
+    import numpy as np
+
+    from backends.registry import create_backend
+
+    path = _scenario(tmp_path, "several", SEVERAL)
+    path.write_text(
+        path.read_text().replace("mjcf: several.xml}", "mjcf: several.xml, pos: [1, 2, 0.5], hpr: [30, 20, 10]}")
+    )
+    world = build_program(load_scenario(path)).world
+    with create_backend("mujoco", world) as sim:
+        states = sim.body_states()
+        for i, body in enumerate(world.bodies):
+            assert np.allclose(states.pos[i], body.pos, rtol=0, atol=1e-12), body.name
+            assert np.allclose(states.quat[i], body.quat, rtol=0, atol=1e-12), body.name
