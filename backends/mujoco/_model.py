@@ -26,7 +26,7 @@ from __future__ import annotations
 
 import math
 from collections import deque
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 from typing import Any
 
 import mujoco
@@ -34,8 +34,9 @@ import numpy as np
 
 from ..errors import EngineFailure, UnsupportedFeature
 from ..geometry import quat_conj, quat_mul, quat_rotate
-from ..types import BodySpec, CompiledWorld, JointKind, JointSpec, Motion, PlacedShape, Rgba, Shape, ShapeKind, Surface
+from ..types import BodySpec, CompiledWorld, JointKind, Motion, PlacedShape, Rgba, Shape, ShapeKind, Surface
 from . import _native
+from ._filters import add_excludes, excluded, touch
 from ._native import NativeModel
 from ._options import MujocoOptions
 
@@ -107,7 +108,7 @@ def plan_tree(world: CompiledWorld, native: NativeModel | None = None) -> dict[s
     of a robot built from its file (``native``) are the file's, not planned here."""
     motion = {b.name: b.motion for b in world.bodies}
     if native is not None:
-        world = _without_file(world, native)
+        world = _native.without_file(world, native)
 
     def node(name: str | None) -> str | None:  # static bodies are the environment
         return None if name is None or motion[name] is Motion.STATIC else name
@@ -145,20 +146,6 @@ def plan_tree(world: CompiledWorld, native: NativeModel | None = None) -> dict[s
                 edges[child] = Edge(parent, i, 1.0 if child == a else -1.0)
                 queue.append(child)
     return edges
-
-
-def _without_file(world: CompiledWorld, native: NativeModel) -> CompiledWorld:
-    """The world less the file's bodies (its world link stays: the robot's placement, a static body) and
-    joints; a scenario joint to a file's body is refused."""
-    own = native.file.robot + "."  # the robot's joints (and welds) are `<robot>.<name>`
-    for joint in world.joints:
-        ends = {joint.body, joint.other} - {None}
-        if not joint.name.startswith(own) and any(native.owns_body(str(e)) for e in ends):
-            raise UnsupportedFeature(f"mujoco: joint `{joint.name}` joins a body of the MJCF robot "
-                                     f"`{native.file.robot}`, which MuJoCo builds from its file")  # fmt: skip
-    bodies = tuple(b for b in world.bodies if not native.owns_body(b.name))
-    joints = tuple(j for j in world.joints if not j.name.startswith(own))
-    return replace(world, bodies=bodies, joints=joints)
 
 
 def _rigid_groups(world: CompiledWorld, edges: dict[str, Edge]) -> dict[str, str]:
@@ -228,14 +215,14 @@ def build(world: CompiledWorld, opts: MujocoOptions, h: float) -> Layout:
             geoms[name] = native.geoms[name]  # the file's world geoms; this body only marks the placement
             continue
         geoms[name] = add_geoms(spec, mj, body, default, group[name] in moving)
-    names = _Names(native)
+    names = _native.Names(native)
     _add_motors(spec, world, heavy, h, names)
     if native is not None:
         geoms.update({b: native.geoms[b] for b in native.bodies})
         group.update({b: b for b in native.bodies})
         for b in native.bodies:  # the file's own bodies touch as MuJoCo's filtering says
             moving.add(b)
-    _add_excludes(spec, world, group, moving, names)
+    add_excludes(spec, world, group, moving, names)
     _add_pairs(spec, world, group, moving, geoms, default, h, opts)
     top = spec
     with _native.unprefixed():
@@ -278,28 +265,6 @@ def build(world: CompiledWorld, opts: MujocoOptions, h: float) -> Layout:
         ),  # fmt: skip
         friction_damping=None if world.model_options else _friction_damping(default),
     )
-
-
-class _Names:
-    """MuJoCo's names of the world's bodies and joints: `body:<name>`, `joint:<name>`, or the file's."""
-
-    def __init__(self, native: NativeModel | None) -> None:
-        self.native = native
-
-    def body(self, name: str) -> str:
-        if self.native is not None and name in self.native.bodies:
-            return self.native.bodies[name]
-        return f"body:{name}"
-
-    def joint(self, name: str) -> str:
-        if self.native is not None and name in self.native.joints:
-            return self.native.joints[name]
-        return f"joint:{name}"
-
-    def has_motor(self, joint: JointSpec) -> bool:
-        """Every scenario hinge and slider has a motor (set at run time); a file's joint only when the scenario
-        gives it one (a helper body per joint of a file would change its solver scaling)."""
-        return self.native is None or joint.name not in self.native.joints or joint.motor is not None
 
 
 def _set_options(spec: Any, world: CompiledWorld, h: float) -> None:
@@ -455,7 +420,7 @@ def _add_hull(spec: Any, name: str, shape: Shape) -> str:
     return str(mesh.name)
 
 
-def _add_motors(spec: Any, world: CompiledWorld, heavy: float, h: float, names: _Names) -> None:
+def _add_motors(spec: Any, world: CompiledWorld, heavy: float, h: float, names: _native.Names) -> None:
     """ODE's velocity motor as a bounded velocity constraint: a tendon's frictionloss row.
 
     The tendon measures the joint's rate minus the rate of a heavy helper slide whose velocity the
@@ -479,30 +444,6 @@ def _add_motors(spec: Any, world: CompiledWorld, heavy: float, h: float, names: 
         tendon.frictionloss = 0.0  # fmax; the backend sets it (0: off)
 
 
-def _touch(a: str, b: str, group: dict[str, str], moving: set[str]) -> bool:
-    """Whether MuJoCo's filtering lets bodies ``a`` and ``b`` collide (before excludes): different rigid
-    groups (MuJoCo's weld bodies), one of them moving freely (contype bits)."""
-    return group[a] != group[b] and bool({group[a], group[b]} & moving)
-
-
-def _excluded(world: CompiledWorld) -> list[tuple[str, str]]:
-    """The body pairs that never touch, in order, once each: joined bodies (ODE programs skip connected
-    bodies), then ``CompiledWorld.excluded_pairs`` (a model's adjacent links, the scenario's exclusions)."""
-    pairs = [(j.body, j.other) for j in world.joints if j.other is not None]
-    pairs += list(world.excluded_pairs)
-    unique: dict[frozenset[str], tuple[str, str]] = {}
-    for a, b in pairs:
-        unique.setdefault(frozenset((a, b)), (a, b))
-    return list(unique.values())
-
-
-def _add_excludes(spec: Any, world: CompiledWorld, group: dict[str, str], moving: set[str], names: _Names) -> None:
-    """A MuJoCo ``<exclude>`` (a body pair) for each excluded pair that MuJoCo's filtering would let touch."""
-    for a, b in _excluded(world):
-        if a != b and _touch(a, b, group, moving):
-            spec.add_exclude(bodyname1=names.body(a), bodyname2=names.body(b))
-
-
 def _add_pairs(
     spec: Any,
     world: CompiledWorld,
@@ -518,7 +459,7 @@ def _add_pairs(
     A pair overrides MuJoCo's filtering and its own geom pair (MuJoCo merges the two), so it is made only
     where the bodies could touch: not both driven, not one rigid group, not joined or excluded.
     """
-    excluded = {frozenset(pair) for pair in _excluded(world)}
+    skip = {frozenset(pair) for pair in excluded(world)}
     order = {b.name: i for i, b in enumerate(world.bodies)}
     seen: set[frozenset[str]] = set()
     for pair in world.pair_surfaces:  # the first one naming a pair is the pair's (CompiledWorld.surface)
@@ -527,7 +468,7 @@ def _add_pairs(
         if key in seen:
             continue
         seen.add(key)
-        if a == b or key in excluded or not _touch(a, b, group, moving):
+        if a == b or key in skip or not touch(a, b, group, moving):
             continue
         params = contact_params(pair.surface, h, opts)
         if params == default:

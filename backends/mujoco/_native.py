@@ -16,13 +16,13 @@ import math
 import warnings
 from collections.abc import Iterator
 from contextlib import contextmanager
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import mujoco
 
 from ..errors import UnsupportedFeature
-from ..types import CompiledWorld, ModelFile
+from ..types import CompiledWorld, JointSpec, ModelFile
 
 
 @dataclass
@@ -152,3 +152,39 @@ def apply_limits(model: mujoco.MjModel, world: CompiledWorld, native: NativeMode
         lo = -math.inf if joint.lo is None else joint.lo
         hi = math.inf if joint.hi is None else joint.hi
         model.jnt_range[j] = (lo, hi)
+
+
+def without_file(world: CompiledWorld, native: NativeModel) -> CompiledWorld:
+    """The world less the file's bodies (its world link stays: the robot's placement, a static body) and
+    joints; a scenario joint to a file's body is refused."""
+    own = native.file.robot + "."  # the robot's joints (and welds) are `<robot>.<name>`
+    for joint in world.joints:
+        ends = {joint.body, joint.other} - {None}
+        if not joint.name.startswith(own) and any(native.owns_body(str(e)) for e in ends):
+            raise UnsupportedFeature(f"mujoco: joint `{joint.name}` joins a body of the MJCF robot "
+                                     f"`{native.file.robot}`, which MuJoCo builds from its file")  # fmt: skip
+    bodies = tuple(b for b in world.bodies if not native.owns_body(b.name))
+    joints = tuple(j for j in world.joints if not j.name.startswith(own))
+    return replace(world, bodies=bodies, joints=joints)
+
+
+class Names:
+    """MuJoCo's names of the world's bodies and joints: `body:<name>`, `joint:<name>`, or the file's."""
+
+    def __init__(self, native: NativeModel | None) -> None:
+        self.native = native
+
+    def body(self, name: str) -> str:
+        if self.native is not None and name in self.native.bodies:
+            return self.native.bodies[name]
+        return f"body:{name}"
+
+    def joint(self, name: str) -> str:
+        if self.native is not None and name in self.native.joints:
+            return self.native.joints[name]
+        return f"joint:{name}"
+
+    def has_motor(self, joint: JointSpec) -> bool:
+        """Every scenario hinge and slider has a motor (set at run time); a file's joint only when the scenario
+        gives it one (a helper body per joint of a file would change its solver scaling)."""
+        return self.native is None or joint.name not in self.native.joints or joint.motor is not None
