@@ -11,10 +11,12 @@ degrees) so gravity swings every joint. After every step each joint's position m
 link frames are built differently: `createMultiBody` from the description against Bullet's URDF importer,
 which changes the last bits); a wrong inertia, a motor left on, damping or a misplaced axis shows at 1e-4 or
 more within the swing. The models: ones whose links do not touch each other while they swing (the
-runner keeps self-collision on, `loadURDF` off by default). Known gap, measured: once a joint presses on its
-limit the two part (kuka: 5.2e-4 rad one step after joint 5 meets its limit at step 215); the limit
-constraint the adapter sets with `changeDynamics(jointLowerLimit, jointUpperLimit)` is not yet shown to be
-the importer's, so the comparison stops before the first limit (docs/robots.md).
+runner keeps self-collision on, `loadURDF` off by default). The swing stops at 0.8 s: at 0.9 s kuka's folded
+links touch each other, and from there the runner's contacts (the scenario's surface, ODE-style) are not
+`loadURDF`'s defaults. Measured: given `URDF_USE_SELF_COLLISION`, each link's friction and restitution as
+the adapter sets them and the adapter's engine parameters (solver iterations, restitution threshold,
+contact breaking threshold), the reference follows kuka to 1.8e-13 rad over 1.2 s, the self-contact included
+(docs/robots.md).
 """
 
 from __future__ import annotations
@@ -31,7 +33,7 @@ from runner.language.load import load_scenario
 p = pytest.importorskip("pybullet", reason="pybullet is a base dependency")
 
 TOL = 1e-9  # rad (m for a slider): rounding only (module docstring)
-#: 0.8 s: before any joint of these models reaches a limit (kuka's joint 5 reaches -2.967 rad at step 215)
+#: 0.8 s: before kuka's links touch each other (step 216, module docstring)
 DT, DURATION, HPR = 1.0 / 240.0, 0.8, (20.0, 30.0, 10.0)
 MODELS = (
     "cartpole.urdf",
