@@ -55,8 +55,12 @@ def load(world: CompiledWorld) -> NativeModel | None:
     except ValueError as exc:  # read by the same compiler when the scenario loaded: a changed file
         raise UnsupportedFeature(f"mujoco: MuJoCo refused {file.path}: {exc}") from None
     strip = len(file.robot) + 1
+    named = [b.name for b in spec.bodies[1:] if b.name] + [j.name for j in spec.joints if j.name]
+    listed = [n[strip:] for n in (*file.bodies[1:], *file.joints)]
+    if len(spec.bodies) != len(file.bodies) or len(spec.joints) != len(file.joints) or not set(named) <= set(listed):
+        raise UnsupportedFeature(f"mujoco: {file.path} changed since the scenario was loaded")
     bodies: dict[str, str] = {}
-    for i, body in enumerate(spec.bodies):
+    for i, body in enumerate(spec.bodies):  # MjSpec lists them in MuJoCo's compiled order (as the description)
         if i == 0:
             continue  # the world body
         if not body.name:
