@@ -127,6 +127,16 @@ class Capability(str, enum.Enum):
     JOINT_MOTOR = "joint:motor"
     KINEMATIC = "motion:kinematic"
     SUBSTEPS = "world:substeps"
+    # What a model file may hold that only an engine building the robot from the file itself runs
+    # (MuJoCo for MJCF, CompiledWorld.models): MODEL_FILE_CAPABILITIES.
+    JOINT_SEVERAL_PER_BODY = "joint:several-per-body"  # an MJCF body moved by several joints, in order
+    JOINT_DYNAMICS = "joint:dynamics"  # joint damping, armature, friction loss or stiffness of a model
+    JOINT_BALL_RANGE = "joint:ball-range"  # a ball joint's cone limit
+    BODY_MASSLESS = "body:massless"  # a moving body without mass (MuJoCo: its subtree carries the inertia)
+    CONSTRAINT_EQUALITY = "constraint:equality"  # MJCF <equality>
+    CONSTRAINT_TENDON = "constraint:tendon"  # MJCF <tendon>
+    COLLISION_EXPLICIT_PAIRS = "collision:explicit-pairs"  # MJCF <contact><pair>
+    WORLD_FLUID = "world:fluid"  # MJCF <option density viscosity wind>
 
 
 #: Capabilities that no adapter maps to its engine yet (the stop bounce and softness of the language): no
@@ -147,13 +157,30 @@ ROBOT_CAPABILITIES: frozenset[Capability] = frozenset(
         Capability.COLLISION_FILTER,
     }
 )
+#: What only an engine that builds a robot from its model file runs (MuJoCo, for MJCF; docs/robots.md).
+MODEL_FILE_CAPABILITIES: frozenset[Capability] = frozenset(
+    {
+        Capability.JOINT_SEVERAL_PER_BODY,
+        Capability.JOINT_DYNAMICS,
+        Capability.JOINT_BALL_RANGE,
+        Capability.BODY_MASSLESS,
+        Capability.CONSTRAINT_EQUALITY,
+        Capability.CONSTRAINT_TENDON,
+        Capability.COLLISION_EXPLICIT_PAIRS,
+        Capability.WORLD_FLUID,
+    }
+)
 #: Every primitive shape; and everything but universal joints and the robot capabilities (what the pybullet,
 #: mujoco and dart adapters offer).
 ALL_SHAPES: frozenset[Capability] = frozenset(
     c for c in Capability if c.value.startswith("shape:") and c not in ROBOT_CAPABILITIES
 )
 RIGID_BODY_CAPABILITIES: frozenset[Capability] = (
-    frozenset(Capability) - {Capability.JOINT_UNIVERSAL} - UNMAPPED_CAPABILITIES - ROBOT_CAPABILITIES
+    frozenset(Capability)
+    - {Capability.JOINT_UNIVERSAL}
+    - UNMAPPED_CAPABILITIES
+    - ROBOT_CAPABILITIES
+    - MODEL_FILE_CAPABILITIES
 )
 
 
@@ -259,6 +286,23 @@ class PairSurface:
 
 
 @dataclass(frozen=True)
+class ModelFile:
+    """A robot whose model file an engine may build from itself (MJCF on MuJoCo): its bodies and joints are
+    also in ``CompiledWorld.bodies``/``joints`` (for every other engine, and for the names), listed here in
+    the file's own order (MuJoCo's compiled order: body ``i`` of the file is ``bodies[i]``, the world body
+    first)."""
+
+    robot: str  # the robot's name: its bodies and joints are `<robot>.<name>`
+    path: str  # absolute
+    format: str  # mjcf
+    pos: Vec3  # where the model's frame is placed
+    quat: Quat
+    bodies: tuple[str, ...]  # CompiledWorld body names, in the file's body order (the world body first)
+    joints: tuple[str, ...]  # CompiledWorld joint names, in the file's joint order
+    needs: frozenset[Capability] = frozenset()  # MODEL_FILE_CAPABILITIES the file uses
+
+
+@dataclass(frozen=True)
 class CompiledWorld:
     name: str
     gravity: Vec3
@@ -272,6 +316,11 @@ class CompiledWorld:
     backend_options: Mapping[str, Mapping[str, Any]] = field(default_factory=dict)
     #: body pairs (names) that never touch: adjacent links of a model and the scenario's exclusions
     excluded_pairs: tuple[tuple[str, str], ...] = ()
+    #: robots an engine may build from their model file (MJCF on MuJoCo)
+    models: tuple[ModelFile, ...] = ()
+    #: True: the model file's own options rule (MJCF `<option>`, its geoms' contact parameters, MuJoCo's own
+    #: mj_step); the scenario's dt and gravity equal the model's (`world.options: model`, docs/robots.md)
+    model_options: bool = False
 
     def body_index(self, name: str) -> int:
         for i, body in enumerate(self.bodies):
@@ -314,6 +363,8 @@ class CompiledWorld:
                 need.add(Capability.JOINT_MOTOR)
         if self.substeps > 1:
             need.add(Capability.SUBSTEPS)
+        for model in self.models:
+            need.update(model.needs)
         return frozenset(need)
 
 

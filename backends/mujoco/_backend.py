@@ -14,6 +14,7 @@ from ..base import Backend
 from ..errors import EngineFailure
 from ..geometry import quat_conj, quat_rotate
 from ..types import (
+    MODEL_FILE_CAPABILITIES,
     RIGID_BODY_CAPABILITIES,
     ROBOT_CAPABILITIES,
     BodyStates,
@@ -59,9 +60,10 @@ class MujocoBackend(Backend):
     name: ClassVar[str] = "mujoco"
     engine_distribution: ClassVar[str] = "mujoco"
     precision: ClassVar[Precision] = Precision.FLOAT64  # mjtNum is double
-    #: no shape:trimesh: MuJoCo collides with a mesh's convex hull only (docs/backends/mujoco.md)
-    capabilities: ClassVar[frozenset[Capability]] = RIGID_BODY_CAPABILITIES | (
-        ROBOT_CAPABILITIES - {Capability.SHAPE_TRIMESH}
+    #: no shape:trimesh: MuJoCo collides with a mesh's convex hull only (docs/backends/mujoco.md); what only
+    #: an engine building a robot from its file runs: MJCF robots are built from their file (_native)
+    capabilities: ClassVar[frozenset[Capability]] = (
+        RIGID_BODY_CAPABILITIES | (ROBOT_CAPABILITIES - {Capability.SHAPE_TRIMESH}) | MODEL_FILE_CAPABILITIES
     )
     Options: ClassVar[type[BackendOptions]] = MujocoOptions
     #: mju_error and the bindings' own failures; MjSpec.compile's ValueError is translated where it is called.
@@ -79,6 +81,8 @@ class MujocoBackend(Backend):
         if self.options.engine_substeps is None:  # set by hand, the column is the scenario's to judge
             check_stack(self._stack)
         self._nsteps = world.substeps * engine_substeps(self.options, world.dt / world.substeps, self._stack)
+        if world.model_options:  # the model's own timestep (checked equal to dt / substeps when loaded)
+            self._nsteps = world.substeps
         self._h = world.dt / self._nsteps
         self._times = substep_times(world.dt, self._nsteps)
         self._layout = build(world, self.options, self._h)
@@ -146,6 +150,7 @@ class MujocoBackend(Backend):
 
     def _step(self) -> None:
         m, d, nsteps, motors = self._m, self._d, self._nsteps, self._helper_dof.size > 0
+        native = self.world.model_options  # MuJoCo's own step, as the model file runs
         friction = self._layout.friction_damping
         forced = bool(self.forces)
         if forced:  # held for every engine step of this step, then cleared
@@ -160,7 +165,10 @@ class MujocoBackend(Backend):
                     self._put(i, pose, self._times[k - 1])
             if motors:
                 d.qvel[self._helper_dof] = self._target
-            _coulomb.step(m, d, friction, self._impacts)
+            if native:
+                mujoco.mj_step(m, d)
+            else:
+                _coulomb.step(m, d, friction, self._impacts)
             if motors:
                 self._motor_mean.add(-d.qfrc_constraint[self._helper_dof])  # the helper feels -(motor force)
             if k + 1 < nsteps:  # the last engine step's contacts stay in MjData until contacts() asks
@@ -288,6 +296,19 @@ class MujocoBackend(Backend):
 
     def _settings(self) -> dict[str, Any]:
         o = self.options
+        if self.world.model_options:
+            opt = self._m.opt
+            return {
+                "engine": f"mujoco {mujoco.__version__}",
+                "options": "the model file's own <option> and contact parameters; mujoco.mj_step",
+                "timestep": float(opt.timestep),
+                "engine_steps_per_step": self._nsteps,
+                "integrator": mujoco.mjtIntegrator(int(opt.integrator)).name,
+                "cone": mujoco.mjtCone(int(opt.cone)).name,
+                "solver": mujoco.mjtSolver(int(opt.solver)).name,
+                "iterations": int(opt.iterations),
+                "tolerance": float(opt.tolerance),
+            }
         return {
             "engine": f"mujoco {mujoco.__version__}",
             "timestep": self._h,
@@ -318,7 +339,10 @@ def _impacts(world: CompiledWorld, m: mujoco.MjModel, h: float, o: MujocoOptions
     """The normal rows' parameters: the world's bounce_vel and the pairs' own (by MuJoCo geom id)."""
     pairs: dict[tuple[int, int], float] = {}
     for pair in world.pair_surfaces:
-        a, b = m.geom(f"geom:{pair.a}").id, m.geom(f"geom:{pair.b}").id
+        try:  # a primitive body's one geom (a compound body's geoms keep the world's bounce_vel)
+            a, b = m.geom(f"geom:{pair.a}").id, m.geom(f"geom:{pair.b}").id
+        except KeyError:
+            continue
         pairs[(min(a, b), max(a, b))] = pair.surface.bounce_vel
     rest = (1.0 - IMPEDANCE) * math.hypot(*world.gravity) * h * h / o.bounce_erp
     return Impacts(h, o.erp, o.max_correcting_vel, rest, world.default_surface.bounce_vel, pairs)

@@ -35,6 +35,9 @@ import numpy as np
 from ..errors import EngineFailure, UnsupportedFeature
 from ..geometry import quat_conj, quat_mul, quat_rotate
 from ..types import BodySpec, CompiledWorld, JointKind, Motion, PlacedShape, Rgba, Shape, ShapeKind, Surface
+from . import _native
+from ._filters import add_excludes, excluded, touch
+from ._native import NativeModel
 from ._options import MujocoOptions
 
 #: Constant constraint impedance (solimp dmin = dmax): how nearly a contact or stop reaches its
@@ -100,9 +103,12 @@ class ContactParams:
     solreffriction: tuple[float, float]
 
 
-def plan_tree(world: CompiledWorld) -> dict[str, Edge]:
-    """Every body's place in the tree, parents before children (static bodies first)."""
+def plan_tree(world: CompiledWorld, native: NativeModel | None = None) -> dict[str, Edge]:
+    """Every body's place in the tree, parents before children (static bodies first); the bodies and joints
+    of a robot built from its file (``native``) are the file's, not planned here."""
     motion = {b.name: b.motion for b in world.bodies}
+    if native is not None:
+        world = _native.without_file(world, native)
 
     def node(name: str | None) -> str | None:  # static bodies are the environment
         return None if name is None or motion[name] is Motion.STATIC else name
@@ -175,16 +181,10 @@ def contact_params(surface: Surface, h: float, opts: MujocoOptions) -> ContactPa
 
 def build(world: CompiledWorld, opts: MujocoOptions, h: float) -> Layout:
     """Compile ``world`` with engine step ``h``."""
-    edges = plan_tree(world)
-    spec = mujoco.MjSpec()
+    native = _native.load(world)
+    edges = plan_tree(world, native)
+    spec = mujoco.MjSpec()  # the scenario's parts (attached to an MJCF robot's own spec, _native)
     spec.compiler.degree = False  # hinge ranges in radians
-    spec.option.timestep = h
-    spec.option.gravity = list(world.gravity)
-    spec.option.integrator = mujoco.mjtIntegrator.mjINT_IMPLICITFAST
-    spec.option.cone = mujoco.mjtCone.mjCONE_ELLIPTIC
-    spec.option.tolerance = 1e-10  # motors settle to 1e-6 of their target rate (default 1e-8: 2e-4)
-    spec.option.disableflags |= mujoco.mjtDisableBit.mjDSBL_AUTORESET  # a blow-up must surface
-    spec.option.disableflags |= mujoco.mjtDisableBit.mjDSBL_FILTERPARENT  # joined pairs are excluded instead
     specs = {b.name: b for b in world.bodies}
     heavy = KINEMATIC_MASS_RATIO * max([1.0] + [b.mass for b in world.bodies if b.motion is Motion.DYNAMIC])
     mj_bodies: dict[str, Any] = {}
@@ -211,32 +211,71 @@ def build(world: CompiledWorld, opts: MujocoOptions, h: float) -> Layout:
             mj.add_freejoint()
         elif edge.joint is not None:
             _add_joint(mj, body, world, edge, h, opts)
+        if native is not None and name == native.world_link:
+            geoms[name] = native.geoms[name]  # the file's world geoms; this body only marks the placement
+            continue
         geoms[name] = add_geoms(spec, mj, body, default, group[name] in moving)
-    _add_motors(spec, world, heavy, h)
-    _add_excludes(spec, world, group, moving)
+    names = _native.Names(native)
+    _add_motors(spec, world, heavy, h, names)
+    if native is not None:
+        geoms.update({b: native.geoms[b] for b in native.bodies})
+        group.update({b: b for b in native.bodies})
+        for b in native.bodies:  # the file's own bodies touch as MuJoCo's filtering says
+            moving.add(b)
+    add_excludes(spec, world, group, moving, names)
     _add_pairs(spec, world, group, moving, geoms, default, h, opts)
-    model = _compile(spec, len(world.bodies))
-    _rescale_solver(model, [b.name for b in world.bodies if b.motion is Motion.DYNAMIC])
-    index = {f"body:{b.name}": i for i, b in enumerate(world.bodies)}
-    geom_body = [index[model.body(model.geom_bodyid[g]).name] for g in range(model.ngeom)]
+    top = spec
+    with _native.unprefixed():
+        if native is not None:
+            if not world.model_options:
+                _native.set_geom_surfaces(native, default, _SOLIMP)
+            top = _native.attach(native, spec)
+        if native is None or not world.model_options:
+            _set_options(top, world, h)
+        model = _compile(top, len(world.bodies))
+    if native is not None:
+        _native.scale_total_mass(model, native)
+        _native.apply_limits(model, world, native)
+    if not world.model_options:
+        _rescale_solver(model, [names.body(b.name) for b in world.bodies if b.motion is Motion.DYNAMIC])
+    body_ids = np.array([model.body(names.body(b.name)).id for b in world.bodies], dtype=np.int64)
+    owner = np.full(model.nbody, -1, dtype=np.int64)  # MuJoCo body -> world body
+    owner[body_ids] = np.arange(len(world.bodies))
+    if native is not None:
+        owner[0] = world.body_index(native.world_link)  # the file's world geoms
+    motored = [_motorised(j.kind) and names.has_motor(j) for j in world.joints]
     return Layout(
         model=model,
         edges=edges,
-        body_id=np.array([model.body(f"body:{b.name}").id for b in world.bodies], dtype=np.int64),
-        geom_body=np.array(geom_body, dtype=np.int64),
+        body_id=body_ids,
+        geom_body=owner[model.geom_bodyid],
         joint_id=np.array(
-            [model.joint(f"joint:{j.name}").id if j.kind in _JOINT else -1 for j in world.joints], dtype=np.int64
+            [model.joint(names.joint(j.name)).id if j.kind in _JOINT else -1 for j in world.joints], dtype=np.int64
         ),
         motor_id=np.array(
-            [model.tendon(f"motor:{j.name}").id if _motorised(j.kind) else -1 for j in world.joints],
+            [model.tendon(f"motor:{j.name}").id if m else -1 for j, m in zip(world.joints, motored, strict=True)],
             dtype=np.int64,
         ),
         helper_dof=np.array(
-            [model.jnt_dofadr[model.joint(f"helper:{j.name}").id] if _motorised(j.kind) else -1 for j in world.joints],
+            [
+                model.jnt_dofadr[model.joint(f"helper:{j.name}").id] if m else -1
+                for j, m in zip(world.joints, motored, strict=True)
+            ],
             dtype=np.int64,
-        ),
-        friction_damping=_friction_damping(default),
+        ),  # fmt: skip
+        friction_damping=None if world.model_options else _friction_damping(default),
     )
+
+
+def _set_options(spec: Any, world: CompiledWorld, h: float) -> None:
+    """The backend's own options (ODE's semantics; docs/backends/mujoco.md)."""
+    spec.option.timestep = h
+    spec.option.gravity = list(world.gravity)
+    spec.option.integrator = mujoco.mjtIntegrator.mjINT_IMPLICITFAST
+    spec.option.cone = mujoco.mjtCone.mjCONE_ELLIPTIC
+    spec.option.tolerance = 1e-10  # motors settle to 1e-6 of their target rate (default 1e-8: 2e-4)
+    spec.option.disableflags |= mujoco.mjtDisableBit.mjDSBL_AUTORESET  # a blow-up must surface
+    spec.option.disableflags |= mujoco.mjtDisableBit.mjDSBL_FILTERPARENT  # joined pairs are excluded instead
 
 
 #: Arena (MjData's contacts, constraints and scratch stack) when MuJoCo's default cannot be allocated:
@@ -268,7 +307,7 @@ def _friction_damping(default: ContactParams) -> float | None:
     return -default.solreffriction[1] / IMPEDANCE
 
 
-def _rescale_solver(model: mujoco.MjModel, dynamic: list[str]) -> None:
+def _rescale_solver(model: mujoco.MjModel, dynamic: list[str]) -> None:  # MuJoCo body names
     """Base the solver's tolerance on the dynamic bodies' inertia, not on the heavy driven bodies.
 
     MuJoCo scales its convergence test by ``stat.meaninertia``, the mean diagonal of the mass matrix;
@@ -276,7 +315,7 @@ def _rescale_solver(model: mujoco.MjModel, dynamic: list[str]) -> None:
     """
     data = mujoco.MjData(model)
     mujoco.mj_forward(model, data)
-    ids = [model.body(f"body:{name}").id for name in dynamic]
+    ids = [model.body(name).id for name in dynamic]
     dofs = np.flatnonzero(np.isin(model.dof_bodyid, ids))
     if dofs.size:
         diagonal = data.M[model.M_rowadr + model.M_rownnz - 1]  # CSR rows end on the diagonal
@@ -381,7 +420,7 @@ def _add_hull(spec: Any, name: str, shape: Shape) -> str:
     return str(mesh.name)
 
 
-def _add_motors(spec: Any, world: CompiledWorld, heavy: float, h: float) -> None:
+def _add_motors(spec: Any, world: CompiledWorld, heavy: float, h: float, names: _native.Names) -> None:
     """ODE's velocity motor as a bounded velocity constraint: a tendon's frictionloss row.
 
     The tendon measures the joint's rate minus the rate of a heavy helper slide whose velocity the
@@ -391,42 +430,18 @@ def _add_motors(spec: Any, world: CompiledWorld, heavy: float, h: float) -> None
     MuJoCo drops a clamped actuator's implicit damping, so the step that crosses the target overshoots.
     """
     for joint in world.joints:
-        if not _motorised(joint.kind):
+        if not (_motorised(joint.kind) and names.has_motor(joint)):
             continue
         helper = spec.worldbody.add_body(name=f"motor:{joint.name}", mass=heavy, inertia=[heavy] * 3)
         helper.explicitinertial, helper.gravcomp = True, 1.0
         helper.ipos, helper.iquat = [0.0, 0.0, 0.0], [1.0, 0.0, 0.0, 0.0]
         helper.add_joint(name=f"helper:{joint.name}", type=mujoco.mjtJoint.mjJNT_SLIDE, axis=[1.0, 0.0, 0.0])
         tendon = spec.add_tendon(name=f"motor:{joint.name}")
-        tendon.wrap_joint(f"joint:{joint.name}", 1.0)
+        tendon.wrap_joint(names.joint(joint.name), 1.0)
         tendon.wrap_joint(f"helper:{joint.name}", -1.0)
         tendon.solref_friction = [-1.0, -1.0 / h]  # the rate error is removed in one step
         tendon.solimp_friction = [MOTOR_IMPEDANCE, MOTOR_IMPEDANCE, 0.001, 0.5, 2.0]
         tendon.frictionloss = 0.0  # fmax; the backend sets it (0: off)
-
-
-def _touch(a: str, b: str, group: dict[str, str], moving: set[str]) -> bool:
-    """Whether MuJoCo's filtering lets bodies ``a`` and ``b`` collide (before excludes): different rigid
-    groups (MuJoCo's weld bodies), one of them moving freely (contype bits)."""
-    return group[a] != group[b] and bool({group[a], group[b]} & moving)
-
-
-def _excluded(world: CompiledWorld) -> list[tuple[str, str]]:
-    """The body pairs that never touch, in order, once each: joined bodies (ODE programs skip connected
-    bodies), then ``CompiledWorld.excluded_pairs`` (a model's adjacent links, the scenario's exclusions)."""
-    pairs = [(j.body, j.other) for j in world.joints if j.other is not None]
-    pairs += list(world.excluded_pairs)
-    unique: dict[frozenset[str], tuple[str, str]] = {}
-    for a, b in pairs:
-        unique.setdefault(frozenset((a, b)), (a, b))
-    return list(unique.values())
-
-
-def _add_excludes(spec: Any, world: CompiledWorld, group: dict[str, str], moving: set[str]) -> None:
-    """A MuJoCo ``<exclude>`` (a body pair) for each excluded pair that MuJoCo's filtering would let touch."""
-    for a, b in _excluded(world):
-        if a != b and _touch(a, b, group, moving):
-            spec.add_exclude(bodyname1=f"body:{a}", bodyname2=f"body:{b}")
 
 
 def _add_pairs(
@@ -444,7 +459,7 @@ def _add_pairs(
     A pair overrides MuJoCo's filtering and its own geom pair (MuJoCo merges the two), so it is made only
     where the bodies could touch: not both driven, not one rigid group, not joined or excluded.
     """
-    excluded = {frozenset(pair) for pair in _excluded(world)}
+    skip = {frozenset(pair) for pair in excluded(world)}
     order = {b.name: i for i, b in enumerate(world.bodies)}
     seen: set[frozenset[str]] = set()
     for pair in world.pair_surfaces:  # the first one naming a pair is the pair's (CompiledWorld.surface)
@@ -453,7 +468,7 @@ def _add_pairs(
         if key in seen:
             continue
         seen.add(key)
-        if a == b or key in excluded or not _touch(a, b, group, moving):
+        if a == b or key in skip or not touch(a, b, group, moving):
             continue
         params = contact_params(pair.surface, h, opts)
         if params == default:

@@ -19,7 +19,18 @@ from panda3d.core import Quat as PandaQuat
 from .._kit import BackendOptions, KinematicPose, SubstepContacts, SubstepMean, substep_times
 from .._kit.stacks import stacks
 from ..base import Backend
-from ..types import BodyStates, Capability, Contact, JointKind, JointStates, Motion, Precision, Quat, Vec3
+from ..types import (
+    MODEL_FILE_CAPABILITIES,
+    BodyStates,
+    Capability,
+    Contact,
+    JointKind,
+    JointStates,
+    Motion,
+    Precision,
+    Quat,
+    Vec3,
+)
 from . import _native
 from ._build import JointHandle, axis_arg, build_scene, destroy_scene, panda_quat, set_motor
 from ._contacts import Collider
@@ -61,7 +72,8 @@ class OdeBackend(Backend):
 
     name = "ode"
     engine_distribution = "panda3d"
-    capabilities = frozenset(Capability)
+    #: everything but what only an engine building a robot from its model file runs (MJCF on MuJoCo)
+    capabilities = frozenset(Capability) - MODEL_FILE_CAPABILITIES
     #: panda3d builds ODE with dSINGLE: every state is a float32 (dGetConfiguration says "ODE_single_precision")
     precision = Precision.FLOAT32
     Options: ClassVar[type[BackendOptions]] = OdeOptions

@@ -14,7 +14,19 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 
 from backends.geometry import IDENTITY, quat_mul, quat_rotate
-from backends.types import BodySpec, JointKind, JointSpec, Motion, Motor, PairSurface, Shape, ShapeKind, Surface
+from backends.types import (
+    BodySpec,
+    Capability,
+    JointKind,
+    JointSpec,
+    ModelFile,
+    Motion,
+    Motor,
+    PairSurface,
+    Shape,
+    ShapeKind,
+    Surface,
+)
 from runner.language.hpr import hpr_to_quat
 from runner.language.model import Scenario
 from runner.language.model_physics import Limits
@@ -32,6 +44,7 @@ class RobotParts:
     excluded: tuple[tuple[str, str], ...]
     surfaces: tuple[PairSurface, ...]  # link overrides: (link, other body) for every other body
     groups: dict[str, list[str]]  # robot -> its links' body names
+    models: tuple[ModelFile, ...] = ()  # the MJCF robots, for an engine that builds them from the file
 
 
 def _placement(robot: Robot) -> tuple[tuple[float, float, float], tuple[float, float, float, float]]:
@@ -120,6 +133,7 @@ def compile_robots(
     excluded: list[tuple[str, str]] = []
     link_surfaces: list[tuple[str, Surface]] = []
     group: dict[str, list[str]] = {}
+    models: list[ModelFile] = []
     for name, robot in model.robots.items():
         desc = robots[name]
         for link in desc.links:
@@ -132,12 +146,16 @@ def compile_robots(
         for joint in desc.joints:
             if joint.kind == "free":  # no joint: the body touches its parent (MuJoCo: the world) as any other
                 continue
-            excluded.append((f"{name}.{joint.parent}", f"{name}.{joint.child}"))
+            if not (robot.format == "mjcf" and joint.parent == desc.root):  # MuJoCo: the world is no parent
+                excluded.append((f"{name}.{joint.parent}", f"{name}.{joint.child}"))
             joints.append(_joint(name, robot, desc, joint))
         excluded.extend((f"{name}.{a}", f"{name}.{b}") for a, b in robot.exclude)
         if not robot.collides_with_itself:  # pybullet's default for URDF: no two links of the model touch
             links = group[name]
             excluded.extend((a, b) for i, a in enumerate(links) for b in links[i + 1 :])
+        excluded.extend((f"{name}.{a}", f"{name}.{b}") for a, b in desc.excluded)
+        if robot.format == "mjcf":
+            models.append(model_file(name, robot, desc))
     members = {**arrays, **group}
     for a, b in model.exclude_contacts:
         for x in members.get(a, [a]):
@@ -145,4 +163,21 @@ def compile_robots(
     everyone = list(others) + [b.name for b in bodies]
     surfaces = tuple(PairSurface(link, other, s) for link, s in link_surfaces for other in everyone if other != link)
     unique = tuple(dict.fromkeys((a, b) if a <= b else (b, a) for a, b in excluded))
-    return RobotParts(tuple(bodies), tuple(joints), unique, surfaces, group)
+    return RobotParts(tuple(bodies), tuple(joints), unique, surfaces, group, tuple(models))
+
+
+def model_file(name: str, robot: Robot, desc: ModelDesc) -> ModelFile:
+    """An MJCF robot as its file: the description's links and joints are in MuJoCo's compiled order, welds
+    (a body without a joint, `<body>_weld`, the description's only fixed joints) aside."""
+    pos, quat = _placement(robot)
+    joints = tuple(f"{name}.{j.name}" for j in desc.joints if j.kind != "fixed")  # MJCF has no fixed joints
+    return ModelFile(
+        robot=name,
+        path=desc.file,
+        format=robot.format,
+        pos=pos,
+        quat=quat,
+        bodies=tuple(f"{name}.{link.name}" for link in desc.links),
+        joints=joints,
+        needs=frozenset(Capability(n.capability) for n in desc.needs),
+    )

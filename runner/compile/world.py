@@ -206,4 +206,6 @@ def compile_world(model: Scenario, name: str, robots: Mapping[str, ModelDesc] | 
         pair_surfaces=tuple(pairs),
         backend_options={k: dict(v) for k, v in model.backend_options.items()},
         excluded_pairs=parts.excluded,
+        models=parts.models,
+        model_options=model.world.options == "model",
     )

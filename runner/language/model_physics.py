@@ -25,6 +25,13 @@ class World(Strict):
     dt: PositiveFloat = Field(description="The scenario step in seconds (the lab uses 0.04).")
     duration: PositiveFloat = Field(description="Simulated seconds to run.")
     substeps: Annotated[int, Field(ge=1, le=1000)] = Field(1, description="Physics steps per scenario step.")
+    options: Literal["scenario", "model"] = Field(
+        "scenario",
+        description="`model`: an MJCF robot's own `<option>` rules (its step, gravity, integrator, solver and "
+        "its geoms' contact parameters; MuJoCo steps it with its own mj_step), as MuJoCo runs the file; `dt` / "
+        "`substeps` and `gravity` must equal the model's (docs/robots.md). `scenario`: the scenario's "
+        "semantics (ODE's), the default.",
+    )
     budget: PositiveFloat | None = Field(
         None,
         description="Wall-clock seconds a run may take, building the world included (default: the command's "

@@ -67,13 +67,33 @@ class LinkDesc:
 @dataclass(frozen=True)
 class JointDesc:
     name: str
-    kind: str  # hinge | slider | fixed
+    kind: str  # hinge | slider | fixed | ball | free (MJCF: a free body)
     parent: str
     child: str
     axis: Vec3  # unit, model frame, at the zero configuration
     anchor: Vec3  # model frame: the child's frame origin
     lo: float | None  # from the zero configuration
     hi: float | None
+    line: int
+
+
+@dataclass(frozen=True)
+class ModelNeed:
+    """Something in a model file only an engine that builds the robot from the file itself runs (MuJoCo for
+    MJCF): the capability it needs (``backends.types.Capability`` value), what it is, and its line."""
+
+    capability: str
+    what: str
+    line: int
+
+
+@dataclass(frozen=True)
+class ActuatorDesc:
+    """An actuator the model declares (MJCF `<actuator>`): the robot's controllable joints."""
+
+    name: str
+    kind: str  # motor | position | velocity | general
+    joint: str | None  # the joint it drives (None: a tendon, site or body transmission)
     line: int
 
 
@@ -85,6 +105,14 @@ class ModelDesc:
     joints: tuple[JointDesc, ...]
     #: what the loader decided that the file left open (a joint started inside its limits, ...), for the user
     notes: tuple[str, ...] = ()
+    #: what only an engine reading the file itself runs (MJCF; runner.language.mjcf)
+    needs: tuple[ModelNeed, ...] = ()
+    actuators: tuple[ActuatorDesc, ...] = ()
+    #: link pairs the model never lets touch (MJCF contype/conaffinity and `<exclude>`)
+    excluded: tuple[tuple[str, str], ...] = ()
+    #: the model's own step and gravity (MJCF `<option>`), for `world.options: model`
+    timestep: float | None = None
+    gravity: Vec3 | None = None
 
     def link(self, name: str) -> LinkDesc:
         return next(link for link in self.links if link.name == name)

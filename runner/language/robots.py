@@ -105,8 +105,8 @@ def load_robots(model: Scenario, positions: Positions, base_dir: FsPath) -> dict
                     f"root link `{root.name}` has no mass; a free model needs one (or `fixed: true`)",
                 )
             )
-        for link in desc.links:
-            if link.name != desc.root and link.mass <= 0:
+        for link in desc.links:  # MJCF: MuJoCo's compiler judged the masses; a massless one is a need (mjcf.py)
+            if link.name != desc.root and link.mass <= 0 and robot.format == "urdf":
                 issues.append(
                     Issue(
                         desc.file,
@@ -116,6 +116,32 @@ def load_robots(model: Scenario, positions: Positions, base_dir: FsPath) -> dict
                         f"link `{link.name}` has no mass (no <inertial> or mass 0); a moving link needs one",
                     )
                 )
+    issues.extend(model_options_issues(model, positions, out))
     if issues:
         raise ScenarioValidationError(issues)
     return out
+
+
+def model_options_issues(model: Scenario, positions: Positions, descs: dict[str, ModelDesc]) -> list[Issue]:
+    """`world.options: model` needs one MJCF robot whose `<option>` timestep is the scenario's engine step
+    (dt / substeps) and whose gravity is the scenario's: the scenario states them (its times are read with
+    them), the check keeps the two from disagreeing."""
+    if model.world.options != "model":
+        return []
+    where = ("world", "options")
+    mjcf = [(name, descs[name]) for name, robot in model.robots.items() if robot.format == "mjcf" and name in descs]
+    if len(mjcf) != 1 or len(model.robots) != 1:
+        return [positions.issue(where, f"`options: model` takes the options of one MJCF robot; found "
+                                f"{len(mjcf)} MJCF and {len(model.robots) - len(mjcf)} other robots")]  # fmt: skip
+    _, desc = mjcf[0]
+    issues = []
+    step = model.world.dt / model.world.substeps
+    if desc.timestep is not None and abs(step - desc.timestep) > 1e-12 * desc.timestep:
+        issues.append(positions.issue(("world", "dt"), f"with `options: model` the engine step dt / substeps "
+                                      f"({step:g} s) must be the model's timestep {desc.timestep:g} s"))  # fmt: skip
+    if desc.gravity is not None and any(
+        abs(a - b) > 1e-12 for a, b in zip(model.world.gravity, desc.gravity, strict=True)
+    ):
+        issues.append(positions.issue(("world", "gravity"), f"with `options: model` gravity must be the "
+                                      f"model's {list(desc.gravity)}; found {list(model.world.gravity)}"))  # fmt: skip
+    return issues

@@ -232,20 +232,6 @@ def test_mjcf_model_through_mujoco() -> None:
     assert not world.joints and not world.excluded_pairs  # a free joint is no joint, and the box meets the floor
 
 
-def test_mjcf_beyond_the_subset_is_refused_at_its_line(tmp_path: Path) -> None:
-    text = (DATA / "mjcf" / "inverted_pendulum.xml").read_text()
-    (tmp_path / "m.xml").write_text(text)
-    path = tmp_path / "s.yaml"
-    path.write_text(
-        "schema_version: 1\nscenario: t\nworld: {dt: 0.01, duration: 1}\nbodies:\n"
-        "  floor: {plane: {}, motion: static}\nrobots:\n  p: {mjcf: m.xml}\n"
-    )
-    file, line, message = _issue(path)
-    assert (
-        file.endswith("m.xml") and line == _line_of(text, "<tendon") and "<tendon> is beyond the MJCF subset" in message
-    )
-
-
 @pytest.mark.parametrize(
     ("extra", "top", "found"),
     [

@@ -1,0 +1,155 @@
+"""MJCF read as MuJoCo reads it (issue 28, item 2): what MuJoCo accepts loads; what only MuJoCo runs is
+listed as the capabilities the model needs, so another engine refuses it before the run (exit 2, the
+feature and the engine named); a file MuJoCo refuses is refused at MuJoCo's line."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from backends.types import MODEL_FILE_CAPABILITIES, Capability, ShapeKind
+from runner.compile.program import build_program
+from runner.errors import ScenarioValidationError
+from runner.language.load import load_scenario
+from tests.paths import ROOT
+
+pytest.importorskip("mujoco", reason="reading MJCF needs MuJoCo's compiler (the `mujoco` extra)")
+DATA = Path(__import__("pybullet_data").getDataPath()) / "mjcf"
+
+
+def _scenario(folder: Path, model: str, text: str | None = None, world: str = "") -> Path:
+    xml = folder / f"{model}.xml"
+    xml.write_text(text if text is not None else (DATA / f"{model}.xml").read_text())
+    path = folder / f"{model}.yaml"
+    path.write_text(
+        f"schema_version: 1\nscenario: t\nworld: {{dt: 0.01, duration: 0.2{world}}}\nbodies:\n"
+        "  marker: {box: [0.05, 0.05, 0.05], motion: static, pos: [50, 50, 0]}\n"
+        f"robots:\n  r: {{mjcf: {model}.xml}}\n"
+    )
+    return path
+
+
+def _run(path: Path, backend: str) -> subprocess.CompletedProcess[str]:
+    command = [sys.executable, "-m", "runner", "run", str(path), "-b", backend, "--no-trace", "-q"]
+    return subprocess.run(command, cwd=ROOT, capture_output=True, text=True, timeout=300, check=False)
+
+
+def test_actuators_and_damping_load_and_are_listed(tmp_path: Path) -> None:
+    loaded = load_scenario(_scenario(tmp_path, "inverted_pendulum"))  # `<custom>`-free, `<default>`s, RK4
+    desc = loaded.robots["r"]
+    assert [n.capability for n in desc.needs] == ["joint:dynamics"]  # damping="1" from the default class
+    assert [(a.name, a.kind, a.joint) for a in desc.actuators] == [("slide", "motor", "slider")]
+    assert desc.timestep == 0.02 and desc.gravity == (0.0, 0.0, -9.81)
+    world = build_program(loaded).world
+    assert world.models[0].needs == {Capability.JOINT_DYNAMICS}
+    assert world.required_capabilities() & MODEL_FILE_CAPABILITIES == world.models[0].needs
+
+
+CONSTRAINED = """<mujoco>
+  <worldbody>
+    <body name="a" pos="0 0 1">
+      <joint name="ja" type="hinge" axis="0 1 0"/>
+      <geom type="capsule" fromto="0 0 0 .3 0 0" size=".02"/>
+      <body name="b" pos=".3 0 0">
+        <joint name="jb" type="hinge" axis="0 1 0"/>
+        <geom type="capsule" fromto="0 0 0 .3 0 0" size=".02"/>
+      </body>
+    </body>
+  </worldbody>
+  <tendon>
+    <fixed name="t" limited="true" range="-.5 .5"><joint joint="ja" coef="1"/><joint joint="jb" coef="1"/></fixed>
+  </tendon>
+  <equality><joint joint1="jb" joint2="ja" polycoef="0 .5 0 0 0"/></equality>
+  <sensor><jointpos joint="ja"/></sensor>
+  <custom><numeric name="n" data="1"/></custom>
+</mujoco>
+"""
+
+
+def test_tendons_and_equality_run_on_mujoco_and_are_refused_up_front_elsewhere(tmp_path: Path) -> None:
+    path = _scenario(tmp_path, "constrained", CONSTRAINED)
+    desc = load_scenario(path).robots["r"]
+    assert [n.capability for n in desc.needs] == ["constraint:equality", "constraint:tendon"]
+    assert (
+        desc.needs[0].line
+        == CONSTRAINED.splitlines().index(
+            '  <equality><joint joint1="jb" joint2="ja" polycoef="0 .5 0 0 0"/></equality>'
+        )
+        + 1
+    )
+    ran = _run(path, "mujoco")
+    assert ran.returncode == 0, ran.stderr
+    refused = _run(path, "pybullet")
+    assert refused.returncode == 2
+    assert "constraint:equality, constraint:tendon" in refused.stderr and "`pybullet`" in refused.stderr
+
+
+SEVERAL = """<mujoco>
+  <compiler angle="degree"/>
+  <worldbody>
+    <geom name="floor" type="plane" size="5 5 .1"/>
+    <body name="torso" pos="0 0 1">
+      <joint name="x" type="slide" axis="1 0 0"/>
+      <joint name="z" type="slide" axis="0 0 1"/>
+      <joint name="pitch" type="hinge" axis="0 1 0" range="-30 30"/>
+      <geom type="ellipsoid" size=".2 .1 .05"/>
+      <geom type="sphere" size=".05" contype="0" conaffinity="0"/>
+    </body>
+  </worldbody>
+</mujoco>
+"""
+
+
+def test_several_joints_per_body_ellipsoids_and_visual_geoms(tmp_path: Path) -> None:
+    desc = load_scenario(_scenario(tmp_path, "several", SEVERAL)).robots["r"]
+    kinds = {j.name: (j.kind, j.parent, j.child) for j in desc.joints}
+    assert kinds == {n: (k, "worldbody", "torso") for n, k in (("x", "slider"), ("z", "slider"), ("pitch", "hinge"))}
+    pitch = next(j for j in desc.joints if j.name == "pitch")
+    assert pitch.lo == pytest.approx(-0.5235987755982988, abs=1e-15)  # 30 degrees, converted by MuJoCo
+    (shape,) = desc.link("torso").shapes  # the visual sphere (contype = conaffinity = 0) is not a collision shape
+    assert shape.shape.kind is ShapeKind.CONVEX and shape.shape.mesh is not None
+    radii = [max(abs(v[k]) for v in shape.shape.mesh.vertices) for k in range(3)]
+    assert radii == pytest.approx([0.2, 0.1, 0.05], abs=1e-12)  # the hull's vertices lie on the ellipsoid
+    assert [n.capability for n in desc.needs] == ["joint:several-per-body"]
+    assert _run(tmp_path / "several.yaml", "mujoco").returncode == 0
+    refused = _run(tmp_path / "several.yaml", "ode")
+    assert refused.returncode == 2 and "joint:several-per-body" in refused.stderr and "`ode`" in refused.stderr
+
+
+def test_a_file_mujoco_refuses_is_refused_at_mujocos_line(tmp_path: Path) -> None:
+    path = _scenario(tmp_path, "hopper")  # pybullet_data's hopper uses `coordinate="global"`, dropped by MuJoCo
+    with pytest.raises(ScenarioValidationError) as caught:
+        load_scenario(path)
+    issue = caught.value.issues[0]
+    assert issue.file == str(tmp_path / "hopper.xml") and issue.line == 2 and "global coordinates" in issue.message
+
+
+def test_options_model_needs_the_models_step_and_gravity(tmp_path: Path) -> None:
+    path = _scenario(tmp_path, "inverted_pendulum", world=", options: model")  # the model's timestep: 0.02
+    with pytest.raises(ScenarioValidationError) as caught:
+        load_scenario(path)
+    assert "dt / substeps (0.01 s) must be the model's timestep 0.02 s" in caught.value.issues[0].message
+    path.write_text(path.read_text().replace("dt: 0.01", "dt: 0.02"))
+    assert load_scenario(path).model.world.options == "model"
+
+
+def test_a_placed_robot_starts_where_the_description_puts_it_on_mujoco(tmp_path: Path) -> None:
+    """MuJoCo builds the robot from its file in a frame at `pos`/`hpr`: its bodies start at the poses the
+    compiled world gives them (the description's forward kinematics moved by the placement), to rounding."""
+    import numpy as np
+
+    from backends.registry import create_backend
+
+    path = _scenario(tmp_path, "several", SEVERAL)
+    path.write_text(
+        path.read_text().replace("mjcf: several.xml}", "mjcf: several.xml, pos: [1, 2, 0.5], hpr: [30, 20, 10]}")
+    )
+    world = build_program(load_scenario(path)).world
+    with create_backend("mujoco", world) as sim:
+        states = sim.body_states()
+        for i, body in enumerate(world.bodies):
+            assert np.allclose(states.pos[i], body.pos, rtol=0, atol=1e-12), body.name
+            assert np.allclose(states.quat[i], body.quat, rtol=0, atol=1e-12), body.name
