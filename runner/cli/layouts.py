@@ -19,7 +19,7 @@ from rich.console import Console
 from rich.markup import escape
 
 from backends.types import JointKind, Motion, Shape, ShapeKind
-from reports.trace_format import LAYOUT_FILE, TOPIC_BODIES, TOPIC_JOINTS, TOPIC_TF, parts_by_topic
+from reports.trace_format import LAYOUT_FILE, TOPIC_BODIES, TOPIC_JOINTS, TOPIC_TF, parts_by_topic, scenario_layout_file
 from runner.compile.asserted import asserted_quantities
 from runner.compile.program import Program, build_program
 from runner.errors import TraceError
@@ -127,15 +127,25 @@ def _number(value: object) -> bool:
 
 
 def write_layouts(folders: Iterable[Path], cases: Sequence[LoadedScenario]) -> None:
-    """``foxglove-layout.json`` in each folder that received these cases' traces. A write that fails is an
+    """In each folder that received these cases' traces: ``foxglove-layout.json`` for all of them, and
+    ``<scenario>.foxglove-layout.json`` for each scenario (its variants together), which a later command
+    writing other scenarios into the folder leaves alone. A write that fails is an
     :class:`~runner.errors.OutputError` (a full disk, exit 74) or a :class:`~runner.errors.TraceError`
     (a folder that cannot be used, exit 2), and leaves no file behind."""
-    spec = layout_spec(cases)
+    by_scenario: dict[str, list[LoadedScenario]] = {}
+    for case in cases:
+        by_scenario.setdefault(case.model.scenario, []).append(case)
+    own = {name: layout_spec(scenario_cases) for name, scenario_cases in by_scenario.items()}  # each built once
+    every = lt.LayoutSpec([p for s in own.values() for p in s.plots],
+                          list(dict.fromkeys(t for s in own.values() for t in s.transitions)),
+                          [b for s in own.values() for b in s.spheres])  # fmt: skip
+    specs = [(LAYOUT_FILE, every), *((scenario_layout_file(name), spec) for name, spec in own.items())]
     for folder in dict.fromkeys(folders):
-        try:
-            lt.write_layout(folder, spec)
-        except OSError as exc:
-            raise write_error(exc, str(folder / LAYOUT_FILE)) from None
+        for name, spec in specs:
+            try:
+                lt.write_layout(folder, spec, name)
+            except OSError as exc:
+                raise write_error(exc, str(folder / name)) from None
 
 
 def leave_layout(err: Console, folders: Iterable[Path], cases: Sequence[LoadedScenario], code: int) -> int:

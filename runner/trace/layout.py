@@ -155,10 +155,10 @@ def layout_text(spec: LayoutSpec) -> str:
     return json.dumps(layout(spec), indent=2, ensure_ascii=False) + "\n"
 
 
-def write_layout(folder: Path, spec: LayoutSpec) -> Path:
-    """Write ``folder/foxglove-layout.json`` (atomically: a reader never sees half a file)."""
+def write_layout(folder: Path, spec: LayoutSpec, name: str = tf.LAYOUT_FILE) -> Path:
+    """Write ``folder/<name>`` (default ``foxglove-layout.json``; atomically: a reader never sees half a file)."""
     folder.mkdir(parents=True, exist_ok=True)
-    target = folder / tf.LAYOUT_FILE
+    target = folder / name
     tmp = target.with_name(f".{target.name}.{os.getpid()}.partial")
     try:
         tmp.write_text(layout_text(spec), encoding="utf-8")
