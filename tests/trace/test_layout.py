@@ -101,3 +101,14 @@ def test_scenario_layout_prints_or_writes_it_and_run_writes_it_beside_the_traces
     (tmp_path / "file").write_text("not a folder")
     bad = _cli("layout", "scenarios/factory_intervals.yaml", "--out", str(tmp_path / "file"))
     assert bad.returncode == 2 and "cannot write" in bad.stderr and "Traceback" not in bad.stderr
+
+
+def test_two_scenarios_run_into_one_folder_keep_both_layouts(tmp_path: Path) -> None:
+    for file in ("scenarios/factory_intervals.yaml", "scenarios/box_pile.yaml"):
+        done = _cli("run", file, "--out", str(tmp_path), "--quiet")
+        assert done.returncode == 0, done.stderr
+    for name, file in (("factory-intervals", "factory_intervals.yaml"), ("box-pile", "box_pile.yaml")):
+        own = json.loads((tmp_path / tf.scenario_layout_file(name)).read_text())
+        assert own == layout(layout_spec(load_files([ROOT / "scenarios" / file], None, False))), name
+    combined = json.loads((tmp_path / tf.LAYOUT_FILE).read_text())  # the last command's scenarios
+    assert combined == layout(layout_spec(load_files([ROOT / "scenarios" / "box_pile.yaml"], None, False)))
