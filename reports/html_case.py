@@ -226,6 +226,7 @@ def replay_html(case: dict[str, Any], pictures: CasePictures, index: int) -> str
         f'<div class="replay" id="replay-{index}" data-sheet="data:image/png;base64,{sheet}">'
         f'<div class="panels">{labels}</div><canvas width="{width}" height="{HEIGHT}"></canvas>'
         f'<div class="controls"><button class="play">▶ play</button>'
+        f'<button class="wide" aria-pressed="false" title="show the replay as wide as the page">⤢ full width</button>'
         f'<input type="range" min="0" max="{len(r.times) - 1}" step="1" value="0" aria-label="time">'
         f'<span class="clock">t = 0.00 s</span><span class="muted">moments:</span>{moments}</div>'
         f'<script type="application/json" class="replay-data">{text}</script></div>'

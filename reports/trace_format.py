@@ -42,6 +42,13 @@ PARTIAL_SUFFIX: Final = ".partial"  # appended to the final name while writing
 #: the Foxglove layout written beside the traces (runner/trace/layout.py)
 LAYOUT_FILE: Final = "foxglove-layout.json"
 
+
+def scenario_layout_file(scenario: str) -> str:
+    """The layout of one scenario, beside the command's combined one: ``<scenario>.foxglove-layout.json``
+    (another scenario run into the same folder never replaces it)."""
+    return f"{scenario}.{LAYOUT_FILE}"
+
+
 #: encodings
 SCHEMA_ENCODING: Final = "protobuf"
 MESSAGE_ENCODING: Final = "protobuf"

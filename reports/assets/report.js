@@ -62,6 +62,12 @@ class Replay {
     this.sheet = null;
     this.slider.addEventListener("input", () => this.load().then(() => this.show(Number(this.slider.value))));
     this.button.addEventListener("click", () => this.load().then(() => this.toggle()));
+    const wide = el.querySelector("button.wide");
+    if (wide) wide.addEventListener("click", () => {  // the frames scaled to the page's width, and back
+      const on = el.classList.toggle("wide");
+      wide.textContent = on ? "⤡ actual size" : "⤢ full width";
+      wide.setAttribute("aria-pressed", String(on));
+    });
     el.querySelectorAll("button.moment").forEach((b) => b.addEventListener("click", () =>
       this.load().then(() => { this.stop(); this.show(this.nearest(Number(b.dataset.t))); })));
     const details = el.closest("details");

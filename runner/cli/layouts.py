@@ -1,46 +1,46 @@
 """The Foxglove layout for the scenarios a command ran: which message paths their assertions read.
 
-Each assertion's expression names quantities (``box.pos.z``, ``slider.position``, ``state.door_open``,
-``max(crate.pos.z)``, ``contact(box, door)``); each becomes the message path Foxglove plots it by
-(:mod:`runner.trace.layout`). An array's name stands for its first copies. A body's height is always
-among the plots, so the Plot panel has a body's z even when no assertion reads one.
+The quantities the assertions read (:func:`runner.compile.asserted.asserted_quantities`: ``box.pos.z``,
+``crate_4.pos.z`` for every copy of an array, a robot's ``arm.link_7.pos.x`` and ``arm.joint_2.position``,
+``state.door_open``, ``contact(box, door)``) each become the message paths Foxglove plots them by
+(:mod:`runner.trace.layout`), with their unit, so that the layout groups them into one plot per unit. A body's
+speed is plotted as its velocity's three components (Foxglove plots fields, not norms). A body's height is
+always among the plots, so the metres plot has a body's z even when no assertion reads one.
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Iterable, Mapping, Sequence
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
 from rich.console import Console
 from rich.markup import escape
 
-from backends.types import Motion, Shape, ShapeKind
-from reports.trace_format import LAYOUT_FILE, TOPIC_BODIES, TOPIC_JOINTS, TOPIC_TF, parts_by_topic
+from backends.types import JointKind, Motion, Shape, ShapeKind
+from reports.trace_format import LAYOUT_FILE, TOPIC_BODIES, TOPIC_JOINTS, TOPIC_TF, parts_by_topic, scenario_layout_file
+from runner.compile.asserted import asserted_quantities
 from runner.compile.program import Program, build_program
 from runner.errors import TraceError
 from runner.exec.exits import classify, most_severe
-from runner.language import model_assertions as A
-from runner.language.expressions import compile_expression
 from runner.language.load import LoadedScenario
 from runner.trace import layout as lt
 from runner.trace.output import write_error
 
 __all__ = ["layout_spec", "leave_layout", "write_layouts"]
 
-_EXPRESSION_FIELDS = ("value", "check", "always", "never", "eventually", "max_of", "min_of")
-_GROUP_MEMBERS = 3  # an array's name plots its first copies
+_BODY_UNITS = {"pos": "m", "vel": "m/s", "angvel": "rad/s", "quat": "1"}
 
 
 @dataclass(frozen=True)
 class _Names:
     """What a scenario's names plot as, worked out once per scenario: the part of /bodies or /joints that
-    holds each body and joint (/bodies/2 ... beyond 8,000), and the arrays' copies."""
+    holds each body and joint (/bodies/2 ... beyond 8,000), and each joint's kind."""
 
     bodies: dict[str, str]
     joints: dict[str, str]
-    groups: Mapping[str, list[str]]
+    kinds: dict[str, JointKind]
 
     @classmethod
     def of(cls, program: Program) -> _Names:
@@ -48,41 +48,37 @@ class _Names:
             return {name: t for t, (_, part) in parts_by_topic(topic, names).items() for name in part}
 
         return cls(topics(TOPIC_BODIES, [b.name for b in program.world.bodies]),
-                   topics(TOPIC_JOINTS, [j.name for j in program.world.joints]), program.groups)  # fmt: skip
+                   topics(TOPIC_JOINTS, [j.name for j in program.world.joints]),
+                   {j.name: j.kind for j in program.world.joints})  # fmt: skip
 
 
-def _quantity(name: str, names: _Names) -> list[lt.PlotPath]:
-    """The plot paths of one dotted name (nothing for time, parameters and unknown names)."""
-    bodies, joints = names.bodies, names.joints
-    head, _, rest = name.partition(".")
-    if head == "state" and rest:
-        return [lt.PlotPath(lt.state_path(rest), name)]
-    if head in joints and rest in ("position", "velocity", "force"):
-        return [lt.PlotPath(lt.joint_path(head, rest, joints[head]), name)]
-    members = [head] if head in bodies else names.groups.get(head, [])[:_GROUP_MEMBERS]
-    field, _, component = rest.partition(".")
-    out = []
-    for body in members:
-        if field == "speed":
-            out += [lt.PlotPath(lt.body_path(body, "vel", c, bodies[body]), f"{body}.vel.{c}") for c in "xyz"]
-        elif field in ("pos", "vel", "angvel", "quat"):
-            comps = [component] if component else ("wxyz" if field == "quat" else "xyz")
-            out += [lt.PlotPath(lt.body_path(body, field, c, bodies[body]), f"{body}.{field}.{c}") for c in comps]
-    return out
+def _joint_unit(kind: JointKind | None, field: str) -> str:
+    linear = kind is JointKind.SLIDER
+    if field == "position":
+        return "m" if linear else "rad"
+    if field == "velocity":
+        return "m/s" if linear else "rad/s"
+    return "N" if linear else "N·m"
 
 
-def _assertion_paths(assertion: object, names: _Names) -> list[lt.PlotPath]:
-    if isinstance(assertion, A.ContactAssertion):
-        a, b = assertion.contact
-        return [lt.PlotPath(f'/contacts.pairs[:]{{a=="{x}"}}{{b=="{y}"}}.normal_force', f"contact {x}-{y} force")
+def _paths(quantity: str, names: _Names) -> list[lt.PlotPath]:
+    """The plot paths of one asserted quantity (none for a body's energy: no field holds it)."""
+    if quantity.startswith("contact(") and quantity.endswith(")"):
+        a, _, b = quantity[len("contact(") : -1].partition(", ")
+        return [lt.PlotPath(f'/contacts.pairs[:]{{a=="{x}"}}{{b=="{y}"}}.normal_force', f"contact {x}-{y} force", "N")
                 for x, y in ((a, b), (b, a))]  # fmt: skip
-    out = []
-    for field in _EXPRESSION_FIELDS:
-        text = getattr(assertion, field, None)
-        if isinstance(text, str):
-            for name in sorted(compile_expression(text).names):
-                out += _quantity(name, names)
-    return out
+    head, _, field = quantity.rpartition(".")
+    if head == "state":
+        return [lt.PlotPath(lt.state_path(field), quantity, "1")]
+    if head in names.joints:
+        unit = _joint_unit(names.kinds.get(head), field)
+        return [lt.PlotPath(lt.joint_path(head, field, names.joints[head]), quantity, unit)]
+    if field == "speed" and head in names.bodies:
+        return [lt.PlotPath(lt.body_path(head, "vel", c, names.bodies[head]), f"{head}.vel.{c}", "m/s") for c in "xyz"]
+    body, _, part = head.rpartition(".")
+    if body in names.bodies and part in _BODY_UNITS:
+        return [lt.PlotPath(lt.body_path(body, part, field, names.bodies[body]), quantity, _BODY_UNITS[part])]
+    return []
 
 
 def _first_dynamic(program: Program) -> str | None:
@@ -105,12 +101,12 @@ def layout_spec(cases: Sequence[LoadedScenario]) -> lt.LayoutSpec:
         seen.add(key)
         program = build_program(case)
         names = _Names.of(program)
-        for assertion in case.model.assertions:
-            plots += _assertion_paths(assertion, names)
+        for quantity in asserted_quantities(program):
+            plots += _paths(quantity, names)
         if not any(p.value.startswith(TOPIC_TF) and p.value.endswith(".translation.z") for p in plots):
             body = _first_dynamic(program)
             if body is not None:
-                plots.append(lt.PlotPath(lt.body_path(body, "pos", "z"), f"{body}.pos.z"))
+                plots.append(lt.PlotPath(lt.body_path(body, "pos", "z"), f"{body}.pos.z", "m"))
         transitions += [lt.state_path(name) for name, value in case.model.state.items() if not _number(value)]
         spheres += [(tuple(b.pos), _radius(b.shape)) for b in program.world.bodies
                     if b.shape.kind is not ShapeKind.PLANE]  # fmt: skip
@@ -131,15 +127,25 @@ def _number(value: object) -> bool:
 
 
 def write_layouts(folders: Iterable[Path], cases: Sequence[LoadedScenario]) -> None:
-    """``foxglove-layout.json`` in each folder that received these cases' traces. A write that fails is an
+    """In each folder that received these cases' traces: ``foxglove-layout.json`` for all of them, and
+    ``<scenario>.foxglove-layout.json`` for each scenario (its variants together), which a later command
+    writing other scenarios into the folder leaves alone. A write that fails is an
     :class:`~runner.errors.OutputError` (a full disk, exit 74) or a :class:`~runner.errors.TraceError`
     (a folder that cannot be used, exit 2), and leaves no file behind."""
-    spec = layout_spec(cases)
+    by_scenario: dict[str, list[LoadedScenario]] = {}
+    for case in cases:
+        by_scenario.setdefault(case.model.scenario, []).append(case)
+    own = {name: layout_spec(scenario_cases) for name, scenario_cases in by_scenario.items()}  # each built once
+    every = lt.LayoutSpec([p for s in own.values() for p in s.plots],
+                          list(dict.fromkeys(t for s in own.values() for t in s.transitions)),
+                          [b for s in own.values() for b in s.spheres])  # fmt: skip
+    specs = [(LAYOUT_FILE, every), *((scenario_layout_file(name), spec) for name, spec in own.items())]
     for folder in dict.fromkeys(folders):
-        try:
-            lt.write_layout(folder, spec)
-        except OSError as exc:
-            raise write_error(exc, str(folder / LAYOUT_FILE)) from None
+        for name, spec in specs:
+            try:
+                lt.write_layout(folder, spec, name)
+            except OSError as exc:
+                raise write_error(exc, str(folder / name)) from None
 
 
 def leave_layout(err: Console, folders: Iterable[Path], cases: Sequence[LoadedScenario], code: int) -> int:

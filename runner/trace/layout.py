@@ -6,8 +6,9 @@ Foxglove Studio 1.48 imports and exports it; its newer releases and Lichtblick r
 * a 3D panel following ``world``: the bodies and the collision solids (/scene, frame-locked to /tf),
   the frames' labels, axes and links hidden (the settings turn them on), a neutral grid, the camera on
   the bodies' start positions;
-* a Plot of the scenario's asserted quantities (:class:`PlotPath`, from runner/cli/layouts.py), with the
-  value at the current time in the legend;
+* one Plot per unit of the scenario's asserted quantities (:class:`PlotPath`, from runner/cli/layouts.py:
+  every quantity an assertion reads, each copy of an array, no limit), metres first, with the value at the
+  current time in the legend;
 * a State Transitions panel of the events (/events ``name``) and of state variables;
 * the Log (/log: events, handler logs, sounds, each verdict when it was decided, the summary).
 
@@ -26,17 +27,21 @@ from typing import Any
 
 from reports import trace_format as tf
 
-__all__ = ["LayoutSpec", "PlotPath", "body_path", "joint_path", "layout", "state_path", "write_layout"]
+__all__ = ["PLOT_ID", "LayoutSpec", "PlotPath", "body_path", "joint_path", "layout", "state_path", "write_layout"]
 
 PANEL_TITLE = "foxglovePanelTitle"  # Foxglove's key for a panel's title in its config
 GRID_COLOR = "#9e9e9e"  # neutral grey: a body's colour stays the only colour in the scene
-MAX_PLOT_PATHS = 12
+PLOT_ID = "Plot!asserted"  # the first plot (metres); the others are Plot!asserted_<unit>
+#: a unit's part of a panel id (ids are Foxglove's `<type>!<name>`: no "/" or "·")
+UNIT_IDS = {"m": "", "m/s": "m_per_s", "rad": "rad", "rad/s": "rad_per_s", "N": "N", "N·m": "N_m", "1": "1",
+            "m or rad": "m_or_rad"}  # fmt: skip
 
 
 @dataclass(frozen=True)
 class PlotPath:
     value: str  # a Foxglove message path
     label: str = ""
+    unit: str = "m"  # plots are grouped by unit: newtons and metres never share an axis
 
 
 @dataclass(frozen=True)
@@ -85,7 +90,7 @@ def _camera(spheres: Sequence[tuple[Sequence[float], float]]) -> dict[str, Any]:
 
 def layout(spec: LayoutSpec) -> dict[str, Any]:
     """The layout (Foxglove's ``LayoutData``) for ``spec``."""
-    plots = list(dict.fromkeys(spec.plots))[:MAX_PLOT_PATHS]
+    plots = list(dict.fromkeys(spec.plots))
     three_d = {
         "followTf": tf.WORLD_FRAME, "followMode": "follow-pose", "cameraState": _camera(spec.spheres),
         "scene": {"transforms": {"showLabel": False, "axisScale": 0, "lineWidth": 0}},  # bodies, not axes
@@ -100,39 +105,60 @@ def layout(spec: LayoutSpec) -> dict[str, Any]:
         "imageMode": {},
         PANEL_TITLE: "Scene",
     }  # fmt: skip
-    plot = {
-        "paths": [{"value": p.value, "enabled": True, "timestampMethod": "receiveTime", **({"label": p.label}
-                   if p.label else {})} for p in plots],
-        "showLegend": True, "legendDisplay": "floating", "showPlotValuesInLegend": True, "showXAxisLabels": True,
-        "showYAxisLabels": True, "isSynced": True, "xAxisVal": "timestamp", "sidebarDimension": 240,
-        PANEL_TITLE: "Asserted quantities",
-    }  # fmt: skip
+    plots_by_unit: dict[str, list[PlotPath]] = {}
+    for p in sorted(plots, key=lambda p: p.unit != "m"):  # metres first (a body's height is always there)
+        plots_by_unit.setdefault(p.unit, []).append(p)
+    plot_panels = {_plot_id(unit): _plot(unit, paths) for unit, paths in plots_by_unit.items()}
+    plot_panels = plot_panels or {PLOT_ID: _plot("m", [])}
     transitions = [f"{tf.TOPIC_EVENTS}.name", *spec.transitions]
     events = {
         "paths": [{"value": p, "timestampMethod": "receiveTime"} for p in dict.fromkeys(transitions)],
         "isSynced": True, PANEL_TITLE: "Events and state",
     }  # fmt: skip
     return {
-        "configById": {"3D!scene": three_d, "Plot!asserted": plot, "StateTransitions!events": events,
+        "configById": {"3D!scene": three_d, **plot_panels, "StateTransitions!events": events,
                        "RosOut!log": {"searchTerms": [], "minLogLevel": 1, PANEL_TITLE: "Log"}},
         "globalVariables": {},
         "userNodes": {},
         "playbackConfig": {"speed": 1},
         "layout": {"direction": "row", "first": "3D!scene", "splitPercentage": 55,
-                   "second": {"direction": "column", "first": "Plot!asserted", "splitPercentage": 50,
+                   "second": {"direction": "column", "first": _stack(list(plot_panels)), "splitPercentage": 60,
                               "second": {"direction": "column", "first": "StateTransitions!events",
                                          "second": "RosOut!log", "splitPercentage": 35}}},
     }  # fmt: skip
+
+
+def _plot_id(unit: str) -> str:
+    part = UNIT_IDS.get(unit, unit)
+    return f"{PLOT_ID}_{part}" if part else PLOT_ID
+
+
+def _plot(unit: str, paths: Sequence[PlotPath]) -> dict[str, Any]:
+    return {
+        "paths": [{"value": p.value, "enabled": True, "timestampMethod": "receiveTime", **({"label": p.label}
+                   if p.label else {})} for p in paths],
+        "showLegend": True, "legendDisplay": "floating", "showPlotValuesInLegend": True, "showXAxisLabels": True,
+        "showYAxisLabels": True, "isSynced": True, "xAxisVal": "timestamp", "sidebarDimension": 240,
+        PANEL_TITLE: f"Asserted quantities ({unit})",
+    }  # fmt: skip
+
+
+def _stack(panels: Sequence[str]) -> Any:
+    """Panels one above the other, each the same height (a mosaic of column splits)."""
+    if len(panels) == 1:
+        return panels[0]
+    return {"direction": "column", "first": panels[0], "second": _stack(panels[1:]),
+            "splitPercentage": round(100 / len(panels), 3)}  # fmt: skip
 
 
 def layout_text(spec: LayoutSpec) -> str:
     return json.dumps(layout(spec), indent=2, ensure_ascii=False) + "\n"
 
 
-def write_layout(folder: Path, spec: LayoutSpec) -> Path:
-    """Write ``folder/foxglove-layout.json`` (atomically: a reader never sees half a file)."""
+def write_layout(folder: Path, spec: LayoutSpec, name: str = tf.LAYOUT_FILE) -> Path:
+    """Write ``folder/<name>`` (default ``foxglove-layout.json``; atomically: a reader never sees half a file)."""
     folder.mkdir(parents=True, exist_ok=True)
-    target = folder / tf.LAYOUT_FILE
+    target = folder / name
     tmp = target.with_name(f".{target.name}.{os.getpid()}.partial")
     try:
         tmp.write_text(layout_text(spec), encoding="utf-8")

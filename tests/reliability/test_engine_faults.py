@@ -61,8 +61,8 @@ def test_an_engine_abort_is_a_crash_with_its_signal_on_the_serial_path_too(tmp_p
     assert "odemath.h:42]" in err  # the engine's own words, printed as text
     partial = tmp_path / "tiny__base__ode.mcap.partial"
     assert partial.exists() and read_trace(partial, recover=True).status == "incomplete"
-    assert sorted(p.name for p in tmp_path.iterdir()) == ["foxglove-layout.json", "tiny.yaml",
-                                                          "tiny__base__ode.mcap.partial",
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["foxglove-layout.json", "tiny.foxglove-layout.json",
+                                                          "tiny.yaml", "tiny__base__ode.mcap.partial",
                                                           "tiny__base__ode.outcome.json"]  # fmt: skip
 
 

@@ -64,8 +64,8 @@ def test_two_runs_of_the_same_case_one_wins_the_other_fails_at_once(tmp_path: Pa
     assert "another scenario run" in err and "is writing" in err and "Traceback" not in err
     assert "trace kept" not in err  # what it found there is the other run's
     trace = out / "drift__base__pybullet.mcap"
-    assert sorted(p.name for p in out.iterdir()) == ["drift__base__pybullet.cost.json", "drift__base__pybullet.mcap",
-                                                     "foxglove-layout.json"]  # fmt: skip
+    assert sorted(p.name for p in out.iterdir()) == ["drift.foxglove-layout.json", "drift__base__pybullet.cost.json",
+                                                     "drift__base__pybullet.mcap", "foxglove-layout.json"]  # fmt: skip
     assert crc_checked(trace) > 0
     found = read_trace(trace)
     assert found.status == "passed" and found.bodies["ball"].vel[0, 0] == winner  # the winner's run, whole

@@ -55,7 +55,8 @@ def test_a_rerun_replaces_its_own_trace_without_a_flag(tmp_path: Path, source: P
     again = scenario("run", str(source), "--backend", "fake", "--out", "out", cwd=tmp_path)
     assert again.returncode == 0, again.stderr
     assert digest(trace) != before and read_trace(trace).bodies["ball"].pos[0, 2] == 3.0
-    assert sorted(p.name for p in (tmp_path / "out").iterdir()) == ["fall__base__fake.cost.json",
+    assert sorted(p.name for p in (tmp_path / "out").iterdir()) == ["fall.foxglove-layout.json",
+                                                                    "fall__base__fake.cost.json",
                                                                     "fall__base__fake.mcap",
                                                                     "foxglove-layout.json"]  # fmt: skip
 

@@ -3,10 +3,10 @@
 Checks what a reader relies on: no console error or warning, no uncaught exception, no failed load and
 no request other than file: and data:; the headline's words are report.json's; every body of the scene
 shows in every picture (its colour, as lit, near where the camera projects its centre; a plane's colour
-somewhere); the 3D replay's slider and play button move the bodies; the charts draw and answer a hover
-with the values under the pointer; audio tracks decode to the run's length. About 20 s. Skipped only when
-no Chromium is installed (CI installs it: apt-get install chromium); with SCENARIO_REQUIRE_BROWSER=1 (set
-by .ci/run) a missing browser fails instead.
+somewhere); the 3D replay's slider and play button move the bodies, and it widens to the page's width;
+the charts draw and answer a hover with the values under the pointer; audio tracks decode to the run's
+length. About 20 s. Skipped only when no Chromium is installed (CI installs it: apt-get install chromium);
+with SCENARIO_REQUIRE_BROWSER=1 (set by .ci/run) a missing browser fails instead.
 """
 
 from __future__ import annotations
@@ -227,6 +227,15 @@ def test_the_replay_slider_and_play_button_move_the_bodies(browser: Browser, com
         assert here and not there  # the box is where that frame has it, and no longer (or not yet) elsewhere
     browser.evaluate("document.querySelector('#case-0 div.replay button.play').click()")
     _until(browser, f"Number(document.querySelector('#case-0 div.replay').dataset.frame) > {late}")
+    # full width: the frames scaled to the replay's whole width (the page's), and back to their own size
+    sizes = browser.evaluate("""(() => { const el = document.querySelector('#case-0 div.replay');
+      const canvas = el.querySelector('canvas'), button = el.querySelector('button.wide');
+      const shown = () => canvas.getBoundingClientRect().width;
+      const before = shown(); button.click(); const wide = shown(), label = button.textContent;
+      button.click(); return [before, wide, el.clientWidth, canvas.width, label, shown()]; })()""")
+    before, wide, container, own, label, after = sizes
+    assert before == after == min(own, container)
+    assert abs(wide - container) <= 1 and label == "⤡ actual size"
     assert browser.problems() == []
 
 

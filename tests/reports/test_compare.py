@@ -45,6 +45,7 @@ def test_crashing_backend_is_marked_and_the_others_are_complete(compare_run: Com
     assert doc["comparison"] == "engines"
     assert {p.name for p in compare_run.traces.iterdir()} == {
         "foxglove-layout.json",  # written beside the traces (runner/trace/layout.py)
+        "factory-physics.foxglove-layout.json",  # and the scenario's own
         "factory-physics__door-stays-closed__crash.mcap.partial",
         "factory-physics__door-stays-closed__crash.outcome.json",
         "factory-physics__door-stays-closed__ode.mcap",

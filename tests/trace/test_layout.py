@@ -39,11 +39,12 @@ def _panels(data: dict[str, Any]) -> set[str]:
 
 def test_the_layout_shows_the_scene_the_asserted_quantities_the_events_and_the_log() -> None:
     data = layout(layout_spec(load_files([ROOT / "scenarios" / "factory_physics.yaml"], None, True)))
-    assert _panels(data) == set(data["configById"]) == {"3D!scene", "Plot!asserted", "StateTransitions!events",
+    assert _panels(data) == set(data["configById"]) == {"3D!scene", "Plot!asserted", "Plot!asserted_m_per_s",
+                                                         "Plot!asserted_N", "StateTransitions!events",
                                                          "RosOut!log"}  # fmt: skip
     scene = data["configById"]["3D!scene"]
     assert scene["followTf"] == tf.WORLD_FRAME and scene["topics"][tf.TOPIC_SCENE] == {"visible": True}
-    plots = {p["label"]: p["value"] for p in data["configById"]["Plot!asserted"]["paths"]}
+    plots = {p["label"]: p["value"] for _, paths in _plots(data).items() for p in paths}
     # assertions read box.vel.z (kick), box.pos.z (apex), door.vel.x, box-door contact, slider.position
     assert plots["box.vel.z"] == "/bodies.box.vel.z"
     assert plots["box.pos.z"] == '/tf.transforms[:]{child_frame_id=="box"}.translation.z'
@@ -52,6 +53,32 @@ def test_the_layout_shows_the_scene_the_asserted_quantities_the_events_and_the_l
     events = [p["value"] for p in data["configById"]["StateTransitions!events"]["paths"]]
     assert events == ["/events.name", "/state.door_open"]
     assert data["configById"]["Plot!asserted"]["showPlotValuesInLegend"] is True
+    # one unit per plot: the contact's newtons never scale the metres' axis
+    units = {title: {p["label"] for p in paths} for title, paths in _plots(data).items()}
+    assert units["Asserted quantities (N)"] == {"contact box-door force", "contact door-box force"}
+    assert {"box.pos.z", "door.pos.x", "slider.position"} <= units["Asserted quantities (m)"]
+    assert {"box.vel.z", "door.vel.x"} <= units["Asserted quantities (m/s)"]
+
+
+def _plots(data: dict[str, Any]) -> dict[str, list[dict[str, Any]]]:
+    """Each Plot panel's title -> its paths."""
+    return {c["foxglovePanelTitle"]: c["paths"] for k, c in data["configById"].items() if k.startswith("Plot!")}
+
+
+def test_every_asserted_quantity_is_plotted_robots_and_every_copy_of_an_array_included() -> None:
+    """Issue 30: the robots' asserted hand and joint, box_pile's top crate (the old 12-series cut dropped it)."""
+    kuka = _plots(layout(layout_spec(load_files([ROOT / "scenarios" / "robots" / "kuka_arm.yaml"], None, True))))
+    assert [p["label"] for p in kuka["Asserted quantities (m)"]] == [
+        "arm.lbr_iiwa_link_7.pos.z", "arm.lbr_iiwa_link_7.pos.x", "arm.lbr_iiwa_link_7.pos.y"]  # fmt: skip
+    assert kuka["Asserted quantities (m)"][1]["value"] == (
+        '/tf.transforms[:]{child_frame_id=="arm.lbr_iiwa_link_7"}.translation.x')
+    assert [p["value"] for p in kuka["Asserted quantities (rad)"]] == ["/joints.arm.lbr_iiwa_joint_2.position"]
+    pile = _plots(layout(layout_spec(load_files([ROOT / "scenarios" / "box_pile.yaml"], None, True))))
+    heights = [p["label"] for p in pile["Asserted quantities (m)"] if p["label"].endswith(".pos.z")]
+    assert heights == [f"crate_{k}.pos.z" for k in range(5)]  # count 5: every crate, the top one included
+    many = _plots(layout(layout_spec(load_files([ROOT / "scenarios" / "box_pile.yaml"], None, True,
+                                                (("params.count", 30),)))))  # fmt: skip
+    assert len([p for p in many["Asserted quantities (m)"] if p["label"].endswith(".pos.z")]) == 30
 
 
 def test_a_scenario_whose_assertions_read_no_height_still_plots_one() -> None:
@@ -74,3 +101,14 @@ def test_scenario_layout_prints_or_writes_it_and_run_writes_it_beside_the_traces
     (tmp_path / "file").write_text("not a folder")
     bad = _cli("layout", "scenarios/factory_intervals.yaml", "--out", str(tmp_path / "file"))
     assert bad.returncode == 2 and "cannot write" in bad.stderr and "Traceback" not in bad.stderr
+
+
+def test_two_scenarios_run_into_one_folder_keep_both_layouts(tmp_path: Path) -> None:
+    for file in ("scenarios/factory_intervals.yaml", "scenarios/box_pile.yaml"):
+        done = _cli("run", file, "--out", str(tmp_path), "--quiet")
+        assert done.returncode == 0, done.stderr
+    for name, file in (("factory-intervals", "factory_intervals.yaml"), ("box-pile", "box_pile.yaml")):
+        own = json.loads((tmp_path / tf.scenario_layout_file(name)).read_text())
+        assert own == layout(layout_spec(load_files([ROOT / "scenarios" / file], None, False))), name
+    combined = json.loads((tmp_path / tf.LAYOUT_FILE).read_text())  # the last command's scenarios
+    assert combined == layout(layout_spec(load_files([ROOT / "scenarios" / "box_pile.yaml"], None, False)))
