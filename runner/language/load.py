@@ -12,7 +12,7 @@ import hashlib
 import os
 import re
 import stat
-from collections import OrderedDict
+from collections import ChainMap, OrderedDict
 from dataclasses import dataclass, field, replace
 from pathlib import Path as FsPath
 from typing import Any
@@ -22,7 +22,8 @@ from pydantic import ValidationError
 from runner.errors import Issue, ScenarioValidationError
 from runner.language.errors_map import issues_from
 from runner.language.files import special_file_kind
-from runner.language.model import Scenario
+from runner.language.model import Scenario, Variant, VariantName
+from runner.language.model_base import Strict
 from runner.language.refs import check_references
 from runner.language.robot_desc import ModelDesc
 from runner.language.robots import load_robots
@@ -58,7 +59,9 @@ class LoadedScenario:
     robots: dict[str, ModelDesc] = field(default_factory=dict)
 
 
-def read_source(path: FsPath) -> tuple[str, Any, Positions]:
+def read_source(path: FsPath, share_variants: bool = False) -> tuple[str, Any, Positions]:
+    """The file's text, data and positions: a copy of their own for the caller to change; with
+    ``share_variants``, the `variants` section is the parse cache's own (read it, never change it)."""
     file = str(path)
     try:
         info = os.stat(path)  # never open what is not a regular file: a FIFO or a device could block forever
@@ -82,7 +85,7 @@ def read_source(path: FsPath) -> tuple[str, Any, Positions]:
         col = exc.start - (raw.rfind(b"\n", 0, exc.start) + 1) + 1
         message = f"expected UTF-8 text, found a byte 0x{raw[exc.start]:02x} at offset {exc.start}"
         raise ScenarioValidationError([Issue(file, line, col, "", message)]) from None
-    data, positions = _parsed(text, file)
+    data, positions = _parsed(text, file, share_variants)
     if not isinstance(data, dict):
         raise ScenarioValidationError(
             [positions.issue((), f"expected a mapping at the top, found {type(data).__name__}")]
@@ -97,7 +100,7 @@ _PARSED: OrderedDict[tuple[str, str], tuple[Any, Positions]] = OrderedDict()
 _PARSED_KEPT = 8_000_000  # characters of text kept at most (hostile or generated files are large)
 
 
-def _parsed(text: str, file: str) -> tuple[Any, Positions]:
+def _parsed(text: str, file: str, share_variants: bool = False) -> tuple[Any, Positions]:
     key = (file, text)
     hit = _PARSED.get(key)
     if hit is None:
@@ -107,7 +110,11 @@ def _parsed(text: str, file: str) -> tuple[Any, Positions]:
     else:
         _PARSED.move_to_end(key)
     data, kept = hit
-    positions = replace(kept, values=dict(kept.values), keys=dict(kept.keys), overridden=dict(kept.overridden))
+    # the caller's changes go to a table of its own, in front of the kept one (a copy costs the file's size)
+    positions = replace(kept, values=ChainMap({}, kept.values), keys=ChainMap({}, kept.keys),
+                        overridden=dict(kept.overridden))  # fmt: skip
+    if share_variants and isinstance(data, dict) and "variants" in data:  # each variant's load copies its own
+        return {k: v if k == "variants" else copy.deepcopy(v) for k, v in data.items()}, positions
     return copy.deepcopy(data), positions  # the tables hold tuples: copying the dicts is enough
 
 
@@ -241,8 +248,15 @@ def variant_names(path: FsPath) -> list[str]:
 def load_scenario(
     path: FsPath, variant: str | None = None, overrides: tuple[tuple[str, Any], ...] = ()
 ) -> LoadedScenario:
-    """Load ``path`` as the given variant (``None``: the base case)."""
-    text, data, positions = read_source(path)  # a copy of its own
+    """Load ``path`` as the given variant (``None``: the base case).
+
+    The chosen variant is merged into the base and checked there; the `variants` section itself is checked
+    once per file (:func:`_checked_variants`), so loading every one of n variants is linear in the file."""
+    text, data, positions = read_source(path, share_variants=True)
+    early = [(k, v) for k, v in overrides if k.split(".")[0] == "variants"]
+    if early:  # `--set variants.x...` changes a variant before it is applied
+        data["variants"] = copy.deepcopy(data["variants"])
+        _apply_overrides(data, early, positions)
     variants = data.get("variants") if isinstance(data.get("variants"), dict) else {}
     chosen = variant if variant not in (None, BASE_CASE) else None
     if chosen is not None:
@@ -252,13 +266,9 @@ def load_scenario(
                 [positions.issue(("variants",), f"unknown variant `{chosen}`; this file has: {names}", at_key=True)]
             )
         _apply_variant(data, variants[chosen], ("variants", chosen), positions)
-    for key, value in overrides:  # after the variant: `--set` beats a variant's `set:` for the same path
-        argument = f"--set {key}"
-        try:
-            target = _set_path(data, key, value)
-        except _SetError as exc:
-            raise ScenarioValidationError([Issue(COMMAND_LINE, 0, 0, argument, str(exc))]) from None
-        positions.overridden[target] = argument
+    # after the variant: `--set` beats a variant's `set:` for the same path
+    _apply_overrides(data, [(k, v) for k, v in overrides if k.split(".")[0] != "variants"], positions)
+    data.pop("variants", None)
     params = data.get("params") if isinstance(data.get("params"), dict) else {}
     issues: list[Issue] = []
     data = _substitute(data, params, (), positions, issues, _Budget(positions.text_size))
@@ -267,7 +277,11 @@ def load_scenario(
     try:
         model = Scenario.model_validate(data, context=time_context(data))
     except ValidationError as exc:
-        raise ScenarioValidationError(issues_from(exc, positions, data, Scenario)) from None
+        issues = issues_from(exc, positions, data, Scenario)
+    checked, variant_issues = _checked_variants(path, text, overrides)
+    if issues or variant_issues:
+        raise ScenarioValidationError([*issues, *variant_issues])
+    model = model.model_copy(update={"variants": checked})
     robots = load_robots(model, positions, path.parent)
     check_references(model, positions, path.parent, robots)
     return LoadedScenario(
@@ -282,6 +296,61 @@ def load_scenario(
     )
 
 
+def _apply_overrides(data: dict[str, Any], overrides: list[tuple[str, Any]], positions: Positions) -> None:
+    for key, value in overrides:
+        argument = f"--set {key}"
+        try:
+            target = _set_path(data, key, value)
+        except _SetError as exc:
+            raise ScenarioValidationError([Issue(COMMAND_LINE, 0, 0, argument, str(exc))]) from None
+        positions.overridden[target] = argument
+
+
+class _VariantsSection(Strict):
+    """The `variants` section alone, checked as the scenario checks it."""
+
+    variants: dict[VariantName, Variant]
+
+
+#: The checked `variants` section of recently loaded files, by (file, text, overrides): each variant is
+#: checked once however many are loaded (5,000 variants, each load checking all of them: 126 s).
+_VARIANTS: OrderedDict[tuple[str, str, str], tuple[dict[str, Any], list[Issue]]] = OrderedDict()
+
+
+def _checked_variants(
+    path: FsPath, text: str, overrides: tuple[tuple[str, Any], ...]
+) -> tuple[dict[str, Any], list[Issue]]:
+    """The `variants` section as models, substituted with the base's parameters (after `--set`), and its
+    issues."""
+    key = (str(path), text, repr(overrides))
+    hit = _VARIANTS.get(key)
+    if hit is not None:
+        _VARIANTS.move_to_end(key)
+        return hit
+    data, positions = _parsed(text, str(path))
+    _apply_overrides(data, list(overrides), positions)
+    section = data.get("variants")
+    found: tuple[dict[str, Any], list[Issue]] = ({}, [])
+    if section is not None:
+        params = data.get("params") if isinstance(data.get("params"), dict) else {}
+        issues: list[Issue] = []
+        section = _substitute(section, params, ("variants",), positions, issues, _Budget(positions.text_size))
+        if issues:
+            found = ({}, issues)
+        else:
+            whole = {"variants": section}
+            base = {k: v for k, v in data.items() if k != "variants"}
+            context = time_context(_substitute(base, params, (), positions, [], _Budget(positions.text_size)))
+            try:
+                found = (_VariantsSection.model_validate(whole, context=context).variants, [])
+            except ValidationError as exc:
+                found = ({}, issues_from(exc, positions, whole, Scenario))
+    _VARIANTS[key] = found
+    while len(_VARIANTS) > 64:
+        _VARIANTS.popitem(last=False)
+    return found
+
+
 def _apply_variant(data: dict[str, Any], variant: Any, vpath: Path, positions: Positions) -> None:
     if not isinstance(variant, dict):
         return  # the model validation reports it
@@ -292,12 +361,12 @@ def _apply_variant(data: dict[str, Any], variant: Any, vpath: Path, positions: P
         except _SetError as exc:
             issues.append(positions.issue(vpath + ("set", key), str(exc), at_key=True))
             continue
-        positions.remap(vpath + ("set", key), target)
+        positions.remap(vpath + ("set", key), target, value)
     if issues:
         raise ScenarioValidationError(issues)
     if "inputs" in variant and variant["inputs"] is not None:
         data["inputs"] = copy.deepcopy(variant["inputs"])
-        positions.remap(vpath + ("inputs",), ("inputs",))
+        positions.remap(vpath + ("inputs",), ("inputs",), variant["inputs"])
     extra = variant.get("assertions") or []
     if isinstance(extra, list) and extra:
         current = data.get("assertions")
@@ -305,7 +374,7 @@ def _apply_variant(data: dict[str, Any], variant: Any, vpath: Path, positions: P
         offset = len(base)
         data["assertions"] = [*base, *copy.deepcopy(extra)]
         for i in range(len(extra)):
-            positions.remap(vpath + ("assertions", i), ("assertions", offset + i))
+            positions.remap(vpath + ("assertions", i), ("assertions", offset + i), extra[i])
 
 
 def load_all(

@@ -37,6 +37,9 @@ MAX_SCENARIO_NAME = 128
 MAX_VARIANT_NAME = 64
 
 
+VariantName = Annotated[str, Field(pattern=r"^[A-Za-z0-9_.-]+$", max_length=MAX_VARIANT_NAME)]
+
+
 class Variant(Strict):
     """A named case: overrides applied to the base scenario."""
 
@@ -86,7 +89,7 @@ class Scenario(Strict):
     )
     inputs: list[Input] = Field(default_factory=list, description="Timed input events.")
     assertions: list[Assertion] = Field(default_factory=list)
-    variants: dict[Annotated[str, Field(pattern=r"^[A-Za-z0-9_.-]+$", max_length=MAX_VARIANT_NAME)], Variant] = Field(
+    variants: dict[VariantName, Variant] = Field(
         default_factory=dict, description="Named cases (names: letters, digits, `_ . -`; part of trace file names)."
     )
     backend_options: dict[Name, dict[str, Any]] = Field(

@@ -8,6 +8,7 @@ safe types are built (no object tags); duplicate keys, non-string keys and alias
 from __future__ import annotations
 
 import re
+from collections.abc import MutableMapping
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -31,8 +32,8 @@ class Positions:
     """Field path -> (line, column), 1-based; keys are located at the key, values at the value."""
 
     file: str
-    values: dict[Path, tuple[int, int]] = field(default_factory=dict)
-    keys: dict[Path, tuple[int, int]] = field(default_factory=dict)
+    values: MutableMapping[Path, tuple[int, int]] = field(default_factory=dict)
+    keys: MutableMapping[Path, tuple[int, int]] = field(default_factory=dict)
     #: paths whose value came from the command line (`--set`), with the argument; issues there name it
     overridden: dict[Path, str] = field(default_factory=dict)
     #: characters of text in the document as built (aliases expanded); see MAX_TEXT
@@ -59,12 +60,28 @@ class Positions:
         line, col = self.locate(path, at_key)
         return Issue(self.file, line, col, format_path(path), message)
 
-    def remap(self, src: Path, dst: Path) -> None:
-        """Make the positions under ``src`` also answer for ``dst`` (variants merged into the base)."""
-        for table in (self.values, self.keys):
-            for p, pos in list(table.items()):
-                if p[: len(src)] == src:
-                    table[dst + p[len(src) :]] = pos
+    def remap(self, src: Path, dst: Path, value: Any) -> None:
+        """Make the positions under ``src``, where the document holds ``value``, also answer for ``dst``
+        (variants merged into the base). Only the paths of ``value`` are visited, so merging a variant costs
+        its own size, not the file's."""
+        for sub in _subpaths(value):
+            for table in (self.values, self.keys):
+                pos = table.get(src + sub)
+                if pos is not None:
+                    table[dst + sub] = pos
+
+
+def _subpaths(value: Any) -> list[Path]:
+    """The paths inside ``value`` (``()`` for itself), depth first."""
+    out: list[Path] = [()]
+    stack: list[tuple[Path, Any]] = [((), value)]
+    while stack:
+        prefix, node = stack.pop()
+        items = node.items() if isinstance(node, dict) else enumerate(node) if isinstance(node, list) else ()
+        for key, child in items:
+            out.append(prefix + (key,))
+            stack.append((prefix + (key,), child))
+    return out
 
 
 def format_path(path: Path) -> str:
