@@ -18,7 +18,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-import dm_control  # the `dev` extra: dm_control's suite of MJCF models
+import dm_control  # type: ignore[import-untyped]  # the `dev` extra: its suite of MJCF models
 import pytest
 
 from backends.registry import KNOWN_BACKENDS, is_installed
