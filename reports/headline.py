@@ -99,6 +99,7 @@ def headline(runs: Sequence[dict[str, Any]], quantities: Sequence[dict[str, Any]
                        "runs_not_finished": len(broken), "not_finished": [r["label"] for r in broken]},
         "agreement": {"agrees": not (misses or diverges or departures or split), "required": required,
                       "engines": sum(r.get("end_time") is not None for r in runs), "quantities": len(quantities),
+                      "truths": sum(q["truth"]["kind"] in ("constraint", "analytic") for q in quantities),
                       "diverging": sum(bool(q["diverging"]) or bool(q.get("agreement", {}).get("no_majority_from")
                                                                       is not None) for q in quantities),
                       "first_over": min(firsts) if firsts else None,
@@ -136,6 +137,7 @@ def merge(parts: Sequence[dict[str, Any]], names: Sequence[str] = ()) -> dict[st
                        "not_finished": [label for x in a for label in x["not_finished"]]},
         "agreement": {"agrees": all(x["agrees"] for x in g), "required": any(x["required"] for x in g),
                       "engines": max([x["engines"] for x in g] + [0]), "quantities": sum(x["quantities"] for x in g),
+                      "truths": sum(x["truths"] for x in g),
                       "diverging": sum(x["diverging"] for x in g), "first_over": min(firsts) if firsts else None,
                       "cases_diverging": sum(not x["agrees"] for x in g),
                       "backends": sorted({b for x in g for b in x["backends"]}),
@@ -194,9 +196,11 @@ def _agreement_words(g: dict[str, Any], cases: int) -> list[str]:
                     f"({where}{s['label']} from {s['from']:g} s: {groups}{extra})")  # fmt: skip
     if said:
         return said
+    if not g["quantities"]:
+        return ["no quantity compared"]
     if g["engines"] >= 2:
         return [f"{g['engines']} engines agree"]
-    return ["within the truth" if g["quantities"] else "no quantity compared"]
+    return ["within the truth" if g["truths"] else "1 engine: nothing to compare it with"]
 
 
 def _words(h: dict[str, Any]) -> dict[str, Any]:
