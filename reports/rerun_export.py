@@ -35,7 +35,8 @@ import numpy as np
 
 from reports import trace_format as tf
 from reports.rerun_scene import WORLD, body_path, scene_entities
-from reports.scene3d.model import scene_model
+from reports.scene3d.framing import frame_camera, moving_bodies
+from reports.scene3d.model import SceneModel, scene_model
 from reports.trace_reader import Trace, read_trace
 
 __all__ = ["APPLICATION_ID", "TIMELINE", "RerunExportError", "Series", "asserted_series", "export_rerun",
@@ -178,11 +179,11 @@ def _send_poses(rec: Any, trace: Trace) -> None:
         )  # fmt: skip
 
 
-def _send_scene(rec: Any, trace: Trace) -> None:
+def _send_scene(rec: Any, model: SceneModel) -> None:
     import rerun as rr
 
     rec.log(WORLD, rr.ViewCoordinates.RIGHT_HAND_Z_UP, static=True)
-    for t, path, archetypes in scene_entities(scene_model(trace)):
+    for t, path, archetypes in scene_entities(model):
         batches = [b for archetype in archetypes for b in archetype.as_component_batches()]
         columns = [b.partition([len(b.as_arrow_array())]) for b in batches]  # one row at t: the whole batch
         rec.send_columns(path, indexes=[rr.TimeColumn(TIMELINE, duration=_duration([t]))], columns=columns)
@@ -209,11 +210,28 @@ def _unit_path(root: str, unit: str, name: str) -> str:
     return str(rr.new_entity_path([root, UNIT_PARTS.get(unit, unit), name]))
 
 
-def _blueprint(units: Sequence[str], force_units: Sequence[str], bodies: Sequence[str]) -> Any:
+def _eye(model: SceneModel) -> Any:
+    """The 3D view's eye where the report's pictures put their camera (reports.scene3d.framing: every moving
+    body in view over the whole run), looking at the middle of where they go; Z up. Without it Rerun frames
+    everything, and a 40 m ground plane leaves a robot arm a few pixels wide."""
+    import rerun.blueprint as rrb
+
+    cam = frame_camera([model])
+    moving = moving_bodies([model]) or [b for b in model.bodies if model.shape.get(b) != "plane"]
+    points = [t.pos[np.isfinite(t.pos).all(axis=1)] for b in moving if (t := model.tracks.get(b)) is not None]
+    cloud = np.vstack(points) if points and sum(len(p) for p in points) else np.zeros((1, 3))
+    centre = (cloud.min(axis=0) + cloud.max(axis=0)) / 2
+    _, forward, _ = cam.axes()
+    target = np.asarray(cam.pos) + forward * max(float((centre - np.asarray(cam.pos)) @ forward), 0.1)
+    return rrb.EyeControls3D(kind="Orbital", position=list(cam.pos), look_target=target.tolist(), eye_up=[0, 0, 1])
+
+
+def _blueprint(units: Sequence[str], force_units: Sequence[str], bodies: Sequence[str], model: SceneModel) -> Any:
     import rerun.blueprint as rrb
 
     hidden = {body_path(b, "collision"): rrb.EntityBehavior(visible=False) for b in bodies}
-    scene = rrb.Spatial3DView(origin=f"/{WORLD}", name="scene", overrides=hidden)  # type: ignore[arg-type]
+    scene = rrb.Spatial3DView(origin=f"/{WORLD}", name="scene", overrides=hidden,  # type: ignore[arg-type]
+                              eye_controls=_eye(model))  # fmt: skip
     plots = [rrb.TimeSeriesView(origin=f"/{ASSERTED}/{UNIT_PARTS.get(u, u)}", name=f"asserted ({u})") for u in units]
     plots += [rrb.TimeSeriesView(origin=f"/{FORCES}/{UNIT_PARTS.get(u, u)}", name=f"joint and contact forces ({u})")
               for u in force_units]  # fmt: skip
@@ -235,15 +253,16 @@ def export_rerun(trace_path: Path, out: Path, trace: Trace | None = None) -> tup
     forces = _force_series(trace)
     units = list(dict.fromkeys(s.unit for s in asserted))
     force_units = list(dict.fromkeys(s.unit for s in forces))
+    model = scene_model(trace)
     rec = rr.RecordingStream(APPLICATION_ID, recording_id=recording_id(trace_path), send_properties=False)
     try:
         out.parent.mkdir(parents=True, exist_ok=True)
-        rec.save(out, default_blueprint=_blueprint(units, force_units, list(trace.bodies)))
+        rec.save(out, default_blueprint=_blueprint(units, force_units, list(trace.bodies), model))
     except (OSError, RuntimeError) as exc:
         raise RerunExportError(f"cannot write {out}: {exc}") from exc
     scenario = trace.scenario
     rec.send_recording_name(" · ".join(scenario.get(k, "?") for k in (tf.KEY_NAME, tf.KEY_VARIANT, tf.KEY_BACKEND)))
-    _send_scene(rec, trace)
+    _send_scene(rec, model)
     _send_poses(rec, trace)
     for s in asserted:
         _send_series(rec, _unit_path(ASSERTED, s.unit, s.name), s)

@@ -5,7 +5,8 @@ no traceback, nothing written.
 The scripted run plays space at 1.2 s and mouse1 at 2.4 s on the lab's physics scene, takes a picture
 from the window at 2.0 s (the box on the door) and 2.6 s (up again) and closes at 3 s (the rest of the
 run goes on headless); its trace
-equals the recorded variant's headless trace step for step. About 10 s.
+equals the recorded variant's headless trace step for step. A replayed trace plays and pauses by script.
+About 15 s.
 """
 
 from __future__ import annotations
@@ -93,3 +94,24 @@ def test_without_panda3d_the_hint_names_the_extra(tmp_path: Path) -> None:
     env = quiet_env(PYTHONPATH=str(blocker))
     done = scenario("view", str(FACTORY), "--offscreen", env=env)
     _refused(done, "pip install 'physics-scenarios[view]'")
+
+
+def test_a_replay_plays_and_pauses_by_script(tmp_path: Path) -> None:
+    """`scenario view TRACE --paused` with space at 0.5 s and 1.5 s of wall time: the replay played for 1 s
+    (x1: one simulated second per second; it used to advance one frame and fall back paused). The bound
+    above allows the second key's frame to be 0.25 s late on a loaded machine (docs/view.md)."""
+    need_panda3d()
+    variant = "door-opens-with-the-box-on-it"
+    assert scenario("run", str(FACTORY), "--variant", variant, "--out", str(tmp_path), "--quiet").returncode == 0
+    trace = tmp_path / f"factory-physics__{variant}__pybullet.mcap"
+    script = tmp_path / "script.yaml"
+    script.write_text("- {after: 0.5, event: space}\n- {after: 1.5, event: space}\n- {after: 2.0, close: true}\n")
+    done = scenario("view", str(trace), "--paused", "--offscreen", "--script", str(script), env=quiet_env())
+    assert done.returncode == 0, done.stderr
+    t, _, mode = done.stdout.strip().splitlines()[-1].removeprefix("replay closed at t = ").partition(" s (")
+    assert mode == "paused)" and 0.5 <= float(t) <= 1.25, done.stdout
+    script.write_text("- {after: 1.0, close: true}\n")  # without --paused it plays by itself
+    done = scenario("view", str(trace), "--offscreen", "--script", str(script), env=quiet_env())
+    assert done.returncode == 0, done.stderr
+    t, _, mode = done.stdout.strip().splitlines()[-1].removeprefix("replay closed at t = ").partition(" s (")
+    assert mode == "playing)" and float(t) >= 0.5, done.stdout
