@@ -13,7 +13,6 @@ from backends.errors import EngineFailure
 from backends.registry import check_capabilities, get_backend
 from runner import interrupts
 from runner.compile.program import build_program
-from runner.errors import TraceError
 from runner.language.load import LoadedScenario
 from runner.sim.budget import Watchdog
 from runner.sim.session import RunResult, Session
@@ -85,7 +84,7 @@ def run_loaded(
         try:
             out_dir.mkdir(parents=True, exist_ok=True)
         except OSError as exc:
-            raise TraceError(f"cannot create the trace folder {out_dir}: {exc.strerror or exc}") from exc
+            raise write_error(exc, f"the trace folder {out_dir}") from exc
         if not claimed:
             claim = Claim(trace_path(out_dir, loaded, backend_name), force=force)
     try:
