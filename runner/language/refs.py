@@ -139,7 +139,11 @@ def check_references(  # noqa: C901
     sound_lengths: dict[str, float] = {}
     root = base_dir.resolve()
     for name, rel in model.sounds.items():
-        target = (base_dir / rel).resolve()
+        try:
+            target = (base_dir / rel).resolve()
+        except (OSError, RuntimeError) as exc:  # RuntimeError: a symlink loop (Python 3.11's resolve)
+            bad(("sounds", name), f"expected a WAV file at {rel!r}: cannot follow its path ({exc})")
+            continue
         if not target.is_relative_to(root):
             bad(("sounds", name), f"the sound file must be inside the scenario's folder {root}; found {rel!r}")
             continue

@@ -46,6 +46,11 @@ def read_info(path: Path) -> SoundInfo:
         raise SoundFileError("file not found") from None
     except (wave.Error, EOFError, OSError) as exc:
         raise SoundFileError(f"not a WAV file ({exc})") from None
+    if info.sample_rate <= 0 or info.channels <= 0 or info.sample_width <= 0:  # compare divides by the rate
+        raise SoundFileError(
+            f"a sample rate of {info.sample_rate} Hz, {info.channels} channels of {info.sample_width} bytes: "
+            "expected at least 1 of each"
+        )
     if info.length > MAX_SOUND_SECONDS:
         raise SoundFileError(f"longer than {MAX_SOUND_SECONDS:.0f} s ({info.length:.1f} s)")
     return info

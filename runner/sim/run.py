@@ -15,7 +15,6 @@ from reports import trace_format as tf
 from runner import interrupts
 from runner.compile.asserted import asserted_quantities
 from runner.compile.program import build_program
-from runner.errors import TraceError
 from runner.language.load import LoadedScenario
 from runner.sim.budget import Watchdog
 from runner.sim.session import RunResult, Session
@@ -87,7 +86,7 @@ def run_loaded(
         try:
             out_dir.mkdir(parents=True, exist_ok=True)
         except OSError as exc:
-            raise TraceError(f"cannot create the trace folder {out_dir}: {exc.strerror or exc}") from exc
+            raise write_error(exc, f"the trace folder {out_dir}") from exc
         if not claimed:
             claim = Claim(trace_path(out_dir, loaded, backend_name), force=force)
     try:

@@ -52,8 +52,10 @@ __all__ = ["RESOURCE_ERRNOS", "Claim", "case_files", "foreign", "is_own", "lock_
 _MAGIC = b"\x89MCAP0\r\n"
 _LIBRARIES = (tf.SDK_LIBRARY, tf.LIBRARY)
 
-#: errno values of a resource fault while writing: the disk (or quota) is full, the device failed
-RESOURCE_ERRNOS = frozenset({errno.ENOSPC, errno.EDQUOT, errno.EIO, errno.EFBIG})
+#: errno values of an output that cannot take what is written (exit 74): the disk (or quota) is full, the
+#: device failed, the file system is read-only or the folder is not writable for this user
+RESOURCE_ERRNOS = frozenset({errno.ENOSPC, errno.EDQUOT, errno.EIO, errno.EFBIG, errno.EROFS, errno.EACCES,
+                             errno.EPERM})  # fmt: skip
 
 
 def write_error(exc: OSError, what: str) -> TraceError:

@@ -10,9 +10,13 @@ with a MarkupError traceback (exit 1), and "[bold]x" was printed as "x".
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
+import os
+import shutil
 import subprocess
 import sys
+from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
@@ -113,6 +117,36 @@ def test_no_trace_writes_nothing(tmp_path: Path, source: Path) -> None:
     done = scenario("run", str(source), "--backend", "fake", "--no-trace", cwd=tmp_path)
     assert done.returncode == 0, done.stderr
     assert sorted(p.name for p in tmp_path.iterdir()) == ["fall.yaml"]
+
+
+@contextlib.contextmanager
+def read_only_folder(folder: Path) -> Iterator[Path]:
+    """A folder nothing can be written into: a read-only tmpfs (root, whom permissions do not stop), else
+    mode 555."""
+    folder.mkdir()
+    mounted = os.geteuid() == 0 and shutil.which("mount") is not None and subprocess.run(
+        ["mount", "-t", "tmpfs", "-o", "ro,size=32k", "tmpfs", str(folder)]).returncode == 0  # fmt: skip
+    if not mounted:
+        folder.chmod(0o555)
+    try:
+        yield folder
+    finally:
+        if mounted:
+            subprocess.run(["umount", str(folder)], check=False)
+        else:
+            folder.chmod(0o755)
+
+
+@pytest.mark.parametrize("where,options", [("out", []), ("out", ["--trace-process"]), ("out", ["-j", "2"]),
+                                           ("out/sub", [])])  # fmt: skip
+def test_a_read_only_output_is_an_output_error(tmp_path: Path, source: Path, where: str, options: list[str]) -> None:
+    """A read-only `--out` exited 2 (bad input); it is an output that cannot take the trace, as a full disk:
+    exit 74, "output error", on every path, and nothing is written."""
+    with read_only_folder(tmp_path / "out"):
+        done = scenario("run", str(source), "--backend", "fake", "--out", where, *options, cwd=tmp_path)
+        assert done.returncode == 74, done.stdout + done.stderr
+        assert "output error: cannot" in done.stderr and "Traceback" not in done.stderr, done.stderr
+        assert list((tmp_path / "out").iterdir()) == []
 
 
 MARKUP = """\

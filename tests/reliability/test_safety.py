@@ -15,6 +15,7 @@
 from __future__ import annotations
 
 import ast
+import struct
 import subprocess
 import sys
 import time
@@ -281,3 +282,25 @@ def test_the_refusal_does_not_depend_on_the_working_directory(layout: tuple[Path
                           cwd=elsewhere, timeout=120)  # fmt: skip
     assert done.returncode == 2 and "must be inside the scenario's folder" in done.stderr
     assert "Traceback" not in done.stderr
+
+
+@pytest.mark.parametrize("kind", ["rate 0", "symlink loop"])
+def test_a_sound_that_cannot_be_played_is_refused_located(layout: tuple[Path, Path], kind: str) -> None:
+    """A WAV with a sample rate of 0 passed `validate` and made `compare` exit 70 (dividing by the rate); a
+    sound that is a symlink loop raised RuntimeError from Path.resolve (exit 70)."""
+    folder, _ = layout
+    if kind == "rate 0":
+        data = bytearray(wav(folder / "sounds" / "zero.wav").read_bytes())
+        assert data[12:16] == b"fmt " and struct.unpack_from("<I", data, 24)[0] == 8000  # the fmt chunk's rate
+        struct.pack_into("<II", data, 24, 0, 0)  # sample rate and byte rate
+        (folder / "sounds" / "zero.wav").write_bytes(bytes(data))
+        ref, expected = "sounds/zero.wav", "sample rate of 0 Hz"
+    else:
+        (folder / "sounds" / "a.wav").symlink_to(folder / "sounds" / "b.wav")
+        (folder / "sounds" / "b.wav").symlink_to(folder / "sounds" / "a.wav")
+        ref, expected = "sounds/a.wav", "cannot follow its path"
+    issues = refusal(sound_scenario(folder, ref))
+    assert any(":8:" in i and expected in i for i in issues), issues
+    done = subprocess.run([sys.executable, "-m", "runner", "validate", str(folder / "t.yaml")], capture_output=True,
+                          text=True, timeout=120)  # fmt: skip
+    assert done.returncode == 2 and expected in done.stderr and "Traceback" not in done.stderr, done.stderr

@@ -17,9 +17,10 @@ from backends.errors import BackendError, BackendNotInstalled, EngineFailure
 from backends.registry import DEFAULT_BACKEND
 from runner.cli import options
 from runner.cli.progress import BatchProgress, wanted
-from runner.errors import ScenarioError, ScenarioValidationError, TraceError, UsageError
+from runner.errors import OutputError, ScenarioError, ScenarioValidationError, TraceError, UsageError
 from runner.exec.cases import Case, CaseResult
 from runner.language.load import BASE_CASE, LoadedScenario, load_files, parse_overrides
+from runner.trace.output import RESOURCE_ERRNOS
 
 NAME = "run"
 HELP = "run scenarios and print verdicts"
@@ -166,7 +167,10 @@ def _execute(
         try:
             out_dir.mkdir(parents=True, exist_ok=True)
         except OSError as exc:
-            raise ScenarioError(f"cannot use {out_dir} as the trace folder: {exc.strerror or exc}") from None
+            message = f"cannot use {out_dir} as the trace folder: {exc.strerror or exc}"
+            if exc.errno in RESOURCE_ERRNOS:  # read-only, not permitted, full: exit 74
+                raise OutputError(message) from None
+            raise ScenarioError(message) from None
     jobs = [_case(args, c, b, overrides, out_dir) for c, b in work]
     check_outputs(jobs, args.force)  # files the tool did not write: refused before anything runs
     executor = make_executor(args.executor, args.jobs, args.ray_address, isolate=args.isolate, force=args.force)
