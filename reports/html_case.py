@@ -66,6 +66,8 @@ def groups_text(q: dict[str, Any]) -> str:
 
 def runs_table(case: dict[str, Any], looks: dict[str, Look], links: dict[str, str | None]) -> str:
     head = ("backend", "run", "assertions", "agreement", "largest deviation / threshold", "trace", "wall time")
+    named = any(q["truth"]["kind"] == "reference" for q in case["quantities"])  # --reference: the runs' yardstick
+    reference = case["reference"] if named else None
     out = ['<table class="runs"><tr>', *(f"<th>{h}</th>" for h in head), "</tr>"]
     for r in case["runs"]:
         b, a = r["backend"], r["assertions"]
@@ -96,7 +98,7 @@ def runs_table(case: dict[str, Any], looks: dict[str, Look], links: dict[str, st
         link = links.get(b)
         trace = f'<a href="{escape(link)}">{escape(r["trace"] or "")}</a>' if link else escape(r["trace"] or "–")
         out.append(
-            f"<tr><td>{key(looks[b])}<b>{escape(b)}</b>{' (reference)' if b == case['reference'] else ''}</td>"
+            f"<tr><td>{key(looks[b])}<b>{escape(b)}</b>{' (reference)' if b == reference else ''}</td>"
             f"<td>{status}</td><td>{assertions}</td><td>{agree}</td><td>{worst_txt}</td><td>{trace}</td>"
             f'<td class="num">{fmt(r["cost"]["wall_seconds"], "s")}</td></tr>'
         )
