@@ -10,6 +10,7 @@ kept for ``drain_messages()`` instead of reaching stderr (``_native``).
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 from typing import Any, ClassVar
 
 import numpy as np
@@ -17,12 +18,13 @@ from panda3d.core import Datagram
 from panda3d.core import Quat as PandaQuat
 
 from .._kit import BackendOptions, KinematicPose, SubstepContacts, SubstepMean, substep_times
-from .._kit.stacks import stacks
+from .._kit.stacks import Stacks, stacks
 from ..base import Backend
 from ..types import (
     MODEL_FILE_CAPABILITIES,
     BodyStates,
     Capability,
+    CompiledWorld,
     Contact,
     JointKind,
     JointStates,
@@ -34,7 +36,7 @@ from ..types import (
 from . import _native
 from ._build import JointHandle, axis_arg, build_scene, destroy_scene, panda_quat, set_motor
 from ._contacts import Collider
-from ._options import OdeOptions, check_stack
+from ._options import OdeOptions, check_resting_stack, check_stack
 
 _ROTATIONAL = (JointKind.HINGE, JointKind.UNIVERSAL)
 
@@ -65,6 +67,17 @@ def _effective_inertia(handle: JointHandle) -> float:
     if other is not None and not other.isEmpty():
         inverse += 1.0 / _inertia_along(other, handle)
     return 1.0 / inverse
+
+
+def _has_friction(world: CompiledWorld) -> bool:
+    """Whether any contact surface between bodies (the default or a pair's) has a Coulomb mu above 0."""
+    return world.default_surface.mu > 0.0 or any(p.surface.mu > 0.0 for p in world.pair_surfaces)
+
+
+def _free_stacks(world: CompiledWorld) -> Stacks:
+    """The columns of bodies that no joint holds: a robot's links above one another are a chain, not a stack."""
+    jointed = {j.body for j in world.joints} | {j.other for j in world.joints if j.other is not None}
+    return stacks(replace(world, bodies=tuple(b for b in world.bodies if b.name not in jointed)))
 
 
 class OdeBackend(Backend):
@@ -100,6 +113,8 @@ class OdeBackend(Backend):
         world = self.world
         self._stacks = stacks(world)
         check_stack(self._stacks.landing)
+        free = _free_stacks(world)
+        check_resting_stack(free.tallest, free.landing, _has_friction(world))
         self._scene = build_scene(world, self.options)
         self._collider = Collider(
             self._scene, self.options.collide, self.options.contact_forces, f"ode-contacts-{id(self):x}",

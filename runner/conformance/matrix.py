@@ -6,9 +6,12 @@ backend, the error ``measured - target`` and the difference ``measured - referen
 status is the runner's verdict (pass / fail), ``known limit`` (an engine that cannot meet the check, failing
 at the default tolerance as its case file says), or ``not run`` when the case did not complete on the backend
 (crash, time-out, engine failure, unsupported feature). A case whose only failures are known limits has the
-status ``known limit``. :mod:`runner.conformance.audit` checks the tolerances themselves (stale or too wide
-overrides, known limits no longer needed); its problems are in ``audit``. The matrix passes only when
-every case passed (or failed at its known limits only) on every backend and the audit found nothing.
+status ``known limit``. A case a backend refuses up front (``unsupported``: UnsupportedFeature, the
+message naming the measured limit and the engines that can run it, docs/backends/*.md) is an answer, not a
+breakage: it is counted apart as refused. :mod:`runner.conformance.audit` checks the tolerances themselves
+(stale or too wide overrides, known limits no longer needed); its problems are in ``audit``. The matrix
+passes only when every case passed (or failed at its known limits only, or was refused) on every backend
+and the audit found nothing.
 """
 
 from __future__ import annotations
@@ -25,6 +28,10 @@ from runner.conformance.pool import BackendRun
 from runner.version import tool_version
 
 REFERENCE = REFERENCE_BACKEND
+#: A case's status when its backend refused it before the run (runner.conformance.worker).
+REFUSED = "unsupported"
+#: Case statuses that leave the matrix passing.
+ACCEPTED = ("passed", audit.KNOWN_LIMIT, REFUSED)
 SCHEMA = "physics-scenarios/conformance-matrix/1"
 
 
@@ -120,6 +127,7 @@ def build_matrix(
                 "wall_seconds": round(runs[b].wall_seconds, 2),
                 "passed": sum(c["runs"][b]["status"] == "passed" for c in out_cases),
                 "known_limits": sum(c["runs"][b]["status"] == audit.KNOWN_LIMIT for c in out_cases),
+                "refused": sum(c["runs"][b]["status"] == REFUSED for c in out_cases),
                 "cases": len(out_cases),
             }
             for b in backends
@@ -128,7 +136,7 @@ def build_matrix(
         "audit": problems,
         "passed": bool(out_cases)
         and not problems
-        and all(r["status"] in ("passed", audit.KNOWN_LIMIT) for c in out_cases for r in c["runs"].values()),
+        and all(r["status"] in ACCEPTED for c in out_cases for r in c["runs"].values()),
     }
 
 

@@ -9,7 +9,9 @@ from rich.console import Console
 from rich.markup import escape
 from rich.table import Table
 
-PASS, FAIL, LIMIT = "✅", "❌", "⚠️"
+from runner.conformance.matrix import REFUSED
+
+PASS, FAIL, LIMIT, REFUSE = "✅", "❌", "⚠️", "⛔"
 RAN = ("passed", "failed", "known limit")  # case statuses of a case that ran to its end
 
 
@@ -59,7 +61,7 @@ def _doc_link(doc: str) -> str:
 def _cell(cell: Mapping[str, Any], run: Mapping[str, Any], reference: str | None) -> str:
     status = cell["status"]
     if status == "not run":
-        return f"— {run['status']}"
+        return "— refused" if run["status"] == REFUSED else f"— {run['status']}"
     if status == "known limit":
         text = _limit(cell)
     else:
@@ -85,6 +87,8 @@ def _summary(run_statuses: list[Mapping[str, Any]], checks: list[Mapping[str, An
         return f"{LIMIT} {passed}/{len(checks)}, {limits} known limit{'s' * (limits > 1)}"
     if status == "failed":
         return f"{FAIL} {passed}/{len(checks)}"
+    if status == REFUSED:
+        return f"{REFUSE} refused"
     return f"{FAIL} {status}"
 
 
@@ -106,11 +110,14 @@ backend's measured value (real ODE, the reference). A **known limit** (⚠️) i
 check: the case file says so (`known_limits:` with the measured deviation, its cause and the doc that
 explains it), the check runs at the default tolerance and fails there, and the cell shows the measured
 deviation and its cause instead of a tick; it is counted apart. It is an expected failure on every path
-(`scenario run`, `pytest scenarios/`, JUnit, reports: docs/language.md). The suite fails when a known limit passes
-(no longer needed) or measures worse than its documented figure, and when a per-backend tolerance override
-is stale (the default tolerance would pass the measured error) or more than 3 times the measured error.
-Regenerate with `scenario conformance --markdown docs/conformance.md` (exit 0 only when every case passes
-everywhere, up to its known limits, and no tolerance is stale or too wide).
+(`scenario run`, `pytest scenarios/`, JUnit, reports: docs/language.md). A case a backend **refuses** up
+front (⛔: exit 2 on `scenario run`, the message naming the measured limit and the engines that can run it,
+docs/backends/*.md) is not run there; it is counted apart and shown with its message. The suite fails
+when a known limit passes (no longer needed) or measures worse than its documented figure, and when a
+per-backend tolerance override is stale (the default tolerance would pass the measured error) or more than
+3 times the measured error. Regenerate with `scenario conformance --markdown docs/conformance.md` (exit 0
+only when every case passes everywhere, up to its known limits and refusals, and no tolerance is stale or
+too wide).
 """
 
 
@@ -119,21 +126,23 @@ def markdown(matrix: Mapping[str, Any]) -> str:  # noqa: C901 - one document, se
     reference = matrix.get("reference")
     lines = ["# Conformance matrix", "", INTRO]
     n_checks = sum(len(c["checks"]) for c in matrix["cases"])
-    result = "**every case passes on every backend, up to its known limits**" if matrix["passed"] else (
+    refused = sum(b.get("refused", 0) for b in matrix["backends"])
+    upto = "its known limits" + (" and the cases refused up front" if refused else "")
+    result = f"**every case passes on every backend, up to {upto}**" if matrix["passed"] else (
         "**some cases fail** (see below)"
     )
     lines += [
         f"Generated on {matrix['date']} by physics-scenarios {matrix['tool_version']} from `{matrix['suite']}`: "
         f"{len(matrix['cases'])} cases, {n_checks} checks. Result: {result}; {totals(matrix)}.",
         "",
-        "| backend | engine version | cases passed | cases with known limits | run time (s) |",
-        "|---|---|---|---|---|",
+        "| backend | engine version | cases passed | cases with known limits | cases refused | run time (s) |",
+        "|---|---|---|---|---|---|",
     ]
     for b in matrix["backends"]:
         ref = " (reference)" if b["name"] == reference else ""
         lines.append(
             f"| `{b['name']}`{ref} | {b['engine_version']} | {b['passed']}/{b['cases']} | "
-            f"{b.get('known_limits', 0)} | {b['wall_seconds']} |"
+            f"{b.get('known_limits', 0)} | {b.get('refused', 0)} | {b['wall_seconds']} |"
         )
     if matrix.get("audit"):
         lines += ["", "## Tolerance problems", "", "| case | check | backend | problem |", "|---|---|---|---|"]
@@ -154,10 +163,15 @@ def markdown(matrix: Mapping[str, Any]) -> str:  # noqa: C901 - one document, se
             _escape(c["semantic"]) + (f" {_escape(c['description'])}" if c["description"] else ""),
         ]
         problems = [
-            f"{b}: {c['runs'][b]['status']}" for b in backends if c["runs"][b]["status"] not in RAN
+            f"{b}: {c['runs'][b]['status']}"
+            for b in backends
+            if c["runs"][b]["status"] not in (*RAN, REFUSED)
         ]
         if problems:
             lines += ["", "Not run to the end: " + "; ".join(problems) + "."]
+        refusals = [f"{b}: {_escape(c['runs'][b]['message'])}" for b in backends if c["runs"][b]["status"] == REFUSED]
+        if refusals:
+            lines += ["", "Refused up front by " + "; ".join(refusals)]
         lines += ["", "| check | expected | tolerance | " + " | ".join(backends) + " |"]
         lines.append("|---|---|---|" + "---|" * len(backends))
         for check in c["checks"]:
@@ -218,7 +232,7 @@ def console(matrix: Mapping[str, Any], out: Console, quiet: bool = False) -> Non
         row = []
         for b in backends:
             text = _summary([c["runs"][b]], c["checks"], b)
-            colour = "green" if text.startswith(PASS) else "yellow" if text.startswith(LIMIT) else "red"
+            colour = "green" if text.startswith(PASS) else "yellow" if text.startswith((LIMIT, REFUSE)) else "red"
             row.append(f"[{colour}]{text}[/]")
         table.add_row(c["id"], *row)
     if not quiet:
@@ -248,7 +262,9 @@ def console(matrix: Mapping[str, Any], out: Console, quiet: bool = False) -> Non
     for c in matrix["cases"]:
         for b in backends:
             run = c["runs"][b]
-            if run["status"] not in RAN:
+            if run["status"] == REFUSED:
+                out.print(f"[yellow]{c['id']} refused by {b}[/]: {run['message']}")
+            elif run["status"] not in RAN:
                 first = run["message"].strip().splitlines()[-1:] if run["message"] else []
                 last = f": {escape(first[0])}" if first else ""
                 out.print(f"[red]{escape(c['id'])} on {b}: {run['status']}[/]{last}")
@@ -259,10 +275,12 @@ def console(matrix: Mapping[str, Any], out: Console, quiet: bool = False) -> Non
 
 
 def totals(matrix: Mapping[str, Any]) -> str:
-    """``87 pass, 2 known limits of 89 case runs`` (cases x backends)."""
+    """``87 pass, 2 known limits of 89 case runs`` (cases x backends; ``, 4 refused`` before ``of`` if any)."""
     passed = sum(b["passed"] for b in matrix["backends"])
     limits = sum(b.get("known_limits", 0) for b in matrix["backends"])
     total = sum(b["cases"] for b in matrix["backends"])
-    text = f"{passed} pass, {limits} known limit{'' if limits == 1 else 's'} of {total} case runs"
+    refused = sum(b.get("refused", 0) for b in matrix["backends"])
+    text = f"{passed} pass, {limits} known limit{'' if limits == 1 else 's'}"
+    text += f", {refused} refused of {total} case runs" if refused else f" of {total} case runs"
     problems = len(matrix.get("audit", []))
     return text + (f", {problems} tolerance problem{'' if problems == 1 else 's'}" if problems else "")

@@ -480,3 +480,42 @@ def test_a_motor_reversed_at_its_stop_does_not_kick_the_joint() -> None:
     assert abs(first.motor_force[0]) < fmax  # the fudged force ODE applied, below fmax
     assert last.velocity[0] == pytest.approx(-1.0, abs=1e-4)
     assert abs(last.position[0] - (0.5 - 1.0 * 50 * h)) <= 1.0 * h
+
+
+def _tumble(dt: float, seconds: float = 10.0) -> tuple[int, float]:
+    """Conformance 14's box spun 1 % off its intermediate axis, run on ODE: (sign changes of the body-frame
+    w_y, sampled every 10 ms; relative energy change at the end)."""
+    inertia = np.array([0.065, 0.05, 0.025])  # the 0.1 x 0.2 x 0.3 m box of 6 kg
+    w0 = np.array([0.1, 10.0, 0.1])
+    spun = w.box("box", (0.1, 0.2, 0.3), (0.0, 0.0, 1.0), density=1000.0, ang_vel=tuple(w0))
+    world = w.world("tumble", [spun], gravity=(0.0, 0.0, 0.0), dt=dt, steps=int(round(seconds / dt)))
+    every = int(round(0.01 / dt))
+    signs: list[float] = []
+    with make_backend("ode", world) as sim:
+        for k in range(1, int(round(seconds / dt)) + 1):
+            sim.step()
+            if k % every == 0:
+                s = sim.body_states()
+                q, wv = s.quat[0], s.ang_vel[0]
+                u = -q[1:]  # w in the body frame: turned by the inverse quaternion
+                t = 2.0 * np.cross(u, wv)
+                body_w = wv + q[0] * t + np.cross(u, t)
+                signs.append(float(np.sign(body_w[1])))
+    changes = sum(a != b for a, b in zip(signs, signs[1:], strict=False))
+    energy = 0.5 * float(inertia @ body_w**2) / (0.5 * float(inertia @ w0**2)) - 1.0
+    return changes, energy
+
+
+def test_the_tumbling_box_drifts_with_the_step_not_with_rounding() -> None:
+    """Over 10 s the exact motion (Euler's equations, RK45 at rtol 1e-12) flips twice: 4 sign changes of
+    the body-frame w_y. ODE's flips more and loses energy (docs/backends/ode.md: 6 flips, -8.2 % at 1 ms).
+    The cause is its first-order step, not float32: the energy error halves with the step (ratio 2 up to
+    the scheme's next order: within [1.6, 2.4]), and at 0.5 ms it is still more than three times the
+    rounding bound (n + 1) 4 eps = 2e4 x 4 x 1.2e-7 = 0.95 % (docs/semantics.md, Rounding), itself a
+    worst case (measured: -4.2 %)."""
+    changes_1, energy_1 = _tumble(0.001)
+    changes_half, energy_half = _tumble(0.0005)
+    assert changes_1 > 4 and changes_half > 4  # more flips than the exact motion's two
+    assert energy_1 < 0.0 and energy_half < 0.0
+    assert 1.6 <= energy_1 / energy_half <= 2.4
+    assert abs(energy_half) > (2 * 10**4 + 1) * 4 * 2.0**-23 * 3

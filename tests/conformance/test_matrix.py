@@ -108,6 +108,26 @@ def test_matrix_errors_against_the_formula_and_the_reference(tmp_path: Path) -> 
     json.dumps(m, allow_nan=False)  # JSON-ready
 
 
+def test_a_case_refused_up_front_is_counted_apart_and_leaves_the_matrix_passing(tmp_path: Path) -> None:
+    # the worker's status for UnsupportedFeature (ODE's resting columns, issue 27): an answer, not a breakage
+    cases = discover(_suite(tmp_path / "s", {"a.yaml": _fall("a"), "b.yaml": _fall("b")}))
+    refusal = {"status": "unsupported", "message": "ode: a column of 5 | at most 4", "checks": [], "wall_seconds": 0}
+    runs = {
+        "ode": _run("ode", {"a": _result(9.9451), "b": refusal}),
+        "mujoco": _run("mujoco", {"a": _result(9.9451), "b": _result(9.9451)}),
+    }
+    m = build_matrix(cases, runs, "suite")
+    assert m["passed"] and not broken(m)
+    assert [(b["passed"], b["refused"]) for b in m["backends"]] == [(1, 1), (2, 0)]
+    text = markdown(m)
+    assert "| `b` | falls | ⛔ refused | ✅ 1/1 |" in text
+    assert "Refused up front by ode: ode: a column of 5 \\| at most 4" in text  # the message, escaped
+    assert "3 pass, 0 known limits, 1 refused of 4 case runs" in text
+    broken_b = {"a": _result(9.9451), "b": refusal | {"status": "failed"}}
+    failed = build_matrix(cases, {**runs, "mujoco": _run("mujoco", broken_b)}, "suite")
+    assert not failed["passed"]  # a failure stays a failure
+
+
 def test_matrix_without_the_reference_and_all_passing(tmp_path: Path) -> None:
     cases = discover(_suite(tmp_path / "s", {"a.yaml": _fall("a")}))
     m = build_matrix(cases, {"pybullet": _run("pybullet", {"a": _result(9.945)})}, "suite")
