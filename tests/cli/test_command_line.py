@@ -9,6 +9,7 @@ from pathlib import Path
 
 import pytest
 
+from reports.trace_format import LAYOUT_FILE
 from runner.cli.main import main
 from runner.language.files import scenario_files
 from tests.paths import ROOT
@@ -147,3 +148,14 @@ def test_set_beats_a_variants_set_for_the_same_path(capsys: pytest.CaptureFixtur
     assert code == 0, out + err
     code, out, err = run(capsys, "run", path, "--variant", "short", "--backend", "pybullet", "--no-trace")
     assert code == 1 and "failed: 2 of 2 assertions: ends, param" in out + err, out + err
+
+
+def test_layout_takes_a_folder_as_its_help_says(capsys: pytest.CaptureFixture[str], tmp_path: Path) -> None:
+    """`scenario layout FOLDER` was refused ("expected a scenario file, found a folder") though `--help` said
+    folders are taken; it now collects a folder like every other command."""
+    folder = tmp_path / "cases" / "deeper"
+    folder.mkdir(parents=True)
+    small(folder)
+    code, _, err = run(capsys, "layout", tmp_path / "cases", "--out", tmp_path / "out")
+    assert code == 0 and (tmp_path / "out" / LAYOUT_FILE).is_file(), err
+    assert "ball" in (tmp_path / "out" / LAYOUT_FILE).read_text()  # the folder's scenario's body

@@ -9,6 +9,7 @@ from pathlib import Path
 from rich.console import Console
 
 from reports.trace_format import LAYOUT_FILE
+from runner.cli import options
 from runner.errors import ExitCode, ScenarioError
 from runner.language.load import load_files
 
@@ -17,7 +18,7 @@ HELP = f"write the Foxglove layout ({LAYOUT_FILE}) for scenarios: 3D scene, asse
 
 
 def configure(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("files", nargs="+", type=Path, metavar="FILE", help="scenario files, or folders of *.yaml")
+    options.add_scenario_files(parser)
     parser.add_argument("--out", type=Path, default=None, metavar="DIR",
                         help=f"write DIR/{LAYOUT_FILE} (default: print the layout)")  # fmt: skip
 
@@ -26,7 +27,7 @@ def execute(args: argparse.Namespace, out: Console, err: Console) -> int:
     from runner.cli.layouts import layout_spec
     from runner.trace.layout import layout_text, write_layout
 
-    cases = load_files(list(args.files), None, True)
+    cases = load_files(options.scenario_files(args.files), None, True)
     spec = layout_spec(cases)
     if args.out is None:
         sys.stdout.write(layout_text(spec))
