@@ -215,7 +215,7 @@ def _publish(out: Path, written: dict[str, bytes]) -> None:
     try:
         out.mkdir(parents=True, exist_ok=True)
     except OSError as exc:
-        raise write_error(exc, f"into {out}") from exc
+        raise write_error(exc, f"the trace folder {out}") from exc
     traces = [n for n in written if n.endswith((tf.FILE_SUFFIX, tf.FILE_SUFFIX + tf.PARTIAL_SUFFIX))]
     for name in traces:
         publish_trace(out / name, written[name])

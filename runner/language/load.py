@@ -255,7 +255,8 @@ def load_scenario(
     text, data, positions = read_source(path, share_variants=True)
     early = [(k, v) for k, v in overrides if k.split(".")[0] == "variants"]
     if early:  # `--set variants.x...` changes a variant before it is applied
-        data["variants"] = copy.deepcopy(data["variants"])
+        if "variants" in data:
+            data["variants"] = copy.deepcopy(data["variants"])
         _apply_overrides(data, early, positions)
     variants = data.get("variants") if isinstance(data.get("variants"), dict) else {}
     chosen = variant if variant not in (None, BASE_CASE) else None

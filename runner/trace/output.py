@@ -180,12 +180,12 @@ class Claim:
         try:
             self.path.parent.mkdir(parents=True, exist_ok=True)
         except OSError as exc:
-            raise write_error(exc, f"the folder {self.path.parent}") from exc
+            raise write_error(exc, f"the trace folder {self.path.parent}") from exc
         while True:
             try:
                 fd = os.open(self.path, os.O_RDWR | os.O_CREAT | os.O_CLOEXEC, 0o644)
             except OSError as exc:
-                raise write_error(exc, f"into {self.path.parent}") from exc
+                raise write_error(exc, f"the trace folder {self.path.parent}") from exc
             try:
                 fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
             except BlockingIOError:

@@ -194,6 +194,9 @@ class TraceWriter:
             self._sdk(self._writer.write_metadata, tf.METADATA_SCENARIO, self._scenario_record())
         except BaseException as exc:
             self._abandon()
+            if self._sink.failed is not None:  # the disk was full before the scenario record was whole:
+                with contextlib.suppress(OSError):  # nothing to recover, no 0-byte .partial left behind
+                    self.partial_path.unlink()
             if isinstance(exc, OSError):
                 raise output.write_error(exc, f"trace {self.partial_path}") from exc
             raise

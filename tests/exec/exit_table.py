@@ -78,6 +78,7 @@ class Row:
     code: int  # the exit code every path must give (compare: its row; pytest: the [exit N] of its report)
     full_disk: bool = False
     variant: str | None = None  # the variant `run` picks (the first): `check` and pytest would run them all
+    read_only: bool = False
 
 
 ROWS = [
@@ -97,6 +98,10 @@ ROWS = [
         BOX.format(name="fails") + "assertions:\n  - {name: flies, at: end, check: box.pos.z > 10}\n", 1),
     Row("known limit (expected failure)", "pybullet", BOX.format(name="limited") + LIMITED.format(near=0.1), 0),
     Row("known limit that passes", "pybullet", BOX.format(name="unlimited") + LIMITED.format(near=0), 1),
+    Row("read-only output", "pybullet", BOX.format(name="readonly"), 74, read_only=True),
+    Row("integer overflow", "pybullet", BOX.format(name="overflow").replace("bodies:", "state: {s: 3}\nbodies:") +
+        "inputs: [{at: 0, event: sq, repeat: {every: 0.04, count: 9}}]\non:\n  sq: [{calc: {s: state.s * state.s}}]\n"
+        "assertions:\n  - {name: big, at: end, value: state.s * floor(1e308) * floor(1e308), max: 0}\n", 1),
 ]  # fmt: skip
 
 LANDING = """\
@@ -148,14 +153,18 @@ def _source(folder: Path, row: Row) -> Path:
 
 
 @contextlib.contextmanager
-def output_folder(base: Path, full: bool) -> Iterator[tuple[Path, dict[str, int]]]:
-    """A folder for --out; for the full-disk row a 32 KiB tmpfs (root), else a 32 KiB file-size limit."""
+def output_folder(base: Path, full: bool, read_only: bool = False) -> Iterator[tuple[Path, dict[str, int]]]:
+    """A folder for --out; for the full-disk row a 32 KiB tmpfs (root), else a 32 KiB file-size limit; for
+    the read-only row a read-only tmpfs (root), else mode 555."""
     out = base / "out"
     out.mkdir(parents=True)
     limits: dict[str, int] = {}
     mounted = False
-    if full and os.geteuid() == 0 and shutil.which("mount"):
-        mounted = subprocess.run(["mount", "-t", "tmpfs", "-o", "size=32k", "tmpfs", str(out)]).returncode == 0
+    if (full or read_only) and os.geteuid() == 0 and shutil.which("mount"):
+        options = "ro,size=32k" if read_only else "size=32k"
+        mounted = subprocess.run(["mount", "-t", "tmpfs", "-o", options, "tmpfs", str(out)]).returncode == 0
+    if read_only and not mounted:
+        out.chmod(0o555)
     if full and not mounted:
         limits["fsize"] = 32 * 1024
     try:
@@ -163,6 +172,8 @@ def output_folder(base: Path, full: bool) -> Iterator[tuple[Path, dict[str, int]
     finally:
         if mounted:
             subprocess.run(["umount", str(out)], check=False)
+        elif read_only:
+            out.chmod(0o755)
 
 
 def environment() -> dict[str, str]:
@@ -229,7 +240,7 @@ def run_cell(row: Row, path: str, base: Path, ray: str = "auto") -> Cell:
     if path == "check":  # its golden file first, where the run completes (a failed assertion is recorded too)
         subprocess.run(command("baseline", source, row.backend, work, variant=row.variant), capture_output=True,
                        timeout=600, env=env, cwd=work)  # fmt: skip
-    with output_folder(work, row.full_disk) as (out, limits):
+    with output_folder(work, row.full_disk, row.read_only) as (out, limits):
         done = subprocess.run(command(path, source, row.backend, out, ray, row.variant), capture_output=True, text=True,
                               timeout=600, env=env, cwd=work, preexec_fn=lambda: _limits(limits))  # fmt: skip
     text = done.stdout + done.stderr

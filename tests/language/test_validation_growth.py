@@ -97,3 +97,16 @@ def test_an_error_in_another_variant_is_reported_whichever_is_loaded(tmp_path: P
             load_scenario(path, variant)
         found = [f"{i.line}:{i.path}" for i in info.value.issues]
         assert found == ["8:variants.bad.inputs"] if variant != "bad" else ["8:inputs", "8:variants.bad.inputs"]
+
+
+def test_a_set_into_the_variants_section_is_applied_before_the_variant(tmp_path: Path) -> None:
+    """`--set variants.x...` edits the section (a copy: the parse cache's is shared by every load), and a
+    file without variants refuses it naming the argument (it raised KeyError once, found by the fuzzer)."""
+    path = tmp_path / "v.yaml"
+    path.write_text(HEAD)
+    with pytest.raises(ScenarioValidationError, match="unknown variant `x`"):
+        load_scenario(path, None, (("variants.x.set", {}),))
+    path.write_text(HEAD + "variants:\n  x: {set: {world.duration: 0.1}}\n")
+    edited = load_scenario(path, "x", (("variants.x.set", {"world.duration": 0.12}),))
+    assert edited.model.world.duration == 0.12
+    assert load_scenario(path, "x").model.world.duration == 0.1  # the cached section was not changed

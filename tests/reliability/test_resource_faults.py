@@ -55,3 +55,21 @@ def test_a_full_disk_is_exit_74_and_keeps_a_readable_partial(tmp_path: Path, dis
         inspect = subprocess.run([sys.executable, "-m", "runner", "inspect", "--recover", str(partial)],
                                  capture_output=True, text=True, timeout=120)  # fmt: skip
         assert inspect.returncode == 0 and "factory-physics" in inspect.stdout, inspect.stderr
+
+
+@pytest.mark.parametrize("path", [[], ["-j", "2"], ["--trace-process"]], ids=["serial", "-j 2", "--trace-process"])
+def test_a_case_started_on_a_full_disk_leaves_no_empty_partial(tmp_path: Path, path: list[str]) -> None:
+    """A case whose trace could not take even its header (the disk filled before it started) left a 0-byte
+    `.partial` that `inspect --recover` cannot read, and was announced as "trace kept". A file-size limit of
+    8 bytes (any user) lets the trace's magic in and refuses its first record."""
+    scenario = tmp_path / "fall.yaml"
+    scenario.write_text("schema_version: 1\nscenario: fall\nworld: {dt: 0.01, duration: 0.1}\nbodies:\n"
+                        "  ball: {sphere: 0.1, mass: 1, pos: [0, 0, 1]}\n")  # fmt: skip
+    out = tmp_path / "out"
+    done = subprocess.run([sys.executable, "-m", "runner", "run", str(scenario), "--backend", "fake", "--out",
+                           str(out), *path], capture_output=True, text=True, timeout=300, env=environment(),
+                          preexec_fn=lambda: _limits({"fsize": 8}))  # fmt: skip
+    assert done.returncode == 74, done.stdout + done.stderr
+    assert f"output error: cannot write trace {out}/fall__base__fake.mcap.partial: File too large" in done.stderr
+    assert "trace kept" not in done.stderr and "Traceback" not in done.stderr, done.stderr
+    assert not [p.name for p in out.iterdir() if p.name.endswith(".partial")]

@@ -113,6 +113,10 @@ def execute(args: argparse.Namespace, out: Console, err: Console) -> int:
 
         write_layouts([args.out / "traces"], cases)  # foxglove-layout.json beside the traces (the report links it)
     inputs = [Path(r.trace) if r.trace is not None else Path(r.outcome_file) if r.outcome_file else None for r in runs]
+    if all(p is None for p in inputs) and any(r.exit.code is ExitCode.OUTPUT_ERROR for r in runs):
+        # a read-only or full --out: no run could write anything, nor can the report (it was exit 2, "no traces")
+        err.print(f"[bold red]output error:[/] no report: nothing could be written into {escape(str(args.out))}")
+        return ExitCode.OUTPUT_ERROR
     try:
         files = write_report([p for p in inputs if p is not None], args.out, reference=args.reference,
                              max_divergence=args.max_divergence, require_agreement=args.require_agreement)  # fmt: skip
