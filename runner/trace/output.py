@@ -46,8 +46,8 @@ from reports import outcome as oc
 from reports import trace_format as tf
 from runner.errors import OutputError, OutputInUse, TraceError
 
-__all__ = ["OUTPUT_ERRNOS", "RESOURCE_ERRNOS", "Claim", "case_files", "foreign", "is_own", "lock_path", "publish_trace", "refusal",
-           "remove_own", "write_error"]  # fmt: skip
+__all__ = ["OUTPUT_ERRNOS", "RESOURCE_ERRNOS", "Claim", "case_files", "foreign", "is_own", "lock_path",
+           "publish_trace", "refusal", "remove_own", "write_error"]  # fmt: skip
 
 _MAGIC = b"\x89MCAP0\r\n"
 _LIBRARIES = (tf.SDK_LIBRARY, tf.LIBRARY)
