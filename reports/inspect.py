@@ -65,7 +65,7 @@ def _overview(trace: Trace) -> Table:
         ("tool", tool),
     ]
     if not trace.complete:
-        how = f"read every whole record; {trace.stop_reason}" if trace.recovered else "no footer"
+        how = f"read up to its last complete chunk; stopped at: {trace.stop_reason}" if trace.recovered else "no footer"
         rows.append(("file", Text(f"unfinished ({how})", style="yellow")))
     elif trace.recovered:  # finished, with a damaged record skipped
         rows.append(("file", Text(f"damaged (read every other record; {trace.stop_reason})", style="yellow")))

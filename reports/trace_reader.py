@@ -259,7 +259,9 @@ def _records(f: IO[bytes], size: int, recover: bool, path: Path) -> Iterator[Any
     offset = len(_MAGIC)
     while True:
         head = f.read(9)
-        if not head:
+        if not head:  # the end of the file without its footer: unfinished (the caller refuses it unless recover)
+            if recover:
+                yield Damage(offset, "the file ends here, before its footer (unfinished)")
             return
         damage: Damage | None = None
         if len(head) < 9:
@@ -396,7 +398,8 @@ def read_trace(path: str | Path, recover: bool = False) -> Trace:
         raise TraceReadError(f"{path} holds no readable trace: {stop_reason}")
     _check_summary(path, metadata)
     if not complete and not recover:
-        raise TraceReadError(f"{path} has no footer (unfinished); read what it holds with recover=True")
+        raise TraceReadError(f"{path} has no footer (unfinished); read what it holds with recover=True "
+                             "(`scenario inspect --recover`)")
     if tf.METADATA_SCENARIO not in metadata and any(s.encoding == "jsonschema" for s in schemas.values()):
         _check_format(path, {})
     infos: dict[str, ChannelInfo] = {}

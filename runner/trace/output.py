@@ -46,22 +46,24 @@ from reports import outcome as oc
 from reports import trace_format as tf
 from runner.errors import OutputError, OutputInUse, TraceError
 
-__all__ = ["RESOURCE_ERRNOS", "Claim", "case_files", "foreign", "is_own", "lock_path", "publish_trace", "refusal",
-           "remove_own", "write_error"]  # fmt: skip
+__all__ = ["OUTPUT_ERRNOS", "RESOURCE_ERRNOS", "Claim", "case_files", "foreign", "is_own", "lock_path",
+           "publish_trace", "refusal", "remove_own", "write_error"]  # fmt: skip
 
 _MAGIC = b"\x89MCAP0\r\n"
 _LIBRARIES = (tf.SDK_LIBRARY, tf.LIBRARY)
 
-#: errno values of an output that cannot take what is written (exit 74): the disk (or quota) is full, the
-#: device failed, the file system is read-only or the folder is not writable for this user
-RESOURCE_ERRNOS = frozenset({errno.ENOSPC, errno.EDQUOT, errno.EIO, errno.EFBIG, errno.EROFS, errno.EACCES,
-                             errno.EPERM})  # fmt: skip
+#: errno values of a resource fault while writing: the disk (or quota) is full, the device failed
+RESOURCE_ERRNOS = frozenset({errno.ENOSPC, errno.EDQUOT, errno.EIO, errno.EFBIG})
+#: errno values of an output that cannot take what the tool writes (exit 74): a resource fault, or a file
+#: system that is read-only or a folder not writable for this user (only where an output is written: the
+#: same errno while reading an input is bad input)
+OUTPUT_ERRNOS = RESOURCE_ERRNOS | {errno.EROFS, errno.EACCES, errno.EPERM}
 
 
 def write_error(exc: OSError, what: str) -> TraceError:
     """``exc`` (raised while writing ``what``) in the tree: :class:`OutputError` for a resource fault (exit
     74), else :class:`TraceError` (a path that cannot be used, exit 2)."""
-    cls = OutputError if exc.errno in RESOURCE_ERRNOS else TraceError
+    cls = OutputError if exc.errno in OUTPUT_ERRNOS else TraceError
     return cls(f"cannot write {what}: {exc.strerror or exc}")
 
 

@@ -20,7 +20,7 @@ from runner.cli.progress import BatchProgress, wanted
 from runner.errors import OutputError, ScenarioError, ScenarioValidationError, TraceError, UsageError
 from runner.exec.cases import Case, CaseResult
 from runner.language.load import BASE_CASE, LoadedScenario, load_files, parse_overrides
-from runner.trace.output import RESOURCE_ERRNOS
+from runner.trace.output import OUTPUT_ERRNOS
 
 NAME = "run"
 HELP = "run scenarios and print verdicts"
@@ -168,7 +168,7 @@ def _execute(
             out_dir.mkdir(parents=True, exist_ok=True)
         except OSError as exc:
             message = f"cannot use {out_dir} as the trace folder: {exc.strerror or exc}"
-            if exc.errno in RESOURCE_ERRNOS:  # read-only, not permitted, full: exit 74
+            if exc.errno in OUTPUT_ERRNOS:  # read-only, not permitted, full: exit 74
                 raise OutputError(message) from None
             raise ScenarioError(message) from None
     jobs = [_case(args, c, b, overrides, out_dir) for c, b in work]
