@@ -11,14 +11,16 @@ message naming the measured limit and the engines that can run it, docs/backends
 breakage: it is counted apart as refused. :mod:`runner.conformance.audit` checks the tolerances themselves
 (stale or too wide overrides, known limits no longer needed); its problems are in ``audit``. The matrix
 passes only when every case passed (or failed at its known limits only, or was refused where
-``EXPECTED_REFUSALS`` names the refusal) on every backend and the audit found nothing.
+the suite's ``expected-refusals.json`` names the refusal) on every backend and the audit found nothing.
 """
 
 from __future__ import annotations
 
 import datetime as _dt
+import json
 import math
 from collections.abc import Mapping, Sequence
+from pathlib import Path
 from typing import Any
 
 from backends.registry import REFERENCE_BACKEND
@@ -30,18 +32,26 @@ from runner.version import tool_version
 REFERENCE = REFERENCE_BACKEND
 #: A case's status when its backend refused it before the run (runner.conformance.worker).
 REFUSED = "unsupported"
-#: Case statuses that leave the matrix passing (a refusal only where :data:`EXPECTED_REFUSALS` names it).
+#: Case statuses that leave the matrix passing (a refusal only where the suite expects it).
 ACCEPTED = ("passed", audit.KNOWN_LIMIT)
-#: Case file -> the backends that refuse it up front by a measured, documented limit. Any other refusal
-#: (a mapping that stopped accepting a case) fails the matrix like a crash.
-EXPECTED_REFUSALS: dict[str, frozenset[str]] = {
-    # ODE: resting columns of more than 4 bodies with friction (docs/backends/ode.md, Stacking; issue 27)
-    "16_stacking_heights.yaml": frozenset({"ode"}),
-}
+#: Beside a suite's case files: {case file: [backends that refuse it up front by a measured, documented
+#: limit]}. Any other refusal (a mapping that stopped accepting a case) fails the matrix like a crash.
+EXPECTED_REFUSALS_FILE = "expected-refusals.json"
 
 
-def _accepted(case: Mapping[str, Any], backend: str, status: str) -> bool:
-    return status in ACCEPTED or (status == REFUSED and backend in EXPECTED_REFUSALS.get(case["file"], frozenset()))
+def expected_refusals(folder: Path) -> dict[str, frozenset[str]]:
+    """The suite folder's expected refusals (none without the file)."""
+    try:
+        found = json.loads((folder / EXPECTED_REFUSALS_FILE).read_text(encoding="utf-8"))
+    except FileNotFoundError:
+        return {}
+    return {str(k): frozenset(map(str, v)) for k, v in found.items() if not str(k).startswith("_")}
+
+
+def _accepted(status: str, backend: str, expected: frozenset[str]) -> bool:
+    return status in ACCEPTED or (status == REFUSED and backend in expected)
+
+
 SCHEMA = "physics-scenarios/conformance-matrix/1"
 
 
@@ -85,6 +95,8 @@ def build_matrix(
     reference = REFERENCE if REFERENCE in runs else None
     out_cases: list[dict[str, Any]] = []
     problems: list[dict[str, str]] = []
+    folders = {case.path.parent: expected_refusals(case.path.parent) for case in cases}
+    expected = {case.id: folders[case.path.parent].get(case.file, frozenset()) for case in cases}
     for case in cases:
         results = {b: runs[b].results.get(case.id) for b in backends}
         per_backend = {b: _checks_by_index(results[b], len(case.checks)) for b in backends}
@@ -146,7 +158,7 @@ def build_matrix(
         "audit": problems,
         "passed": bool(out_cases)
         and not problems
-        and all(_accepted(c, b, r["status"]) for c in out_cases for b, r in c["runs"].items()),
+        and all(_accepted(r["status"], b, expected[c["id"]]) for c in out_cases for b, r in c["runs"].items()),
     }
 
 

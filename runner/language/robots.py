@@ -65,7 +65,10 @@ def load_robots(model: Scenario, positions: Positions, base_dir: FsPath) -> dict
         try:
             desc = load_model(robot, base_dir)
         except ModelFileError as exc:
-            issues.append(Issue(exc.file, exc.line, exc.column, ".".join(str(p) for p in where), exc.message))
+            if exc.line <= 0:  # no place in the model file (it is missing, unreadable): the scenario's line
+                issues.append(positions.issue(where, exc.message))
+            else:
+                issues.append(Issue(exc.file, exc.line, exc.column, ".".join(str(p) for p in where), exc.message))
             continue
         out[name] = desc
         links = {link.name for link in desc.links}

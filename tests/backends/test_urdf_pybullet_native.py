@@ -39,7 +39,7 @@ MODELS = (
     "cartpole.urdf",
     "pendulum5.urdf",
     "kuka_iiwa/model.urdf",
-    "kuka_iiwa/model_vr_limits.urdf",
+    "kuka_iiwa/model_free_base.urdf",
     "quadruped/quadruped.urdf",
 )
 

@@ -295,4 +295,5 @@ def test_mjcf_without_mujoco_names_the_extra(tmp_path: Path, monkeypatch: pytest
         "  floor: {plane: {}, motion: static}\nrobots:\n  p: {mjcf: m.xml}\n"
     )
     file, _, message = _issue(path)
-    assert file.endswith("m.xml") and "pip install 'physics-scenarios[mujoco]'" in message
+    # no place in the model file to name: located at the scenario's `mjcf:` line
+    assert file.endswith("s.yaml") and "pip install 'physics-scenarios[mujoco]'" in message
