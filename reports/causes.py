@@ -32,6 +32,7 @@ import numpy as np
 import yaml
 
 from reports import trace_format as tf
+from reports.quantities import specs
 from reports.runs import Run
 from reports.trace_reader import Trace
 
@@ -71,14 +72,6 @@ def gravity(trace: Trace) -> np.ndarray | None:
         if isinstance(item, list) and len(item) == 2 and item[0] == "world.gravity":
             found = item[1]
     return _vector(found)
-
-
-def _specs(trace: Trace, key: str) -> list[dict[str, Any]]:
-    try:
-        found = json.loads(trace.scenario.get(key, "[]"))
-    except json.JSONDecodeError:
-        return []
-    return [s for s in found if isinstance(s, dict)]
 
 
 def _contact_load(trace: Trace, body: str) -> float:
@@ -135,8 +128,8 @@ def joint_sag(runs: Sequence[Run], quantities: Sequence[dict[str, Any]], backend
     for run in runs:
         if run.backend not in backends or run.trace is None:
             continue
-        bodies = {s["name"]: s for s in _specs(run.trace, tf.KEY_BODY_SPECS)}
-        for joint in _specs(run.trace, tf.KEY_JOINT_SPECS):
+        bodies = {s["name"]: s for s in specs(run.trace, tf.KEY_BODY_SPECS)}
+        for joint in specs(run.trace, tf.KEY_JOINT_SPECS):
             body = bodies.get(str(joint.get("body")))
             q = by_id.get(f"{joint.get('body')}:joint-distance")
             if joint.get("other") is not None or joint.get("kind") not in _HELD or body is None or q is None:

@@ -35,7 +35,7 @@ from reports.runs import Run
 from reports.trace_reader import Trace
 from reports.truth import Reference
 
-__all__ = ["KINDS", "UNITS", "Quantity", "measure", "quantities", "truth_wins"]
+__all__ = ["KINDS", "UNITS", "Quantity", "measure", "quantities", "specs", "truth_wins"]
 
 KINDS = ("position", "angle")
 UNITS = {"position": "m", "angle": "rad"}
@@ -60,7 +60,8 @@ def _r(x: float) -> float | None:
     return round(x, 9) if math.isfinite(x) else None
 
 
-def _specs(trace: Trace, key: str) -> list[dict[str, Any]]:
+def specs(trace: Trace, key: str) -> list[dict[str, Any]]:
+    """The scenario's JSON list under ``key`` in the trace (body or joint specs); [] when unreadable."""
     try:
         found = json.loads(trace.scenario.get(key, "[]"))
     except json.JSONDecodeError:
@@ -113,7 +114,7 @@ def _joint_label(kind: str) -> tuple[str, str]:
 
 
 def _moving(trace: Trace) -> list[str]:
-    static = {s["name"] for s in _specs(trace, tf.KEY_BODY_SPECS) if s.get("motion") == "static"}
+    static = {s["name"] for s in specs(trace, tf.KEY_BODY_SPECS) if s.get("motion") == "static"}
     return [b for b in trace.bodies if b not in static]
 
 
@@ -203,8 +204,8 @@ def _collect(runs: Sequence[Run], ref: Run | None, references: Sequence[Referenc
     first = next((r.trace for r in ([ref] if ref else []) + list(runs) if r is not None and r.trace is not None), None)
     if first is None:
         return found
-    bodies = {s["name"]: s for s in _specs(first, tf.KEY_BODY_SPECS)}
-    joints = _specs(first, tf.KEY_JOINT_SPECS)
+    bodies = {s["name"]: s for s in specs(first, tf.KEY_BODY_SPECS)}
+    joints = specs(first, tf.KEY_JOINT_SPECS)
     held: set[str] = set()
     for j in joints:
         body = bodies.get(j.get("body", ""))
