@@ -140,7 +140,7 @@ def summary(trace: Trace, max_events: int = 50) -> Group:
 def summary_text(trace: Trace, width: int = 100, max_events: int = 50) -> str:
     """The same summary as plain text (no colour), for logs, tests and ``--json``-less pipes."""
     buffer = io.StringIO()
-    console = Console(file=buffer, width=width, color_system=None, force_terminal=False, highlight=False)
+    console = Console(file=buffer, width=width, color_system=None, force_terminal=False, highlight=False, emoji=False)
     console.print(summary(trace, max_events))
     return buffer.getvalue()
 

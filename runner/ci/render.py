@@ -39,7 +39,8 @@ def render(renderable: object, width: int = 120) -> str:
     from rich.console import Console
 
     buf = io.StringIO()
-    Console(file=buf, width=width, color_system=None, force_terminal=False, highlight=False).print(renderable)
+    console = Console(file=buf, width=width, color_system=None, force_terminal=False, highlight=False, emoji=False)
+    console.print(renderable)
     return buf.getvalue()
 
 

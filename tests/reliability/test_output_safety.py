@@ -198,6 +198,16 @@ def test_emoji_codes_in_locations_and_names_are_printed_as_text(tmp_path: Path) 
     assert "out:100:/markup__base__fake.mcap" in run.stdout
     inspect = scenario("inspect", "out:100:/markup__base__fake.mcap", cwd=tmp_path)
     assert inspect.returncode == 0 and "[bold]y :100: :smile:" in inspect.stdout, inspect.stdout
+    junit_run = scenario("run", "[bold]d:smile:/m.yaml", "--backend", "fake", "--out", "o2", "--junit", "j.xml",
+                         cwd=tmp_path)  # fmt: skip
+    assert junit_run.returncode == 1, junit_run.stderr
+    junit = (tmp_path / "j.xml").read_text(encoding="utf-8")
+    assert "[bold]y :100: :smile:" in junit, junit
+    from reports.inspect import summary_text
+    from reports.trace_reader import read_trace
+
+    summary = summary_text(read_trace(tmp_path / "out:100:" / "markup__base__fake.mcap"))
+    assert "[bold]y :100: :smile:" in summary, summary
     emoji = ("\N{HUNDRED POINTS SYMBOL}", "\N{SMILING FACE WITH OPEN MOUTH AND SMILING EYES}")
-    for output in (done.stderr, run.stdout, run.stderr, inspect.stdout):
+    for output in (done.stderr, run.stdout, run.stderr, inspect.stdout, junit, summary):
         assert not any(e in output for e in emoji), output
