@@ -53,11 +53,16 @@ class JUnitCase:
 
 
 def suite_properties(backend: str, loaded: LoadedScenario | None = None) -> dict[str, str]:
+    from backends.errors import BackendError
     from backends.registry import engine_version
 
+    try:
+        version = engine_version(backend)
+    except BackendError:  # a name the command line gave that is no backend (its error case says so)
+        version = "unknown backend"
     props = {
         "backend": backend,
-        "engine_version": engine_version(backend),
+        "engine_version": version,
         "tool_version": tool_version(),
         "python": platform.python_version(),
         "platform": f"{sys.platform}-{platform.machine()}",

@@ -87,6 +87,28 @@ def test_run_junit_bad_input_is_an_error(
     assert "unknown key `densty`; did you mean `density`?" in (error.text or "")
 
 
+@pytest.mark.parametrize("backends", [["-b", "fake,pybullet"], ["-b", "fake", "-b", "pybullet"], ["-b", "nosuch"]])
+def test_run_junit_bad_input_with_several_backends_is_an_error_per_backend(
+    schema: xmlschema.XMLSchema, tmp_path: Path, capsys: pytest.CaptureFixture[str], backends: list[str]
+) -> None:
+    """Before: `-b a,b --junit` on a bad file printed "Unknown backend `a,b`" (the JUnit writer looked the joined
+    names up) instead of the file's own errors."""
+    bad = tmp_path / "bad.yaml"
+    bad.write_text(DROP.replace("density: 500", "densty: 500"))
+    report = tmp_path / "junit.xml"
+    code, output = cli(capsys, "run", bad, *backends, "--junit", report)
+    assert code == 2, output
+    expected = "Unknown backend `nosuch`" if "nosuch" in backends else "unknown key `densty`"  # names come first
+    assert expected in output and "Unknown backend `fake,pybullet`" not in output, output
+    schema.validate(str(report))
+    names = [n for n in backends if n != "-b"][0].split(",") + [n for n in backends if n != "-b"][1:]
+    cases = _cases(report)
+    assert sorted(cases) == sorted(f"load[{n}]" for n in names), list(cases)
+    for case in cases.values():
+        error = case.find("error")
+        assert error is not None and expected in (error.text or "")
+
+
 def test_check_junit_divergence_and_missing_baseline(
     schema: xmlschema.XMLSchema, factory_goldens: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:

@@ -118,17 +118,19 @@ def _write_junit(
         by_file: dict[str, list[str]] = {}
         for issue in exc.issues:
             by_file.setdefault(issue.file, []).append(str(issue))
-        junit += [from_error(f, _backend_text(args), "\n".join(lines)) for f, lines in by_file.items()]
+        junit += [from_error(f, b, "\n".join(lines)) for f, lines in by_file.items() for b in _backend_names(args)]
     elif exc is not None:
         kind = "engine-failure" if isinstance(exc, (BackendNotInstalled, EngineFailure)) else "bad-input"
         where = args.files[0] if args.files else "scenario"
-        junit.append(from_error(where, _backend_text(args), str(exc), kind))
+        junit += [from_error(where, b, str(exc), kind) for b in _backend_names(args)]
     write_junit(args.junit, junit)
 
 
-def _backend_text(args: argparse.Namespace) -> str:
-    """The backends as the command line named them (for a JUnit error before they were checked)."""
-    return ",".join(args.backend or [args.backend_default])
+def _backend_names(args: argparse.Namespace) -> list[str]:
+    """The backends as the command line named them (`-b a,b` or `-b a -b b`), for a JUnit error case per
+    backend before the names were checked."""
+    names = [n.strip() for text in (args.backend or [args.backend_default]) for n in text.split(",")]
+    return list(dict.fromkeys(n for n in names if n)) or [args.backend_default]
 
 
 def _check(args: argparse.Namespace) -> None:
