@@ -7,6 +7,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 
 from runner.language.model import Scenario
+from runner.language.model_names import spelled
 from runner.language.model_physics import Body
 from runner.language.robot_desc import ModelDesc
 
@@ -109,10 +110,17 @@ def readable_names(model: Scenario, robots: Mapping[str, ModelDesc] | None = Non
     return names
 
 
+def written(name: str) -> str:
+    """A dotted name as an expression writes it: each part that is not an identifier quoted
+    (``arm.8.position`` -> ``arm["8"].position``)."""
+    first, *rest = name.split(".")
+    return first + "".join(spelled(part) for part in rest)
+
+
 def check_name(name: str, valid: set[str]) -> str | None:
     """An error message if ``name`` cannot be read, else None."""
     if name in valid:
         return None
     close = difflib.get_close_matches(name, sorted(valid), n=1, cutoff=0.7)
-    hint = f"; did you mean `{close[0]}`?" if close else ""
-    return f"unknown name `{name}` in expression{hint}"
+    hint = f"; did you mean `{written(close[0])}`?" if close else ""
+    return f"unknown name `{written(name)}` in expression{hint}"
