@@ -263,6 +263,17 @@ def _dotted(node: ast.AST) -> str | None:
     return None if parts is None else ".".join(part for part, _ in parts)
 
 
+def _not_a_name(node: ast.AST) -> str:
+    """Why ``node`` (a chain of `.` and `[...]`) is no dotted name."""
+    while isinstance(node, ast.Attribute | ast.Subscript):
+        if isinstance(node, ast.Subscript) and not (
+            isinstance(node.slice, ast.Constant) and isinstance(node.slice.value, str)
+        ):
+            return 'a part in brackets is a quoted name: `arm["8"].position`'
+        node = node.value
+    return "attribute access is only allowed on names"
+
+
 def _underscored(node: ast.AST) -> str | None:
     """The first unquoted part of a name that starts with an underscore (refused: a quoted part is a model's
     name, read as a whole like every dotted name, so it may)."""
@@ -302,8 +313,7 @@ class _Compiler:
         if isinstance(node, ast.Name | ast.Attribute | ast.Subscript):
             name = _dotted(node)
             if name is None:
-                raise self.fail(node, "only names are read with `.` and `[...]`, and a part in brackets is quoted "
-                                "text: `arm[\"8\"].position`")
+                raise self.fail(node, _not_a_name(node))
             if _underscored(node) is not None:
                 raise self.fail(node, f"name `{name}` not allowed (underscore)")
             if name in CONSTANTS:
