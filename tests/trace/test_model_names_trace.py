@@ -161,3 +161,14 @@ def test_a_body_named_with_a_space_on_mujoco(tmp_path: Path) -> None:
     assert link.pos[0, 2] == pytest.approx(0.94, abs=1e-9) and np.all(np.isfinite(link.vel))
     times, z = trace.series("hand.pinch site.pos.z")
     assert len(times) == 51 and z[0] == pytest.approx(0.94, abs=1e-9)
+
+
+def test_inspect_lists_the_robot_by_the_file_s_names(runs: Path) -> None:
+    from reports.inspect import summary_text
+
+    text = summary_text(read_trace(runs / "spirit40-names__base__dart.mcap"), width=160)
+    rows = [[cell.strip() for cell in line.split("│")[1:-1]] for line in text.splitlines() if "│" in line]
+    assert "Robot dog: links (17)" in text and "Robot dog: joints (16)" in text
+    # spirit40.urdf: <joint name="8"> axis 1 0 0, limits -0.707 .. 0.707 (the robot starts at 0), welded body
+    assert ["8", "hinge", "-0.707 .. 0.707 rad", "1 0 0"] in rows and ["jtoe0", "fixed", "", ""] in rows
+    assert ["body", "static"] in rows and ["hip0", "0.575"] in rows  # <link name="hip0"> <mass value="0.575"/>
