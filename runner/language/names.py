@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import difflib
-from collections.abc import Mapping
+from collections.abc import Container, Mapping
 from dataclasses import dataclass
 
 from runner.language.model import Scenario
@@ -94,6 +94,17 @@ def robot_groups(robots: Mapping[str, ModelDesc]) -> dict[str, list[str]]:
 def robot_joints(robots: Mapping[str, ModelDesc]) -> list[str]:
     """The joints the robots add: `<robot>.<joint>` (a free joint is no joint)."""
     return [f"{name}.{j.name}" for name, desc in robots.items() for j in desc.joints if j.kind != "free"]
+
+
+def split_owner(name: str, members: Container[str]) -> tuple[str, str]:
+    """(owner, rest) of a dotted name: the owner is the longest leading part that is a robot's link or joint in
+    ``members`` (a model's name may hold dots: `arm.a.b.pos.z` reads link `a.b`), else the first part."""
+    parts = name.split(".")
+    for k in range(len(parts) - 1, 1, -1):
+        owner = ".".join(parts[:k])
+        if owner in members:
+            return owner, ".".join(parts[k:])
+    return parts[0], ".".join(parts[1:])
 
 
 def readable_names(model: Scenario, robots: Mapping[str, ModelDesc] | None = None) -> list[str]:

@@ -172,3 +172,46 @@ def test_inspect_lists_the_robot_by_the_file_s_names(runs: Path) -> None:
     # spirit40.urdf: <joint name="8"> axis 1 0 0, limits -0.707 .. 0.707 (the robot starts at 0), welded body
     assert ["8", "hinge", "-0.707 .. 0.707 rad", "1 0 0"] in rows and ["jtoe0", "fixed", "", ""] in rows
     assert ["body", "static"] in rows and ["hip0", "0.575"] in rows  # <link name="hip0"> <mass value="0.575"/>
+
+
+def test_names_with_dots_are_read_whole(tmp_path: Path) -> None:
+    """A link `a.b` and a joint `j.1`: `bot["a.b"].pos.z` reads the link (the longest known owner of the dotted
+    name), on every engine, and the trace's field is `a_b`."""
+    (tmp_path / "robot.urdf").write_text(textwrap.dedent("""\
+        <?xml version="1.0"?>
+        <robot name="two">
+          <link name="base">
+            <inertial><mass value="1"/><inertia ixx="0.1" ixy="0" ixz="0" iyy="0.1" iyz="0" izz="0.1"/></inertial>
+            <collision><geometry><box size="0.2 0.2 0.2"/></geometry></collision>
+          </link>
+          <link name="a.b">
+            <inertial><mass value="1"/><inertia ixx="0.1" ixy="0" ixz="0" iyy="0.1" iyz="0" izz="0.1"/></inertial>
+            <collision><geometry><box size="0.2 0.2 0.2"/></geometry></collision>
+          </link>
+          <joint name="j.1" type="revolute">
+            <parent link="base"/><child link="a.b"/><axis xyz="0 1 0"/><origin xyz="0 0 0.5"/>
+            <limit lower="-1" upper="1" effort="10" velocity="1"/>
+          </joint>
+        </robot>
+        """))  # fmt: skip
+    scenario = tmp_path / "s.yaml"
+    # welded 1 m up, the link's frame 0.5 m above the base's at the start
+    scenario.write_text(textwrap.dedent("""\
+        schema_version: 1
+        scenario: dots
+        world: {dt: 0.01, duration: 0.1}
+        bodies:
+          ground: {plane: {}, motion: static}
+        robots:
+          bot: {urdf: robot.urdf, fixed: true, pos: [0, 0, 1]}
+        assertions:
+          - {name: link a.b, value: 'bot["a.b"].pos.z', at: 0, near: 1.5, tol: 1.0e-9}
+          - {name: joint j.1, value: 'bot["j.1"].position', at: 0, near: 0, tol: 1.0e-9}
+        """))  # fmt: skip
+    done = _run(tmp_path, [scenario], ",".join(ENGINES))
+    assert done.returncode == 0, done.stdout[-3000:] + done.stderr[-3000:]
+    for engine in ENGINES:
+        trace = read_trace(tmp_path / f"dots__base__{engine}.mcap")
+        assert trace.series("bot.a.b.pos.z")[1][0] == pytest.approx(1.5, abs=1e-9)
+        assert "bot.j.1" in trace.joints and len(trace.series("bot.j.1.position")[1]) == 11
+    assert tf.field_path("bot.a.b") == "bot.a_b"
