@@ -112,6 +112,9 @@ def test_the_trace_field_is_the_mapped_name(runs: Path) -> None:
 def test_the_foxglove_layout_plots_the_mapped_field(runs: Path) -> None:
     layout = (runs / "spirit40-names.foxglove-layout.json").read_text()
     assert f"{tf.TOPIC_JOINTS}.dog._8.position" in layout and f"{tf.TOPIC_JOINTS}.dog.8." not in layout
+    paths = [p for panel in json.loads(layout)["configById"].values() for p in panel.get("paths", [])]
+    (plotted,) = [p for p in paths if p["value"] == f"{tf.TOPIC_JOINTS}.dog._8.position"]
+    assert plotted["label"] == 'dog["8"].position'  # as the assertion writes it
 
 
 def test_junit_names_the_cases_and_passes(runs: Path) -> None:
