@@ -12,6 +12,7 @@ from rich.table import Table
 from rich.text import Text
 
 from reports import trace_format as tf
+from reports.quantities import specs
 from reports.trace_reader import Trace, read_trace
 
 __all__ = ["render_inspect", "summary", "summary_text"]
@@ -125,9 +126,52 @@ def _attachments(trace: Trace) -> Table:
     return table
 
 
+def _robots(trace: Trace) -> list[Table]:
+    """Per robot (the bodies and joints named `<robot>.<member>`): its links' masses, and its joints' kinds,
+    limits and axes (world frame, at the start) from the trace's specs, names as the model file spells them."""
+    members: dict[str, tuple[list[dict[str, Any]], list[dict[str, Any]]]] = {}
+    for k, key in enumerate((tf.KEY_BODY_SPECS, tf.KEY_JOINT_SPECS)):
+        for spec in specs(trace, key):
+            robot, dot, member = str(spec.get("name", "")).partition(".")
+            if dot:
+                members.setdefault(robot, ([], []))[k].append({**spec, "member": member})
+    out = []
+    for robot, (links, joints) in members.items():
+        table = Table(title=f"Robot {robot}: links ({len(links)})", title_justify="left")
+        table.add_column("link")
+        table.add_column("mass (kg)", justify="right")
+        for link in links:
+            table.add_row(Text(link["member"]), _mass(link))
+        out.append(table)
+        table = Table(title=f"Robot {robot}: joints ({len(joints)})", title_justify="left")
+        for column in ("joint", "kind", "limits", "axis (world, at the start)"):
+            table.add_column(column)
+        for joint in joints:
+            table.add_row(*_joint_cells(joint))
+        out.append(table)
+    return out
+
+
+def _mass(link: dict[str, Any]) -> str:
+    mass = link.get("mass")
+    if link.get("motion") == "static":
+        return "static"
+    return f"{mass:.6g}" if isinstance(mass, int | float) else "?"
+
+
+def _joint_cells(joint: dict[str, Any]) -> list[Any]:
+    lo, hi, kind = joint.get("lo"), joint.get("hi"), str(joint.get("kind", "?"))
+    unit = {"hinge": " rad", "slider": " m"}.get(kind, "")
+    shown = [f"{v:.6g}" if isinstance(v, int | float) else default for v, default in ((lo, "-inf"), (hi, "inf"))]
+    limits = "" if lo is None and hi is None else f"{shown[0]} .. {shown[1]}{unit}"
+    axis = joint.get("axis") if kind in ("hinge", "slider") else None
+    return [Text(joint["member"]), kind, limits, " ".join(f"{c:.6g}" for c in axis) if isinstance(axis, list) else ""]
+
+
 def summary(trace: Trace, max_events: int = 50) -> Group:
     """A rich renderable summarising ``trace``."""
     parts: list[Any] = [Text(str(trace.path), style="bold underline"), _overview(trace), _channels(trace)]
+    parts += _robots(trace)
     if trace.events:
         parts.append(_events(trace, max_events))
     if trace.verdicts:

@@ -29,7 +29,7 @@ _FIELD_TYPE_BOOL, _FIELD_TYPE_STRING = 8, 9  # google.protobuf.FieldDescriptor.T
 def _member(msg: Any, name: str) -> Any:
     """A body's or joint's field; a robot's link or joint (`arm.link_7`) is in its robot's nested message."""
     group, dot, leaf = name.partition(".")
-    return getattr(getattr(msg, group, None), leaf, None) if dot else getattr(msg, name, None)
+    return getattr(getattr(msg, group, None), tf.field_name(leaf), None) if dot else getattr(msg, name, None)
 
 class UnreadableMessage(ValueError):
     """A message that its channel's schema does not decode."""

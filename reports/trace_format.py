@@ -11,7 +11,8 @@ in docs/trace-format.md. A trace is one MCAP file per run and variant:
   ``FileDescriptorSet``): Foxglove's well-known schemas for the 3D, Log and Audio panels
   (``foxglove-schemas-protobuf``), and the project's own messages
   (``runner/trace/proto/physics_scenarios.proto``, plus Bodies, Joints and State generated per trace
-  from the scenario's names).
+  from the scenario's names; a robot's link or joint whose name is not an identifier has the field
+  :func:`field_name`, the metadata keeping the name itself).
 
 Per-step numbers on /tf, /bodies, /joints and /contacts are doubles rounded to :data:`VALUE_RESOLUTION`
 (NaN and infinities kept), so a body at rest writes identical bytes every step and compresses away.
@@ -22,6 +23,7 @@ version and refuse it (:data:`TRACE_FORMAT_VERSION`, metadata key :data:`KEY_TRA
 
 from __future__ import annotations
 
+import re
 from collections.abc import Sequence
 from typing import Final
 
@@ -97,6 +99,26 @@ def message_parts(names: Sequence[str]) -> list[list[str]]:
             fields.add(group)
         parts[-1].append(name)
     return parts
+
+
+_UNSAFE_FIELD_CHARACTER = re.compile(r"[^A-Za-z0-9_]")
+
+
+def field_name(name: str) -> str:
+    """The protobuf field (and Foxglove message-path part) of a robot's link or joint ``name``, which the
+    model file may spell any way (``8``, ``pinch site``): every character other than an ASCII letter, digit
+    or ``_`` becomes ``_``, and ``_`` goes before a leading digit (``_8``, ``pinch_site``); an identifier is
+    its own field. The scenario loader refuses two names of one robot that would share a field
+    (runner.language.model_names, the same rule), so readers map names to fields without a table."""
+    safe = _UNSAFE_FIELD_CHARACTER.sub("_", name)
+    return f"_{safe}" if safe[:1].isdigit() else safe
+
+
+def field_path(name: str) -> str:
+    """The message path of a body or joint within /bodies or /joints: ``box``, ``arm.link_7``, ``arm._8``
+    (a robot's member through its robot's message, with its :func:`field_name`)."""
+    group, dot, leaf = name.partition(".")
+    return f"{group}.{field_name(leaf)}" if dot else name
 
 
 def part_topic(topic: str, part: int) -> str:

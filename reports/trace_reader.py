@@ -182,8 +182,11 @@ class Trace:
     def series(self, path: str) -> tuple[np.ndarray, np.ndarray]:
         """(times, values) of ``box.pos.z``, ``box.quat.w``, ``slider.position`` or ``state.name``."""
         parts = path.split(".")
-        if len(parts) > 2 and (f"{parts[0]}.{parts[1]}" in self.bodies or f"{parts[0]}.{parts[1]}" in self.joints):
-            parts = [f"{parts[0]}.{parts[1]}", *parts[2:]]  # a robot's link or joint: `arm.link_7.pos.z`
+        for k in range(len(parts) - 1, 1, -1):  # a robot's link or joint, its name possibly dotted: `arm.a.b.pos.z`
+            owner = ".".join(parts[:k])
+            if owner in self.bodies or owner in self.joints:
+                parts = [owner, *parts[k:]]
+                break
         if parts[0] == "state" and len(parts) == 2 and parts[1] in self.state:
             values = [np.nan if v is None else v for v in self.state[parts[1]]]
             return self.state_times, np.asarray(values)

@@ -25,6 +25,7 @@ from runner.compile.program import Program, build_program
 from runner.errors import TraceError
 from runner.exec.exits import classify, most_severe
 from runner.language.load import LoadedScenario
+from runner.language.names import written
 from runner.trace import layout as lt
 from runner.trace.output import write_error
 
@@ -62,7 +63,8 @@ def _joint_unit(kind: JointKind | None, field: str) -> str:
 
 
 def _paths(quantity: str, names: _Names) -> list[lt.PlotPath]:
-    """The plot paths of one asserted quantity (none for a body's energy: no field holds it)."""
+    """The plot paths of one asserted quantity (none for a body's energy: no field holds it), labelled as an
+    expression writes the quantity (`dog["8"].position`)."""
     if quantity.startswith("contact(") and quantity.endswith(")"):
         a, _, b = quantity[len("contact(") : -1].partition(", ")
         return [lt.PlotPath(f'/contacts.pairs[:]{{a=="{x}"}}{{b=="{y}"}}.normal_force', f"contact {x}-{y} force", "N")
@@ -72,12 +74,13 @@ def _paths(quantity: str, names: _Names) -> list[lt.PlotPath]:
         return [lt.PlotPath(lt.state_path(field), quantity, "1")]
     if head in names.joints:
         unit = _joint_unit(names.kinds.get(head), field)
-        return [lt.PlotPath(lt.joint_path(head, field, names.joints[head]), quantity, unit)]
+        return [lt.PlotPath(lt.joint_path(head, field, names.joints[head]), written(quantity), unit)]
     if field == "speed" and head in names.bodies:
-        return [lt.PlotPath(lt.body_path(head, "vel", c, names.bodies[head]), f"{head}.vel.{c}", "m/s") for c in "xyz"]
+        return [lt.PlotPath(lt.body_path(head, "vel", c, names.bodies[head]), written(f"{head}.vel.{c}"), "m/s")
+                for c in "xyz"]  # fmt: skip
     body, _, part = head.rpartition(".")
     if body in names.bodies and part in _BODY_UNITS:
-        return [lt.PlotPath(lt.body_path(body, part, field, names.bodies[body]), quantity, _BODY_UNITS[part])]
+        return [lt.PlotPath(lt.body_path(body, part, field, names.bodies[body]), written(quantity), _BODY_UNITS[part])]
     return []
 
 

@@ -23,6 +23,7 @@ from typing import Any
 from runner.compile.program import Program
 from runner.language import model_assertions as A
 from runner.language.expressions import ExpressionError, compile_expression
+from runner.language.names import split_owner
 
 __all__ = ["asserted_quantities"]
 
@@ -43,10 +44,7 @@ def _texts(assertion: Any) -> list[str]:
 
 def _resolve(name: str, bodies: set[str], joints: set[str], groups: dict[str, list[str]], state: set[str]) -> list[str]:
     """The quantities one dotted name reads (nothing for time, constants, parameters and unknown names)."""
-    head, _, rest = name.partition(".")
-    link, _, tail = rest.partition(".")
-    if f"{head}.{link}" in bodies or f"{head}.{link}" in joints:
-        head, rest = f"{head}.{link}", tail  # a robot's link or joint: `arm.link_7.pos.z`
+    head, rest = split_owner(name, bodies | joints)  # a robot's link or joint: `arm.link_7.pos.z`
     if head == "state":
         return [name] if rest in state else []
     if head in joints:

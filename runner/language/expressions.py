@@ -3,10 +3,11 @@
 Syntax is a subset of Python's: numbers, ``true``/``false`` (and True/False), strings, ``+ - * / // % **``,
 comparisons (chains allowed), ``and or not``, ``x if c else y``, parentheses, calls to a fixed list of
 functions, and dotted names such as ``box.pos.z``, ``slider.position``, ``state.door_open``,
-``param.count``, ``time``, ``dt``. Text is parsed with :mod:`ast` and every node is checked against a
-whitelist, then compiled into plain Python closures: nothing is ever passed to ``eval``/``exec``;
-attribute access on values is impossible (dotted names are resolved by the runner as whole names);
-names starting with an underscore are refused.
+``param.count``, ``time``, ``dt``; a part that is not an identifier (a robot's joint named ``8``) is quoted:
+``arm["8"].position`` reads the name ``arm.8.position``. Text is parsed with :mod:`ast` and every node is
+checked against a whitelist, then compiled into plain Python closures: nothing is ever passed to
+``eval``/``exec``; attribute access on values is impossible (dotted names are resolved by the runner as
+whole names); unquoted names starting with an underscore are refused.
 """
 
 from __future__ import annotations
@@ -239,15 +240,44 @@ class Expression:
         return float(bounded(value))
 
 
-def _dotted(node: ast.AST) -> str | None:
-    parts: list[str] = []
-    while isinstance(node, ast.Attribute):
-        parts.append(node.attr)
+def _parts(node: ast.AST) -> list[tuple[str, bool]] | None:
+    """The parts of a dotted name, each with whether it was quoted (``arm["8"].position``: a robot's link or
+    joint whose name is not an identifier), first part first; None if ``node`` is no name."""
+    parts: list[tuple[str, bool]] = []
+    while isinstance(node, ast.Attribute | ast.Subscript):
+        if isinstance(node, ast.Attribute):
+            parts.append((node.attr, False))
+        elif isinstance(node.slice, ast.Constant) and isinstance(node.slice.value, str):
+            parts.append((node.slice.value, True))
+        else:
+            return None
         node = node.value
     if isinstance(node, ast.Name):
-        parts.append(node.id)
-        return ".".join(reversed(parts))
+        parts.append((node.id, False))
+        return parts[::-1]
     return None
+
+
+def _dotted(node: ast.AST) -> str | None:
+    parts = _parts(node)
+    return None if parts is None else ".".join(part for part, _ in parts)
+
+
+def _not_a_name(node: ast.AST) -> str:
+    """Why ``node`` (a chain of `.` and `[...]`) is no dotted name."""
+    while isinstance(node, ast.Attribute | ast.Subscript):
+        if isinstance(node, ast.Subscript) and not (
+            isinstance(node.slice, ast.Constant) and isinstance(node.slice.value, str)
+        ):
+            return 'a part in brackets is a quoted name: `arm["8"].position`'
+        node = node.value
+    return "attribute access is only allowed on names"
+
+
+def _underscored(node: ast.AST) -> str | None:
+    """The first unquoted part of a name that starts with an underscore (refused: a quoted part is a model's
+    name, read as a whole like every dotted name, so it may)."""
+    return next((part for part, quoted in _parts(node) or [] if not quoted and part.startswith("_")), None)
 
 
 class _Compiler:
@@ -280,11 +310,11 @@ class _Compiler:
                 value = bounded(node.value)
                 return lambda r: value
             raise self.fail(node, f"constant {node.value!r} not allowed")
-        if isinstance(node, ast.Name | ast.Attribute):
+        if isinstance(node, ast.Name | ast.Attribute | ast.Subscript):
             name = _dotted(node)
             if name is None:
-                raise self.fail(node, "attribute access is only allowed on names")
-            if any(part.startswith("_") for part in name.split(".")):
+                raise self.fail(node, _not_a_name(node))
+            if _underscored(node) is not None:
                 raise self.fail(node, f"name `{name}` not allowed (underscore)")
             if name in CONSTANTS:
                 constant = CONSTANTS[name]
@@ -353,7 +383,7 @@ class _Compiler:
                 value = a.value if isinstance(a, ast.Constant) else _dotted(a)
                 if not isinstance(value, str):
                     raise self.fail(node, f"{fname}() takes names or strings")
-                if not isinstance(a, ast.Constant) and any(p.startswith("_") for p in value.split(".")):
+                if not isinstance(a, ast.Constant) and _underscored(a) is not None:
                     raise self.fail(a, f"name `{value}` not allowed (underscore)")
                 literal.append(value)
             self.call_args.add((fname, tuple(literal)))

@@ -29,6 +29,7 @@ from typing import Any
 import numpy as np
 
 from backends.types import Mesh, PlacedShape, Shape, ShapeKind
+from runner.language.model_names import check_names
 from runner.language.robot_desc import (
     ActuatorDesc,
     JointDesc,
@@ -42,7 +43,6 @@ from runner.language.robot_desc import (
 from runner.language.urdf import parse_xml
 
 _JOINTS = {0: "free", 1: "ball", 2: "slider", 3: "hinge"}  # mjtJoint
-_IDENT = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
 #: Subdivisions of the icosphere whose hull stands for an ellipsoid on engines without one: 642 vertices,
 #: every one on the ellipsoid; the hull lies inside it by at most 0.3 % of the largest radius.
 ELLIPSOID_SUBDIVISIONS = 3
@@ -142,10 +142,7 @@ def _names(model: Any, file: Path, lines: dict[tuple[str, str], int]) -> tuple[l
             name = f"{bodies[body]}_{suffix}"
         joints.append(name)
     for kind, names in (("body", bodies), ("joint", joints)):
-        for n in names:
-            if not _IDENT.match(n):
-                raise ModelFileError(file, lines.get((kind, n), 0),
-                                     f"{kind} name `{n}` is not an identifier (letters, digits, `_`)")  # fmt: skip
+        check_names(file, kind, [(n, lines.get((kind, n), 0)) for n in names])
     return bodies, joints
 
 

@@ -2,14 +2,13 @@
 
 from __future__ import annotations
 
-from typing import Literal
+from typing import Annotated, Literal
 
 from pydantic import Field, field_validator, model_validator
 
 from runner.language.model_base import (
     Expr,
     FiniteFloat,
-    Name,
     NonNegFloat,
     PositiveFloat,
     Strict,
@@ -18,6 +17,17 @@ from runner.language.model_base import (
     finite_vec,
 )
 from runner.language.model_physics import Limits, Motor, Rgba
+
+#: A link's or joint's name as the model file spells it (runner.language.model_names): any text without
+#: control characters, `"8"` and `pinch site` included.
+PartName = Annotated[
+    str,
+    Field(
+        pattern=r"^[^\x00-\x1f\x7f-\x9f]+$",
+        max_length=256,
+        description="A link's or joint's name as the model file spells it (quote it in YAML if it is a number).",
+    ),
+]
 
 
 class Servo(Strict):
@@ -94,14 +104,14 @@ class Robot(Strict):
         description="Meshes of static links: convex hulls (every engine) or the triangles as they are "
         "(`shape:trimesh`).",
     )
-    joints: dict[Name, RobotJoint] = Field(default_factory=dict, description="Overrides per joint of the model.")
-    links: dict[Name, RobotLink] = Field(default_factory=dict, description="Overrides per link of the model.")
+    joints: dict[PartName, RobotJoint] = Field(default_factory=dict, description="Overrides per joint of the model.")
+    links: dict[PartName, RobotLink] = Field(default_factory=dict, description="Overrides per link of the model.")
     self_collision: bool | None = Field(
         None,
         description="Whether the model's links touch each other (a joint's two links never do): default off "
         "for URDF (pybullet's default), on for MJCF (MuJoCo's).",
     )
-    exclude: list[tuple[Name, Name]] = Field(
+    exclude: list[tuple[PartName, PartName]] = Field(
         default_factory=list,
         description="Link pairs that never touch, beyond the adjacent ones (a joint's two links never touch).",
     )

@@ -3,10 +3,11 @@
 from __future__ import annotations
 
 import difflib
-from collections.abc import Mapping
+from collections.abc import Container, Mapping
 from dataclasses import dataclass
 
 from runner.language.model import Scenario
+from runner.language.model_names import spelled
 from runner.language.model_physics import Body
 from runner.language.robot_desc import ModelDesc
 
@@ -95,6 +96,17 @@ def robot_joints(robots: Mapping[str, ModelDesc]) -> list[str]:
     return [f"{name}.{j.name}" for name, desc in robots.items() for j in desc.joints if j.kind != "free"]
 
 
+def split_owner(name: str, members: Container[str]) -> tuple[str, str]:
+    """(owner, rest) of a dotted name: the owner is the longest leading part that is a robot's link or joint in
+    ``members`` (a model's name may hold dots: `arm.a.b.pos.z` reads link `a.b`), else the first part."""
+    parts = name.split(".")
+    for k in range(len(parts) - 1, 1, -1):
+        owner = ".".join(parts[:k])
+        if owner in members:
+            return owner, ".".join(parts[k:])
+    return parts[0], ".".join(parts[1:])
+
+
 def readable_names(model: Scenario, robots: Mapping[str, ModelDesc] | None = None) -> list[str]:
     """Every dotted name an expression may read (for suggestions)."""
     robots = robots or {}
@@ -109,10 +121,17 @@ def readable_names(model: Scenario, robots: Mapping[str, ModelDesc] | None = Non
     return names
 
 
+def written(name: str) -> str:
+    """A dotted name as an expression writes it: each part that is not an identifier quoted
+    (``arm.8.position`` -> ``arm["8"].position``)."""
+    first, *rest = name.split(".")
+    return first + "".join(spelled(part) for part in rest)
+
+
 def check_name(name: str, valid: set[str]) -> str | None:
     """An error message if ``name`` cannot be read, else None."""
     if name in valid:
         return None
     close = difflib.get_close_matches(name, sorted(valid), n=1, cutoff=0.7)
-    hint = f"; did you mean `{close[0]}`?" if close else ""
-    return f"unknown name `{name}` in expression{hint}"
+    hint = f"; did you mean `{written(close[0])}`?" if close else ""
+    return f"unknown name `{written(name)}` in expression{hint}"

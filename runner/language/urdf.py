@@ -20,6 +20,7 @@ from typing import Any
 import numpy as np
 
 from backends.types import Mesh, PlacedShape, Rgba, Shape, ShapeKind
+from runner.language.model_names import check_names
 from runner.language.robot_desc import (
     JointDesc,
     LinkDesc,
@@ -31,8 +32,6 @@ from runner.language.robot_desc import (
 )
 from runner.language.urdf_rules import merge_massless_fixed, usable_inertia
 
-#: A name expressions can read as `<robot>.<name>` (the language's identifiers).
-_IDENT = r"^[A-Za-z_][A-Za-z0-9_]*$"
 _KINDS = {
     "revolute": "hinge",
     "continuous": "hinge",
@@ -134,15 +133,9 @@ def _check_structure(tree: Any, file: Path) -> tuple[dict[str, int], dict[str, i
     root = tree.getroot()
     if root.tag != "robot":
         raise ModelFileError(file, root.sourceline or 0, f"expected a <robot> URDF document, found <{root.tag}>")
+    for kind in ("link", "joint"):
+        check_names(file, kind, [(e.get("name"), e.sourceline or 0) for e in root.findall(kind)])
     links, joints = _lines(tree, "link"), _lines(tree, "joint")
-    for kind, table in (("link", links), ("joint", joints)):
-        for name, line in table.items():
-            if not re.match(_IDENT, name):
-                raise ModelFileError(
-                    file,
-                    line,
-                    f"{kind} name `{name}` is not an identifier (letters, digits, `_`); expressions could not read it",
-                )
     if not links:
         soft = root.find("deformable")
         if soft is not None:

@@ -15,6 +15,7 @@ from typing import Any
 import numpy as np
 
 from backends.types import BodyStates, CompiledWorld, JointStates
+from runner.language.names import split_owner
 from runner.sim.collisions import quat_matrices
 
 _COMPONENT = {"x": 0, "y": 1, "z": 2}
@@ -49,6 +50,7 @@ class StateResolver:
         self.world = world
         self.body_index = {b.name: i for i, b in enumerate(world.bodies)}
         self.joint_index = {j.name: i for i, j in enumerate(world.joints)}
+        self._members = frozenset(n for n in [*self.body_index, *self.joint_index] if "." in n)  # robots' parts
         self.groups = {g: [self.body_index[n] for n in names] for g, names in groups.items()}
         self.members = {g: list(names) for g, names in groups.items()}
         self.state = state
@@ -87,10 +89,7 @@ class StateResolver:
         if name in self._constants:
             value = self._constants[name]
             return lambda: value
-        head, _, rest = name.partition(".")
-        link, _, tail = rest.partition(".")
-        if f"{head}.{link}" in self.body_index or f"{head}.{link}" in self.joint_index:
-            head, rest = f"{head}.{link}", tail  # a robot's link or joint: `arm.link_7.pos.z`
+        head, rest = split_owner(name, self._members)  # a robot's link or joint: `arm.link_7.pos.z`
         if head == "state":
             return lambda: self.state[rest]
         if head == "param":

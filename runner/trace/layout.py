@@ -59,11 +59,11 @@ def body_path(body: str, field: str, component: str, topic: str = tf.TOPIC_BODIE
     if field in ("pos", "quat"):
         part = "translation" if field == "pos" else "rotation"
         return f'{tf.TOPIC_TF}.transforms[:]{{child_frame_id=="{body}"}}.{part}.{component}'
-    return f"{topic}.{body}.{field}.{component}"
+    return f"{topic}.{tf.field_path(body)}.{field}.{component}"
 
 
 def joint_path(joint: str, field: str, topic: str = tf.TOPIC_JOINTS) -> str:
-    return f"{topic}.{joint}.{'motor_force' if field == 'force' else field}"
+    return f"{topic}.{tf.field_path(joint)}.{'motor_force' if field == 'force' else field}"
 
 
 def state_path(variable: str) -> str:

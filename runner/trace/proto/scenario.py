@@ -8,7 +8,9 @@ bodies. State is a file of its own, built when the first step brings the variabl
 are those of the initial values). Names are the language's identifiers (``[A-Za-z_][A-Za-z0-9_]*``),
 valid protobuf field names as they are; ``json_name`` is set to the name itself so no consumer camel-cases
 it. A robot's links and joints (``arm.link_7``, docs/robots.md) are fields of a nested message per robot,
-so the paths read ``/bodies.arm.link_7.vel.z`` as the expressions do; traces without robots are unchanged.
+so the paths read ``/bodies.arm.link_7.vel.z`` as the expressions do; a member whose name the model file
+spells otherwise than as an identifier (``8``) has the field :func:`reports.trace_format.field_name` gives
+(``/joints.arm._8.position``). Traces without robots are unchanged.
 A world of more than 8,000 bodies (or joints) has a message per 8,000, on /bodies/2, ... (protobuf's limit on
 one message, :data:`reports.trace_format.FIELDS_PER_MESSAGE`).
 """
@@ -83,7 +85,7 @@ def _grouped(file: descriptor_pb2.FileDescriptorProto, name: str, names: Sequenc
         if group not in members:
             members[group] = []
             fields.append((group, _F.TYPE_MESSAGE, f".{PACKAGE}.{name}.Robot_{group}"))
-        members[group].append(leaf)
+        members[group].append(tf.field_name(leaf))
     _fields(msg, fields)
     for group, leaves in members.items():
         _fields(msg.nested_type.add(name=f"Robot_{group}"), [(leaf, _F.TYPE_MESSAGE, type_name) for leaf in leaves])
@@ -92,7 +94,7 @@ def _grouped(file: descriptor_pb2.FileDescriptorProto, name: str, names: Sequenc
 def field_of(msg: Any, name: str) -> Any:
     """The field of ``msg`` for a name, a robot member's (``arm.link_7``) through its robot's message."""
     group, dot, leaf = name.partition(".")
-    return getattr(getattr(msg, group), leaf) if dot else getattr(msg, name)
+    return getattr(getattr(msg, group), tf.field_name(leaf)) if dot else getattr(msg, name)
 
 
 def _classes(files: Sequence[descriptor_pb2.FileDescriptorProto], names: Sequence[str], with_base: bool) -> list[Any]:
