@@ -30,7 +30,7 @@ from reports import trace_format as tf
 __all__ = ["PLOT_ID", "LayoutSpec", "PlotPath", "body_path", "joint_path", "layout", "state_path", "write_layout"]
 
 PANEL_TITLE = "foxglovePanelTitle"  # Foxglove's key for a panel's title in its config
-GRID_COLOR = "#9e9e9e"  # neutral grey: a body's colour stays the only colour in the scene
+GRID_COLOR = "#505050"  # dark grey, seen on the light grey background; a body's colour stays the only colour
 GRID_CELLS = 10  # the grid's divisions: its size / 10 is a round length (0.1, 0.2, 0.5 x 10^k m)
 PLOT_ID = "Plot!asserted"  # the first plot (metres); the others are Plot!asserted_<unit>
 #: a unit's part of a panel id (ids are Foxglove's `<type>!<name>`: no "/" or "·")
