@@ -9,8 +9,8 @@ decode; opening all 256 variant traces took 14 minutes of CI for no schema more.
 The Foxglove Studio web bundle (npm ``@foxglove/studio-base@1.48.0``, installed by ``make foxglove``) is
 served on 127.0.0.1 and driven in headless Chromium over the DevTools protocol (tests/trace/
 foxglove_studio.py): one server, one browser, one page; each trace is mounted in a fresh Studio with the
-layout ``scenario layout`` writes for its scenario file, and the test waits (polling, no fixed sleep) until
-Foxglove shows, for that trace:
+layout ``scenario run`` wrote beside it for its scenario (``<scenario>.foxglove-layout.json``), and the
+test waits (polling, no fixed sleep) until Foxglove shows, for that trace:
 
 * 0 entries in its Problems list (a channel whose schema it cannot parse is a problem),
 * every channel of the trace in its topic list,
@@ -19,8 +19,7 @@ Foxglove shows, for that trace:
   the scene has colour (the bodies in their palette, the collision solids in amber; static bodies are grey
   and every scenario has a body that is not static).
 
-Each trace is opened with the layout ``scenario run`` wrote beside it for its scenario
-(``<scenario>.foxglove-layout.json``). Besides, every scenario file of ``scenarios/`` and
+Besides, every scenario file of ``scenarios/`` and
 ``scenarios/robots/`` is run by a command of its own into one folder, on one engine (MuJoCo when installed),
 so that each command adds its scenario's layout to those already there: all of them must still be there,
 and each of those traces, opened with its layout, must show in Foxglove's Plot legends
