@@ -4,8 +4,8 @@ One layout per trace folder, in Foxglove Studio's layout format (``configById`` 
 Foxglove Studio 1.48 imports and exports it; its newer releases and Lichtblick read the same):
 
 * a 3D panel following ``world``: the bodies and the collision solids (/scene, frame-locked to /tf),
-  the frames' labels, axes and links hidden (the settings turn them on), a neutral grid, the camera on
-  the bodies' start positions;
+  the frames' labels, axes and links hidden (the settings turn them on), a neutral floor grid sized and
+  centred on the bodies' extent at their start (:func:`_grid`), the camera framing that extent;
 * one Plot per unit of the scenario's asserted quantities (:class:`PlotPath`, from runner/cli/layouts.py:
   every quantity an assertion reads, each copy of an array, no limit), metres first, with the value at the
   current time in the legend;
@@ -30,7 +30,8 @@ from reports import trace_format as tf
 __all__ = ["PLOT_ID", "LayoutSpec", "PlotPath", "body_path", "joint_path", "layout", "state_path", "write_layout"]
 
 PANEL_TITLE = "foxglovePanelTitle"  # Foxglove's key for a panel's title in its config
-GRID_COLOR = "#9e9e9e"  # neutral grey: a body's colour stays the only colour in the scene
+GRID_COLOR = "#505050"  # dark grey, seen on the light grey background; a body's colour stays the only colour
+GRID_CELLS = 10  # the grid's divisions: its size / 10 is a round length (0.1, 0.2, 0.5 x 10^k m)
 PLOT_ID = "Plot!asserted"  # the first plot (metres); the others are Plot!asserted_<unit>
 #: a unit's part of a panel id (ids are Foxglove's `<type>!<name>`: no "/" or "·")
 UNIT_IDS = {"m": "", "m/s": "m_per_s", "rad": "rad", "rad/s": "rad_per_s", "N": "N", "N·m": "N_m", "1": "1",
@@ -70,17 +71,41 @@ def state_path(variable: str) -> str:
     return f"{tf.TOPIC_STATE}.{variable}"
 
 
+def _extent(spheres: Sequence[tuple[Sequence[float], float]]) -> tuple[list[float], list[float]]:
+    """The box (low corner, high corner) around the bodies' spheres; a 1 m cube at the origin without any."""
+    if not spheres:
+        return [-0.5, -0.5, -0.5], [0.5, 0.5, 0.5]
+    return ([min(c[i] - r for c, r in spheres) for i in range(3)],
+            [max(c[i] + r for c, r in spheres) for i in range(3)])  # fmt: skip
+
+
+def _round_up(length: float) -> float:
+    """The smallest of 1, 2, 5 x 10^k that is at least ``length``."""
+    scale = 10.0 ** math.floor(math.log10(length))
+    return next(round(m * scale, 12) for m in (1, 2, 5, 10) if m * scale >= length * (1 - 1e-12))
+
+
+def _grid(spheres: Sequence[tuple[Sequence[float], float]]) -> dict[str, Any]:
+    """The floor grid under the bodies: a square twice the bodies' larger horizontal extent at their start
+    (2 m at least, as the camera's 1 m radius: bodies move, one layout serves every variant), rounded up to
+    1, 2 or 5 x 10^k m, in 10 cells (so each is 0.1, 0.2 or 0.5 x 10^k m), centred under them on a cell
+    corner, at z = 0 (the ground of every scenario with a floor)."""
+    lo, hi = _extent(spheres)
+    size = _round_up(2 * max(hi[0] - lo[0], hi[1] - lo[1], 2.0))
+    cell = size / GRID_CELLS
+    centre = [round(round((a + b) / 2 / cell) * cell, 9) + 0.0 for a, b in zip(lo[:2], hi[:2], strict=True)]
+    return {"visible": True, "frameLocked": True, "label": "Grid", "instanceId": "grid", "layerId": "foxglove.Grid",
+            "size": size, "divisions": GRID_CELLS, "lineWidth": 1, "color": GRID_COLOR,
+            "position": [*centre, 0], "rotation": [0, 0, 0], "order": 1}  # fmt: skip
+
+
 def _camera(spheres: Sequence[tuple[Sequence[float], float]]) -> dict[str, Any]:
     """A perspective view from above and to the side, centred on the bodies, at the distance where a 45-degree
     field of view holds the sphere around them all (1 / sin(22.5 deg) = 2.6 times its radius), that radius at
     least 1 m: bodies move, and one layout serves every variant of a file."""
-    if spheres:
-        lo = [min(c[i] - r for c, r in spheres) for i in range(3)]
-        hi = [max(c[i] + r for c, r in spheres) for i in range(3)]
-        target = [(a + b) / 2 for a, b in zip(lo, hi, strict=True)]
-        radius = math.dist(lo, hi) / 2
-    else:
-        target, radius = [0.0, 0.0, 0.0], 1.0
+    lo, hi = _extent(spheres)
+    target = [(a + b) / 2 for a, b in zip(lo, hi, strict=True)]
+    radius = math.dist(lo, hi) / 2
     return {
         "distance": round(2.6 * max(radius, 1.0), 3), "perspective": True, "phi": 55.0, "thetaOffset": 45.0,
         "targetOffset": [round(c, 3) for c in target], "target": [0, 0, 0], "targetOrientation": [0, 0, 0, 1],
@@ -96,9 +121,7 @@ def layout(spec: LayoutSpec) -> dict[str, Any]:
         "scene": {"transforms": {"showLabel": False, "axisScale": 0, "lineWidth": 0}},  # bodies, not axes
         "transforms": {},
         "topics": {tf.TOPIC_SCENE: {"visible": True}},
-        "layers": {"grid": {"visible": True, "frameLocked": True, "label": "Grid", "instanceId": "grid",
-                            "layerId": "foxglove.Grid", "size": 20, "divisions": 20, "lineWidth": 1,
-                            "color": GRID_COLOR, "position": [0, 0, 0], "rotation": [0, 0, 0], "order": 1}},
+        "layers": {"grid": _grid(spec.spheres)},
         "publish": {"type": "point", "poseTopic": "/move_base_simple/goal", "pointTopic": "/clicked_point",
                     "poseEstimateTopic": "/initialpose", "poseEstimateXDeviation": 0.5,
                     "poseEstimateYDeviation": 0.5, "poseEstimateThetaDeviation": 0.26179939},

@@ -34,6 +34,7 @@ from runner.errors import TraceError
 from runner.trace import foxglove as fx
 from runner.trace import output
 from runner.trace.encoder import TraceEncoder, dumps, verdict_text
+from runner.trace.repeats import EventRuns
 from runner.trace.sounds import SoundBank
 
 __all__ = ["COMPRESSION_THREADS", "ZSTD_LEVEL", "SolidVisual", "TraceMeta", "TraceWriter"]
@@ -180,6 +181,7 @@ class TraceWriter:
         self._final: Path | None = None
         self._closed = False
         self._encoder = TraceEncoder(self._names, self._joint_names)
+        self._runs = EventRuns(meta.dt)  # events delivered on every step: one Log line per run
         self._sounds = SoundBank()
         self._sink = self._open()
         self._context = foxglove.Context()  # this trace's channels reach this trace's writer only
@@ -272,8 +274,13 @@ class TraceWriter:
         if not math.isfinite(t) or t < 0.0:
             raise ValueError(f"simulated time must be finite and >= 0, got {t!r}")
         ns = round(t * 1e9)
+        self._sum_up_runs(self._runs.ended(ns, self._last_ns))
         self._last_ns = max(self._last_ns, ns)
         return ns
+
+    def _sum_up_runs(self, summaries: Sequence[tuple[int, str]]) -> None:
+        for ns, text in summaries:
+            self._log(ns, tf.LOG_LEVELS["info"], text, tf.LOGGER_EVENT)
 
     def _write(self, topic: str, ns: int, data: bytes) -> None:
         self._channels[topic].log(data, log_time=ns)
@@ -342,10 +349,12 @@ class TraceWriter:
             self._next_flush_ns = (ns // self._flush_ns + 1) * self._flush_ns
 
     def event(self, t: float, name: str, source: str, detail: Mapping[str, Any] | None = None) -> None:
+        """Every delivery on /events; on /log, those that start a run (runner/trace/repeats.py)."""
         ns = self._ns(t)
         self._write(tf.TOPIC_EVENTS, ns, self._encoder.event(t, name, source, detail))
-        extra = f" {dumps(detail, ensure_ascii=False)}" if detail else ""
-        self._log(ns, tf.LOG_LEVELS["info"], f"{name} ({source}){extra}", tf.LOGGER_EVENT)
+        if self._runs.deliver(ns, name, source):
+            extra = f" {dumps(detail, ensure_ascii=False)}" if detail else ""
+            self._log(ns, tf.LOG_LEVELS["info"], f"{name} ({source}){extra}", tf.LOGGER_EVENT)
 
     def log(self, t: float, level: str, message: str, name: str = tf.LOGGER_SCENARIO) -> None:
         code = tf.LOG_LEVELS.get(level.lower())
@@ -375,8 +384,9 @@ class TraceWriter:
         self._log(self._ns(t), tf.LOG_LEVELS[level], text, tf.LOGGER_VERDICT)
 
     def verdicts(self, t: float, verdicts: Sequence[Mapping[str, Any]]) -> None:
-        """Every verdict of the run on /verdicts, and a summary line on /log."""
+        """Every verdict of the run on /verdicts, and a summary line on /log (after the runs of events)."""
         ns = self._ns(t)
+        self._sum_up_runs(self._runs.ended(ns, self._last_ns, everything=True))
         self._write(tf.TOPIC_VERDICTS, ns, self._encoder.verdicts(t, verdicts))
         limits = [
             str(v.get(tf.VERDICT_NAME, "?")) for v in verdicts if v.get("known_limit") and v.get(tf.VERDICT_PASSED)
@@ -404,6 +414,7 @@ class TraceWriter:
             tf.KEY_END_TIME: repr(self._last_ns / 1e9),
         }
         try:
+            self._sum_up_runs(self._runs.ended(self._last_ns, self._last_ns, everything=True))
             self._sdk(self._writer.write_metadata, tf.METADATA_RESULT, result)
             self._sdk(self._writer.close)
             self._closed = True

@@ -89,7 +89,7 @@ class _Handler(SimpleHTTPRequestHandler):
         self.send_header("Content-Range", f"bytes {start}-{end}/{size}")
         self.send_header("Content-Length", str(end - start + 1))
         self.end_headers()
-        self._remaining = end - start + 1
+        self._remaining: int | None = end - start + 1
         return f
 
     def copyfile(self, source: Any, outputfile: Any) -> None:
@@ -133,8 +133,13 @@ _PROBE = """(() => {
     .find(el => el.innerText.includes('Scene') && el.querySelector('canvas'));
   const canvas = panel ? panel.querySelector('canvas') : null;
   const r = canvas ? canvas.getBoundingClientRect() : null;
+  const clock = document.querySelector('[data-testid="PlaybackTime-text"] input');
+  const crashed = ['Something went wrong in this panel', 'This panel encountered an unexpected error']
+    .filter(t => text.includes(t));
+  const flagged = [...document.querySelectorAll('[class*="errorIcon"]')].length;
   return {problems: problems === undefined ? null : problems, text, legend,
-          scene: r ? [r.x, r.y, r.width, r.height] : null};
+          scene: r ? [r.x, r.y, r.width, r.height] : null, clock: clock ? clock.value : null,
+          panelProblems: [...crashed, ...(flagged ? [`${flagged} plot paths flagged with an error`] : [])]};
 })()"""
 
 # Pixels of the screenshot in colour (saturation >= 0.15, value >= 0.1), counted in the page. The shipped
@@ -164,6 +169,8 @@ class View:
     topics: set[str] = field(default_factory=set)
     legend: dict[str, str] = field(default_factory=dict)
     scene_pixels: int = 0  # coloured pixels in the 3D panel
+    clock: str | None = None  # the playback time as Foxglove shows it
+    panel_problems: list[str] = field(default_factory=list)  # a panel's error boundary, a plot path's error
     seconds: float = 0.0
     screenshot: bytes = b""
 
@@ -227,6 +234,30 @@ class Studio:
             view.problems = int(digits[0]) if digits else 0
         view.topics = set(re.findall(r"^(/[\w/]+)$", probe["text"], re.M))
         view.legend = {name: value for name, value in probe["legend"]}
+        view.clock = probe["clock"]
+        view.panel_problems = probe["panelProblems"]
+
+    def read(self, view: View) -> View:
+        """``view`` updated with what the page shows now (legend, clock, problems)."""
+        probe = self.browser.evaluate(_PROBE)
+        if probe is not None:
+            self._read(view, probe)
+        return view
+
+    def seek(self, seconds: float) -> None:
+        """Seek as a user does: type the time into the playback time field and press Enter (with the
+        "SEC" time format, the field takes seconds since the epoch: a trace's simulated seconds)."""
+        field = "document.querySelector('[data-testid=\"PlaybackTime-text\"] input')"
+        self.browser.evaluate(f"{field}.focus(), {field}.select()")  # focusing pauses playback
+        self.browser.call("Input.insertText", text=f"{seconds:.9f}")
+        self.browser.call("Input.dispatchKeyEvent", type="keyDown", key="Enter", code="Enter",
+                          windowsVirtualKeyCode=13, text="\r")  # fmt: skip
+        self.browser.call("Input.dispatchKeyEvent", type="keyUp", key="Enter", code="Enter", windowsVirtualKeyCode=13)
+        self.browser.evaluate(f"{field}.blur()")
+
+    def screenshot(self) -> bytes:
+        """The whole page, as PNG."""
+        return base64.b64decode(self.browser.call("Page.captureScreenshot", format="png")["data"])
 
     def _pixels(self, rect: list[float], view: View) -> int:
         x, y, w, h = rect

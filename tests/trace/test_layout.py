@@ -4,15 +4,18 @@
 from __future__ import annotations
 
 import json
+import math
 import subprocess
 import sys
 from pathlib import Path
 from typing import Any
 
+import pytest
+
 from reports import trace_format as tf
 from runner.cli.layouts import layout_spec
 from runner.language.load import load_files
-from runner.trace.layout import layout
+from runner.trace.layout import LayoutSpec, layout
 from tests.paths import ROOT
 
 CLI = [sys.executable, "-m", "runner"]
@@ -112,3 +115,24 @@ def test_two_scenarios_run_into_one_folder_keep_both_layouts(tmp_path: Path) -> 
         assert own == layout(layout_spec(load_files([ROOT / "scenarios" / file], None, False))), name
     combined = json.loads((tmp_path / tf.LAYOUT_FILE).read_text())  # the last command's scenarios
     assert combined == layout(layout_spec(load_files([ROOT / "scenarios" / "box_pile.yaml"], None, False)))
+
+
+def test_the_3d_panel_is_framed_on_the_bodies_and_its_grid_is_sized_to_them() -> None:
+    """The camera's target is the centre of the box around the bodies' spheres and its distance holds the
+    sphere around that box in a 45-degree field of view (radius / sin(22.5 deg), 1 m radius at least); the
+    grid is a square of 1, 2 or 5 x 10^k m at least twice the horizontal extent (2 m at least), in 10 cells,
+    centred under the bodies on a cell corner."""
+    # a 12 m x 3 m row of unit spheres at z = 1: box x -0.5..12.5 (13 m), y -0.5..0.5, z 0.5..1.5
+    row = LayoutSpec([], (), [((x, 0.0, 1.0), 0.5) for x in range(13)])
+    scene = layout(row)["configById"]["3D!scene"]
+    camera, grid = scene["cameraState"], scene["layers"]["grid"]
+    assert camera["targetOffset"] == [6.0, 0.0, 1.0]
+    radius = math.dist((-0.5, -0.5, 0.5), (12.5, 0.5, 1.5)) / 2
+    # the layout uses 2.6 r, 1 / sin(22.5 deg) = 2.613 to two digits: 0.5 % closer than the exact fit
+    assert camera["distance"] == pytest.approx(radius / math.sin(math.radians(22.5)), rel=0.01)
+    assert (grid["layerId"], grid["visible"], grid["size"], grid["divisions"]) == ("foxglove.Grid", True, 50, 10)
+    assert grid["position"] == [5.0, 0.0, 0]  # 6 m rounded to the 5 m cells
+    # the KUKA arm: less than 1 m across at its start, so the 2 m floor: 5 m in 0.5 m cells, camera 2.6 m away
+    kuka = layout(layout_spec(load_files([ROOT / "scenarios" / "robots" / "kuka_arm.yaml"], None, True)))
+    scene = kuka["configById"]["3D!scene"]
+    assert (scene["layers"]["grid"]["size"], scene["cameraState"]["distance"]) == (5, 2.6)
