@@ -61,6 +61,11 @@ class DartBackend(Backend):
         engine, wrapper = str(dart.__version__), cls.engine_version()
         return f"DART {engine}" + ("" if wrapper == engine else f" (dartpy {wrapper})")
 
+    @classmethod
+    def check_world(cls, world: CompiledWorld, options: BackendOptions) -> None:
+        if isinstance(options, DartOptions):
+            _friction_model(world, options.friction)  # `friction: cone` above the solver's mu is refused
+
     def _build(self) -> None:
         world = self.world
         self._detector = self.options.collision_detector

@@ -75,11 +75,14 @@ class MujocoBackend(Backend):
         engine, wrapper = mujoco.mj_versionString(), cls.engine_version()
         return f"MuJoCo {engine}" + ("" if wrapper == engine else f" (mujoco {wrapper})")
 
+    @classmethod
+    def check_world(cls, world: CompiledWorld, options: BackendOptions) -> None:
+        if isinstance(options, MujocoOptions) and options.engine_substeps is None:
+            check_stack(stack_height(world))  # set by hand, the column is the scenario's to judge
+
     def _build(self) -> None:
         world = self.world
-        self._stack = stack_height(world)
-        if self.options.engine_substeps is None:  # set by hand, the column is the scenario's to judge
-            check_stack(self._stack)
+        self._stack = stack_height(world)  # the registry refused a column too tall first (check_world)
         self._nsteps = world.substeps * engine_substeps(self.options, world.dt / world.substeps, self._stack)
         if world.model_options:  # the model's own timestep (checked equal to dt / substeps when loaded)
             self._nsteps = world.substeps
