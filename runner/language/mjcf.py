@@ -29,6 +29,8 @@ from typing import Any
 import numpy as np
 
 from backends.types import Mesh, PlacedShape, Shape, ShapeKind
+from runner.language.mesh_limits import check_mesh_file
+from runner.language.model_numbers import check_mjcf_numbers, check_number, check_unique_names, check_vertices
 from runner.language.robot_desc import (
     ActuatorDesc,
     JointDesc,
@@ -217,14 +219,58 @@ def _actuators(model: Any, joints: list[str], lines: dict[tuple[str, str], int],
     return out
 
 
+def _check_meshes(tree: Any, file: Path) -> None:
+    """Every `<mesh file=...>` of the main file within the mesh limits, before MuJoCo reads it
+    (runner.language.mesh_limits); a file it cannot find is left to MuJoCo's own message."""
+    compiler = tree.getroot().find("compiler")
+    folder = file.parent
+    if compiler is not None:
+        folder = folder / (compiler.get("meshdir") or compiler.get("assetdir") or "")
+    for mesh in tree.getroot().iter("mesh"):
+        name = mesh.get("file")
+        if not name:
+            continue
+        try:
+            path = (folder / name).resolve()
+        except (OSError, RuntimeError):  # a symlink loop
+            line = mesh.sourceline or 0
+            raise ModelFileError(file, line, f"the mesh `{name}` is a symlink loop", near=name) from None
+        if path.is_file():
+            check_mesh_file(path, file, mesh.sourceline or 0, name)
+
+
+def _check_compiled(model: Any, file: Path, bodies: list[str], lines: dict[tuple[str, str], int]) -> None:
+    """What MuJoCo computed (defaults, includes and `fromto` applied) finite and within +-MAX_MAGNITUDE, at
+    the body's line: the main file's attributes were checked one by one before (check_mjcf_numbers)."""
+    for b in range(1, model.nbody):
+        geoms = range(int(model.body_geomadr[b]), int(model.body_geomadr[b]) + int(model.body_geomnum[b]))
+        fields = {"pos": model.body_pos[b], "quat": model.body_quat[b], "mass": [model.body_mass[b]],
+                  "inertia": model.body_inertia[b], "geom size": [v for g in geoms for v in model.geom_size[g]],
+                  "geom pos": [v for g in geoms for v in model.geom_pos[g]]}  # fmt: skip
+        for what, values in fields.items():
+            for value in np.asarray(values, dtype=float).ravel():
+                problem = check_number(float(value), "any")
+                if problem is not None:
+                    raise ModelFileError(file, lines.get(("body", bodies[b]), 0),
+                                         f"body `{bodies[b]}`: its {what} {float(value)!r} {problem}")  # fmt: skip
+    if model.nmeshvert:
+        line = next((line for (tag, _), line in lines.items() if tag == "mesh"), 0)
+        check_vertices(np.asarray(model.mesh_vert), file, line, "of the model")
+
+
 def load_mjcf(file: Path) -> ModelDesc:
     tree = parse_xml(file)
+    check_mjcf_numbers(tree, file)
+    _check_meshes(tree, file)
     mujoco = _mujoco(file)
     model = compile_file(file)
     data = mujoco.MjData(model)
     mujoco.mj_kinematics(model, data)
     lines = _lines(tree)
     bodies, joint_names = _names(model, file, lines)
+    check_unique_names(file, "body", ((name, lines.get(("body", name), 0)) for name in bodies))
+    check_unique_names(file, "joint", ((name, lines.get(("joint", name), 0)) for name in joint_names))
+    _check_compiled(model, file, bodies, lines)
     links = []
     for b in range(model.nbody):
         rot = np.zeros(9)
