@@ -1,10 +1,12 @@
 """Bounds on the mesh files a model names, checked before a mesh is read (docs/reliability.md, "Limits").
 
 A mesh is read whole, processed (vertices merged), then turned into a convex hull or kept as triangles in
-Python tuples: about 15 times its size in memory. A 200 MB STL took 2.7 GB and over 90 s before these
-bounds; the file's size is checked from its ``stat``, and its triangle and vertex counts from the file's own
-header (binary STL, PLY) or by counting its lines (OBJ, ASCII STL) before anything is parsed, and once more
-after loading (any other format). The largest mesh in pybullet_data is a 10 MB OBJ of 0.1 M triangles.
+Python tuples: a binary STL of 327,680 triangles (16 MB, every vertex on its hull) took 3.8 s and 180 MB
+more as triangles, 13 s and 280 MB as a hull (measured on the shared machine); a 200 MB STL took 2.7 GB
+and over 90 s before these bounds. The file's size is checked from its ``stat``, and its triangle and vertex
+counts from the file's own header (binary STL, PLY) or by counting its lines (OBJ, ASCII STL) before
+anything is parsed, and once more after loading (any other format). The largest mesh in pybullet_data is a
+10 MB OBJ of 124,990 triangles (samurai_monastry.obj).
 """
 
 from __future__ import annotations
@@ -15,11 +17,11 @@ from pathlib import Path
 
 from runner.language.robot_desc import ModelFileError
 
-#: bytes of one mesh file (as for sounds)
-MAX_MESH_BYTES = 50_000_000
+#: bytes of one mesh file
+MAX_MESH_BYTES = 25_000_000
 #: triangles (faces) and vertices of one mesh
-MAX_MESH_TRIANGLES = 500_000
-MAX_MESH_VERTICES = 500_000
+MAX_MESH_TRIANGLES = 250_000
+MAX_MESH_VERTICES = 250_000
 
 _PLY_ELEMENT = re.compile(rb"^element\s+(vertex|face)\s+(\d+)", re.MULTILINE)
 

@@ -99,7 +99,7 @@ def test_a_binary_stl_declaring_too_many_triangles(tmp_path: Path, capsys: pytes
 
 def test_an_obj_with_too_many_vertices(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     n = MAX_MESH_VERTICES + 1
-    (tmp_path / "many.obj").write_bytes(b"v 0 0 0\n" * n + b"f 1 2 3\n")  # 4 MB
+    (tmp_path / "many.obj").write_bytes(b"v 0 0 0\n" * n + b"f 1 2 3\n")  # 2 MB
     issue = _refused(capsys, tmp_path, "urdf", "many.obj")
     assert f"the mesh many.obj holds {n} vertices; at most {MAX_MESH_VERTICES} are read" in issue
 
