@@ -3,7 +3,8 @@
 The cells of ``tests/exec/exit_table.py`` (the script that prints the table for docs/reliability.md), run
 as a user runs the command: a runtime expression error, a `send` loop, an engine abort, a full disk, a
 missing engine, a capability the engine lacks, a failed assertion, a known limit (an expected failure:
-exit 0) and a known limit that passes (exit 1), each serially, with ``-j 2``, ``--isolate``,
+exit 0), a known limit that passes (exit 1), a read-only output, an integer overflow and an oversized mesh
+(refused when the scenario is loaded), each serially, with ``-j 2``, ``--isolate``,
 ``--trace-process``, on Ray (a cluster started with ``ray start --head``, when the ``ray`` extra is
 installed), as a row of ``compare``, through ``check`` (against a golden file recorded first) and through
 the pytest plugin; then `compare`'s agreement outcomes with ``--max-divergence``. 72 commands and 9
