@@ -28,9 +28,9 @@ from ..types import (
     Quat,
     Vec3,
 )
-from . import _coulomb
+from . import _coulomb, _native
 from ._bounce import Impacts
-from ._model import IMPEDANCE, KINEMATIC_MASS_RATIO, MU_MAX, build
+from ._model import IMPEDANCE, KINEMATIC_MASS_RATIO, MU_MAX, build, plan_tree
 from ._options import MujocoOptions, check_stack, engine_substeps
 
 
@@ -79,6 +79,7 @@ class MujocoBackend(Backend):
     def check_world(cls, world: CompiledWorld, options: BackendOptions) -> None:
         if isinstance(options, MujocoOptions) and options.engine_substeps is None:
             check_stack(stack_height(world))  # set by hand, the column is the scenario's to judge
+        plan_tree(world, _native.load(world))  # a kinematic loop, one MJCF robot at most, ... (no model built)
 
     def _build(self) -> None:
         world = self.world

@@ -34,6 +34,7 @@ from ..types import (
     Vec3,
 )
 from ._build import PLANE_HALF_SIZE, Layout, build, initial_rate, xyzw
+from ._build import check as check_build
 from ._frames import InertialFrames
 from ._impacts import ImpactErp
 from ._options import PyBulletOptions, check_stack, solver_iterations
@@ -85,6 +86,7 @@ class PyBulletBackend(Backend):
     def check_world(cls, world: CompiledWorld, options: BackendOptions) -> None:
         if isinstance(options, PyBulletOptions) and options.solver_iterations is None:
             check_stack(stack_height(world))  # set by hand, the column is the scenario's to judge
+        check_build(world)
 
     def _build(self) -> None:
         self._c = int(p.connect(p.DIRECT))

@@ -1,6 +1,7 @@
 """`scenario validate --backend X` refuses exactly what `scenario run --backend X` refuses before its first step
-(issue 31): the engines' limits judged from the world (the tallest column each holds, DART's friction cone)
-run with the capability check (``Backend.check_world``), so both commands exit 2 with the same message.
+(issue 31): the engines' limits judged from the world (the tallest column each holds, DART's friction cone,
+the joint trees PyBullet, MuJoCo and DART build) run with the capability check (``Backend.check_world``), so
+both commands exit 2 with the same message.
 
 Measured before: `box_pile --set params.count=50` validated (exit 0) and then `run` refused it on PyBullet
 and ODE; a 3,000-link chain validated, and `run` on PyBullet built it for over 5 minutes before refusing the
@@ -44,6 +45,19 @@ bodies:
   crate: {box: [0.2, 0.2, 0.2], mass: 1, pos: [0, 0, 0.1]}
 """
 
+LOOP = """\
+schema_version: 1
+scenario: loop
+world: {gravity: [0, 0, -9.81], dt: 0.01, duration: 0.1}
+bodies:
+  ground: {plane: {}, motion: static}
+  a: {box: [0.1, 0.1, 0.1], mass: 1, pos: [0, 0, 1]}
+  b: {box: [0.1, 0.1, 0.1], mass: 1, pos: [0.2, 0, 1]}
+joints:
+  ab: {type: hinge, bodies: [a, b], axis: [0, 1, 0], anchor: [0.1, 0, 1]}
+  ba: {type: hinge, bodies: [b, a], axis: [0, 1, 0], anchor: [0.1, 0, 1.05]}
+"""
+
 CHAIN_HEAD = """\
 schema_version: 1
 scenario: chain
@@ -77,7 +91,7 @@ def _scenario(tmp_path: Path, name: str) -> Path:
         (tmp_path / "chain.urdf").write_text(_chain_urdf(60))
         path.write_text(CHAIN_HEAD)
     else:
-        path.write_text({"resting_column": RESTING_COLUMN, "slippery_cone": SLIPPERY_CONE}[name])
+        path.write_text({"resting_column": RESTING_COLUMN, "slippery_cone": SLIPPERY_CONE, "loop": LOOP}[name])
     return path
 
 
@@ -89,6 +103,9 @@ CASES = [  # (scenario, --set items, backend, what the refusal says)
     ("chain", [], "mujoco", "column of 60 bodies; MuJoCo holds at most 50"),
     ("chain", [], "pybullet", "column of 60 bodies; PyBullet holds at most 30"),
     ("slippery_cone", [], "dart", "NsgsFrictionSolver"),
+    ("loop", [], "pybullet", "joint `ba`: it closes a loop of joints"),
+    ("loop", [], "mujoco", "joint `ba` closes a kinematic loop"),
+    ("loop", [], "dart", "joint `ba` of scenario `loop` makes a closed loop of joints"),
 ]
 
 
