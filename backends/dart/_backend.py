@@ -34,8 +34,9 @@ from ..types import (
     Quat,
     Vec3,
 )
-from . import _contacts, _surfaces, _trees
+from . import _contacts, _surfaces
 from ._build import BodyHandle, JointHandle, build, place_free
+from ._build import check as check_build
 from ._gate import BounceGate
 from ._options import MAX_CONE_MU, MAX_CONE_STACK, DartOptions
 from ._reads import state_readers
@@ -65,7 +66,7 @@ class DartBackend(Backend):
     def check_world(cls, world: CompiledWorld, options: BackendOptions) -> None:
         if isinstance(options, DartOptions):
             _friction_model(world, options.friction)  # `friction: cone` above the solver's mu is refused
-        _trees.plan(world)  # a closed loop of joints, a joint of a body to itself (no engine call)
+        check_build(world)  # the joint trees: loops, joint kinds, planes (no engine call)
 
     def _build(self) -> None:
         world = self.world
