@@ -39,6 +39,7 @@ from runner.language.robot_desc import (
     ModelFileError,
     ModelNeed,
     quat4,
+    resolved,
     vec,
 )
 from runner.language.urdf import parse_xml
@@ -219,24 +220,34 @@ def _actuators(model: Any, joints: list[str], lines: dict[tuple[str, str], int],
     return out
 
 
+#: included files followed when looking for meshes (MuJoCo refuses a file that includes itself)
+MAX_INCLUDES = 64
+
+
 def _check_meshes(tree: Any, file: Path) -> None:
-    """Every `<mesh file=...>` of the main file within the mesh limits, before MuJoCo reads it
-    (runner.language.mesh_limits); a file it cannot find is left to MuJoCo's own message."""
+    """Every `<mesh file=...>` of the file and of the files it includes (their numbers checked too) within the
+    mesh limits, before MuJoCo reads them (runner.language.mesh_limits); a file that cannot be found or read
+    is left to MuJoCo's own message."""
     compiler = tree.getroot().find("compiler")
     folder = file.parent
     if compiler is not None:
         folder = folder / (compiler.get("meshdir") or compiler.get("assetdir") or "")
-    for mesh in tree.getroot().iter("mesh"):
-        name = mesh.get("file")
-        if not name:
-            continue
-        try:
-            path = (folder / name).resolve()
-        except (OSError, RuntimeError):  # a symlink loop
-            line = mesh.sourceline or 0
-            raise ModelFileError(file, line, f"the mesh `{name}` is a symlink loop", near=name) from None
-        if path.is_file():
-            check_mesh_file(path, file, mesh.sourceline or 0, name)
+    todo, seen = [(tree, file)], {file.resolve()}
+    while todo:
+        current, owner = todo.pop()
+        for element in current.getroot().iter("mesh", "include"):
+            name, line = element.get("file"), element.sourceline or 0
+            if not name:
+                continue
+            base = folder if element.tag == "mesh" else file.parent  # includes are relative to the main file
+            path = resolved(base / name, owner, line, name)
+            if element.tag == "mesh" and path.is_file():
+                check_mesh_file(path, owner, line, name)
+            elif element.tag == "include" and path.is_file() and path not in seen and len(seen) < MAX_INCLUDES:
+                seen.add(path)
+                included = parse_xml(path)
+                check_mjcf_numbers(included, path)
+                todo.append((included, path))
 
 
 def _check_compiled(model: Any, file: Path, bodies: list[str], lines: dict[tuple[str, str], int]) -> None:

@@ -111,3 +111,21 @@ def test_an_mjcf_mesh_over_the_size_limit_is_refused_before_mujoco_reads_it(
     _sparse_stl(tmp_path / "big.stl", 1, MAX_MESH_BYTES + 1)
     issue = _refused(capsys, tmp_path, "mjcf", "big.stl")
     assert f"the mesh big.stl is larger than {MAX_MESH_BYTES} bytes" in issue
+
+
+def test_a_mesh_in_an_included_mjcf_file_is_bounded_too(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    pytest.importorskip("mujoco")
+    _sparse_stl(tmp_path / "big.stl", 1, MAX_MESH_BYTES + 1)
+    assets = '<mujoco>\n  <asset>\n    <mesh name="big" file="big.stl"/>\n  </asset>\n</mujoco>\n'
+    (tmp_path / "assets.xml").write_text(assets)
+    model = tmp_path / "model.xml"
+    model.write_text('<mujoco>\n  <include file="assets.xml"/>\n  <worldbody>\n    <body name="b" pos="0 0 1">'
+                     '<freejoint/><geom type="mesh" mesh="big"/></body>\n  </worldbody>\n</mujoco>\n')  # fmt: skip
+    scenario = tmp_path / "s.yaml"
+    scenario.write_text(SCENARIO.format(kind="mjcf", file="model.xml"))
+    with pytest.raises(ScenarioValidationError) as info:
+        load_scenario(scenario, None)
+    (issue,) = [str(i) for i in info.value.issues]
+    assert issue.startswith(f"{tmp_path / 'assets.xml'}:3:") and "the mesh big.stl is larger than" in issue, issue
+    code, out = cli(capsys, "validate", scenario)
+    assert code == 2 and "Traceback" not in out, out
