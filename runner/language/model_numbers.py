@@ -38,6 +38,16 @@ URDF_FIELDS: dict[tuple[str, str], str] = {
     ("mass", "value"): "mass",
     **{("inertia", k): "any" for k in ("ixx", "ixy", "ixz", "iyy", "iyz", "izz")},
 }
+#: how many numbers a URDF attribute holds (default 1); pybullet reads the first 3 of more (microtaur's
+#: `rpy="-3.14159 1.57079 0 0"`); a mesh scale is 1 (every axis), or 3 and more
+URDF_COUNTS: dict[tuple[str, str], str] = {
+    ("origin", "xyz"): "3",
+    ("origin", "rpy"): "3",
+    ("axis", "xyz"): "3",
+    ("box", "size"): "3",
+    ("mesh", "scale"): "1 or 3",
+}
+_OPTENV = re.compile(r"\$\(optenv\s+(\S+)\s*([^)]*)\)")
 #: MJCF attributes (any element) that place, size or weigh something
 MJCF_FIELDS: dict[str, str] = {
     "pos": "any",
@@ -101,8 +111,18 @@ def check_number(value: float, rule: str) -> str | None:
     return None
 
 
-def _check_attribute(file: Path, element: Any, key: str, rule: str) -> None:
+def _text(element: Any, key: str) -> str | None:
+    """The attribute's value as the loader reads it: xacro's `$(optenv NAME default)` (husky.urdf) expanded."""
+    import os
+
     text = element.get(key)
+    if text is None or "$(optenv" not in text:
+        return text
+    return _OPTENV.sub(lambda m: os.environ.get(m.group(1), m.group(2)), text)
+
+
+def _check_attribute(file: Path, element: Any, key: str, rule: str) -> None:
+    text = _text(element, key)
     if text is None:
         return
     values = _values(text)
@@ -128,6 +148,7 @@ def check_urdf_numbers(tree: Any, file: Path) -> None:
             if rule is not None and _in_visual(element):
                 rule = "any"  # drawn, never simulated: laikago's toes draw a sphere of radius 0
             if rule is not None:
+                _check_count(file, element, key, URDF_COUNTS.get((element.tag, key), "1"))
                 _check_attribute(file, element, key, rule)
             else:
                 _no_nan(file, element, key)
@@ -139,6 +160,22 @@ def check_urdf_numbers(tree: Any, file: Path) -> None:
                 file, axis.sourceline or 0, f"joint `{joint.get('name')}`: `axis` {axis.get('xyz')!r} is zero; a "
                 "moving joint needs a direction", near="xyz=",
             )  # fmt: skip
+
+
+def _check_count(file: Path, element: Any, key: str, count: str) -> None:
+    """The attribute holds numbers, as many as ``count`` says ("3", "1", "1 or 3": 1, or 3 and more)."""
+    text = _text(element, key) or ""
+    values = _values(text)
+    found = -1 if values is None else len(values)
+    fits = found == 1 or found >= 3 if count == "1 or 3" else found >= 3 if count == "3" else found == 1
+    if not fits:
+        what = "number" if count == "1" else "numbers"
+        if count == "1 or 3":
+            what += " (a mesh scale: one for every axis, or x y z)"
+        raise ModelFileError(
+            file, element.sourceline or 0, f"{_where(element)}: `{key}` {text.strip()!r}: expected {count} {what}",
+            near=f"{key}=",
+        )  # fmt: skip
 
 
 def _in_visual(element: Any) -> bool:

@@ -30,10 +30,10 @@ class ModelFileError(Exception):
         self.file = str(file)
         self.line = line
         self.message = message
-        self.column = column or _column(self.file, line, near)
+        self.column = column or line_column(self.file, line, near)
 
 
-def _column(file: str, line: int, near: str) -> int:
+def line_column(file: str, line: int, near: str = "") -> int:
     """The 1-based column of ``near`` on ``line`` of ``file`` (else of its first non-blank character; 0 when
     the line is unknown or unreadable). Read only when an error is raised."""
     if line <= 0:

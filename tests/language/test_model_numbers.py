@@ -90,6 +90,9 @@ URDF_CASES = [
     ("huge-axis", "axis", "1e300 1e300 0", "xyz", "beyond"),
     ("zero-axis", "axis", "0 0 0", "xyz", "is zero"),
     ("nan-limit", "lower", "nan", "lower", "is NaN"),
+    ("empty-size", "box_size", "", "size", "expected 3 numbers"),
+    ("one-number-axis", "axis", "-1e9", "xyz", "expected 3 numbers"),
+    ("text-radius", "radius", "abc", "radius", "expected 1 number"),
     ("duplicate-link", "arm", "base", '"base"', "link name `base` is used twice"),
     ("empty-link-name", "arm", "", "name", "without a name"),
     ("duplicate-joint", "weld", "hinge", '"hinge"', "joint name `hinge` is used twice"),
@@ -232,3 +235,10 @@ def test_a_bad_mjcf_number_or_name_is_refused_at_its_line(
     template_line = next(n for n, line in enumerate(MJCF.splitlines(), 1) if "{" + field + "}" in line)
     assert re.search(rf"^{re.escape(str(model))}:{template_line}:\d+: robots\.r\.mjcf: .*{re.escape(says)}", out,
                      re.M), out  # fmt: skip
+
+
+def test_a_massless_root_is_located_at_its_link(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """Found by mutating this file's model: the issue had column 0 (unlocated); now the link's first column."""
+    scenario, urdf = _write(tmp_path, mass="0")
+    out = _refused_alike(capsys, scenario, tmp_path)
+    assert f"{urdf}:2:3: robots.r.fixed: root link `base` has no mass" in out, out
