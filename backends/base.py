@@ -146,6 +146,14 @@ class Backend(abc.ABC):
         """The engine's own name and version, and its wrapper's where they differ (``scenario backends``)."""
         return f"{cls.engine_distribution} {cls.engine_version()}"
 
+    @classmethod
+    def check_world(cls, world: CompiledWorld, options: BackendOptions) -> None:
+        """Refuse (UnsupportedFeature) what this backend cannot run in ``world`` with ``options``, judged from
+        the world alone before anything is built: the engine's limits (the tallest column it holds, ...).
+        The registry calls it with the capability check, so `scenario validate --backend` refuses exactly
+        what `scenario run` refuses before its first step, and a refused world is never built."""
+        del world, options
+
     # --- the contract ------------------------------------------------------------------------------
 
     def settings(self) -> dict[str, Any]:

@@ -163,8 +163,8 @@ def check_options(name: str, raw: Mapping[str, Any]) -> BackendOptions:
 
 
 def check_capabilities(cls: type[Backend], world: CompiledWorld) -> None:
-    """Refuse a world that needs what the backend cannot do, or options it does not take, before anything
-    is built (UnsupportedFeature, exit 2)."""
+    """Refuse a world that needs what the backend cannot do, options it does not take, or beyond the engine's
+    limits (``Backend.check_world``), before anything is built (UnsupportedFeature, exit 2)."""
     lacking = world.required_capabilities() - cls.capabilities
     missing = sorted(c.value for c in lacking)
     if missing:
@@ -175,7 +175,8 @@ def check_capabilities(cls: type[Backend], world: CompiledWorld) -> None:
         )
         refusal.missing = frozenset(lacking)
         raise refusal
-    cls.Options.parse(world.options_for(cls.name), cls.name)  # unknown keys and bad values, before building
+    options = cls.Options.parse(world.options_for(cls.name), cls.name)  # unknown keys and bad values
+    cls.check_world(world, options)  # the engine's limits (Backend.check_world)
 
 
 def _alternatives(refusing: type[Backend], lacking: frozenset[Capability] | set[Capability]) -> str:

@@ -36,6 +36,7 @@ from ..types import (
 )
 from . import _contacts, _surfaces
 from ._build import BodyHandle, JointHandle, build, place_free
+from ._build import check as check_build
 from ._gate import BounceGate
 from ._options import MAX_CONE_MU, MAX_CONE_STACK, DartOptions
 from ._reads import state_readers
@@ -60,6 +61,12 @@ class DartBackend(Backend):
     def engine_label(cls) -> str:
         engine, wrapper = str(dart.__version__), cls.engine_version()
         return f"DART {engine}" + ("" if wrapper == engine else f" (dartpy {wrapper})")
+
+    @classmethod
+    def check_world(cls, world: CompiledWorld, options: BackendOptions) -> None:
+        if isinstance(options, DartOptions):
+            _friction_model(world, options.friction)  # `friction: cone` above the solver's mu is refused
+        check_build(world)  # the joint trees: loops, joint kinds, planes (no engine call)
 
     def _build(self) -> None:
         world = self.world

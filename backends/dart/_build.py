@@ -148,6 +148,33 @@ def build(
     return built
 
 
+def check(world: CompiledWorld) -> None:
+    """Refuse what :func:`build` would refuse in the world's joint trees, in its order, from the world alone
+    (no engine call): a closed loop, a joint kind DART has no pair for, a jointed child that is not dynamic, a
+    plane that moves or hangs from a joint."""
+    bodies = world.bodies
+    for tree in _trees.plan(world):
+        if tree.root_joint is not None:
+            _check_kind(world.joints[tree.root_joint])
+        _check_plane(bodies[tree.root], jointed=False)
+        for link in tree.links:
+            spec, child = world.joints[link.joint], bodies[link.child]
+            if child.motion is not Motion.DYNAMIC:
+                raise UnsupportedFeature(f"Backend `dart` needs `{child.name}` of joint `{spec.name}` to be dynamic.")
+            _check_kind(spec)
+            _check_plane(child, jointed=True)
+
+
+def _check_kind(spec: JointSpec) -> None:
+    if spec.kind not in _PAIR_FACTORY:
+        raise UnsupportedFeature(f"Backend `dart` does not support {spec.kind.value} joints (`{spec.name}`).")
+
+
+def _check_plane(spec: BodySpec, jointed: bool) -> None:
+    if spec.shape.kind is ShapeKind.PLANE and (spec.motion is not Motion.STATIC or jointed):
+        raise UnsupportedFeature(f"Plane `{spec.name}` must be static and unjointed (planes never move).")
+
+
 def _exclude_pairs(world: CompiledWorld, built: Built, solver: Any) -> None:
     """Black-list ``excluded_pairs`` in the constraint solver's own BodyNodeCollisionFilter (DART's default
     filter, which also applies each skeleton's self-collision and adjacent-body settings): those pairs get

@@ -28,9 +28,9 @@ from ..types import (
     Quat,
     Vec3,
 )
-from . import _coulomb
+from . import _coulomb, _native
 from ._bounce import Impacts
-from ._model import IMPEDANCE, KINEMATIC_MASS_RATIO, MU_MAX, build
+from ._model import IMPEDANCE, KINEMATIC_MASS_RATIO, MU_MAX, build, plan_tree
 from ._options import MujocoOptions, check_stack, engine_substeps
 
 
@@ -75,11 +75,15 @@ class MujocoBackend(Backend):
         engine, wrapper = mujoco.mj_versionString(), cls.engine_version()
         return f"MuJoCo {engine}" + ("" if wrapper == engine else f" (mujoco {wrapper})")
 
+    @classmethod
+    def check_world(cls, world: CompiledWorld, options: BackendOptions) -> None:
+        if isinstance(options, MujocoOptions) and options.engine_substeps is None:
+            check_stack(stack_height(world))  # set by hand, the column is the scenario's to judge
+        plan_tree(world, _native.load(world))  # a kinematic loop, one MJCF robot at most, ... (no model built)
+
     def _build(self) -> None:
         world = self.world
-        self._stack = stack_height(world)
-        if self.options.engine_substeps is None:  # set by hand, the column is the scenario's to judge
-            check_stack(self._stack)
+        self._stack = stack_height(world)  # the registry refused a column too tall first (check_world)
         self._nsteps = world.substeps * engine_substeps(self.options, world.dt / world.substeps, self._stack)
         if world.model_options:  # the model's own timestep (checked equal to dt / substeps when loaded)
             self._nsteps = world.substeps

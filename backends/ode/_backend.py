@@ -98,6 +98,12 @@ class OdeBackend(Backend):
     def engine_label(cls) -> str:
         return _native.label()
 
+    @classmethod
+    def check_world(cls, world: CompiledWorld, options: BackendOptions) -> None:
+        check_stack(stacks(world).landing)
+        free = _free_stacks(world)
+        check_resting_stack(free.tallest, free.landing, _has_friction(world))
+
     def _build(self) -> None:
         _native.install()
         self._messages: list[str] = []
@@ -111,10 +117,7 @@ class OdeBackend(Backend):
 
     def _build_scene(self) -> None:
         world = self.world
-        self._stacks = stacks(world)
-        check_stack(self._stacks.landing)
-        free = _free_stacks(world)
-        check_resting_stack(free.tallest, free.landing, _has_friction(world))
+        self._stacks = stacks(world)  # the registry refused columns too tall first (check_world)
         self._scene = build_scene(world, self.options)
         self._collider = Collider(
             self._scene, self.options.collide, self.options.contact_forces, f"ode-contacts-{id(self):x}",

@@ -23,6 +23,7 @@ from ..types import (
     RIGID_BODY_CAPABILITIES,
     BodyStates,
     Capability,
+    CompiledWorld,
     Contact,
     JointKind,
     JointStates,
@@ -33,6 +34,7 @@ from ..types import (
     Vec3,
 )
 from ._build import PLANE_HALF_SIZE, Layout, build, initial_rate, xyzw
+from ._build import check as check_build
 from ._frames import InertialFrames
 from ._impacts import ImpactErp
 from ._options import PyBulletOptions, check_stack, solver_iterations
@@ -80,6 +82,12 @@ class PyBulletBackend(Backend):
     def engine_label(cls) -> str:
         return f"Bullet (pybullet {cls.engine_version()})"  # Bullet exposes no version of its own here
 
+    @classmethod
+    def check_world(cls, world: CompiledWorld, options: BackendOptions) -> None:
+        if isinstance(options, PyBulletOptions) and options.solver_iterations is None:
+            check_stack(stack_height(world))  # set by hand, the column is the scenario's to judge
+        check_build(world)
+
     def _build(self) -> None:
         self._c = int(p.connect(p.DIRECT))
         try:
@@ -104,9 +112,7 @@ class PyBulletBackend(Backend):
         # forever; threshold exactly g*h: a limit cycle that rocks the box]. Add 1.5 g*h (1.1 already
         # rests still; 1.5 leaves a margin).
         self._threshold = self._fit.restitution_threshold + _GRAVITY_MARGIN * math.hypot(*world.gravity) * self._h
-        self._stack = stack_height(world)
-        if self.options.solver_iterations is None:  # set by hand, the column is the scenario's to judge
-            check_stack(self._stack)
+        self._stack = stack_height(world)  # the registry refused a column too tall first (check_world)
         self._iterations = solver_iterations(self.options, self._stack)
         p.setPhysicsEngineParameter(
             fixedTimeStep=self._h,

@@ -95,13 +95,28 @@ def _collision(p: Any, c: int, spec: BodySpec, offset: Vec3 = ORIGIN) -> int:
     if len(placed) == 1:
         one = placed[0]
         return _shape(p, c, one.shape, _add(offset, one.pos), one.quat)
+    _check_compound(spec)
+    return _compound(p, c, spec.shapes, offset)
+
+
+def _check_compound(spec: BodySpec) -> None:
+    placed = spec.shapes
+    if spec.shape.kind is not ShapeKind.COMPOUND or len(placed) < 2:
+        return
     meshes = [s for s in placed if s.shape.kind in (ShapeKind.CONVEX, ShapeKind.TRIMESH)]
     if meshes:  # createCollisionShapeArray takes primitives and mesh files, not vertices
         raise UnsupportedFeature(
             f"Backend `pybullet` cannot build body `{spec.name}`: a compound of {len(placed)} shapes with a "
             f"mesh among them (PyBullet builds meshes from vertices only as a link's single shape)."
         )
-    return _compound(p, c, spec.shapes, offset)
+
+
+def check(world: CompiledWorld) -> None:
+    """Refuse what :func:`build` would refuse, from the world alone (no engine call): joints PyBullet cannot
+    build, loops of joints, compounds with a mesh among their shapes."""
+    _trees(world)
+    for spec in world.bodies:
+        _check_compound(spec)
 
 
 def _compound(p: Any, c: int, placed: tuple[PlacedShape, ...], offset: Vec3) -> int:

@@ -29,7 +29,9 @@ from typing import Any
 import numpy as np
 
 from backends.types import Mesh, PlacedShape, Shape, ShapeKind
+from runner.language.mesh_limits import check_mesh_file
 from runner.language.model_names import check_names
+from runner.language.model_numbers import check_mjcf_numbers, check_number, check_vertices
 from runner.language.robot_desc import (
     ActuatorDesc,
     JointDesc,
@@ -38,6 +40,7 @@ from runner.language.robot_desc import (
     ModelFileError,
     ModelNeed,
     quat4,
+    resolved,
     vec,
 )
 from runner.language.urdf import parse_xml
@@ -214,14 +217,66 @@ def _actuators(model: Any, joints: list[str], lines: dict[tuple[str, str], int],
     return out
 
 
+#: included files followed when looking for meshes (MuJoCo refuses a file that includes itself)
+MAX_INCLUDES = 64
+
+
+def _check_meshes(tree: Any, file: Path) -> None:
+    """Every `<mesh file=...>` of the file and of the files it includes (their numbers checked too) within the
+    mesh limits, before MuJoCo reads them (runner.language.mesh_limits); a file that cannot be found or read
+    is left to MuJoCo's own message."""
+    compiler = tree.getroot().find("compiler")
+    folder = file.parent
+    if compiler is not None:
+        folder = folder / (compiler.get("meshdir") or compiler.get("assetdir") or "")
+    todo, seen = [(tree, file)], {file.resolve()}
+    while todo:
+        current, owner = todo.pop()
+        for element in current.getroot().iter("mesh", "include"):
+            name, line = element.get("file"), element.sourceline or 0
+            if not name:
+                continue
+            base = folder if element.tag == "mesh" else file.parent  # includes are relative to the main file
+            path = resolved(base / name, owner, line, name)
+            if element.tag == "mesh" and path.is_file():
+                check_mesh_file(path, owner, line, name)
+            elif element.tag == "include" and path.is_file() and path not in seen and len(seen) < MAX_INCLUDES:
+                seen.add(path)
+                included = parse_xml(path)
+                check_mjcf_numbers(included, path)
+                todo.append((included, path))
+
+
+def _check_compiled(model: Any, file: Path, bodies: list[str], lines: dict[tuple[str, str], int]) -> None:
+    """What MuJoCo computed (defaults, includes and `fromto` applied) finite and within +-MAX_MAGNITUDE, at
+    the body's line: the main file's attributes were checked one by one before (check_mjcf_numbers)."""
+    for b in range(1, model.nbody):
+        geoms = range(int(model.body_geomadr[b]), int(model.body_geomadr[b]) + int(model.body_geomnum[b]))
+        fields = {"pos": model.body_pos[b], "quat": model.body_quat[b], "mass": [model.body_mass[b]],
+                  "inertia": model.body_inertia[b], "geom size": [v for g in geoms for v in model.geom_size[g]],
+                  "geom pos": [v for g in geoms for v in model.geom_pos[g]]}  # fmt: skip
+        for what, values in fields.items():
+            for value in np.asarray(values, dtype=float).ravel():
+                problem = check_number(float(value), "any")
+                if problem is not None:
+                    raise ModelFileError(file, lines.get(("body", bodies[b]), 0),
+                                         f"body `{bodies[b]}`: its {what} {float(value)!r} {problem}")  # fmt: skip
+    if model.nmeshvert:
+        line = next((line for (tag, _), line in lines.items() if tag == "mesh"), 0)
+        check_vertices(np.asarray(model.mesh_vert), file, line, "of the model")
+
+
 def load_mjcf(file: Path) -> ModelDesc:
     tree = parse_xml(file)
+    check_mjcf_numbers(tree, file)
+    _check_meshes(tree, file)
     mujoco = _mujoco(file)
     model = compile_file(file)
     data = mujoco.MjData(model)
     mujoco.mj_kinematics(model, data)
     lines = _lines(tree)
     bodies, joint_names = _names(model, file, lines)
+    _check_compiled(model, file, bodies, lines)
     links = []
     for b in range(model.nbody):
         rot = np.zeros(9)

@@ -30,10 +30,10 @@ class ModelFileError(Exception):
         self.file = str(file)
         self.line = line
         self.message = message
-        self.column = column or _column(self.file, line, near)
+        self.column = column or line_column(self.file, line, near)
 
 
-def _column(file: str, line: int, near: str) -> int:
+def line_column(file: str, line: int, near: str = "") -> int:
     """The 1-based column of ``near`` on ``line`` of ``file`` (else of its first non-blank character; 0 when
     the line is unknown or unreadable). Read only when an error is raised."""
     if line <= 0:
@@ -130,12 +130,22 @@ def data_root(text: str) -> tuple[Path, str] | None:
     return None
 
 
+def resolved(path: Path, model_file: Path | str, line: int, near: str) -> Path:
+    """``path`` with its symlinks followed; a symlink loop (or a path the system cannot follow) is a
+    ModelFileError at ``line`` of ``model_file`` (0: the scenario's line), not a crash (it was exit 70)."""
+    try:
+        return path.resolve()
+    except (OSError, RuntimeError) as exc:  # Python 3.11 raises RuntimeError("Symlink loop from ...")
+        why = "is a symlink loop" if "loop" in str(exc).lower() else f"cannot be followed ({exc})"
+        raise ModelFileError(model_file, line, f"`{near}` {why}", near=near) from None
+
+
 def resolve_file(text: str, base_dir: Path) -> Path:
     """A model path as the scenario writes it: relative to the scenario's folder, or under a root."""
     rooted = data_root(text)
     if rooted is not None:
-        return (rooted[0] / rooted[1]).resolve()
-    return (base_dir / text).resolve()
+        return resolved(rooted[0] / rooted[1], text, 0, text)
+    return resolved(base_dir / text, text, 0, text)
 
 
 #: how many folders above the model's own a `package://` name is looked for in (ROS's `<pkg>/urdf/x.urdf` is 1)
@@ -166,7 +176,7 @@ def resolve_package(uri: str, package_root: Path | None, model_file: Path, line:
         package, _, rest = uri[len("package://") :].partition("/")
         bases = package_bases(package, model_file)
         for base in bases:
-            target = (base / rest).resolve()
+            target = resolved(base / rest, model_file, line, uri)
             if not target.is_relative_to(base):
                 raise ModelFileError(
                     model_file, line, f"the mesh `{uri}` resolves to {target}, outside its root {base}", near=uri
@@ -182,11 +192,11 @@ def resolve_package(uri: str, package_root: Path | None, model_file: Path, line:
             near=uri,
         )
     if uri.startswith("package://") and package_root is not None:
-        root, target = package_root, (package_root / uri[len("package://") :]).resolve()
+        root, target = package_root, resolved(package_root / uri[len("package://") :], model_file, line, uri)
     elif uri.startswith("file://"):
-        root, target = model_file.parent.resolve(), Path(uri[len("file://") :]).resolve()
+        root, target = model_file.parent.resolve(), resolved(Path(uri[len("file://") :]), model_file, line, uri)
     else:
-        root, target = model_file.parent.resolve(), (model_file.parent / uri).resolve()
+        root, target = model_file.parent.resolve(), resolved(model_file.parent / uri, model_file, line, uri)
     if not target.is_relative_to(root.resolve()):
         raise ModelFileError(
             model_file, line, f"the mesh `{uri}` resolves to {target}, outside its root {root}", near=uri

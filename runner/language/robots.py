@@ -11,7 +11,7 @@ from pathlib import Path as FsPath
 from runner.errors import Issue, ScenarioValidationError
 from runner.language.model import Scenario
 from runner.language.model_robots import Robot
-from runner.language.robot_desc import ModelDesc, ModelFileError, data_root, resolve_file
+from runner.language.robot_desc import ModelDesc, ModelFileError, data_root, line_column, resolve_file
 from runner.language.semantics import unknown
 from runner.language.yaml_source import Positions
 
@@ -103,7 +103,7 @@ def load_robots(model: Scenario, positions: Positions, base_dir: FsPath) -> dict
                 Issue(
                     desc.file,
                     root.line,
-                    0,
+                    line_column(desc.file, root.line),
                     f"robots.{name}.fixed",
                     f"root link `{root.name}` has no mass; a free model needs one (or `fixed: true`)",
                 )
@@ -114,7 +114,7 @@ def load_robots(model: Scenario, positions: Positions, base_dir: FsPath) -> dict
                     Issue(
                         desc.file,
                         link.line,
-                        0,
+                        line_column(desc.file, link.line),
                         f"robots.{name}",
                         f"link `{link.name}` has no mass (no <inertial> or mass 0); a moving link needs one",
                     )

@@ -20,7 +20,9 @@ from typing import Any
 import numpy as np
 
 from backends.types import Mesh, PlacedShape, Rgba, Shape, ShapeKind
+from runner.language.mesh_limits import check_mesh_counts, check_mesh_file
 from runner.language.model_names import check_names
+from runner.language.model_numbers import check_urdf_numbers, check_vertices
 from runner.language.robot_desc import (
     JointDesc,
     LinkDesc,
@@ -195,16 +197,21 @@ def _mesh_lines(tree: Any) -> dict[str, int]:
     return {e.get("filename"): e.sourceline or 0 for e in tree.getroot().iter("mesh") if e.get("filename")}
 
 
-def load_mesh(path: Path, scale: tuple[float, float, float], file: Path, line: int, hull: bool) -> Mesh:
-    """The mesh file's triangles (scaled), or their convex hull."""
+def load_mesh(path: Path, scale: tuple[float, float, float], file: Path, line: int, hull: bool, near: str = "") -> Mesh:
+    """The mesh file's triangles (scaled), or their convex hull; a file beyond the mesh limits is refused
+    before it is read (runner.language.mesh_limits), a vertex not finite or beyond +-1e9 m after."""
     import trimesh
 
+    check_mesh_file(path, file, line, near)
     try:
-        loaded = trimesh.load(str(path), force="mesh", process=True)
+        loaded = trimesh.load(str(path), force="mesh", process=False)  # processing drops NaN vertices unseen
     except Exception as exc:  # noqa: BLE001 - trimesh raises many types for unreadable files; all mean "bad mesh"
-        raise ModelFileError(file, line, f"cannot read the mesh {path.name}: {exc}") from None
+        raise ModelFileError(file, line, f"cannot read the mesh {path.name}: {exc}", near=near) from None
     if not isinstance(loaded, trimesh.Trimesh) or len(loaded.faces) == 0:
-        raise ModelFileError(file, line, f"the mesh {path.name} holds no triangles")
+        raise ModelFileError(file, line, f"the mesh {path.name} holds no triangles", near=near)
+    check_vertices(np.asarray(loaded.vertices) * np.asarray(scale, dtype=float), file, line, path.name)
+    loaded.process()  # vertices merged, degenerate faces dropped: as trimesh.load(process=True)
+    check_mesh_counts(len(loaded.faces), len(loaded.vertices), path, file, line, near)
     loaded.apply_scale(np.asarray(scale, dtype=float))
     if hull:
         loaded = loaded.convex_hull  # qhull, through trimesh: every vertex of the hull, none moved
@@ -227,7 +234,7 @@ def _shape(geometry: Any, file: Path, package_root: Path | None, mesh_lines: dic
     target = resolve_package(mesh.filename, package_root, file, line)
     scale = _mesh_scale(mesh.scale, file, line)
     kind = ShapeKind.CONVEX if hull else ShapeKind.TRIMESH
-    return Shape(kind, mesh=load_mesh(target, scale, file, line, hull))
+    return Shape(kind, mesh=load_mesh(target, scale, file, line, hull, near=mesh.filename))
 
 
 def _mesh_scale(scale: Any, file: Path, line: int) -> tuple[float, float, float]:
@@ -306,6 +313,7 @@ def load_urdf(file: Path, package_root: Path | None, static_root: bool, static_t
 
     tree = parse_xml(file)
     link_lines, joint_lines = _check_structure(tree, file)
+    check_urdf_numbers(tree, file)
     capsules = _capsules(tree)
     mesh_lines = _mesh_lines(tree)
     try:

@@ -30,7 +30,7 @@ import socket
 import subprocess
 import sys
 import tempfile
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -70,6 +70,26 @@ joints:
 """
 
 
+MESH_ROBOT = """\
+<robot name="r">
+  <link name="base">
+    <inertial><mass value="1"/><inertia ixx="0.01" iyy="0.01" izz="0.01" ixy="0" ixz="0" iyz="0"/></inertial>
+    <collision><geometry><mesh filename="big.stl"/></geometry></collision>
+  </link>
+</robot>
+"""
+
+
+def oversized_mesh(folder: Path) -> None:
+    """A robot whose collision mesh is a binary STL one byte over the limit (sparse: nothing written)."""
+    from runner.language.mesh_limits import MAX_MESH_BYTES
+
+    (folder / "robot.urdf").write_text(MESH_ROBOT)
+    with (folder / "big.stl").open("wb") as handle:
+        handle.write(b"\0" * 80 + (1).to_bytes(4, "little"))
+        handle.truncate(MAX_MESH_BYTES + 1)
+
+
 @dataclass(frozen=True)
 class Row:
     name: str
@@ -79,6 +99,8 @@ class Row:
     full_disk: bool = False
     variant: str | None = None  # the variant `run` picks (the first): `check` and pytest would run them all
     read_only: bool = False
+    files: Callable[[Path], None] | None = None  # writes the files the scenario names beside it
+    refused_on_load: bool = False  # refused before any case starts: `compare` itself exits 2 (bad input)
 
 
 ROWS = [
@@ -102,6 +124,9 @@ ROWS = [
     Row("integer overflow", "pybullet", BOX.format(name="overflow").replace("bodies:", "state: {s: 3}\nbodies:") +
         "inputs: [{at: 0, event: sq, repeat: {every: 0.04, count: 9}}]\non:\n  sq: [{calc: {s: state.s * state.s}}]\n"
         "assertions:\n  - {name: big, at: end, value: state.s * floor(1e308) * floor(1e308), max: 0}\n", 1),
+    Row("oversized mesh (a 25 MB STL)", "pybullet",
+        BOX.format(name="bigmesh") + "robots:\n  r: {urdf: robot.urdf, pos: [1, 0, 1]}\n", 2, files=oversized_mesh,
+        refused_on_load=True),
 ]  # fmt: skip
 
 LANDING = """\
@@ -149,6 +174,8 @@ def _source(folder: Path, row: Row) -> Path:
     folder.mkdir(parents=True, exist_ok=True)
     path = folder / f"{re.sub(r'[^a-z]+', '_', row.name)}.yaml"
     path.write_text(row.text)
+    if row.files is not None:
+        row.files(folder)
     return path
 
 

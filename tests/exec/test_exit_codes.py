@@ -3,7 +3,8 @@
 The cells of ``tests/exec/exit_table.py`` (the script that prints the table for docs/reliability.md), run
 as a user runs the command: a runtime expression error, a `send` loop, an engine abort, a full disk, a
 missing engine, a capability the engine lacks, a failed assertion, a known limit (an expected failure:
-exit 0) and a known limit that passes (exit 1), each serially, with ``-j 2``, ``--isolate``,
+exit 0), a known limit that passes (exit 1), a read-only output, an integer overflow and an oversized mesh
+(refused when the scenario is loaded), each serially, with ``-j 2``, ``--isolate``,
 ``--trace-process``, on Ray (a cluster started with ``ray start --head``, when the ``ray`` extra is
 installed), as a row of ``compare``, through ``check`` (against a golden file recorded first) and through
 the pytest plugin; then `compare`'s agreement outcomes with ``--max-divergence``. 72 commands and 9
@@ -73,9 +74,12 @@ def test_one_exit_code_and_one_first_line_on_every_path(cells: dict[str, dict[st
 
 def test_compare_exits_by_its_own_rule(cells: dict[str, dict[str, Cell]]) -> None:
     """`compare` exits 1 when a run does not pass (the row says why), 0 when every run passes (a known limit
-is an expected failure); a full disk under its report is 74."""
+is an expected failure); a full disk under its report is 74; a scenario refused when it is loaded (an
+oversized mesh), before any run, is bad input: 2."""
     own = {name: found["compare"].command_code for name, found in cells.items()}
-    assert own == {r.name: 74 if r.full_disk or r.read_only else 1 if r.code else 0 for r in ROWS}
+    expected = {r.name: 74 if r.full_disk or r.read_only else 2 if r.refused_on_load else 1 if r.code else 0
+                for r in ROWS}  # fmt: skip
+    assert own == expected
 
 
 @pytest.mark.parametrize("row", ROWS, ids=[r.name for r in ROWS])
