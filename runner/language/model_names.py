@@ -48,11 +48,13 @@ def check_names(file: Path, kind: str, names: Iterable[tuple[str | None, int]]) 
     fields: dict[str, tuple[str, int]] = {}
     for name, line in names:
         if not name:
-            raise ModelFileError(file, line, f"a {kind} has no name (expected name=\"...\")")
+            raise ModelFileError(file, line, f"a {kind} has no name (expected name=\"...\")", near="name=")
         if _CONTROL.search(name):
             raise ModelFileError(file, line, f"{kind} name {name!r} holds a control character")
         if name in seen:
-            raise ModelFileError(file, line, f"{kind} name `{name}` is given twice (first at line {seen[name]})")
+            raise ModelFileError(
+                file, line, f"{kind} name `{name}` is given twice (first at line {seen[name]})", near=f'"{name}"'
+            )
         seen[name] = line
         field = field_name(name)
         if field in fields:

@@ -93,9 +93,9 @@ URDF_CASES = [
     ("empty-size", "box_size", "", "size", "expected 3 numbers"),
     ("one-number-axis", "axis", "-1e9", "xyz", "expected 3 numbers"),
     ("text-radius", "radius", "abc", "radius", "expected 1 number"),
-    ("duplicate-link", "arm", "base", '"base"', "link name `base` is used twice"),
-    ("empty-link-name", "arm", "", "name", "without a name"),
-    ("duplicate-joint", "weld", "hinge", '"hinge"', "joint name `hinge` is used twice"),
+    ("duplicate-link", "arm", "base", '"base"', "link name `base` is given twice"),
+    ("empty-link-name", "arm", "", "name", "has no name"),
+    ("duplicate-joint", "weld", "hinge", '"hinge"', "joint name `hinge` is given twice"),
 ]
 
 
@@ -217,7 +217,7 @@ MJCF_CASES = [
     ("inf-mass", "mass", "inf", "mass", "beyond"),
     ("negative-mass", "mass", "-1", "mass", "must not be negative"),
     ("nan-range", "range", "nan 1", "range", "is NaN"),
-    ("generated-name-taken", "first", "body_2", '"body_2"', "body name `body_2` is used twice"),
+    ("generated-name-taken", "first", "body_2", '"body_2"', "body name `body_2` is given twice"),
 ]
 
 
