@@ -169,6 +169,8 @@ def _targets(r: Results) -> list[str]:
                     f"({s:.2f}x of {ceiling:.2f}x) | {_met(share >= TARGET_CEILING)} | the ceiling: a pure-Python loop "
                     f"split over 2 processes; {rest}load average {r.load[0]:.1f}-{r.load[1]:.1f} on "
                     f"{os.cpu_count()} cores |")  # fmt: skip
+    for target, measured, ok, where in rbt.target_rows(r.robot):
+        rows.append(f"| {target} | {measured} | {_met(ok)} | {where} |")
     return [*rows, ""]
 
 
