@@ -28,16 +28,20 @@ class InertialFrames:
             i: (b.com, b.inertia_quat) for i, b in enumerate(world.bodies) if has_offset(b)
         }
         #: per offset body: its COM in the body frame and the conjugate of its principal axes' quaternion
-        self._conj = [(i, (*com, *quat_conj(iq))) for i, (com, iq) in self.offsets.items()]
+        self._conj = [(*com, *quat_conj(iq)) for com, iq in self.offsets.values()]
+        self._rows = np.array(list(self.offsets), dtype=np.int64)
 
     def to_body(self, arr: np.ndarray) -> None:
         """Rows of (pos, quat x y z w, lin_vel, ang_vel) of inertial frames -> of body frames, in place.
 
         Every step converts every offset body, so the products of ``quat_mul``, ``quat_rotate`` and the cross
         product are written out here on plain floats (the same operations in the same order: the same
-        numbers), one ``tolist`` and one row assignment per body instead of tuples and numpy scalars."""
-        for i, (cx, cy, cz, jw, jx, jy, jz) in self._conj:
-            px, py, pz, x, y, z, w, vx, vy, vz, ox, oy, oz = arr[i].tolist()
+        numbers), the rows read out and written back in one call each instead of tuples and numpy scalars."""
+        if not self._conj:
+            return
+        rows = arr[self._rows].tolist()
+        for k, ((cx, cy, cz, jw, jx, jy, jz), row) in enumerate(zip(self._conj, rows, strict=True)):
+            px, py, pz, x, y, z, w, vx, vy, vz, ox, oy, oz = row
             # qb = qc * conj(iq), qc = (w, x, y, z): quat_mul's products, in its order
             bw = w * jw - x * jx - y * jy - z * jz
             bx = w * jx + x * jw + y * jz - z * jy
@@ -53,7 +57,8 @@ class InertialFrames:
             # drift = omega x (-arm)
             nx, ny, nz = -ax, -ay, -az
             lin = (vx + (oy * nz - oz * ny), vy + (oz * nx - ox * nz), vz + (ox * ny - oy * nx))
-            arr[i] = (px - ax, py - ay, pz - az, bx, by, bz, bw, *lin, ox, oy, oz)
+            rows[k] = [px - ax, py - ay, pz - az, bx, by, bz, bw, *lin, ox, oy, oz]
+        arr[self._rows] = rows
 
     def to_inertial(self, body: int, pos: Vec3, quat: Quat, lin_vel: Vec3, ang_vel: Vec3) -> tuple[Vec3, Quat, Vec3]:
         """A body-frame pose and origin velocity -> the inertial frame's pose and the COM's velocity."""
