@@ -19,6 +19,7 @@ from . import build as bld
 from . import encoding as enc
 from . import ray_cluster, seed_loop
 from . import robot as rbt
+from . import startup as sup
 from .batch import BatchFigures
 from .measure import RAW_LOOPS
 from .memory import MemoryFigures
@@ -44,6 +45,7 @@ class Results:
     encoding: list[enc.EncodingFigures] = field(default_factory=list)
     build: list[bld.BuildFigures] = field(default_factory=list)
     robot: list[rbt.RobotFigures] = field(default_factory=list)
+    startup: sup.StartupFigures | None = None
     seed: seed_loop.SeedFigures | None = None
     ray: ray_cluster.RayFigures | None = None
     wrapper_us: float = 0.0
@@ -112,6 +114,7 @@ def render(r: Results) -> str:
     if r.robot:
         out += rbt.render(r.robot)
     out += seed_loop.render(r.seed)
+    out += sup.render(r.startup)
     out += ["## What remains, and why (profiling)", "", *_floor(r.overhead), *(f"- {c}" for c in KNOWN_CAUSES), ""]
     return "\n".join(out) + "\n"
 
@@ -169,8 +172,8 @@ def _targets(r: Results) -> list[str]:
                     f"({s:.2f}x of {ceiling:.2f}x) | {_met(share >= TARGET_CEILING)} | the ceiling: a pure-Python loop "
                     f"split over 2 processes; {rest}load average {r.load[0]:.1f}-{r.load[1]:.1f} on "
                     f"{os.cpu_count()} cores |")  # fmt: skip
-    for target, measured, ok, where in rbt.target_rows(r.robot):
-        rows.append(f"| {target} | {measured} | {_met(ok)} | {where} |")
+    for goal, measured, ok, where in [*rbt.target_rows(r.robot), *sup.target_rows(r.startup)]:
+        rows.append(f"| {goal} | {measured} | {_met(ok)} | {where} |")
     return [*rows, ""]
 
 
