@@ -255,7 +255,7 @@ def _child(argv: Sequence[str]) -> int:
             runner(False, out)  # records the servos' targets, step by step, for the native loop
         finally:
             Servos.targets = record  # type: ignore[method-assign]
-        runner_q = final["q"]
+        runner_q = final.get("q")  # none when the run ended by an engine failure (``note`` gives its status)
         modes = ["runner", "runner+trace", "parts"] + (["native"] if make_loop is not None else [])
         for rep in range(reps):
             turn = rep % len(modes)
@@ -266,7 +266,7 @@ def _child(argv: Sequence[str]) -> int:
                     s = runner(mode == "runner+trace", out, split_parts=mode == "parts")
                 seconds.setdefault(mode, []).append(s)
     same = float("nan")
-    if make_loop is not None:
+    if make_loop is not None and runner_q is not None and "native_q" in final:
         moving = ~np.isnan(runner_q)
         same = float(np.abs(runner_q[moving] - final["native_q"][moving]).max()) if moving.any() else 0.0
     med = {k: statistics.median(v) * 1e3 for k, v in seconds.items()}
