@@ -11,13 +11,13 @@ from pathlib import Path
 
 from backends.registry import DEFAULT_BACKEND, is_installed, list_backends
 
-from . import batch, build, encoding, memory, overhead, ray_cluster, robot, scaling, seed_loop
+from . import batch, build, encoding, memory, overhead, ray_cluster, robot, scaling, seed_loop, startup
 from .instrument import wrapper_cost
 from .report import Results, append_notes, render
 
 #: Every engine the registry lists (a fifth engine joins the benchmarks by its registry line).
 ENGINES = tuple(e.name for e in list_backends())
-SECTIONS = ("overhead", "scaling", "memory", "batch", "encoding", "build", "robot", "seed", "ray")
+SECTIONS = ("overhead", "scaling", "memory", "batch", "encoding", "build", "robot", "seed", "startup", "ray")
 
 
 def _ints(text: str) -> list[int]:
@@ -55,6 +55,9 @@ def parser() -> argparse.ArgumentParser:
     p.add_argument("--encoding-reps", type=int, default=3, help="encoding: interleaved repetitions (median)")
     p.add_argument("--build-backends", type=_names, default=None, help="build: engines (default: all installed)")
     p.add_argument("--build-sizes", type=_ints, default=[100, 1000, 10000], help="build: body counts")
+    p.add_argument("--robot-backends", type=_names, default=None, help="robot: engines (default: all installed)")
+    p.add_argument("--robot-reps", type=int, default=5, help="robot: interleaved repetitions (median)")
+    p.add_argument("--startup-reps", type=int, default=7, help="startup: interleaved rounds (median)")
     p.add_argument("--seed-duration", type=float, default=4.0, help="seed: simulated seconds of the pile on ODE")
     p.add_argument("--seed-reps", type=int, default=3, help="seed: interleaved repetitions (median)")
     return p
@@ -68,6 +71,7 @@ def _quick(a: argparse.Namespace) -> None:
     a.encoding_duration, a.encoding_reps = 0.4, 1
     a.build_sizes = [10, 40]
     a.seed_duration, a.seed_reps = 0.2, 1
+    a.robot_reps, a.startup_reps = 1, 1
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -92,7 +96,8 @@ def main(argv: list[str] | None = None) -> int:
         "batch": f"-j {args.batch_jobs}, {args.batch_reps} reps, {args.batch_backend}",
         "encoding": f"{'x'.join(map(str, args.pile))} boxes, {args.encoding_duration:g} s, {args.encoding_reps} reps",
         "build": f"{args.build_sizes} bodies, {','.join(args.build_backends or installed)}",
-        "robot": f"scenarios/robots/kuka_arm.yaml, {','.join(installed)}",
+        "robot": f"{', '.join(robot.ROBOTS)}, {args.robot_reps} reps, {','.join(args.robot_backends or installed)}",
+        "startup": f"bench/scenarios/one_step.yaml on {startup.ENGINE}, {args.startup_reps} rounds",
         "seed": f"{'x'.join(map(str, args.pile))} boxes, {args.seed_duration:g} s on ode, {args.seed_reps} reps",
     }
     results = Results(command=shlex.join(["python", "-m", "bench", *(argv if argv is not None else sys.argv[1:])]),
@@ -130,10 +135,14 @@ def main(argv: list[str] | None = None) -> int:
         results.build = build.run(chosen, args.build_sizes, log)
     if "robot" in args.sections:
         log(f"robot: {sizes['robot']}")
-        results.robot = robot.run(installed, log)
+        chosen = [b for b in (args.robot_backends or installed) if b in installed]
+        results.robot = robot.run(chosen, args.robot_reps, log)
     if "seed" in args.sections and is_installed(seed_loop.ENGINE):
         log(f"seed: {sizes['seed']}")
         results.seed = seed_loop.run(tuple(args.pile), args.seed_duration, args.seed_reps, log)
+    if "startup" in args.sections:
+        log(f"startup: {sizes['startup']}")
+        results.startup = startup.run(args.startup_reps, log)
     if "ray" in args.sections and not args.quick:  # CI runs the test itself (make test); --quick skips it
         log(f"ray: {ray_cluster.TEST}")
         results.ray = ray_cluster.run(log)

@@ -42,8 +42,9 @@ class Split:
         return sum(c for k, c in self.calls.items() if k.startswith(prefix + "."))
 
 
-def _wrap(func: Callable[..., Any], key: str, split: Split, depth: list[int]) -> Callable[..., Any]:
-    clock = time.perf_counter
+def _wrap(
+    func: Callable[..., Any], key: str, split: Split, depth: list[int], clock: Callable[[], float] = time.perf_counter
+) -> Callable[..., Any]:
 
     @functools.wraps(func)
     def timed(*args: Any, **kwargs: Any) -> Any:
@@ -62,8 +63,11 @@ def _wrap(func: Callable[..., Any], key: str, split: Split, depth: list[int]) ->
 
 
 @contextlib.contextmanager
-def timed(targets: dict[str, tuple[type, tuple[str, ...]]]) -> Iterator[Split]:
-    """Wrap ``{group: (class, method names)}`` while the block runs; yields the :class:`Split`."""
+def timed(
+    targets: dict[str, tuple[type, tuple[str, ...]]], clock: Callable[[], float] = time.perf_counter
+) -> Iterator[Split]:
+    """Wrap ``{group: (class, method names)}`` while the block runs; yields the :class:`Split` (seconds of
+    ``clock``: wall time by default, ``time.process_time`` for CPU time)."""
     split = Split()
     saved: list[tuple[type, str, Any]] = []
     depths: dict[str, list[int]] = {group: [0] for group in targets}
@@ -75,7 +79,7 @@ def timed(targets: dict[str, tuple[type, tuple[str, ...]]]) -> Iterator[Split]:
                 if inherited is None:
                     continue
                 saved.append((cls, name, original))
-                setattr(cls, name, _wrap(inherited, f"{group}.{name}", split, depths[group]))
+                setattr(cls, name, _wrap(inherited, f"{group}.{name}", split, depths[group], clock))
         yield split
     finally:
         for cls, name, original in reversed(saved):

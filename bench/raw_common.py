@@ -59,3 +59,36 @@ def time_loop(make: Any, world: CompiledWorld, settings: Mapping[str, Any], step
     finally:
         loop.close()
     return RawTiming(end - start, built - start, final)
+
+
+@dataclass(frozen=True)
+class Servo:
+    """One position servo as a hand-written loop drives it: ``vel = gain (target - q)``, clamped to vmax."""
+
+    joint: int  # world joint index
+    gain: float
+    fmax: float
+    vmax: float | None
+
+
+class RobotLoop(Protocol):
+    """The adapter's own engine world (same bodies, joints and settings: the same physics), stepped and read
+    by hand as the engine's users do: the servos' commands from the last joint reading, the engine's step,
+    then every link's pose and velocity and every joint's position, velocity and motor force."""
+
+    def step(self, targets: list[float]) -> None: ...
+
+    def read(self) -> None: ...
+
+    def joint_positions(self) -> dict[int, float]:
+        """World joint index -> its position (the runner's coordinate) after the last read."""
+        ...
+
+
+def servo_rates(servos: list[Servo], targets: list[float], q: list[float]) -> list[float]:
+    """Each servo's commanded rate (the runner's servo law, runner.sim.servo), in the engine's coordinate."""
+    out = []
+    for s, target, now in zip(servos, targets, q, strict=True):
+        vel = s.gain * (target - now)
+        out.append(vel if s.vmax is None else max(-s.vmax, min(s.vmax, vel)))
+    return out

@@ -21,6 +21,8 @@ import numpy as np
 
 from backends.types import CompiledWorld, Motion, ShapeKind
 
+from .raw_common import Servo, servo_rates
+
 
 class MujocoLoop:
     def __init__(self, world: CompiledWorld, s: Mapping[str, Any]) -> None:
@@ -111,3 +113,61 @@ TARGET_RATIO_RAW = 1.30
 
 #: The loop bench/measure.py runs for this engine (found by the file name, bench/raw_<registry name>.py).
 LOOP = MujocoLoop
+
+
+class MujocoRobotLoop:
+    """A robot on MuJoCo by hand (bench/robot.py), in the adapter's model: each servo's rate put on its
+    motor's helper dof (the adapter's velocity motor: a tendon frictionloss row, docs/backends/mujoco.md),
+    the adapter's engine step function (the physics), the motors' forces from ``qfrc_constraint``, then
+    ``mj_kinematics``, ``mj_comPos`` and ``mj_comVel`` and every body's pose and velocity and every joint's
+    position and velocity read as numpy arrays (no per-body Python)."""
+
+    def __init__(self, adapter: Any, servos: list[Servo]) -> None:
+        from backends.mujoco import _coulomb
+
+        self.m, self.d, lay = adapter._m, adapter._d, adapter._layout
+        if adapter._nsteps != 1:
+            raise ValueError("the hand-written robot loop makes one engine step per step")
+        friction, impacts = lay.friction_damping, adapter._impacts
+        self.advance: Callable[[], object]
+        if adapter.world.model_options:
+            self.advance = lambda: mujoco.mj_step(self.m, self.d)
+        else:
+            self.advance = lambda: _coulomb.step(self.m, self.d, friction, impacts)
+        self.servos = servos
+        slots = [int(adapter._motor_of[s.joint]) for s in servos]
+        self.helper = adapter._helper_dof[slots]
+        self.m.tendon_frictionloss[slots] = [s.fmax for s in servos]  # the motors' force bound, set once
+        self.sign = adapter._sign[[s.joint for s in servos]]
+        self.servo_q = self.m.jnt_qposadr[lay.joint_id[[s.joint for s in servos]]]
+        self.all_helpers = adapter._helper_dof
+        self.ids, self.root = lay.body_id, adapter._root
+        self.rated = adapter._rated
+        self.qadr, self.dadr, self.rated_sign = adapter._rated_qpos, adapter._rated_dof, adapter._sign[adapter._rated]
+        self.q = [float(x) for x in self.sign * self.d.qpos[self.servo_q]]
+
+    def step(self, targets: list[float]) -> None:
+        d = self.d
+        d.qvel[self.helper] = self.sign * np.array(servo_rates(self.servos, targets, self.q))
+        self.advance()
+        self.force = -d.qfrc_constraint[self.all_helpers]
+
+    def read(self) -> None:
+        m, d = self.m, self.d
+        mujoco.mj_kinematics(m, d)
+        mujoco.mj_comPos(m, d)
+        mujoco.mj_comVel(m, d)
+        ids = self.ids
+        pos, quat, cvel = d.xpos[ids], d.xquat[ids], d.cvel[ids]
+        ang = cvel[:, :3]
+        lin = cvel[:, 3:] + np.cross(ang, pos - d.subtree_com[self.root])
+        self.pos, self.quat, self.lin, self.ang = pos, quat, lin, ang
+        self.qpos, self.qvel = d.qpos[self.qadr], d.qvel[self.dadr]
+        self.q = [float(x) for x in self.sign * d.qpos[self.servo_q]]
+
+    def joint_positions(self) -> dict[int, float]:
+        return dict(zip(self.rated.tolist(), (self.rated_sign * self.qpos).tolist(), strict=True))
+
+
+#: bench/robot.py's hand-written robot loop for this engine (built from the adapter's world).
+ROBOT_LOOP = MujocoRobotLoop

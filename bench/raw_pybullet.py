@@ -19,6 +19,10 @@ from backends.pybullet._impacts import ImpactErp
 from backends.pybullet._reads import base_rows
 from backends.types import CompiledWorld, Motion, ShapeKind
 
+from .raw_common import Servo, servo_rates
+
+_flat = chain.from_iterable
+
 #: PyBullet's row (pos, quaternion x y z w, lin, ang) in the loops' order (quaternion w x y z).
 _WXYZ_ROW = np.array([0, 1, 2, 6, 3, 4, 5, 7, 8, 9, 10, 11, 12])
 
@@ -103,3 +107,66 @@ class PyBulletLoop:
 
 #: The loop bench/measure.py runs for this engine (found by the file name, bench/raw_<registry name>.py).
 LOOP = PyBulletLoop
+
+
+class PyBulletRobotLoop:
+    """A robot on PyBullet by hand (bench/robot.py): the servos' rates in one ``setJointMotorControlArray``
+    per multibody, ``stepSimulation``, then ``getBasePositionAndOrientation`` + ``getBaseVelocity`` per
+    base, one ``getLinkStates`` (with velocities) per multibody and one ``getJointStates`` per multibody
+    (position, velocity and the motor's applied torque), the floats streamed into arrays."""
+
+    def __init__(self, adapter: Any, servos: list[Servo]) -> None:
+        if adapter.world.substeps != 1 or adapter._impacts.active:
+            raise ValueError("the hand-written robot loop steps once per step with no bouncing pair")
+        self.c, lay = adapter._c, adapter._layout
+        self.servos = servos
+        self.bases = adapter._base_uids
+        self.n = len(adapter.world.bodies)
+        self.base_rows = adapter._base_rows if adapter._base_rows is not None else slice(None)
+        self.groups = [(uid, list(links), list(bodies)) for uid, links, bodies in lay.link_groups]
+        handles = [lay.joints[s.joint] for s in servos]
+        self.sign = [h.sign for h in handles]
+        #: per multibody: its servoed links and their places in ``servos``
+        self.motors = [(u, [h.link for h in handles if h.uid == u], [k for k, h in enumerate(handles) if h.uid == u])
+                       for u in sorted({h.uid for h in handles})]  # fmt: skip
+        moving = [k for k, h in enumerate(lay.joints) if h.dofs == 1]  # world joints with a coordinate
+        uids = sorted({lay.joints[k].uid for k in moving})
+        self.joint_groups = [(u, [lay.joints[k].link for k in moving if lay.joints[k].uid == u]) for u in uids]
+        order = [k for u in uids for k in moving if lay.joints[k].uid == u]  # read order -> world joint
+        self.joint_order, self.joint_sign = np.array(order), np.array([lay.joints[k].sign for k in order])
+        self.servo_row = [order.index(s.joint) for s in servos]
+        self.read()
+
+    def step(self, targets: list[float]) -> None:
+        c, rates = self.c, servo_rates(self.servos, targets, self.q)
+        for uid, links, k in self.motors:
+            p.setJointMotorControlArray(
+                uid, links, p.VELOCITY_CONTROL, targetVelocities=[self.sign[i] * rates[i] for i in k],
+                forces=[self.servos[i].fmax for i in k], physicsClientId=c,
+            )  # fmt: skip
+        p.stepSimulation(physicsClientId=c)
+
+    def read(self) -> None:
+        c = self.c
+        rows = np.empty((self.n, 13))
+        if self.bases:
+            rows[self.base_rows] = base_rows(c, self.bases)
+        for uid, links, bodies in self.groups:
+            states = p.getLinkStates(uid, links, computeLinkVelocity=1, computeForwardKinematics=1, physicsClientId=c)
+            rows[bodies] = np.fromiter(_flat(_flat((s[0], s[1], s[6], s[7]) for s in states)), np.float64,
+                                       13 * len(links)).reshape(-1, 13)  # fmt: skip
+        states = []
+        for uid, links in self.joint_groups:
+            states.extend(p.getJointStates(uid, links, physicsClientId=c))
+        joints = np.fromiter(_flat((j[0], j[1], j[3]) for j in states), np.float64, 3 * len(states)).reshape(-1, 3)
+        self.rows, self.joints = rows, joints
+        q = joints[:, 0]
+        self.q = [self.sign[i] * float(q[r]) for i, r in enumerate(self.servo_row)]
+
+    def joint_positions(self) -> dict[int, float]:
+        """World joint index -> its position (the runner's coordinate) after the last read."""
+        return dict(zip(self.joint_order.tolist(), (self.joint_sign * self.joints[:, 0]).tolist(), strict=True))
+
+
+#: bench/robot.py's hand-written robot loop for this engine (built from the adapter's world).
+ROBOT_LOOP = PyBulletRobotLoop

@@ -119,6 +119,9 @@ class MujocoBackend(Backend):
         rated = np.array([j for j, joint in enumerate(world.joints) if joint.kind in _RATED], dtype=np.int64)
         self._rated = rated  # the joints with a coordinate: slider, hinge
         self._rated_qpos, self._rated_dof = m.jnt_qposadr[lay.joint_id[rated]], m.jnt_dofadr[lay.joint_id[rated]]
+        self._rated_sign = self._sign[rated]
+        #: what a joint without a coordinate reads (NaN) or a joint without a motor feels (0), copied per read
+        self._no_reading, self._no_force = np.full(len(world.joints), np.nan), np.zeros(len(world.joints))
         self._motored = motors  # world joints with a motor, their slots, signs
         self._motored_slot, self._motored_sign = self._motor_of[motors], self._sign[motors]
         self._stale = True
@@ -288,10 +291,10 @@ class MujocoBackend(Backend):
         return BodyStates(pos=pos, quat=d.xquat[ids], lin_vel=lin, ang_vel=ang)
 
     def _joint_states(self) -> JointStates:
-        n, rated, motored = len(self.world.joints), self._rated, self._motored
-        position, velocity, force = np.full(n, np.nan), np.full(n, np.nan), np.zeros(n)
+        rated, motored = self._rated, self._motored
+        position, velocity, force = self._no_reading.copy(), self._no_reading.copy(), self._no_force.copy()
         if rated.size:
-            sign = self._sign[rated]
+            sign = self._rated_sign
             position[rated] = sign * self._qpos[self._rated_qpos]
             velocity[rated] = sign * self._qvel[self._rated_dof]
         if motored.size:

@@ -11,6 +11,7 @@ and the kit merges them (backends/base.py: the contacts used during the step).
 from __future__ import annotations
 
 import math
+from itertools import chain
 from typing import Any, ClassVar
 
 import numpy as np
@@ -40,6 +41,8 @@ from ._impacts import ImpactErp
 from ._options import PyBulletOptions, check_stack, solver_iterations
 from ._reads import ROW, ContactReader, base_rows
 from ._surfaces import FRICTION_CLAMP, SurfaceFit, fit_surfaces
+
+_flat = chain.from_iterable
 
 _NAME = "pybullet"
 #: PyBullet clamps joint rates and free bases' speeds to 100 by default; ODE has no such limit.
@@ -181,6 +184,14 @@ class PyBulletBackend(Backend):
         self._base_uids = [layout.uid[i] for i in bases]
         self._base_rows = None if bases == list(range(len(world.bodies))) else bases  # None: every body, in order
         self._motor_joints = [k for k, h in enumerate(layout.joints) if h.dofs == 1]
+        uids = sorted({layout.joints[k].uid for k in self._motor_joints})
+        #: per multibody, its 1-dof joints' links, for one getJointStates call each; then the world joints
+        #: those rows are, and their signs
+        self._joint_reads = [(u, [layout.joints[k].link for k in self._motor_joints if layout.joints[k].uid == u])
+                             for u in uids]  # fmt: skip
+        order = [k for u in uids for k in self._motor_joints if layout.joints[k].uid == u]
+        self._joint_order = np.array(order, dtype=np.int64)
+        self._joint_sign = np.array([layout.joints[k].sign for k in order], dtype=float)
         self._motor_mean = SubstepMean(len(world.joints))
         self._times = substep_times(world.dt, world.substeps)
         self._substep_contacts = SubstepContacts(world.substeps)
@@ -274,7 +285,8 @@ class PyBulletBackend(Backend):
                 states = p.getLinkStates(
                     uid, links, computeLinkVelocity=1, computeForwardKinematics=1, physicsClientId=c
                 )
-                arr[bodies] = [ls[0] + ls[1] + ls[6] + ls[7] for ls in states]
+                values = _flat(_flat((ls[0], ls[1], ls[6], ls[7]) for ls in states))  # pos, xyzw, lin, ang
+                arr[bodies] = np.fromiter(values, np.float64, ROW * len(links)).reshape(-1, ROW)
         if self._frames.offsets:  # inertial frames -> body frames
             self._frames.to_body(arr)
         self._cache = arr
@@ -290,12 +302,14 @@ class PyBulletBackend(Backend):
         )
 
     def _joint_states(self) -> JointStates:
-        m = len(self.world.joints)
+        m, c = len(self.world.joints), self._c
         pos, vel, force = np.full(m, np.nan), np.full(m, np.nan), np.zeros(m)
-        for k in self._motor_joints:
-            h = self._layout.joints[k]
-            q, qd, _, torque = p.getJointState(h.uid, h.link, physicsClientId=self._c)
-            pos[k], vel[k], force[k] = h.sign * q, h.sign * qd, h.sign * torque
+        if self._joint_reads:  # one getJointStates per multibody: (q, qd, reaction forces, applied torque)
+            states = [s for uid, links in self._joint_reads for s in p.getJointStates(uid, links, physicsClientId=c)]
+            rows = np.fromiter(_flat((s[0], s[1], s[3]) for s in states), np.float64, 3 * len(states))
+            rows = rows.reshape(-1, 3) * self._joint_sign[:, None]
+            order = self._joint_order
+            pos[order], vel[order], force[order] = rows[:, 0], rows[:, 1], rows[:, 2]
         if self.world.substeps > 1 and self.steps:
             force = self._motor_mean.mean.copy()  # the mean over the step's substeps
         return JointStates(position=pos, velocity=vel, motor_force=force)

@@ -27,19 +27,38 @@ class InertialFrames:
         self.offsets: dict[int, tuple[Vec3, Quat]] = {
             i: (b.com, b.inertia_quat) for i, b in enumerate(world.bodies) if has_offset(b)
         }
+        #: per offset body: its COM in the body frame and the conjugate of its principal axes' quaternion
+        self._conj = [(*com, *quat_conj(iq)) for com, iq in self.offsets.values()]
+        self._rows = np.array(list(self.offsets), dtype=np.int64)
 
     def to_body(self, arr: np.ndarray) -> None:
-        """Rows of (pos, quat x y z w, lin_vel, ang_vel) of inertial frames -> of body frames, in place."""
-        for i, (com, iq) in self.offsets.items():
-            row = arr[i]
-            qc = (row[6], row[3], row[4], row[5])
-            qb = quat_mul(qc, quat_conj(iq))
-            arm = quat_rotate(qb, com)  # origin -> COM, world frame
-            omega = (row[10], row[11], row[12])
-            drift = _cross(omega, (-arm[0], -arm[1], -arm[2]))
-            row[0:3] = [row[0] - arm[0], row[1] - arm[1], row[2] - arm[2]]
-            row[3:7] = [qb[1], qb[2], qb[3], qb[0]]
-            row[7:10] = [row[7] + drift[0], row[8] + drift[1], row[9] + drift[2]]
+        """Rows of (pos, quat x y z w, lin_vel, ang_vel) of inertial frames -> of body frames, in place.
+
+        Every step converts every offset body, so the products of ``quat_mul``, ``quat_rotate`` and the cross
+        product are written out here on plain floats (the same operations in the same order: the same
+        numbers), the rows read out and written back in one call each instead of tuples and numpy scalars."""
+        if not self._conj:
+            return
+        rows = arr[self._rows].tolist()
+        for k, ((cx, cy, cz, jw, jx, jy, jz), row) in enumerate(zip(self._conj, rows, strict=True)):
+            px, py, pz, x, y, z, w, vx, vy, vz, ox, oy, oz = row
+            # qb = qc * conj(iq), qc = (w, x, y, z): quat_mul's products, in its order
+            bw = w * jw - x * jx - y * jy - z * jz
+            bx = w * jx + x * jw + y * jz - z * jy
+            by = w * jy - x * jz + y * jw + z * jx
+            bz = w * jz + x * jy - y * jx + z * jw
+            # arm = R(qb) com: quat_rotate's products, in its order
+            ux = by * cz - bz * cy
+            uy = bz * cx - bx * cz
+            uz = bx * cy - by * cx
+            ax = cx + 2.0 * (bw * ux + by * uz - bz * uy)
+            ay = cy + 2.0 * (bw * uy + bz * ux - bx * uz)
+            az = cz + 2.0 * (bw * uz + bx * uy - by * ux)
+            # drift = omega x (-arm)
+            nx, ny, nz = -ax, -ay, -az
+            lin = (vx + (oy * nz - oz * ny), vy + (oz * nx - ox * nz), vz + (ox * ny - oy * nx))
+            rows[k] = [px - ax, py - ay, pz - az, bx, by, bz, bw, *lin, ox, oy, oz]
+        arr[self._rows] = rows
 
     def to_inertial(self, body: int, pos: Vec3, quat: Quat, lin_vel: Vec3, ang_vel: Vec3) -> tuple[Vec3, Quat, Vec3]:
         """A body-frame pose and origin velocity -> the inertial frame's pose and the COM's velocity."""

@@ -14,6 +14,7 @@ import argparse
 import importlib
 import json
 import pkgutil
+import sys
 import traceback
 from collections.abc import Sequence
 from pathlib import Path
@@ -24,22 +25,40 @@ from rich.console import Console
 from rich.markup import escape
 
 from runner import interrupts
-from runner.cli.outcomes import debug, in_tests
 from runner.errors import ExitCode, ScenarioValidationError
 from runner.exec.exits import classify
 from runner.interrupts import Terminated
 from runner.version import tool_version
 
 
-def command_modules() -> list[ModuleType]:
-    """Every module in runner.cli.commands, in name order."""
+def command_names() -> list[str]:
+    """Every command, in name order: the modules of runner.cli.commands (listed, not imported)."""
     from runner.cli import commands
 
-    names = sorted(m.name for m in pkgutil.iter_modules(commands.__path__) if not m.name.startswith("_"))
+    return sorted(m.name for m in pkgutil.iter_modules(commands.__path__) if not m.name.startswith("_"))
+
+
+def command_modules(only: str | None = None) -> list[ModuleType]:
+    """Every module in runner.cli.commands, in name order (``only``: that command's alone)."""
+    from runner.cli import commands
+
+    names = [only] if only is not None else command_names()
     return [importlib.import_module(f"{commands.__name__}.{name}") for name in names]
 
 
-def build_parser() -> tuple[argparse.ArgumentParser, dict[str, ModuleType]]:
+def chosen_command(argv: Sequence[str] | None) -> str | None:
+    """The command the arguments name, when it comes before any option (``scenario run ...``), so that only
+    its module is imported (each command imports what it needs: reports, rich tables, engines); None when
+    the whole parser is needed (no command, a misspelt one, ``--help`` or ``--version``)."""
+    args = sys.argv[1:] if argv is None else list(argv)
+    if not args or args[0] not in command_names():
+        return None
+    return args[0]
+
+
+def build_parser(argv: Sequence[str] | None = None) -> tuple[argparse.ArgumentParser, dict[str, ModuleType]]:
+    """The parser; with ``argv`` naming a command, one that knows only that command (the same parsing and
+    messages for it, without importing the others)."""
     parser = argparse.ArgumentParser(
         prog="scenario",
         description="Declarative physics scenarios, checked on several physics engines with ODE semantics.",
@@ -47,7 +66,7 @@ def build_parser() -> tuple[argparse.ArgumentParser, dict[str, ModuleType]]:
     parser.add_argument("--version", action="version", version=f"physics-scenarios {tool_version()}")
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
     modules = {}
-    for module in command_modules():
+    for module in command_modules(chosen_command(argv) if argv is not None else None):
         module.configure(sub.add_parser(module.NAME, help=module.HELP, description=module.HELP))
         modules[module.NAME] = module
     return parser, modules
@@ -68,7 +87,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     try:
         out = _console(stderr=False)
         err = _console(stderr=True)
-        parser, modules = build_parser()
+        argv = sys.argv[1:] if argv is None else list(argv)
+        parser, modules = build_parser(argv)
         args = parser.parse_args(argv)
         return int(modules[args.command].execute(args, out, err))
     except BrokenPipeError:  # our output was closed (`scenario ... | head`): nothing more to say
@@ -83,6 +103,8 @@ def _report(exc: BaseException, err: Console) -> int:
     """Print ``exc`` as its first message line (runner.exec.exits) and give its exit code. A bug is
     "internal error, please report" (exit 70), with its traceback when SCENARIO_DEBUG=1; in the test
     suite it is raised."""
+    from runner.cli.outcomes import debug, in_tests  # with the verdict tables: not every command prints them
+
     if isinstance(exc, SystemExit | GeneratorExit):
         raise exc
     exit = classify(exc)

@@ -11,17 +11,20 @@ from __future__ import annotations
 
 import json
 import os
+from typing import TYPE_CHECKING
 
 from rich.console import Console
 from rich.markup import escape
 
-from runner.ci.junit import JUnitCase, from_result, suite_properties
 from runner.ci.render import known_limit_lines, verdict_table
 from runner.errors import ExitCode
 from runner.exec.cases import CaseResult
 from runner.language.load import LoadedScenario
 from runner.sim.session import RunResult
 from runner.sim.verdicts import KNOWN_LIMIT
+
+if TYPE_CHECKING:  # imported when a JUnit report is asked for (xml.etree costs every run's start-up)
+    from runner.ci.junit import JUnitCase
 
 __all__ = ["case_line", "debug", "in_tests", "junit_case", "print_problem", "print_result", "print_summary",
            "summary_line"]
@@ -121,6 +124,8 @@ _KINDS = {
 
 def junit_case(res: CaseResult, loaded: LoadedScenario | None) -> JUnitCase:
     """A case as JUnit sees it: a failed assertion is a failure, anything that stopped it an error."""
+    from runner.ci.junit import JUnitCase, from_result, suite_properties
+
     if res.result is not None:
         return from_result(res.result, loaded)
     exit = res.exit

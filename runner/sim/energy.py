@@ -55,13 +55,32 @@ WINDOW_STEPS = 25
 #: a slow motion's integrator error above the window's maximum: 2a/(1+a) with a = pi/25, < 0.223
 GAIN_FRACTION = 0.25
 _ROUNDING = 4 * float(np.finfo(float).eps)
+#: (3, 9): w -> its cross-product matrix, row-major ([w]x r = w x r), as one product for a whole array
+_SKEW = np.zeros((3, 9))
+_SKEW[2, 1], _SKEW[1, 2], _SKEW[2, 3], _SKEW[0, 5], _SKEW[1, 6], _SKEW[0, 7] = -1, 1, 1, -1, -1, 1
 
 
-def _rotate(q: np.ndarray, v: np.ndarray) -> np.ndarray:
-    """Each row of ``v`` turned by its quaternion (w, x, y, z) of ``q``: t = 2 u x v, then v + s t + u x t."""
-    s, u = q[:, 0:1], q[:, 1:4]
-    t = 2.0 * np.cross(u, v)
-    return v + s * t + np.cross(u, t)
+def _quat_matrix_form() -> np.ndarray:
+    """(16, 9): the rotation matrix of a unit quaternion q = (w, x, y, z), row-major, as a linear map of its
+    outer product q q^T flattened (each entry is a quadratic form: R00 = w2 + x2 - y2 - z2, R01 = 2 (xy - wz),
+    ...), so that a whole array of matrices is one product."""
+    form = np.zeros((4, 4, 3, 3))
+    w, x, y, z = range(4)
+    for i, (a, b, sign) in enumerate(((w, w, 1), (x, x, 1), (y, y, -1), (z, z, -1))):
+        form[a, b, 0, 0] = sign
+        form[a, b, 1, 1] = (1, -1, 1, -1)[i]
+        form[a, b, 2, 2] = (1, -1, -1, 1)[i]
+    for (a, b), (row, col), sign in (
+        ((x, y), (0, 1), 1), ((w, z), (0, 1), -1), ((x, z), (0, 2), 1), ((w, y), (0, 2), 1),
+        ((x, y), (1, 0), 1), ((w, z), (1, 0), 1), ((y, z), (1, 2), 1), ((w, x), (1, 2), -1),
+        ((x, z), (2, 0), 1), ((w, y), (2, 0), -1), ((y, z), (2, 1), 1), ((w, x), (2, 1), 1),
+    ):  # fmt: skip
+        form[a, b, row, col] += sign  # 2 ab = ab + ba
+        form[b, a, row, col] += sign
+    return form.reshape(16, 9)
+
+
+_QUAT_MATRIX = _quat_matrix_form()
 
 
 def body_energies(
@@ -77,27 +96,26 @@ def body_energies(
     centre of mass, rotational about it, plus the gravitational -m g.p_com. The states are those of the body
     frames; ``com`` (N, 3) places each centre of mass in its body frame (None: at the origin) and ``tensor``
     (N, 3, 3) is each inertia tensor about it in the body frame (None: ``inertia``, principal moments along
-    the body axes)."""
+    the body axes).
+
+    The check runs every step, mostly on a few to a hundred bodies, where each numpy call costs more than
+    its arithmetic: the bodies' rotation matrices are one product (:func:`_quat_matrix_form`) and every
+    other quantity one or two whole-array calls."""
     quat = states.quat[index]
     w = states.ang_vel[index]
-    s, x, y, z = quat.T
-    wx, wy, wz = w.T
-    # R^T w, the body-frame angular velocity: w turned by the inverse quaternion (s, -u), u = (x, y, z),
-    # without its matrix: t = 2 (-u) x w, then w + s t + (-u) x t (written out: the check runs every step).
-    tx, ty, tz = 2.0 * (z * wy - y * wz), 2.0 * (x * wz - z * wx), 2.0 * (y * wx - x * wy)
-    bx, by, bz = wx + s * tx + (z * ty - y * tz), wy + s * ty + (x * tz - z * tx), wz + s * tz + (y * tx - x * ty)
+    n = len(quat)
+    rot = ((quat[:, :, None] * quat[:, None, :]).reshape(n, 16) @ _QUAT_MATRIX).reshape(n, 3, 3)
+    body_w = (w[:, None, :] @ rot)[:, 0, :]  # R^T w, the body-frame angular velocity
     pos, v = states.pos[index], states.lin_vel[index]
     if com is not None:
-        offset = _rotate(quat, com)  # R com: from the body frame's origin to the COM, world axes
+        offset = (rot @ com[:, :, None])[:, :, 0]  # R com: from the body frame's origin to the COM, world axes
         pos = pos + offset
-        v = v + np.cross(w, offset)  # the COM's velocity (the states give the origin's)
+        v = v + ((w @ _SKEW).reshape(n, 3, 3) @ offset[:, :, None])[:, :, 0]  # the COM's: v + w x offset
     if tensor is None:
-        ix, iy, iz = inertia.T
-        rotational = ix * bx * bx + iy * by * by + iz * bz * bz
+        rotational = np.add.reduce(inertia * body_w * body_w, axis=1)
     else:
-        body_w = np.stack((bx, by, bz), axis=1)
-        rotational = np.einsum("ni,nij,nj->n", body_w, tensor, body_w)
-    kinetic = 0.5 * mass * np.add.reduce(v * v, axis=1) + 0.5 * rotational
+        rotational = np.add.reduce((body_w[:, None, :] @ tensor)[:, 0, :] * body_w, axis=1)
+    kinetic = 0.5 * (mass * np.add.reduce(v * v, axis=1) + rotational)
     return kinetic, kinetic - mass * (pos @ gravity)
 
 
@@ -144,7 +162,9 @@ class EnergyWatch:
         if not self.index.size:
             return
         if self.motors.size:
-            power = np.nan_to_num(joints.motor_force[self.motors] * joints.velocity[self.motors])
+            power = joints.motor_force[self.motors] * joints.velocity[self.motors]
+            if not np.isfinite(power).all():  # rare: nan_to_num alone costs more than the rest of the line
+                power = np.nan_to_num(power)
             self.work += float(np.abs(power).sum()) * self.dt
         kinetic, energy = body_energies(states, self.rows, self.mass, self.inertia, self.gravity, self.com, self.tensor)
         total = float(energy.sum()) - self.work

@@ -34,7 +34,7 @@ def servo_specs(model: Scenario) -> tuple[ServoSpec, ...]:
         for jname, joint in robot.joints.items():
             s = joint.servo
             if s is not None:
-                target = s.target if isinstance(s.target, float | int) else compile_expression(s.target)
+                target = float(s.target) if isinstance(s.target, float | int) else compile_expression(s.target)
                 out.append(ServoSpec(f"{rname}.{jname}", target, s.gain, s.fmax, s.vmax))
     return tuple(out)
 
@@ -48,10 +48,13 @@ class Servos:
     def __bool__(self) -> bool:
         return bool(self.specs)
 
+    def targets(self, resolver: Resolver) -> list[float]:
+        """Every servo's target now, in ``specs`` order (an expression target is read every step)."""
+        return [s.target if isinstance(s.target, float) else float(s.target.number(resolver)) for _, s in self.specs]
+
     def drive(self, backend: Backend, positions: list[float], resolver: Resolver) -> None:
-        for j, spec in self.specs:
-            target = spec.target if isinstance(spec.target, float | int) else spec.target.number(resolver)
-            vel = spec.gain * (float(target) - positions[j])
+        for (j, spec), target in zip(self.specs, self.targets(resolver), strict=True):
+            vel = spec.gain * (target - positions[j])
             if spec.vmax is not None:
                 vel = max(-spec.vmax, min(spec.vmax, vel))
             if math.isfinite(vel):  # a NaN reading is the engine's failure, which the runner reports itself

@@ -1,0 +1,175 @@
+"""Benchmark 11: start-up. A one-step `scenario run` on MuJoCo against ``python -c 'import mujoco'`` in the
+same environment (issue 29: at most 1.5x), with `scenario validate` of the same file beside them.
+
+Each command is a fresh process (``sys.executable``, this checkout on ``PYTHONPATH``), timed by its wall
+clock and by the CPU time (user + system) of the process and its children (``getrusage``; on a shared
+machine other programs' load lengthens the wall time, not this: the target is taken on it); the three are
+run in turn, the order rotated each round, and the figures are medians. Where the time
+goes: one more run of each command under ``python -X importtime``, its modules' own import times summed by
+group (the flag itself slows imports a little, so the groups are shares of the imports, not of the wall
+time); what the imports leave of a run is the interpreter's start, loading and validating the file, the
+engine's build, the step, the trace and the case's child process.
+"""
+
+from __future__ import annotations
+
+import os
+import resource
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+ONE_STEP = ROOT / "bench" / "scenarios" / "one_step.yaml"
+ENGINE = "mujoco"
+#: issue 29: a one-step `scenario run` on MuJoCo against importing MuJoCo
+TARGET_RATIO = 1.5
+#: module name prefixes -> the group they are shown in (first match wins)
+GROUPS = (
+    ("runner.language.model", "the scenario language's pydantic models (runner/language/model_*.py)"),
+    ("pydantic", "pydantic, pydantic_core, annotated_types"),
+    ("annotated_types", "pydantic, pydantic_core, annotated_types"),
+    ("typing_extensions", "pydantic, pydantic_core, annotated_types"),
+    ("mujoco", "mujoco (and its renderer's glfw)"),
+    ("glfw", "mujoco (and its renderer's glfw)"),
+    ("numpy", "numpy"),
+    ("rich", "rich"),
+    ("pygments", "rich"),
+    ("google.protobuf", "protobuf, foxglove schemas, mcap (the trace)"),
+    ("foxglove", "protobuf, foxglove schemas, mcap (the trace)"),
+    ("mcap", "protobuf, foxglove schemas, mcap (the trace)"),
+    ("yaml", "yaml"),
+    ("runner", "runner (the rest)"),
+    ("backends", "backends"),
+    ("reports", "reports"),
+)
+
+
+@dataclass
+class StartupFigures:
+    seconds: dict[str, list[float]] = field(default_factory=dict)  # command -> per round, wall
+    cpu: dict[str, list[float]] = field(default_factory=dict)  # command -> per round, user + system
+    imports: dict[str, dict[str, float]] = field(default_factory=dict)  # command -> group -> seconds
+    statuses: dict[str, set[int]] = field(default_factory=dict)
+
+    def median(self, name: str) -> float:
+        return statistics.median(self.seconds[name])
+
+    def cpu_median(self, name: str) -> float:
+        return statistics.median(self.cpu[name])
+
+    @property
+    def ratio(self) -> float:
+        """The target's ratio: CPU time of the one-step run over that of importing the engine."""
+        return self.cpu_median("run") / self.cpu_median("import")
+
+    @property
+    def wall_ratio(self) -> float:
+        return self.median("run") / self.median("import")
+
+
+def commands(out: Path) -> dict[str, list[str]]:
+    py = sys.executable
+    return {
+        "import": [py, "-c", f"import {ENGINE}"],
+        "validate": [py, "-m", "runner", "validate", str(ONE_STEP)],
+        "run": [py, "-m", "runner", "run", str(ONE_STEP), "--backend", ENGINE, "--quiet", "--out", str(out)],
+    }
+
+
+def _env() -> dict[str, str]:
+    return {**os.environ, "PYTHONPATH": str(ROOT)}
+
+
+def group_of(module: str) -> str:
+    return next((g for prefix, g in GROUPS if module == prefix or module.startswith((prefix + ".", prefix + "_"))),
+                "other")  # fmt: skip
+
+
+def import_groups(stderr: str) -> dict[str, float]:
+    """``-X importtime`` output -> seconds of the modules' own import time per group."""
+    out: dict[str, float] = {}
+    for line in stderr.splitlines():
+        if not line.startswith("import time:") or "self [us]" in line:
+            continue
+        own, _, name = line[len("import time:") :].split("|")
+        group = group_of(name.strip())
+        out[group] = out.get(group, 0.0) + int(own) / 1e6
+    return out
+
+
+def run(reps: int = 7, log: Callable[[str], None] = print) -> StartupFigures:
+    fig = StartupFigures()
+    with tempfile.TemporaryDirectory(prefix="bench-startup-") as tmp:
+        cmds = commands(Path(tmp))
+        names = list(cmds)
+        for rep in range(reps + 1):  # the first round warms the file cache and is not counted
+            turn = rep % len(names)
+            for name in names[turn:] + names[:turn]:
+                before = resource.getrusage(resource.RUSAGE_CHILDREN)
+                start = time.perf_counter()
+                done = subprocess.run(cmds[name], capture_output=True, text=True, env=_env(), cwd=ROOT, check=False)
+                seconds = time.perf_counter() - start
+                after = resource.getrusage(resource.RUSAGE_CHILDREN)
+                cpu = after.ru_utime - before.ru_utime + after.ru_stime - before.ru_stime
+                fig.statuses.setdefault(name, set()).add(done.returncode)
+                if rep:
+                    fig.seconds.setdefault(name, []).append(seconds)
+                    fig.cpu.setdefault(name, []).append(cpu)
+        for name, cmd in cmds.items():
+            done = subprocess.run([cmd[0], "-X", "importtime", *cmd[1:]], capture_output=True, text=True,
+                                  env=_env(), cwd=ROOT, check=False)  # fmt: skip
+            fig.imports[name] = import_groups(done.stderr)
+    fig.seconds = {n: fig.seconds[n] for n in names}
+    fig.cpu = {n: fig.cpu[n] for n in names}
+    log("  startup: " + ", ".join(f"{n} {fig.cpu_median(n):.3f} s CPU ({fig.median(n):.3f} wall)" for n in names)
+        + f"; run/import {fig.ratio:.2f}")  # fmt: skip
+    return fig
+
+
+def target_rows(fig: StartupFigures | None) -> list[tuple[str, str, bool, str]]:
+    if fig is None:
+        return []
+    run_imports = fig.imports.get("run", {})
+    top = sorted(((v, k) for k, v in run_imports.items() if not k.startswith("mujoco")), reverse=True)[:3]
+    where = "; ".join(f"{k} {v * 1e3:.0f} ms" for v, k in top)
+    return [(f"start-up: one-step `scenario run` on {ENGINE} / `python -c 'import {ENGINE}'` <= {TARGET_RATIO:g}",
+             f"{fig.ratio:.2f} (CPU {fig.cpu_median('run'):.2f} s vs {fig.cpu_median('import'):.2f} s; wall "
+             f"{fig.wall_ratio:.2f})",
+             fig.ratio <= TARGET_RATIO, f"imports beyond mujoco's (-X importtime, section 11): {where}")]  # fmt: skip
+
+
+def render(fig: StartupFigures | None) -> list[str]:
+    if fig is None:
+        return []
+    names = [n for n in ("import", "validate", "run") if n in fig.seconds]
+    out = [
+        "## 11. Start-up: a one-step `scenario run` against importing the engine",
+        "",
+        f"bench/startup.py: `bench/scenarios/one_step.yaml` (one 10 ms step of a box), each command a fresh "
+        f"process, {len(fig.seconds['run'])} interleaved rounds after one uncounted, medians of the CPU time of "
+        f"the process and its children (user + system) and of the wall time; "
+        f"exit codes seen: " + ", ".join(f"{n} {sorted(fig.statuses[n])}" for n in names) + ".",
+        "",
+        "| command | CPU (s) | / import | wall (s) | / import | wall, each round (s) |",
+        "|---|---|---|---|---|---|",
+    ]
+    label = {"import": f"`python -c 'import {ENGINE}'`", "validate": "`scenario validate one_step.yaml`",
+             "run": f"`scenario run one_step.yaml --backend {ENGINE} --quiet`"}  # fmt: skip
+    for n in names:
+        runs = ", ".join(f"{s:.2f}" for s in fig.seconds[n])
+        out.append(f"| {label[n]} | {fig.cpu_median(n):.3f} | {fig.cpu_median(n) / fig.cpu_median('import'):.2f} "
+                   f"| {fig.median(n):.3f} | {fig.median(n) / fig.median('import'):.2f} | {runs} |")  # fmt: skip
+    groups = sorted({g for d in fig.imports.values() for g in d}, key=lambda g: -fig.imports.get("run", {}).get(g, 0))
+    out += ["", "Where the time goes: the modules' own import time by group (ms, `-X importtime`, one run each):", "",
+            "| group | " + " | ".join(names) + " |", "|---|" + "---|" * len(names)]  # fmt: skip
+    for g in groups:
+        out.append(f"| {g} | " + " | ".join(f"{fig.imports.get(n, {}).get(g, 0.0) * 1e3:.0f}" for n in names) + " |")
+    totals = " | ".join(f"{sum(fig.imports.get(n, {}).values()) * 1e3:.0f}" for n in names)
+    out += [f"| **all imports** | {totals} |", ""]
+    return out

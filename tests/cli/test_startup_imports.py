@@ -1,0 +1,46 @@
+"""What a command imports (issue 29, start-up): `scenario run` and `scenario validate` import what they use, not
+the other commands, the trace reader or the JUnit writer. A check of the imports, not of the time (bench/startup.py
+measures that): a module a command does not use, imported at start-up, costs every run."""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+from tests.paths import ROOT
+
+ONE_STEP = ROOT / "bench" / "scenarios" / "one_step.yaml"
+#: never needed to run or validate a scenario
+NOT_FOR_A_RUN = (
+    "reports.trace_reader",
+    "mcap_protobuf.decoder",
+    "runner.ci.junit",
+    "runner.cli.commands.report",
+    "runner.cli.commands.compare",
+    "runner.cli.commands.view",
+    "runner.cli.commands.conformance",
+)
+
+
+def _imported(args: list[str], cwd: Path) -> set[str]:
+    """The modules a `scenario` command's own process imports (``-X importtime``)."""
+    env = {**os.environ, "PYTHONPATH": str(ROOT)}
+    env.pop("PYTEST_CURRENT_TEST", None)
+    done = subprocess.run([sys.executable, "-X", "importtime", "-m", "runner", *args], capture_output=True,
+                          text=True, cwd=cwd, env=env, check=False, timeout=300)  # fmt: skip
+    assert done.returncode == 0, done.stderr[-2000:]
+    return {line.rsplit("|", 1)[1].strip() for line in done.stderr.splitlines() if line.startswith("import time:")}
+
+
+def test_a_run_imports_neither_the_other_commands_nor_the_trace_reader(tmp_path: Path) -> None:
+    modules = _imported(["run", str(ONE_STEP), "--backend", "pybullet", "--quiet", "--out", str(tmp_path)], tmp_path)
+    assert "runner.sim.session" in modules and "runner.trace.writer" in modules  # it did run and write its trace
+    assert not modules & set(NOT_FOR_A_RUN)
+
+
+def test_validate_imports_neither_the_step_loop_nor_the_trace(tmp_path: Path) -> None:
+    modules = _imported(["validate", str(ONE_STEP)], tmp_path)
+    assert "runner.language.load" in modules
+    assert not modules & {*NOT_FOR_A_RUN, "runner.sim.session", "runner.trace.writer"}
