@@ -63,7 +63,10 @@ class MujocoBackend(Backend):
     #: no shape:trimesh: MuJoCo collides with a mesh's convex hull only (docs/backends/mujoco.md); what only
     #: an engine building a robot from its file runs: MJCF robots are built from their file (_native)
     capabilities: ClassVar[frozenset[Capability]] = (
-        RIGID_BODY_CAPABILITIES | (ROBOT_CAPABILITIES - {Capability.SHAPE_TRIMESH}) | MODEL_FILE_CAPABILITIES
+        RIGID_BODY_CAPABILITIES
+        | (ROBOT_CAPABILITIES - {Capability.SHAPE_TRIMESH})
+        | MODEL_FILE_CAPABILITIES
+        | {Capability.JOINT_ARMATURE}  # dof_armature
     )
     Options: ClassVar[type[BackendOptions]] = MujocoOptions
     #: mju_error and the bindings' own failures; MjSpec.compile's ValueError is translated where it is called.

@@ -236,6 +236,8 @@ def build(world: CompiledWorld, opts: MujocoOptions, h: float) -> Layout:
     if native is not None:
         _native.scale_total_mass(model, native)
         _native.apply_limits(model, world, native)
+        if not world.model_options:
+            _native.runner_dynamics(model, world, native)
     if not world.model_options:
         _rescale_solver(model, [names.body(b.name) for b in world.bodies if b.motion is Motion.DYNAMIC])
     body_ids = np.array([model.body(names.body(b.name)).id for b in world.bodies], dtype=np.int64)
@@ -346,6 +348,10 @@ def _add_joint(mj: Any, body: BodySpec, world: CompiledWorld, edge: Edge, h: flo
         axis=list(quat_rotate(inv, joint.axis)),
         pos=list(quat_rotate(inv, anchor)),
     )
+    mj_joint.armature = joint.dynamics.armature  # dof_armature (joint:armature)
+    if joint.dynamics.stiffness > 0:  # a spring MuJoCo applies itself (joint:stiffness); the coordinate's 0 is
+        mj_joint.stiffness = joint.dynamics.stiffness  # the start pose, as JointSpec's
+        mj_joint.springref = edge.sign * joint.dynamics.springref
     if joint.lo is None and joint.hi is None:
         return
     if joint.kind is JointKind.BALL:

@@ -11,7 +11,7 @@ nor any two links of a model without ``self_collision`` (a URDF's default, as py
 from __future__ import annotations
 
 from collections.abc import Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 from backends.geometry import IDENTITY, quat_mul, quat_rotate
 from backends.types import (
@@ -27,6 +27,7 @@ from backends.types import (
     ShapeKind,
     Surface,
 )
+from runner.compile.joints import dynamics, initial_motor
 from runner.language.hpr import hpr_to_quat
 from runner.language.model import Scenario
 from runner.language.model_physics import Limits
@@ -89,11 +90,13 @@ def link_body(robot_name: str, robot: Robot, desc: ModelDesc, link: LinkDesc, nu
     )
 
 
-def _joint(robot_name: str, robot: Robot, desc: ModelDesc, joint: JointDesc) -> JointSpec:
+def _joint(robot_name: str, robot: Robot, desc: ModelDesc, joint: JointDesc, native: bool) -> JointSpec:
+    """``native``: MuJoCo runs the file's own joint dynamics (`options: model`); the runner drives none."""
     pos0, quat0 = _placement(robot)
     override = robot.joints.get(joint.name)
     lo, hi = joint.lo, joint.hi
     motor = None
+    dyn = dynamics(joint.dynamics, override.dynamics if override is not None else None)
     if override is not None:
         if override.free:
             lo = hi = None
@@ -103,8 +106,9 @@ def _joint(robot_name: str, robot: Robot, desc: ModelDesc, joint: JointDesc) -> 
             lo, hi = override.limits
         if override.motor is not None:
             motor = Motor(override.motor.vel, override.motor.fmax)
-        elif override.servo is not None:
-            motor = Motor(0.0, 0.0)  # the servo sets it every step (runner.sim.servo)
+    servo = override is not None and override.servo is not None  # the servo sets it every step (runner.sim.servo)
+    if joint.kind in ("hinge", "slider"):
+        motor = initial_motor(motor, replace(dyn, damping=0.0, frictionloss=0.0) if native else dyn, servo)
     limits = override.limits if override is not None and isinstance(override.limits, Limits) else None
     other = None if is_static(robot, desc, joint.parent) else f"{robot_name}.{joint.parent}"
     return JointSpec(
@@ -120,6 +124,7 @@ def _joint(robot_name: str, robot: Robot, desc: ModelDesc, joint: JointDesc) -> 
         stop_stiffness=limits.stiffness if limits is not None else None,
         stop_damping=limits.damping if limits is not None else None,
         motor=motor,
+        dynamics=dyn,
     )
 
 
@@ -136,6 +141,7 @@ def compile_robots(
     models: list[ModelFile] = []
     for name, robot in model.robots.items():
         desc = robots[name]
+        native = robot.format == "mjcf" and model.world.options == "model"
         for link in desc.links:
             bodies.append(link_body(name, robot, desc, link, len(bodies)))
             override = robot.links.get(link.name)
@@ -148,7 +154,7 @@ def compile_robots(
                 continue
             if not (robot.format == "mjcf" and joint.parent == desc.root):  # MuJoCo: the world is no parent
                 excluded.append((f"{name}.{joint.parent}", f"{name}.{joint.child}"))
-            joints.append(_joint(name, robot, desc, joint))
+            joints.append(_joint(name, robot, desc, joint, native))
         excluded.extend((f"{name}.{a}", f"{name}.{b}") for a, b in robot.exclude)
         if not robot.collides_with_itself:  # pybullet's default for URDF: no two links of the model touch
             links = group[name]

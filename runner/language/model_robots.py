@@ -17,7 +17,7 @@ from runner.language.model_base import (
     Vec3,
     finite_vec,
 )
-from runner.language.model_physics import Limits, Motor, Rgba
+from runner.language.model_physics import Dynamics, Limits, Motor, Rgba
 
 
 class Servo(Strict):
@@ -42,6 +42,9 @@ class RobotJoint(Strict):
     )
     free: bool = Field(False, description="Drop the model's limits (a `continuous` joint).")
     servo: Servo | None = None
+    dynamics: Dynamics | None = Field(
+        None, description="Replace the model's damping, friction, armature, effort or velocity limit (each given)."
+    )
 
     @model_validator(mode="after")
     def _check(self) -> RobotJoint:
