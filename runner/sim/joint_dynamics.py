@@ -45,11 +45,15 @@ def native_joints(world: CompiledWorld, backend: Backend) -> set[str]:
 class JointFriction:
     """Commands the damping-and-friction motor of every joint that has one (module docstring)."""
 
-    def __init__(self, world: CompiledWorld, skip: set[str]) -> None:
+    def __init__(self, world: CompiledWorld, skip: set[str], native_damping: bool = False) -> None:
+        """``skip``: joints the scenario drives or the engine runs itself; ``native_damping``: the engine damps
+        every joint itself (``Backend.native_damping``), the motor carries the friction loss only."""
         self.joints = [
-            (k, spec.name, spec.dynamics.frictionloss, spec.dynamics.damping)
+            (k, spec.name, spec.dynamics.frictionloss, 0.0 if native_damping else spec.dynamics.damping)
             for k, spec in enumerate(world.joints)
-            if spec.dynamics.dissipative and spec.name not in skip and spec.kind.value in ("slider", "hinge")
+            if spec.name not in skip
+            and spec.kind.value in ("slider", "hinge")
+            and (spec.dynamics.frictionloss > 0 or (spec.dynamics.damping > 0 and not native_damping))
         ]
 
     def __bool__(self) -> bool:

@@ -179,7 +179,9 @@ class Session:
         self._zeros = [(self.joint_index[j], offset) for j, offset in program.joint_zeros.items()]
         self.servos = Servos(servo_specs(model), self.joint_index, self.world)  # position servos (sim.servo)
         # damping and friction loss as each joint's motor (runner.sim.joint_dynamics)
-        self.joint_friction = JointFriction(self.world, driven_joints(model) | native_joints(self.world, backend))
+        self.joint_friction = JointFriction(
+            self.world, driven_joints(model) | native_joints(self.world, backend), backend.native_damping
+        )
         self.energy = EnergyWatch(self.world, backend.name)  # energy from nowhere: exit 3 (runner.sim.energy)
 
     # --- services used by actions and intervals (runner.sim.intervals.IntervalHost) --------------------

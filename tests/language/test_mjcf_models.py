@@ -10,7 +10,7 @@ from pathlib import Path
 
 import pytest
 
-from backends.types import MODEL_FILE_CAPABILITIES, Capability, ShapeKind
+from backends.types import MODEL_FILE_CAPABILITIES, ShapeKind
 from runner.compile.program import build_program
 from runner.errors import ScenarioValidationError
 from runner.language.load import load_scenario
