@@ -236,8 +236,6 @@ def build(world: CompiledWorld, opts: MujocoOptions, h: float) -> Layout:
     if native is not None:
         _native.scale_total_mass(model, native)
         _native.apply_limits(model, world, native)
-        if not world.model_options:
-            _native.runner_dynamics(model, world, native)
     if not world.model_options:
         _rescale_solver(model, [names.body(b.name) for b in world.bodies if b.motion is Motion.DYNAMIC])
     body_ids = np.array([model.body(names.body(b.name)).id for b in world.bodies], dtype=np.int64)

@@ -158,19 +158,6 @@ def apply_limits(model: mujoco.MjModel, world: CompiledWorld, native: NativeMode
         model.jnt_range[j] = (lo, hi)
 
 
-def runner_dynamics(model: mujoco.MjModel, world: CompiledWorld, native: NativeModel) -> None:
-    """With the scenario's options, a file joint's damping and friction loss are the runner's (its motor,
-    docs/semantics.md "Joint dynamics"), as on every engine: MuJoCo's own are cleared so they do not act twice.
-    Armature and stiffness stay MuJoCo's."""
-    for joint in world.joints:
-        name = native.joints.get(joint.name)
-        if name is None or not joint.dynamics.dissipative:
-            continue
-        dof = int(model.jnt_dofadr[model.joint(name).id])
-        model.dof_damping[dof] = 0.0
-        model.dof_frictionloss[dof] = 0.0
-
-
 def without_file(world: CompiledWorld, native: NativeModel) -> CompiledWorld:
     """The world less the file's bodies (its world link stays: the robot's placement, a static body) and
     joints; a scenario joint to a file's body is refused."""

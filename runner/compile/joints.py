@@ -73,11 +73,12 @@ def dynamics(model: JointDynamics, given: Dynamics | None) -> JointDynamics:
 
 def initial_motor(motor: Motor | None, dyn: JointDynamics, driven: bool) -> Motor | None:
     """The joint's motor at the start: the given one capped by the effort and velocity limits, or an idle
-    one (fmax 0) where the runner will drive it (a servo, ``driven``; damping or friction loss), so that every
-    adapter builds it."""
+    one (fmax 0) for a servo (``driven``), which the runner commands every step. Damping and friction loss
+    need none: every adapter's slider and hinge takes ``set_motor`` (an MJCF file's joint on MuJoCo, which has
+    a motor only when the scenario gives it one, keeps MuJoCo's own damping and friction loss)."""
     if motor is not None:
         return Motor(*capped(motor.vel, motor.fmax, dyn))
-    return Motor(0.0, 0.0) if driven or dyn.dissipative else None
+    return Motor(0.0, 0.0) if driven else None
 
 
 def capped(vel: float, fmax: float, dyn: JointDynamics) -> tuple[float, float]:

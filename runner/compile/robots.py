@@ -11,7 +11,7 @@ nor any two links of a model without ``self_collision`` (a URDF's default, as py
 from __future__ import annotations
 
 from collections.abc import Mapping
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 
 from backends.geometry import IDENTITY, quat_mul, quat_rotate
 from backends.types import (
@@ -90,8 +90,7 @@ def link_body(robot_name: str, robot: Robot, desc: ModelDesc, link: LinkDesc, nu
     )
 
 
-def _joint(robot_name: str, robot: Robot, desc: ModelDesc, joint: JointDesc, native: bool) -> JointSpec:
-    """``native``: MuJoCo runs the file's own joint dynamics (`options: model`); the runner drives none."""
+def _joint(robot_name: str, robot: Robot, desc: ModelDesc, joint: JointDesc) -> JointSpec:
     pos0, quat0 = _placement(robot)
     override = robot.joints.get(joint.name)
     lo, hi = joint.lo, joint.hi
@@ -108,7 +107,7 @@ def _joint(robot_name: str, robot: Robot, desc: ModelDesc, joint: JointDesc, nat
             motor = Motor(override.motor.vel, override.motor.fmax)
     servo = override is not None and override.servo is not None  # the servo sets it every step (runner.sim.servo)
     if joint.kind in ("hinge", "slider"):
-        motor = initial_motor(motor, replace(dyn, damping=0.0, frictionloss=0.0) if native else dyn, servo)
+        motor = initial_motor(motor, dyn, servo)
     limits = override.limits if override is not None and isinstance(override.limits, Limits) else None
     other = None if is_static(robot, desc, joint.parent) else f"{robot_name}.{joint.parent}"
     return JointSpec(
@@ -141,7 +140,6 @@ def compile_robots(
     models: list[ModelFile] = []
     for name, robot in model.robots.items():
         desc = robots[name]
-        native = robot.format == "mjcf" and model.world.options == "model"
         for link in desc.links:
             bodies.append(link_body(name, robot, desc, link, len(bodies)))
             override = robot.links.get(link.name)
@@ -154,7 +152,7 @@ def compile_robots(
                 continue
             if not (robot.format == "mjcf" and joint.parent == desc.root):  # MuJoCo: the world is no parent
                 excluded.append((f"{name}.{joint.parent}", f"{name}.{joint.child}"))
-            joints.append(_joint(name, robot, desc, joint, native))
+            joints.append(_joint(name, robot, desc, joint))
         excluded.extend((f"{name}.{a}", f"{name}.{b}") for a, b in robot.exclude)
         if not robot.collides_with_itself:  # pybullet's default for URDF: no two links of the model touch
             links = group[name]

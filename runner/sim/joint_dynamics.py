@@ -13,8 +13,8 @@ step. The motor is a velocity constraint towards rest whose force is bounded by 
   ``-c qdot`` torque diverges once ``c dt / m > 2``), and first-order accurate in ``dt`` like the step.
 
 docs/semantics.md ("Joint dynamics") states the rules: the combination with a motor or a servo (the motor
-wins), the effort and velocity limits (:func:`runner.compile.joints.capped`), and why MuJoCo running a file
-with its own options (`world.options: model`) keeps MuJoCo's own damping instead.
+wins), the effort and velocity limits (:func:`runner.compile.joints.capped`), and why MuJoCo running an
+MJCF file keeps MuJoCo's own damping and friction loss for the file's joints, and DART its own damping.
 """
 
 from __future__ import annotations
@@ -36,8 +36,9 @@ def driven_joints(model: Scenario) -> set[str]:
 
 def native_joints(world: CompiledWorld, backend: Backend) -> set[str]:
     """Joints whose damping and friction loss the engine runs itself: a model file's joints on an engine that
-    builds robots from their file (MuJoCo) with the file's own options (`world.options: model`)."""
-    if not (world.model_options and MODEL_FILE_CAPABILITIES <= backend.capabilities):
+    builds robots from their file (MuJoCo: its own frictionloss row, the same constraint as this motor, and
+    its implicit damping), with either options; a motor helper per joint would change its solver's scaling."""
+    if not MODEL_FILE_CAPABILITIES <= backend.capabilities:
         return set()
     return {j for model in world.models for j in model.joints}
 
