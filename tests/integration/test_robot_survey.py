@@ -48,7 +48,7 @@ def survey(request: pytest.FixtureRequest, tmp_path_factory: pytest.TempPathFact
 
 
 #: Issue 28's target is not met for MJCF yet (measured on this corpus, 45 files, 0.5 s, -j 1): MuJoCo runs 30,
-#: and refuses 8 that MuJoCo 3's own compiler rejects (pybullet_data's hopper, walker2d, half_cheetah,
+#: and refuses 8 that MuJoCo 4's own compiler rejects (pybullet_data's hopper, walker2d, half_cheetah,
 #: humanoid_fixed, humanoid_symmetric, swimmer, ground, ground_plane) and 2 with a body named `pinch site`; the
 #: energy watchdog stops 5. PyBullet runs 15, DART 14, ODE 11 (joint damping and friction loss run on every
 #: engine now) and refuse the rest up front by name: several joints in one body (14 files), armature (13),
