@@ -26,6 +26,10 @@ tolerances are the step's error (dt = h; the engines integrate with semi-implici
   falls at a = g - effort/m: z = z0 - a t^2 / 2; semi-implicit Euler's position error after n steps is
   a h t / 2; the motor's reported force equals the effort to the solver's rounding (relative 1e-5 covers
   float32).
+* **Velocity limit** (a wheel on a vertical hinge through its centre, a motor commanding 5 rad/s with ample
+  force on a joint limited to 2 rad/s): the commanded rate is clamped, so the wheel turns at 2 rad/s; the
+  motor reaches its rate within a step (MuJoCo's motor row leaves 1e-4 of the change per step, gone after a
+  few), so after 0.2 s the rate is 2 rad/s to the solver's rounding (relative 1e-5 covers float32).
 * **Armature** (MuJoCo, the only engine with it: a wheel on a hinge through its centre, damping c, spun at
   w0): w = w0 e^(-c t / (I + armature)); the others refuse `joint:armature` before the run.
 """
@@ -135,6 +139,19 @@ def test_effort_limit_caps_a_motor_that_cannot_hold_its_load(tmp_path: Path, eng
     assert np.all(np.abs(z - (2.0 - 0.5 * a * t**2)) <= a * h * t / 2 + 1e-9 + 2.0 * _eps(engine) * t / h)
     force = trace.joints["lift"].motor_force[1:]
     assert np.all(np.abs(np.abs(force) - effort) <= 1e-5 * effort), (engine, force[:3])
+
+
+@pytest.mark.parametrize("engine", ENGINES)
+def test_velocity_limit_clamps_a_motors_commanded_rate(tmp_path: Path, engine: str) -> None:
+    trace = _run(
+        tmp_path,
+        engine,
+        f"world: {{gravity: [0, 0, {-G}], dt: 0.001, duration: 0.2}}\n"
+        "bodies:\n  wheel: {cylinder: {radius: 0.2, length: 0.05}, mass: 2.0, pos: [0, 0, 1]}\n"
+        "joints:\n  axle: {type: hinge, bodies: [wheel, environment], axis: [0, 0, 1], "
+        "motor: {vel: 5, fmax: 1000}, dynamics: {velocity: 2}}\n",
+    )
+    assert abs(float(trace.joints["axle"].velocity[-1]) - 2.0) <= 1e-5 * 2.0
 
 
 ARMATURE = (
