@@ -106,8 +106,7 @@ def _joint(robot_name: str, robot: Robot, desc: ModelDesc, joint: JointDesc) -> 
         if override.motor is not None:
             motor = Motor(override.motor.vel, override.motor.fmax)
     servo = override is not None and override.servo is not None  # the servo sets it every step (runner.sim.servo)
-    if joint.kind in ("hinge", "slider"):
-        motor = initial_motor(motor, dyn, servo)
+    motor = initial_motor(motor, dyn, servo)
     limits = override.limits if override is not None and isinstance(override.limits, Limits) else None
     other = None if is_static(robot, desc, joint.parent) else f"{robot_name}.{joint.parent}"
     return JointSpec(
