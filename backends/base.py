@@ -113,6 +113,9 @@ class Backend(abc.ABC):
     Options: ClassVar[type[BackendOptions]] = BackendOptions
     #: The exception types the engine itself raises; only these become EngineFailure.
     engine_errors: ClassVar[tuple[type[BaseException], ...]] = ()
+    #: True: the adapter gives the engine each joint's ``JointSpec.dynamics.damping`` itself (its own joint
+    #: damping), and the runner's motor carries only the friction loss (runner.sim.joint_dynamics).
+    native_damping: ClassVar[bool] = False
 
     def __init__(self, world: CompiledWorld) -> None:
         self.world = world

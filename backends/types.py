@@ -130,8 +130,10 @@ class Capability(str, enum.Enum):
     # What a model file may hold that only an engine building the robot from the file itself runs
     # (MuJoCo for MJCF, CompiledWorld.models): MODEL_FILE_CAPABILITIES.
     JOINT_SEVERAL_PER_BODY = "joint:several-per-body"  # an MJCF body moved by several joints, in order
-    JOINT_DYNAMICS = "joint:dynamics"  # joint damping, armature, friction loss or stiffness of a model
+    JOINT_ARMATURE = "joint:armature"  # JointDynamics.armature: rotor inertia added to the joint's coordinate
+    JOINT_STIFFNESS = "joint:stiffness"  # JointDynamics.stiffness: a spring on the coordinate towards springref
     JOINT_BALL_RANGE = "joint:ball-range"  # a ball joint's cone limit
+    JOINT_BALL_DYNAMICS = "joint:ball-dynamics"  # damping, friction loss, armature or stiffness of a ball/free joint
     BODY_MASSLESS = "body:massless"  # a moving body without mass (MuJoCo: its subtree carries the inertia)
     CONSTRAINT_EQUALITY = "constraint:equality"  # MJCF <equality>
     CONSTRAINT_TENDON = "constraint:tendon"  # MJCF <tendon>
@@ -161,8 +163,9 @@ ROBOT_CAPABILITIES: frozenset[Capability] = frozenset(
 MODEL_FILE_CAPABILITIES: frozenset[Capability] = frozenset(
     {
         Capability.JOINT_SEVERAL_PER_BODY,
-        Capability.JOINT_DYNAMICS,
+        Capability.JOINT_STIFFNESS,
         Capability.JOINT_BALL_RANGE,
+        Capability.JOINT_BALL_DYNAMICS,
         Capability.BODY_MASSLESS,
         Capability.CONSTRAINT_EQUALITY,
         Capability.CONSTRAINT_TENDON,
@@ -177,7 +180,7 @@ ALL_SHAPES: frozenset[Capability] = frozenset(
 )
 RIGID_BODY_CAPABILITIES: frozenset[Capability] = (
     frozenset(Capability)
-    - {Capability.JOINT_UNIVERSAL}
+    - {Capability.JOINT_UNIVERSAL, Capability.JOINT_ARMATURE}
     - UNMAPPED_CAPABILITIES
     - ROBOT_CAPABILITIES
     - MODEL_FILE_CAPABILITIES
@@ -232,6 +235,31 @@ class Motor:
 
 
 @dataclass(frozen=True)
+class JointDynamics:
+    """A joint's own dynamics (docs/semantics.md, "Joint dynamics"), in the joint coordinate's units (hinge:
+    N m, rad; slider: N, m). Damping and friction loss are realised by the runner with the joint's velocity
+    motor (``runner.sim.joint_dynamics``): every engine with ``joint:motor`` runs them. Effort and velocity
+    limits cap what the runner commands that motor. Armature and stiffness are the adapter's
+    (``joint:armature``, ``joint:stiffness``)."""
+
+    damping: float = 0.0  # N m s/rad or N s/m: a force -damping * rate
+    frictionloss: float = 0.0  # N m or N: dry friction, the force that holds the joint still up to this bound
+    armature: float = 0.0  # kg m^2 or kg: inertia added to the coordinate (a rotor's reflected inertia)
+    stiffness: float = 0.0  # N m/rad or N/m: a spring force -stiffness * (position - springref)
+    springref: float = 0.0  # where the spring is relaxed, in the coordinate measured from the start
+    effort: float | None = None  # the largest force a motor or servo may apply (caps fmax); None: no cap
+    velocity: float | None = None  # the largest rate a motor or servo may command; None: no cap
+
+    @property
+    def dissipative(self) -> bool:
+        """Whether the runner drives the joint's motor for damping or friction loss."""
+        return self.damping > 0 or self.frictionloss > 0
+
+
+NO_DYNAMICS = JointDynamics()
+
+
+@dataclass(frozen=True)
 class BodySpec:
     name: str
     motion: Motion
@@ -276,6 +304,7 @@ class JointSpec:
     stop_stiffness: float | None = None
     stop_damping: float | None = None
     motor: Motor | None = None  # initial motor; the runner may change it with set_motor
+    dynamics: JointDynamics = NO_DYNAMICS
 
 
 @dataclass(frozen=True)
@@ -359,8 +388,12 @@ class CompiledWorld:
                 need.add(Capability.JOINT_STOP_BOUNCE)
             if joint.stop_stiffness is not None or joint.stop_damping is not None:
                 need.add(Capability.JOINT_STOP_SOFTNESS)
-            if joint.motor is not None:
+            if joint.motor is not None or joint.dynamics.dissipative:
                 need.add(Capability.JOINT_MOTOR)
+            if joint.dynamics.armature > 0:
+                need.add(Capability.JOINT_ARMATURE)
+            if joint.dynamics.stiffness > 0:
+                need.add(Capability.JOINT_STIFFNESS)
         if self.substeps > 1:
             need.add(Capability.SUBSTEPS)
         for model in self.models:

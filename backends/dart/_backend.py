@@ -52,6 +52,9 @@ class DartBackend(Backend):
     #: DART MeshShapes, ``_meshes``), excluded pairs (the solver's BodyNodeCollisionFilter).
     capabilities: ClassVar[frozenset[Capability]] = RIGID_BODY_CAPABILITIES | ROBOT_CAPABILITIES
     Options: ClassVar[type[BackendOptions]] = DartOptions
+    #: joint damping is DART's own (GenericJoint's damping coefficient, integrated implicitly): DART's servo
+    #: constraint drops a bound as small as damping x a slow rate (docs/semantics.md, "Joint dynamics")
+    native_damping: ClassVar[bool] = True
     #: pybind11 turns the C++ exceptions of DART into RuntimeError (DART 6 itself mostly prints its errors,
     #: dterr, and carries on); Python's own RuntimeError subclasses are never translated (backends.errors).
     engine_errors: ClassVar[tuple[type[BaseException], ...]] = (RuntimeError,)

@@ -253,6 +253,7 @@ def _joint_pair(
         joint.setPositionUpperLimit(0, hi)
         joint.setLimitEnforcement(spec.lo is not None or spec.hi is not None)
         joint.setActuatorType(dart.dynamics.ActuatorType.PASSIVE)
+        joint.setDampingCoefficient(0, spec.dynamics.damping)  # DART's own, implicit (DartBackend.native_damping)
     return joint, node
 
 

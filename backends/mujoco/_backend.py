@@ -63,7 +63,10 @@ class MujocoBackend(Backend):
     #: no shape:trimesh: MuJoCo collides with a mesh's convex hull only (docs/backends/mujoco.md); what only
     #: an engine building a robot from its file runs: MJCF robots are built from their file (_native)
     capabilities: ClassVar[frozenset[Capability]] = (
-        RIGID_BODY_CAPABILITIES | (ROBOT_CAPABILITIES - {Capability.SHAPE_TRIMESH}) | MODEL_FILE_CAPABILITIES
+        RIGID_BODY_CAPABILITIES
+        | (ROBOT_CAPABILITIES - {Capability.SHAPE_TRIMESH})
+        | MODEL_FILE_CAPABILITIES
+        | {Capability.JOINT_ARMATURE}  # dof_armature
     )
     Options: ClassVar[type[BackendOptions]] = MujocoOptions
     #: mju_error and the bindings' own failures; MjSpec.compile's ValueError is translated where it is called.
@@ -106,9 +109,12 @@ class MujocoBackend(Backend):
             if edge.joint is not None:
                 self._sign[edge.joint] = edge.sign
         motors = np.flatnonzero(lay.motor_id >= 0)
-        self._motor_of = np.full(len(world.joints), -1)  # world joint -> slot = tendon id (one per motor)
-        self._motor_of[motors] = lay.motor_id[motors]
-        self._helper_dof = lay.helper_dof[motors][np.argsort(lay.motor_id[motors])]
+        # slots: the motors in tendon order (an MJCF file's own tendons may come first)
+        order = np.argsort(lay.motor_id[motors])
+        self._motor_tendon = lay.motor_id[motors][order]  # slot -> the motor's tendon id
+        self._motor_of = np.full(len(world.joints), -1)  # world joint -> slot
+        self._motor_of[motors[order]] = np.arange(motors.size)
+        self._helper_dof = lay.helper_dof[motors][order]
         self._target = np.zeros(motors.size)  # per slot, in the MuJoCo joint's coordinate
         self._motor_mean = SubstepMean(motors.size)
         self._substep_contacts = SubstepContacts(self._nsteps)  # the step's engine steps but the last
@@ -143,7 +149,7 @@ class MujocoBackend(Backend):
 
     def _set_motor(self, joint: int, vel: float, fmax: float) -> None:
         slot = int(self._motor_of[joint])
-        self._m.tendon_frictionloss[slot] = fmax  # 0: no row, the motor is off
+        self._m.tendon_frictionloss[self._motor_tendon[slot]] = fmax  # 0: no row, the motor is off
         self._target[slot] = self._sign[joint] * vel
 
     def _reset_body(self, body: int, pos: Vec3, quat: Quat, lin_vel: Vec3, ang_vel: Vec3) -> None:

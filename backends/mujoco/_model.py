@@ -346,6 +346,10 @@ def _add_joint(mj: Any, body: BodySpec, world: CompiledWorld, edge: Edge, h: flo
         axis=list(quat_rotate(inv, joint.axis)),
         pos=list(quat_rotate(inv, anchor)),
     )
+    mj_joint.armature = joint.dynamics.armature  # dof_armature (joint:armature)
+    if joint.dynamics.stiffness > 0:  # a spring MuJoCo applies itself (joint:stiffness); the coordinate's 0 is
+        mj_joint.stiffness = joint.dynamics.stiffness  # the start pose, as JointSpec's
+        mj_joint.springref = edge.sign * joint.dynamics.springref
     if joint.lo is None and joint.hi is None:
         return
     if joint.kind is JointKind.BALL:

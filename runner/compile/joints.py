@@ -17,10 +17,11 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping
+from dataclasses import replace
 
 from backends.geometry import IDENTITY, quat_conj, quat_mul, quat_rotate
-from backends.types import BodySpec, Vec3
-from runner.language.model_physics import Joint, Limits
+from backends.types import BodySpec, JointDynamics, Motor, Vec3
+from runner.language.model_physics import Dynamics, Joint, Limits
 
 
 def _dot(a: Vec3, b: Vec3) -> float:
@@ -58,3 +59,32 @@ def stops(joint: Joint, offset: float) -> tuple[float | None, float | None]:
         return None, None
     lo, hi = (joint.limits.lo, joint.limits.hi) if isinstance(joint.limits, Limits) else joint.limits
     return lo - offset, hi - offset
+
+
+def dynamics(model: JointDynamics, given: Dynamics | None) -> JointDynamics:
+    """A joint's dynamics: the model's (NO_DYNAMICS for a hand-written joint), each field the scenario gives
+    replacing it."""
+    if given is None:
+        return model
+    fields = {"damping": given.damping, "frictionloss": given.friction, "armature": given.armature,
+              "effort": given.effort, "velocity": given.velocity}  # fmt: skip
+    return replace(model, **{k: v for k, v in fields.items() if v is not None})
+
+
+def initial_motor(motor: Motor | None, dyn: JointDynamics, driven: bool) -> Motor | None:
+    """The joint's motor at the start: the given one capped by the effort and velocity limits, or an idle
+    one (fmax 0) for a servo (``driven``), which the runner commands every step. Damping and friction loss
+    need none: every adapter's slider and hinge takes ``set_motor`` (an MJCF file's joint on MuJoCo, which has
+    a motor only when the scenario gives it one, keeps MuJoCo's own damping and friction loss)."""
+    if motor is not None:
+        return Motor(*capped(motor.vel, motor.fmax, dyn))
+    return Motor(0.0, 0.0) if driven else None
+
+
+def capped(vel: float, fmax: float, dyn: JointDynamics) -> tuple[float, float]:
+    """A motor command within the joint's velocity and effort limits (docs/semantics.md, "Joint dynamics")."""
+    if dyn.velocity is not None:
+        vel = max(-dyn.velocity, min(dyn.velocity, vel))
+    if dyn.effort is not None:
+        fmax = min(fmax, dyn.effort)
+    return vel, fmax

@@ -27,6 +27,7 @@ from backends.types import (
     ShapeKind,
     Surface,
 )
+from runner.compile.joints import dynamics, initial_motor
 from runner.language.hpr import hpr_to_quat
 from runner.language.model import Scenario
 from runner.language.model_physics import Limits
@@ -94,6 +95,7 @@ def _joint(robot_name: str, robot: Robot, desc: ModelDesc, joint: JointDesc) -> 
     override = robot.joints.get(joint.name)
     lo, hi = joint.lo, joint.hi
     motor = None
+    dyn = dynamics(joint.dynamics, override.dynamics if override is not None else None)
     if override is not None:
         if override.free:
             lo = hi = None
@@ -103,8 +105,8 @@ def _joint(robot_name: str, robot: Robot, desc: ModelDesc, joint: JointDesc) -> 
             lo, hi = override.limits
         if override.motor is not None:
             motor = Motor(override.motor.vel, override.motor.fmax)
-        elif override.servo is not None:
-            motor = Motor(0.0, 0.0)  # the servo sets it every step (runner.sim.servo)
+    servo = override is not None and override.servo is not None  # the servo sets it every step (runner.sim.servo)
+    motor = initial_motor(motor, dyn, servo)
     limits = override.limits if override is not None and isinstance(override.limits, Limits) else None
     other = None if is_static(robot, desc, joint.parent) else f"{robot_name}.{joint.parent}"
     return JointSpec(
@@ -120,6 +122,7 @@ def _joint(robot_name: str, robot: Robot, desc: ModelDesc, joint: JointDesc) -> 
         stop_stiffness=limits.stiffness if limits is not None else None,
         stop_damping=limits.damping if limits is not None else None,
         motor=motor,
+        dynamics=dyn,
     )
 
 

@@ -11,6 +11,7 @@ from collections.abc import Mapping, Sequence
 
 from backends.geometry import IDENTITY, quat_normalize
 from backends.types import (
+    NO_DYNAMICS,
     BodySpec,
     CompiledWorld,
     JointKind,
@@ -22,7 +23,7 @@ from backends.types import (
     ShapeKind,
     Surface,
 )
-from runner.compile.joints import stops, zero_offset
+from runner.compile.joints import dynamics, initial_motor, stops, zero_offset
 from runner.compile.robots import compile_robots
 from runner.language.hpr import hpr_to_quat
 from runner.language.model import Scenario
@@ -182,7 +183,12 @@ def compile_world(model: Scenario, name: str, robots: Mapping[str, ModelDesc] | 
                 stop_bounce=limits.bounce if limits is not None else 0.0,
                 stop_stiffness=limits.stiffness if limits is not None else None,
                 stop_damping=limits.damping if limits is not None else None,
-                motor=Motor(joint.motor.vel, joint.motor.fmax) if joint.motor is not None else None,
+                motor=initial_motor(
+                    Motor(joint.motor.vel, joint.motor.fmax) if joint.motor is not None else None,
+                    dynamics(NO_DYNAMICS, joint.dynamics),
+                    driven=False,
+                ),
+                dynamics=dynamics(NO_DYNAMICS, joint.dynamics),
             )
         )
     members = {**groups(model), **parts.groups}

@@ -11,10 +11,12 @@ message and line), and the compiled model is mapped into the engine-neutral desc
 - every joint (hinge, slide, ball, free); a body without a joint is welded to its parent;
 - body pairs MuJoCo never lets touch (contype/conaffinity of all their geoms, `<exclude>`) are excluded;
 - actuators are listed (the robot's controllable joints);
+- every hinge's and slide's damping, friction loss, armature and stiffness (:class:`JointDynamics`);
 - what only an engine that reads the file itself can run (several joints in one body, `<equality>`,
-  `<tendon>`, joint damping/armature/friction loss/stiffness, explicit contact pairs, a massless moving
-  body, fluid forces) is recorded in :attr:`ModelDesc.needs` as capabilities: MuJoCo, which builds the
-  robot from the file (backends/mujoco), runs it; another engine refuses it before the run.
+  `<tendon>`, a ball joint's dynamics, explicit contact pairs, a massless moving body, fluid forces) is
+  recorded in :attr:`ModelDesc.needs` as capabilities: MuJoCo, which builds the robot from the file
+  (backends/mujoco), runs it; another engine refuses it before the run. Armature and stiffness are named
+  there too (`joint:armature`, `joint:stiffness`), so that an engine without them refuses at their line.
 
 Sites, cameras, lights, `<custom>`, `<sensor>`, `<visual>`, `<statistic>`, `<keyframe>` do not change the
 dynamics of a step and are not read.
@@ -28,7 +30,7 @@ from typing import Any
 
 import numpy as np
 
-from backends.types import Mesh, PlacedShape, Shape, ShapeKind
+from backends.types import NO_DYNAMICS, JointDynamics, Mesh, PlacedShape, Shape, ShapeKind
 from runner.language.mesh_limits import check_mesh_file
 from runner.language.model_names import check_names
 from runner.language.model_numbers import check_mjcf_numbers, check_number, check_vertices
@@ -149,7 +151,30 @@ def _names(model: Any, file: Path, lines: dict[tuple[str, str], int]) -> tuple[l
     return bodies, joints
 
 
-def _needs(model: Any, tree: Any, bodies: list[str], lines: dict[tuple[str, str], int]) -> list[ModelNeed]:
+def _has_dynamics(model: Any, j: int) -> bool:
+    dofs = slice(int(model.jnt_dofadr[j]), int(model.jnt_dofadr[j]) + (6 if int(model.jnt_type[j]) == 0 else 3))
+    return bool(np.any(model.dof_damping[dofs] != 0) or np.any(model.dof_frictionloss[dofs] != 0)
+                or np.any(model.dof_armature[dofs] != 0) or model.jnt_stiffness[j] != 0)  # fmt: skip
+
+
+def _dynamics(model: Any, j: int) -> JointDynamics:
+    """A hinge's or slide's damping, friction loss, armature and spring as MuJoCo compiled them (defaults
+    applied); the spring's rest position from the zero configuration (``qpos_spring - qpos0``)."""
+    if int(model.jnt_type[j]) not in (2, 3):
+        return NO_DYNAMICS
+    dof, q = int(model.jnt_dofadr[j]), int(model.jnt_qposadr[j])
+    return JointDynamics(
+        damping=float(model.dof_damping[dof]),
+        frictionloss=float(model.dof_frictionloss[dof]),
+        armature=float(model.dof_armature[dof]),
+        stiffness=float(model.jnt_stiffness[j]),
+        springref=float(model.qpos_spring[q] - model.qpos0[q]),
+    )
+
+
+def _needs(
+    model: Any, tree: Any, bodies: list[str], joints: list[str], lines: dict[tuple[str, str], int]
+) -> list[ModelNeed]:
     """What only an engine reading the file itself runs (module docstring), once per capability."""
     out: dict[str, ModelNeed] = {}
 
@@ -165,10 +190,15 @@ def _needs(model: Any, tree: Any, bodies: list[str], lines: dict[tuple[str, str]
             )
         if model.body_mass[b] <= 0 and int(model.body_jntnum[b]) > 0:
             need("body:massless", f"body `{bodies[b]}` moves but has no mass", lines.get(("body", bodies[b]), 0))
-    for attr, what in (("dof_damping", "damping"), ("dof_armature", "armature"), ("dof_frictionloss", "friction loss"),
-                       ("jnt_stiffness", "stiffness")):  # fmt: skip
-        if np.any(getattr(model, attr) != 0):
-            need("joint:dynamics", f"joint {what}", _first_line(tree, "joint"))
+    for j in range(model.njnt):  # damping and friction loss of hinges and slides are every engine's (the runner's)
+        dof, name = int(model.jnt_dofadr[j]), joints[j]
+        line = lines.get(("joint", name), _first_line(tree, "joint"))
+        if int(model.jnt_type[j]) in (0, 1) and _has_dynamics(model, j):
+            need("joint:ball-dynamics", f"joint `{name}`'s damping, friction loss, armature or stiffness", line)
+        elif model.dof_armature[dof] > 0:
+            need("joint:armature", f"joint `{name}`'s armature", line)
+        if int(model.jnt_type[j]) in (2, 3) and model.jnt_stiffness[j] > 0:
+            need("joint:stiffness", f"joint `{name}`'s stiffness", line)
     if any(model.jnt_limited[j] and int(model.jnt_type[j]) == 1 for j in range(model.njnt)):
         need("joint:ball-range", "a ball joint's range", _first_line(tree, "joint"))
     if model.neq:
@@ -321,13 +351,13 @@ def load_mjcf(file: Path) -> ModelDesc:
             lo, hi = (float(model.jnt_range[j][0]), float(model.jnt_range[j][1])) if limited else (None, None)
             anchor = vec(data.xanchor[j]) if kind != "free" else vec(data.xpos[b])
             joints.append(JointDesc(joint_names[j], kind, parent, bodies[b], vec(data.xaxis[j]), anchor, lo, hi,
-                                    lines.get(("joint", joint_names[j]), line)))  # fmt: skip
+                                    lines.get(("joint", joint_names[j]), line), _dynamics(model, j)))  # fmt: skip
     return ModelDesc(
         str(file),
         "worldbody",
         tuple(links),
         tuple(joints),
-        needs=tuple(_needs(model, tree, bodies, lines)),
+        needs=tuple(_needs(model, tree, bodies, joint_names, lines)),
         actuators=tuple(_actuators(model, joint_names, lines, mujoco)),
         excluded=tuple(_excluded(model, bodies)),
         timestep=float(model.opt.timestep),

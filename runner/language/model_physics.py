@@ -155,6 +155,32 @@ class Limits(Strict):
         return self
 
 
+class Dynamics(Strict):
+    """A slider's or hinge's own dynamics (docs/semantics.md, "Joint dynamics"). On a model's joint each
+    field given replaces the model's value (URDF `<dynamics>`/`<limit>`, MJCF's joint); one left out keeps
+    it."""
+
+    damping: NonNegFloat | None = Field(
+        None, description="Viscous damping: a force -damping x rate, N s/m (slider) or N m s/rad (hinge)."
+    )
+    friction: NonNegFloat | None = Field(
+        None,
+        description="Dry joint friction (MuJoCo's frictionloss, URDF's `friction`): the joint is held still "
+        "by up to this force (N) or torque (N m), and slides against it.",
+    )
+    armature: NonNegFloat | None = Field(
+        None,
+        description="Inertia added to the coordinate (a rotor's reflected inertia), kg (slider) or kg m^2 "
+        "(hinge): MuJoCo only (`joint:armature`).",
+    )
+    effort: PositiveFloat | None = Field(
+        None, description="The largest force (N) or torque (N m) a motor or servo may apply: caps its fmax."
+    )
+    velocity: PositiveFloat | None = Field(
+        None, description="The largest rate (m/s or rad/s) a motor or servo may command: caps its vel."
+    )
+
+
 class Joint(Strict):
     type: Literal["slider", "hinge", "ball", "fixed", "universal"]
     bodies: tuple[Name, Name] = Field(description="[body, other]; other may be `environment`.")
@@ -167,6 +193,7 @@ class Joint(Strict):
         "{lo, hi, zero, bounce, stiffness, damping}.",
     )
     motor: Motor | None = None
+    dynamics: Dynamics | None = Field(None, description="Damping, dry friction, armature, effort and rate limits.")
 
     _v = field_validator("axis", "axis2", "anchor", mode="before")(finite_vec)
 
@@ -180,6 +207,8 @@ class Joint(Strict):
             raise ValueError(f"`zero: absolute` is defined for sliders and hinges, not a {self.type} joint")
         if self.type in ("ball", "fixed") and (self.limits is not None or self.motor is not None):
             raise ValueError(f"a {self.type} joint takes no limits or motor")
+        if self.type not in ("slider", "hinge") and self.dynamics is not None:
+            raise ValueError(f"`dynamics` is defined for sliders and hinges, not a {self.type} joint")
         if self.type == "universal" and self.axis2 is None:
             raise ValueError("a universal joint needs axis2")
         if self.axis2 is not None:
@@ -196,4 +225,7 @@ class PairSurface(Surface):
     bodies: tuple[Name, Name] = Field(description="The two bodies (or body groups) this surface is for.")
 
 
-__all__ = ["Body", "BodyArray", "Cylinder", "Joint", "Limits", "Motor", "NonNegFloat", "PairSurface", "Plane", "World"]
+__all__ = [
+    "Body", "BodyArray", "Cylinder", "Dynamics", "Joint", "Limits", "Motor", "NonNegFloat", "PairSurface", "Plane",
+    "World",
+]  # fmt: skip

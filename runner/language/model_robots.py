@@ -16,7 +16,7 @@ from runner.language.model_base import (
     Vec3,
     finite_vec,
 )
-from runner.language.model_physics import Limits, Motor, Rgba
+from runner.language.model_physics import Dynamics, Limits, Motor, Rgba
 
 #: A link's or joint's name as the model file spells it (runner.language.model_names): any text without
 #: control characters, `"8"` and `pinch site` included.
@@ -52,6 +52,9 @@ class RobotJoint(Strict):
     )
     free: bool = Field(False, description="Drop the model's limits (a `continuous` joint).")
     servo: Servo | None = None
+    dynamics: Dynamics | None = Field(
+        None, description="Replace the model's damping, friction, armature, effort or velocity limit (each given)."
+    )
 
     @model_validator(mode="after")
     def _check(self) -> RobotJoint:

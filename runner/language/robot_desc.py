@@ -14,7 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
-from backends.types import PlacedShape, Quat, Rgba, Vec3
+from backends.types import NO_DYNAMICS, JointDynamics, PlacedShape, Quat, Rgba, Vec3
 
 #: `@pybullet_data/...`: the models shipped inside the pybullet wheel (pybullet_data.getDataPath()).
 PYBULLET_DATA = "@pybullet_data"
@@ -75,6 +75,9 @@ class JointDesc:
     lo: float | None  # from the zero configuration
     hi: float | None
     line: int
+    #: damping, friction loss, armature, stiffness, effort and velocity limits (URDF `<dynamics>`/`<limit>`,
+    #: MJCF's compiled joint), in the joint's coordinate as ``lo``/``hi``
+    dynamics: JointDynamics = NO_DYNAMICS
 
 
 @dataclass(frozen=True)

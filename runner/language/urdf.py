@@ -19,7 +19,7 @@ from typing import Any
 
 import numpy as np
 
-from backends.types import Mesh, PlacedShape, Rgba, Shape, ShapeKind
+from backends.types import NO_DYNAMICS, JointDynamics, Mesh, PlacedShape, Rgba, Shape, ShapeKind
 from runner.language.mesh_limits import check_mesh_counts, check_mesh_file
 from runner.language.model_names import check_names
 from runner.language.model_numbers import check_urdf_numbers, check_vertices
@@ -293,6 +293,31 @@ def _color(link: Any, materials: dict[str, Rgba]) -> Rgba | None:
     return None
 
 
+def _dynamics(joint: Any, kind: str, file: Path, line: int) -> JointDynamics:
+    """`<dynamics damping friction>` and `<limit effort velocity>` of a hinge or slider (docs/semantics.md,
+    "Joint dynamics"); `friction` is dry joint friction (friction loss). An effort or velocity of 0 (or none)
+    is no limit, as the loaders read it (many files write 0 for "not stated")."""
+    if kind not in ("hinge", "slider"):
+        return NO_DYNAMICS
+    dyn, limit = joint.dynamics, joint.limit
+    values = {
+        "damping": dyn.damping if dyn is not None else None,
+        "friction": dyn.friction if dyn is not None else None,
+        "effort": limit.effort if limit is not None else None,
+        "velocity": limit.velocity if limit is not None else None,
+    }
+    for what, value in values.items():
+        if value is not None and not (math.isfinite(float(value)) and float(value) >= 0):
+            raise ModelFileError(file, line, f"joint `{joint.name}`: {what} {value} is not a number >= 0", near=what)
+    number = {k: float(v) if v is not None else 0.0 for k, v in values.items()}
+    return JointDynamics(
+        damping=number["damping"],
+        frictionloss=number["friction"],
+        effort=number["effort"] or None,
+        velocity=number["velocity"] or None,
+    )
+
+
 def _walk(root: str, joints: list[Any]) -> Iterator[Any]:
     """Joints parents first."""
     by_parent: dict[str, list[Any]] = {}
@@ -358,6 +383,7 @@ def load_urdf(file: Path, package_root: Path | None, static_root: bool, static_t
                 None if lo is None else float(lo),
                 None if hi is None else float(hi),
                 joint_lines.get(joint.name, 0),
+                _dynamics(joint, kind, file, joint_lines.get(joint.name, 0)),
             )
         )
     links: list[LinkDesc] = []

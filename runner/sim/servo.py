@@ -15,6 +15,8 @@ import math
 from dataclasses import dataclass
 
 from backends.base import Backend
+from backends.types import NO_DYNAMICS, CompiledWorld
+from runner.compile.joints import capped
 from runner.language.expressions import Expression, Resolver, compile_expression
 from runner.language.model import Scenario
 
@@ -42,8 +44,12 @@ def servo_specs(model: Scenario) -> tuple[ServoSpec, ...]:
 class Servos:
     """Commands every servo's motor from the latest joint readings (``positions``, world joint order)."""
 
-    def __init__(self, specs: tuple[ServoSpec, ...], joint_index: dict[str, int]) -> None:
+    def __init__(
+        self, specs: tuple[ServoSpec, ...], joint_index: dict[str, int], world: CompiledWorld | None = None
+    ) -> None:
         self.specs = [(joint_index[s.joint], s) for s in specs]
+        # each joint's effort and velocity limits cap the commands (docs/semantics.md, "Joint dynamics")
+        self.dynamics = {j: world.joints[j].dynamics if world else NO_DYNAMICS for j, _ in self.specs}
 
     def __bool__(self) -> bool:
         return bool(self.specs)
@@ -58,4 +64,4 @@ class Servos:
             if spec.vmax is not None:
                 vel = max(-spec.vmax, min(spec.vmax, vel))
             if math.isfinite(vel):  # a NaN reading is the engine's failure, which the runner reports itself
-                backend.set_motor(j, vel, spec.fmax)
+                backend.set_motor(j, *capped(vel, spec.fmax, self.dynamics[j]))

@@ -28,6 +28,7 @@ from backends.base import Backend
 from backends.errors import EngineFailure
 from backends.types import BodyStates, Motion
 from runner import interrupts
+from runner.compile.joints import capped
 from runner.compile.program import Program
 from runner.language import model_behaviour as B
 from runner.language.hpr import hpr_to_quat, quat_to_hpr
@@ -38,6 +39,7 @@ from runner.sim.collisions import EventHandler, SolidTraverser, quat_matrices
 from runner.sim.conditions import ConditionTriggers, HandlerGate, with_zeros
 from runner.sim.energy import EnergyWatch
 from runner.sim.intervals import IntervalManager
+from runner.sim.joint_dynamics import JointFriction, driven_joints, native_joints
 from runner.sim.kinematics import KinematicTable
 from runner.sim.resolver import Snapshot, StateResolver
 from runner.sim.servo import Servos, servo_specs
@@ -183,7 +185,11 @@ class Session:
         self.conditions = ConditionTriggers(program.triggers, program.expressions)
         self.handler_gate = HandlerGate()
         self._zeros = [(self.joint_index[j], offset) for j, offset in program.joint_zeros.items()]
-        self.servos = Servos(servo_specs(model), self.joint_index)  # position servos (runner.sim.servo)
+        self.servos = Servos(servo_specs(model), self.joint_index, self.world)  # position servos (sim.servo)
+        # damping and friction loss as each joint's motor (runner.sim.joint_dynamics)
+        self.joint_friction = JointFriction(
+            self.world, driven_joints(model) | native_joints(self.world, backend), backend.native_damping
+        )
         self.energy = EnergyWatch(self.world, backend.name)  # energy from nowhere: exit 3 (runner.sim.energy)
 
     # --- services used by actions and intervals (runner.sim.intervals.IntervalHost) --------------------
@@ -250,7 +256,9 @@ class Session:
     def set_motor(self, joint: str, vel: float, fmax: float | None) -> None:
         fmax = self.motors[joint][1] if fmax is None else fmax
         self.motors[joint] = (vel, fmax)
-        self.backend.set_motor(self.joint_index[joint], vel, fmax)
+        self.joint_friction.release(joint)  # the scenario's motor is the joint's from now on
+        k = self.joint_index[joint]
+        self.backend.set_motor(k, *capped(vel, fmax, self.world.joints[k].dynamics))
 
     def add_force(self, body: str, force: Sequence[float], torque: Sequence[float], scale: float) -> None:
         i = self.body_index[body]
@@ -471,6 +479,8 @@ class Session:
             self.forces.clear()
             if self.servos:
                 self.servos.drive(self.backend, self.snapshot.joints.position.tolist(), self.resolver)
+            if self.joint_friction:
+                self.joint_friction.drive(self.backend, self.snapshot.joints.velocity.tolist())
             self._step(t_next)
             recorded = self.trace is not None and ((k + 1) % self.record_every == 0 or k == steps - 1)
             self._read(t_next, contacts=recorded)

@@ -4,7 +4,7 @@ The reference loads the same file with `p.loadURDF(file, pos, orn, useFixedBase=
 flags=URDF_USE_INERTIA_FROM_FILE)` and then sets what `loadURDF` adds on its own and the scenario language
 does not have (docs/robots.md, "PyBullet's loadURDF"): the velocity motor it puts on every joint off
 (`setJointMotorControl2(VELOCITY_CONTROL, force=0)`), the multibody's linear and angular damping 0 (it
-sets 0.04), and the joints' `<dynamics damping>` 0 (the runner does not simulate URDF damping yet). Gravity
+sets 0.04), and the joints' `<dynamics damping>` 0 (the backend alone, without the runner's damping). Gravity
 -9.81 and the step 1/240 s are set on both. The robot is welded to the world tilted (hpr 20, 30, 10
 degrees) so gravity swings every joint. After every step each joint's position must agree to 1e-9 rad
 (m): the same engine integrates the same tree with the same inertias, so they agree to rounding (the

@@ -10,7 +10,7 @@ from pathlib import Path
 
 import pytest
 
-from backends.types import MODEL_FILE_CAPABILITIES, Capability, ShapeKind
+from backends.types import MODEL_FILE_CAPABILITIES, ShapeKind
 from runner.compile.program import build_program
 from runner.errors import ScenarioValidationError
 from runner.language.load import load_scenario
@@ -40,11 +40,13 @@ def _run(path: Path, backend: str) -> subprocess.CompletedProcess[str]:
 def test_actuators_and_damping_load_and_are_listed(tmp_path: Path) -> None:
     loaded = load_scenario(_scenario(tmp_path, "inverted_pendulum"))  # `<custom>`-free, `<default>`s, RK4
     desc = loaded.robots["r"]
-    assert [n.capability for n in desc.needs] == ["joint:dynamics"]  # damping="1" from the default class
+    assert desc.needs == ()  # damping="1" from the default class: every engine runs it (the runner's motor)
+    assert {j.name: j.dynamics.damping for j in desc.joints if j.kind != "fixed"} == {"slider": 1.0, "hinge": 1.0}
     assert [(a.name, a.kind, a.joint) for a in desc.actuators] == [("slide", "motor", "slider")]
     assert desc.timestep == 0.02 and desc.gravity == (0.0, 0.0, -9.81)
     world = build_program(loaded).world
-    assert world.models[0].needs == {Capability.JOINT_DYNAMICS}
+    assert world.models[0].needs == frozenset()
+    assert {j.name: j.dynamics.damping for j in world.joints} == {"r.slider": 1.0, "r.hinge": 1.0}
     assert world.required_capabilities() & MODEL_FILE_CAPABILITIES == world.models[0].needs
 
 
