@@ -190,7 +190,7 @@ def check_references(  # noqa: C901
             if step.interval is not None and step.interval not in model.intervals:
                 bad(path + ("interval",), _unknown("interval", step.interval, model.intervals))
     check_interval_cycles(model, bad)
-    _check_actions(model, bad, body_names, sound_lengths)
+    _check_actions(model, bad, body_names, sound_lengths, robots)
     _check_expressions(model, bad, body_names | group_names, robots)
     _check_events(model, bad, set(robot_links(robots)))
     _check_servos(model, bad, robots)
@@ -210,7 +210,9 @@ _INTERVAL_ACTIONS: dict[type, str] = {
 }
 
 
-def _check_actions(model: Scenario, bad: Any, body_names: set[str], sounds: dict[str, float]) -> None:
+def _check_actions(
+    model: Scenario, bad: Any, body_names: set[str], sounds: dict[str, float], robots: Mapping[str, ModelDesc]
+) -> None:
     for action, path in all_actions(model):
         kind = _INTERVAL_ACTIONS.get(type(action))
         if kind is not None and getattr(action, kind) not in model.intervals:
@@ -226,25 +228,43 @@ def _check_actions(model: Scenario, bad: Any, body_names: set[str], sounds: dict
             if ref not in model.sounds:
                 bad(path + (field,), _unknown("sound", ref, model.sounds))
         if isinstance(action, B.MotorAction):
-            joint = model.joints.get(action.motor.joint)
-            if joint is None:
-                bad(path + ("motor", "joint"), _unknown("joint", action.motor.joint, model.joints))
-            elif joint.type not in ("slider", "hinge"):
-                bad(
-                    path + ("motor", "joint"),
-                    f"joint `{action.motor.joint}` is a {joint.type}; motors drive sliders and hinges",
-                )
-        if isinstance(action, B.ForceAction | B.ImpulseAction):
-            cmd = action.force if isinstance(action, B.ForceAction) else action.impulse
+            _check_motor(model, bad, path, action.motor.joint, robots)
+        if isinstance(action, B.ForceAction | B.ImpulseAction | B.ApplyAction):
             field = "force" if isinstance(action, B.ForceAction) else "impulse"
+            field = "apply" if isinstance(action, B.ApplyAction) else field
+            cmd = getattr(action, field)
             if cmd.body not in body_names:
                 bad(path + (field, "body"), _unknown("body", cmd.body, body_names))
         if isinstance(action, B.ResetAction):
             ref = action.reset if isinstance(action.reset, str) else action.reset.body
+            held = {b for j in model.joints.values() for b in j.bodies} | set(_jointed_links(robots))
             if ref not in body_names:
                 bad(path + ("reset",), _unknown("body", ref, body_names))
-            elif any(ref in j.bodies for j in model.joints.values()):
+            elif ref in held:
                 bad(path + ("reset",), f"body `{ref}` is held by a joint; only free bodies can be reset")
+
+
+def _jointed_links(robots: Mapping[str, ModelDesc]) -> Iterator[str]:
+    """The robots' links at either end of a joint (a free joint holds nothing)."""
+    for name, desc in robots.items():
+        for j in desc.joints:
+            if j.kind != "free":
+                yield f"{name}.{j.parent}"
+                yield f"{name}.{j.child}"
+
+
+def _check_motor(model: Scenario, bad: Any, path: Path, ref: str, robots: Mapping[str, ModelDesc]) -> None:
+    """A motor drives a slider or hinge: a hand-written one, or a robot's without a servo."""
+    kinds = {name: j.type for name, j in model.joints.items()}
+    kinds.update({f"{r}.{j.name}": j.kind for r, desc in robots.items() for j in desc.joints if j.kind != "free"})
+    kind = kinds.get(ref)
+    robot, _, joint = ref.partition(".")
+    if kind is None:
+        bad(path + ("motor", "joint"), _unknown("joint", ref, kinds))
+    elif kind not in ("slider", "hinge"):
+        bad(path + ("motor", "joint"), f"joint `{ref}` is a {kind}; motors drive sliders and hinges")
+    elif robot in model.robots and joint in model.robots[robot].joints and model.robots[robot].joints[joint].servo:
+        bad(path + ("motor", "joint"), f"joint `{ref}` has a servo, which sets its motor every step")
 
 
 def expressions_in(model: Scenario) -> Iterator[tuple[str, Path]]:
@@ -255,6 +275,8 @@ def expressions_in(model: Scenario) -> Iterator[tuple[str, Path]]:
         if isinstance(action, B.CalcAction):
             for var, text in action.calc.items():
                 yield text, path + ("calc", var)
+        if isinstance(action, B.ApplyAction) and action.apply.until is not None:
+            yield action.apply.until, path + ("apply", "until")
     for name, trigger in model.triggers.items():
         yield trigger.when, ("triggers", name, "when")
     for i, a in enumerate(model.assertions):
