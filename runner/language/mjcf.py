@@ -16,8 +16,8 @@ message and line), and the compiled model is mapped into the engine-neutral desc
   body, fluid forces) is recorded in :attr:`ModelDesc.needs` as capabilities: MuJoCo, which builds the
   robot from the file (backends/mujoco), runs it; another engine refuses it before the run.
 
-Sites, cameras, lights, `<custom>`, `<sensor>`, `<visual>`, `<statistic>`, `<keyframe>` do not change the
-dynamics of a step and are not read.
+Sites, cameras, lights, `<custom>`, `<sensor>`, `<visual>`, `<statistic>` do not change the dynamics of a step
+and are not read; `<keyframe>`s are read as start states a scenario may pick (`initial: {keyframe: NAME}`).
 """
 
 from __future__ import annotations
@@ -32,6 +32,7 @@ from backends.types import Mesh, PlacedShape, Shape, ShapeKind
 from runner.language.robot_desc import (
     ActuatorDesc,
     JointDesc,
+    KeyframeDesc,
     LinkDesc,
     ModelDesc,
     ModelFileError,
@@ -217,6 +218,29 @@ def _actuators(model: Any, joints: list[str], lines: dict[tuple[str, str], int],
     return out
 
 
+def _keyframes(model: Any, joints: list[str], tree: Any) -> list[KeyframeDesc]:
+    """The file's keys: hinge and slide values from the zero configuration (qpos0), and the other joints
+    they move."""
+    keys = list(tree.getroot().iter("key"))
+    out = []
+    for k in range(model.nkey):
+        name = model.key(k).name or f"key_{k}"
+        values, others = [], []
+        for j in range(model.njnt):
+            q, d = int(model.jnt_qposadr[j]), int(model.jnt_dofadr[j])
+            kind = _JOINTS[int(model.jnt_type[j])]
+            if kind in ("hinge", "slider"):
+                values.append((joints[j], float(model.key_qpos[k][q] - model.qpos0[q]), float(model.key_qvel[k][d])))
+                continue
+            nq, nv = (7, 6) if kind == "free" else (4, 3)
+            moved = np.any(model.key_qpos[k][q : q + nq] != model.qpos0[q : q + nq])
+            if moved or np.any(model.key_qvel[k][d : d + nv]):
+                others.append(joints[j])
+        line = (keys[k].sourceline or 0) if k < len(keys) else 0
+        out.append(KeyframeDesc(name, line, tuple(values), tuple(others)))
+    return out
+
+
 def load_mjcf(file: Path) -> ModelDesc:
     tree = parse_xml(file)
     mujoco = _mujoco(file)
@@ -280,4 +304,5 @@ def load_mjcf(file: Path) -> ModelDesc:
         excluded=tuple(_excluded(model, bodies)),
         timestep=float(model.opt.timestep),
         gravity=vec(model.opt.gravity),
+        keyframes=tuple(_keyframes(model, joint_names, tree)),
     )

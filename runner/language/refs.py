@@ -194,6 +194,7 @@ def check_references(  # noqa: C901
     _check_expressions(model, bad, body_names | group_names, robots)
     _check_events(model, bad, set(robot_links(robots)))
     _check_servos(model, bad, robots)
+    _check_initial(model, bad, robots)
     check_handlers(model, bad, possible_events(model))
     check_times(model, bad)
     check_backend_options(model, bad)
@@ -255,7 +256,7 @@ def _jointed_links(robots: Mapping[str, ModelDesc]) -> Iterator[str]:
 
 def _check_motor(model: Scenario, bad: Any, path: Path, ref: str, robots: Mapping[str, ModelDesc]) -> None:
     """A motor drives a slider or hinge: a hand-written one, or a robot's without a servo."""
-    kinds = {name: j.type for name, j in model.joints.items()}
+    kinds: dict[str, str] = {name: j.type for name, j in model.joints.items()}
     kinds.update({f"{r}.{j.name}": j.kind for r, desc in robots.items() for j in desc.joints if j.kind != "free"})
     kind = kinds.get(ref)
     robot, _, joint = ref.partition(".")
@@ -347,6 +348,52 @@ def _check_servos(model: Scenario, bad: Any, robots: Mapping[str, ModelDesc]) ->
             first = next((p for p in (check_name(n, valid) for n in sorted(expr.names)) if p), None)
             if first:
                 bad(path, first)
+
+
+def _joint_limits(robot: Any, joint: Any) -> tuple[float | None, float | None]:
+    """A robot joint's stops from the model's zero: the scenario's override, else the model's."""
+    override = robot.joints.get(joint.name)
+    if override is not None and override.free:
+        return None, None
+    if override is not None and override.limits is not None:
+        limits = override.limits
+        return (limits.lo, limits.hi) if not isinstance(limits, tuple) else limits
+    return joint.lo, joint.hi
+
+
+def _check_initial(model: Scenario, bad: Any, robots: Mapping[str, ModelDesc]) -> None:
+    """A start names the model's hinges and sliders (or keyframe), inside their stops."""
+    for rname, robot in model.robots.items():
+        start, desc = robot.initial, robots.get(rname)
+        if start is None or desc is None:
+            continue
+        here: tuple[str | int, ...] = ("robots", rname, "initial")
+        joints = {j.name: j for j in desc.joints}
+        values: dict[str, tuple[tuple[float, float], tuple[str | int, ...]]] = {}
+        if start.keyframe is not None:
+            key = desc.keyframe(start.keyframe)
+            if key is None:
+                names = [k.name for k in desc.keyframes]
+                bad(here + ("keyframe",), _unknown("keyframe (MJCF <key>)", start.keyframe, names))
+            elif key.others:
+                bad(here + ("keyframe",), f"keyframe `{key.name}` moves the free or ball joint(s) "
+                    f"{', '.join(f'`{j}`' for j in key.others)}; a start is taken for hinges and slides only")
+            else:
+                values.update({j: ((q, v), here + ("keyframe",)) for j, q, v in key.values})
+        for jname, value in start.values().items():
+            values[jname] = (value, here + ("joints", jname))
+        for jname, ((q, _), path) in values.items():
+            joint = joints.get(jname)
+            if joint is None:
+                bad(path, _unknown("joint", jname, joints), at_key=path[-1] == jname)
+                continue
+            if joint.kind not in ("hinge", "slider"):
+                bad(path, f"joint `{jname}` is a {joint.kind}; a start position is for hinges and sliders")
+                continue
+            lo, hi = _joint_limits(robot, joint)
+            if (lo is not None and q < lo) or (hi is not None and q > hi):
+                shown = f"[{'-inf' if lo is None else f'{lo:g}'}, {'inf' if hi is None else f'{hi:g}'}]"
+                bad(path, f"joint `{jname}` starts at {q:g}, outside its limits {shown} (from the model's zero)")
 
 
 def _check_events(model: Scenario, bad: Any, links: set[str]) -> None:

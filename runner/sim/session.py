@@ -465,7 +465,7 @@ class Session:
                 self.energy.driven()  # a moving kinematic body pushes what it touches: unbooked work
             if self.held:
                 for i, force, torque in self.held.step_inputs(self.snapshot.bodies.quat, self.truth):
-                    self.add_force(self.names[i], force, torque, 1.0)
+                    self.add_force(self.names[i], force.tolist(), torque.tolist(), 1.0)
             for i, f in self.forces.items():
                 self.backend.apply_force(i, tuple(f[:3]), tuple(f[3:]))
             self.forces.clear()

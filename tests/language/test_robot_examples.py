@@ -36,6 +36,8 @@ def test_the_examples_exist() -> None:
         "duck_drop.yaml",
         "mjcf_box.yaml",
         "pendulum5.yaml",
+        "swing_arm.yaml",
+        "thruster.yaml",
     }
 
 
