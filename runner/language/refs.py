@@ -381,11 +381,13 @@ def _check_initial(model: Scenario, bad: Any, robots: Mapping[str, ModelDesc]) -
             else:
                 values.update({j: ((q, v), here + ("keyframe",)) for j, q, v in key.values})
         for jname, value in start.values().items():
-            values[jname] = (value, here + ("joints", jname))
+            given = start.joints[jname]
+            values[jname] = (value, here + ("joints", jname) + (() if isinstance(given, float | int) else ("pos",)))
         for jname, ((q, _), path) in values.items():
             joint = joints.get(jname)
             if joint is None:
-                bad(path, _unknown("joint", jname, joints), at_key=path[-1] == jname)
+                bad(here + ("joints", jname) if jname in start.joints else path, _unknown("joint", jname, joints),
+                    at_key=jname in start.joints)  # fmt: skip
                 continue
             if joint.kind not in ("hinge", "slider"):
                 bad(path, f"joint `{jname}` is a {joint.kind}; a start position is for hinges and sliders")
