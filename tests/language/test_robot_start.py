@@ -50,6 +50,7 @@ def test_kuka_starts_where_its_urdf_kinematics_put_it(tmp_path: Path) -> None:
     assert program.joint_zeros == {"arm.lbr_iiwa_joint_2": 0.5, "arm.lbr_iiwa_joint_4": -1.0}
     j2 = next(j for j in world.joints if j.name == "arm.lbr_iiwa_joint_2")
     model = next(j for j in load_scenario(path).robots["arm"].joints if j.name == "lbr_iiwa_joint_2")
+    assert model.lo is not None and model.hi is not None
     assert (model.lo, model.hi) == pytest.approx((-2.0944, 2.0944), abs=1e-4)
     assert (j2.lo, j2.hi) == (model.lo - 0.5, model.hi - 0.5)
 
