@@ -37,6 +37,7 @@ def test_the_examples_exist() -> None:
         "mjcf_box.yaml",
         "pendulum5.yaml",
         "swing_arm.yaml",
+        "keyframe_pendulum.yaml",
         "thruster.yaml",
     }
 
@@ -44,7 +45,7 @@ def test_the_examples_exist() -> None:
 @pytest.mark.parametrize("path", ROBOTS, ids=[p.stem for p in ROBOTS])
 @pytest.mark.parametrize("engine", ENGINES)
 def test_every_engine_accepts_them(path: Path, engine: str) -> None:
-    if path.stem == "mjcf_box":
+    if path.stem in ("mjcf_box", "keyframe_pendulum"):
         pytest.importorskip("mujoco", reason="mujoco not installed (MJCF is read by MuJoCo's compiler)")
     try:
         cls = get_backend(engine)
