@@ -55,6 +55,26 @@ def test_kuka_starts_where_its_urdf_kinematics_put_it(tmp_path: Path) -> None:
     assert (j2.lo, j2.hi) == (model.lo - 0.5, model.hi - 0.5)
 
 
+def test_every_kuka_link_is_where_yourdfpy_puts_it(tmp_path: Path) -> None:
+    """All 7 joints turned: every link's frame (position and rotation) equals yourdfpy's forward kinematics of
+    the same URDF, to float64 rounding over 7 composed transforms (1e-12)."""
+    import yourdfpy
+
+    from backends.geometry import quat_matrices
+
+    folder = Path(__import__("pybullet_data").getDataPath()) / "kuka_iiwa"
+    urdf = yourdfpy.URDF.load(str(folder / "model.urdf"), load_meshes=False)
+    cfg = np.array([0.3, -0.5, 0.7, -1.1, 0.4, 0.9, -0.2])
+    urdf.update_cfg(cfg)
+    joints = ", ".join(f"lbr_iiwa_joint_{k + 1}: {q}" for k, q in enumerate(cfg))
+    path = _write(tmp_path, f"    urdf: \"{KUKA}\"\n    fixed: true\n    initial: {{joints: {{{joints}}}}}\n")
+    world = build_program(load_scenario(path)).world
+    for body in world.bodies[1:]:
+        frame = urdf.get_transform(body.name.split(".")[1], "lbr_iiwa_link_0")
+        assert body.pos == pytest.approx(frame[:3, 3], abs=1e-12), body.name
+        assert quat_matrices(body.quat) == pytest.approx(frame[:3, :3], abs=1e-12), body.name
+
+
 def test_link_velocities_are_the_derivative_of_the_placement(tmp_path: Path) -> None:
     """Each link's velocity from the joint rates is d/dt of its forward-kinematics pose: compared with a
     central difference over +-1e-6 s, whose error is O(dt^2 |x'''|) < 1e-9 for rates of order 1 rad/s on a
