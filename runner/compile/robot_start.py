@@ -18,8 +18,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from backends.geometry import IDENTITY, quat_from_axis_angle, quat_mul
+from backends.geometry import IDENTITY, quat_conj, quat_from_axis_angle, quat_mul, quat_rotate
 from backends.types import Quat
+from runner.language.hpr import hpr_to_quat
 from runner.language.model_robots import Robot
 from runner.language.robot_desc import ModelDesc
 
@@ -60,15 +61,30 @@ class LinkMotion:
 _REST = LinkMotion(np.eye(3), IDENTITY, np.zeros(3), np.zeros(3), np.zeros(3))
 
 
+def root_motion(robot: Robot, desc: ModelDesc) -> LinkMotion | None:
+    """A free root's start velocity (`initial: {vel, angvel}`, world frame, of its link frame's origin) as a
+    twist in the model frame; None when it starts at rest."""
+    if robot.initial is None or not robot.initial.moving_root:
+        return None
+    turn = quat_conj(hpr_to_quat(robot.hpr)) if robot.hpr is not None else IDENTITY
+    omega = np.asarray(quat_rotate(turn, robot.initial.angvel), dtype=float)
+    v = np.asarray(quat_rotate(turn, robot.initial.vel), dtype=float)
+    at = np.asarray(desc.link(desc.root).pos, dtype=float)
+    return LinkMotion(np.eye(3), IDENTITY, np.zeros(3), omega, v - np.cross(omega, at))
+
+
 def _rotation(axis: np.ndarray, angle: float) -> np.ndarray:
     k = np.array([[0.0, -axis[2], axis[1]], [axis[2], 0.0, -axis[0]], [-axis[1], axis[0], 0.0]])
     return np.asarray(np.eye(3) + np.sin(angle) * k + (1.0 - np.cos(angle)) * (k @ k), dtype=float)
 
 
-def link_motions(desc: ModelDesc, values: Mapping[str, tuple[float, float]]) -> dict[str, LinkMotion]:
-    """Every link's displacement and velocity for the joints' start ``values`` (the root: at rest). The
-    description lists a parent's joint before its children's (both loaders walk from the root)."""
-    out: dict[str, LinkMotion] = {}
+def link_motions(
+    desc: ModelDesc, values: Mapping[str, tuple[float, float]], root: LinkMotion | None = None
+) -> dict[str, LinkMotion]:
+    """Every link's displacement and velocity for the joints' start ``values``, the root link moving as
+    ``root`` (default: at rest). The description lists a parent's joint before its children's (both loaders
+    walk from the root)."""
+    out: dict[str, LinkMotion] = {} if root is None else {desc.root: root}
     for joint in desc.joints:
         parent = out.get(joint.parent, _REST)
         q, qd = values.get(joint.name, (0.0, 0.0))

@@ -27,7 +27,7 @@ from backends.types import (
     ShapeKind,
     Surface,
 )
-from runner.compile.robot_start import LinkMotion, link_motions, start_values
+from runner.compile.robot_start import LinkMotion, link_motions, root_motion, start_values
 from runner.language.hpr import hpr_to_quat
 from runner.language.model import Scenario
 from runner.language.model_physics import Limits
@@ -167,8 +167,8 @@ def compile_robots(
     models: list[ModelFile] = []
     for name, robot in model.robots.items():
         desc = robots[name]
-        values = start_values(robot, desc)
-        motions = link_motions(desc, values) if values else {}
+        values, root = start_values(robot, desc), root_motion(robot, desc)
+        motions = link_motions(desc, values, root) if values or root is not None else {}
         for link in desc.links:
             bodies.append(link_body(name, robot, desc, link, len(bodies), motions.get(link.name)))
             override = robot.links.get(link.name)

@@ -88,6 +88,17 @@ class RobotStart(Strict):
         description="Per joint (hinge or slider): its position, or {pos, vel}; over the keyframe's values.",
     )
 
+    vel: Vec3 = Field(
+        (0.0, 0.0, 0.0), description="A free root link's velocity, m/s, world frame (URDF robots not `fixed`)."
+    )
+    angvel: Vec3 = Field((0.0, 0.0, 0.0), description="A free root link's angular velocity, rad/s, world frame.")
+
+    _v = field_validator("vel", "angvel", mode="before")(finite_vec)
+
+    @property
+    def moving_root(self) -> bool:
+        return any(self.vel) or any(self.angvel)
+
     def values(self) -> dict[str, tuple[float, float]]:
         """Joint -> (position, rate) as written here (a keyframe's are the model's)."""
         return {j: (float(v), 0.0) if isinstance(v, float | int) else (v.pos, v.vel) for j, v in self.joints.items()}

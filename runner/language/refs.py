@@ -368,6 +368,10 @@ def _check_initial(model: Scenario, bad: Any, robots: Mapping[str, ModelDesc]) -
         if start is None or desc is None:
             continue
         here: tuple[str | int, ...] = ("robots", rname, "initial")
+        if start.moving_root and (robot.fixed or robot.format != "urdf"):
+            field = "vel" if any(start.vel) else "angvel"
+            why = "is welded to the world (`fixed`)" if robot.fixed else "is an MJCF model (its root is the world)"
+            bad(here + (field,), f"a start velocity is for a free root link; robot `{rname}` {why}")
         joints = {j.name: j for j in desc.joints}
         values: dict[str, tuple[tuple[float, float], tuple[str | int, ...]]] = {}
         if start.keyframe is not None:

@@ -188,3 +188,19 @@ def test_apply_takes_exactly_one_end(tmp_path: Path, ends: str) -> None:
     extra = f"on:\n  start:\n    - apply: {{body: arm.lbr_iiwa_link_7, force: [0, 0, 1]{tail}}}\n"
     issues = " ".join(_issues(_write(tmp_path, f"    urdf: \"{KUKA}\"\n    fixed: true\n", extra)))
     assert "expected exactly one of `for` (seconds) or `until` (a condition)" in issues
+
+
+def test_a_start_velocity_is_for_a_free_root(tmp_path: Path) -> None:
+    """`initial: {vel, angvel}` moves a free root link (its frame's origin, world frame) and the links it
+    carries rigidly; a root welded to the world is refused at the value."""
+    spin = "    initial: {vel: [1, 0, 0], angvel: [0, 0, 2]}\n"
+    issues = " ".join(_issues(_write(tmp_path, f"    urdf: \"{KUKA}\"\n    fixed: true\n{spin}")))
+    assert "a start velocity is for a free root link; robot `arm` is welded to the world (`fixed`)" in issues
+    free = "@pybullet_data/kuka_iiwa/model_free_base.urdf"  # its base has a mass
+    path = _write(tmp_path, f"    urdf: \"{free}\"\n    pos: [0, 0, 1]\n{spin}", name="free.yaml")
+    world = build_program(load_scenario(path)).world
+    base, hand = (world.bodies[world.body_index(f"arm.lbr_iiwa_link_{k}")] for k in (0, 7))
+    assert base.lin_vel == (1.0, 0.0, 0.0) and base.ang_vel == (0.0, 0.0, 2.0)
+    arm = np.subtract(hand.pos, base.pos)  # the hand above the base: v = v0 + omega x r, omega along z
+    assert hand.lin_vel == pytest.approx(np.add((1.0, 0.0, 0.0), np.cross((0.0, 0.0, 2.0), arm)), abs=1e-15)
+    assert hand.ang_vel == pytest.approx((0.0, 0.0, 2.0), abs=1e-15)
