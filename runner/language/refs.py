@@ -26,6 +26,7 @@ from runner.language.names import (
 )
 from runner.language.patterns import possible_events
 from runner.language.robot_desc import ModelDesc
+from runner.language.robot_refs import check_initial, check_motor, jointed_links
 from runner.language.semantics import (
     check_backend_options,
     check_handlers,
@@ -194,7 +195,7 @@ def check_references(  # noqa: C901
     _check_expressions(model, bad, body_names | group_names, robots)
     _check_events(model, bad, set(robot_links(robots)))
     _check_servos(model, bad, robots)
-    _check_initial(model, bad, robots)
+    check_initial(model, bad, robots)
     check_handlers(model, bad, possible_events(model))
     check_times(model, bad)
     check_backend_options(model, bad)
@@ -229,7 +230,7 @@ def _check_actions(
             if ref not in model.sounds:
                 bad(path + (field,), _unknown("sound", ref, model.sounds))
         if isinstance(action, B.MotorAction):
-            _check_motor(model, bad, path, action.motor.joint, robots)
+            check_motor(model, bad, path, action.motor.joint, robots)
         if isinstance(action, B.ForceAction | B.ImpulseAction | B.ApplyAction):
             field = "force" if isinstance(action, B.ForceAction) else "impulse"
             field = "apply" if isinstance(action, B.ApplyAction) else field
@@ -238,34 +239,11 @@ def _check_actions(
                 bad(path + (field, "body"), _unknown("body", cmd.body, body_names))
         if isinstance(action, B.ResetAction):
             ref = action.reset if isinstance(action.reset, str) else action.reset.body
-            held = {b for j in model.joints.values() for b in j.bodies} | set(_jointed_links(robots))
+            held = {b for j in model.joints.values() for b in j.bodies} | set(jointed_links(robots))
             if ref not in body_names:
                 bad(path + ("reset",), _unknown("body", ref, body_names))
             elif ref in held:
                 bad(path + ("reset",), f"body `{ref}` is held by a joint; only free bodies can be reset")
-
-
-def _jointed_links(robots: Mapping[str, ModelDesc]) -> Iterator[str]:
-    """The robots' links at either end of a joint (a free joint holds nothing)."""
-    for name, desc in robots.items():
-        for j in desc.joints:
-            if j.kind != "free":
-                yield f"{name}.{j.parent}"
-                yield f"{name}.{j.child}"
-
-
-def _check_motor(model: Scenario, bad: Any, path: Path, ref: str, robots: Mapping[str, ModelDesc]) -> None:
-    """A motor drives a slider or hinge: a hand-written one, or a robot's without a servo."""
-    kinds: dict[str, str] = {name: j.type for name, j in model.joints.items()}
-    kinds.update({f"{r}.{j.name}": j.kind for r, desc in robots.items() for j in desc.joints if j.kind != "free"})
-    kind = kinds.get(ref)
-    robot, _, joint = ref.partition(".")
-    if kind is None:
-        bad(path + ("motor", "joint"), _unknown("joint", ref, kinds))
-    elif kind not in ("slider", "hinge"):
-        bad(path + ("motor", "joint"), f"joint `{ref}` is a {kind}; motors drive sliders and hinges")
-    elif robot in model.robots and joint in model.robots[robot].joints and model.robots[robot].joints[joint].servo:
-        bad(path + ("motor", "joint"), f"joint `{ref}` has a servo, which sets its motor every step")
 
 
 def expressions_in(model: Scenario) -> Iterator[tuple[str, Path]]:
@@ -348,58 +326,6 @@ def _check_servos(model: Scenario, bad: Any, robots: Mapping[str, ModelDesc]) ->
             first = next((p for p in (check_name(n, valid) for n in sorted(expr.names)) if p), None)
             if first:
                 bad(path, first)
-
-
-def _joint_limits(robot: Any, joint: Any) -> tuple[float | None, float | None]:
-    """A robot joint's stops from the model's zero: the scenario's override, else the model's."""
-    override = robot.joints.get(joint.name)
-    if override is not None and override.free:
-        return None, None
-    if override is not None and override.limits is not None:
-        limits = override.limits
-        return (limits.lo, limits.hi) if not isinstance(limits, tuple) else limits
-    return joint.lo, joint.hi
-
-
-def _check_initial(model: Scenario, bad: Any, robots: Mapping[str, ModelDesc]) -> None:
-    """A start names the model's hinges and sliders (or keyframe), inside their stops."""
-    for rname, robot in model.robots.items():
-        start, desc = robot.initial, robots.get(rname)
-        if start is None or desc is None:
-            continue
-        here: tuple[str | int, ...] = ("robots", rname, "initial")
-        if start.moving_root and (robot.fixed or robot.format != "urdf"):
-            field = "vel" if any(start.vel) else "angvel"
-            why = "is welded to the world (`fixed`)" if robot.fixed else "is an MJCF model (its root is the world)"
-            bad(here + (field,), f"a start velocity is for a free root link; robot `{rname}` {why}")
-        joints = {j.name: j for j in desc.joints}
-        values: dict[str, tuple[tuple[float, float], tuple[str | int, ...]]] = {}
-        if start.keyframe is not None:
-            key = desc.keyframe(start.keyframe)
-            if key is None:
-                names = [k.name for k in desc.keyframes]
-                bad(here + ("keyframe",), _unknown("keyframe (MJCF <key>)", start.keyframe, names))
-            elif key.others:
-                bad(here + ("keyframe",), f"keyframe `{key.name}` moves the free or ball joint(s) "
-                    f"{', '.join(f'`{j}`' for j in key.others)}; a start is taken for hinges and slides only")
-            else:
-                values.update({j: ((q, v), here + ("keyframe",)) for j, q, v in key.values})
-        for jname, value in start.values().items():
-            given = start.joints[jname]
-            values[jname] = (value, here + ("joints", jname) + (() if isinstance(given, float | int) else ("pos",)))
-        for jname, ((q, _), path) in values.items():
-            joint = joints.get(jname)
-            if joint is None:
-                bad(here + ("joints", jname) if jname in start.joints else path, _unknown("joint", jname, joints),
-                    at_key=jname in start.joints)  # fmt: skip
-                continue
-            if joint.kind not in ("hinge", "slider"):
-                bad(path, f"joint `{jname}` is a {joint.kind}; a start position is for hinges and sliders")
-                continue
-            lo, hi = _joint_limits(robot, joint)
-            if (lo is not None and q < lo) or (hi is not None and q > hi):
-                shown = f"[{'-inf' if lo is None else f'{lo:g}'}, {'inf' if hi is None else f'{hi:g}'}]"
-                bad(path, f"joint `{jname}` starts at {q:g}, outside its limits {shown} (from the model's zero)")
 
 
 def _check_events(model: Scenario, bad: Any, links: set[str]) -> None:
