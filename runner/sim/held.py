@@ -42,9 +42,11 @@ class HeldForces:
     def __bool__(self) -> bool:
         return bool(self.active)
 
-    def start(self, body: int, command: ApplyCommand) -> None:
+    def start(self, body: int, command: ApplyCommand) -> int | None:
+        """Start a held force; the number of steps it lasts (None: until its condition)."""
         steps = None if command.for_ is None else max(1, round(command.for_ / self.dt))
         self.active.append(Held(body, command, steps))
+        return steps
 
     def step_inputs(
         self, quats: np.ndarray, truth: Callable[[str], bool]

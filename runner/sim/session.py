@@ -253,8 +253,10 @@ class Session:
         acc[:3] += np.asarray(force, float) * scale
         acc[3:] += np.asarray(torque, float) * scale
 
-    def hold_force(self, command: B.ApplyCommand) -> None:
-        self.held.start(self.body_index[command.body], command)
+    def hold_force(self, command: B.ApplyCommand, at: float) -> None:
+        steps = self.held.start(self.body_index[command.body], command)
+        how = f"for {steps} steps" if steps is not None else f"until `{command.until}`"
+        self.log(at, "debug", f"apply on `{command.body}`: held {how}", "handler")
 
     def reset(self, command: B.ResetCommand) -> None:
         """The lab's reset: a dynamic body teleported with new velocities, a kinematic one moved to a pose."""
