@@ -329,6 +329,9 @@ class ModelFile:
     bodies: tuple[str, ...]  # CompiledWorld body names, in the file's body order (the world body first)
     joints: tuple[str, ...]  # CompiledWorld joint names, in the file's joint order
     needs: frozenset[Capability] = frozenset()  # MODEL_FILE_CAPABILITIES the file uses
+    #: the joints' start, (CompiledWorld joint name, position from the model's zero, rate), hinges and slides;
+    #: the world's bodies and joints are already at that pose (their stops and readings from there)
+    start: tuple[tuple[str, float, float], ...] = ()
 
 
 @dataclass(frozen=True)

@@ -31,6 +31,7 @@ from ..types import (
 from . import _coulomb, _native
 from ._bounce import Impacts
 from ._model import IMPEDANCE, KINEMATIC_MASS_RATIO, MU_MAX, build, plan_tree
+from ._native import set_start
 from ._options import MujocoOptions, check_stack, engine_substeps
 
 
@@ -131,6 +132,7 @@ class MujocoBackend(Backend):
         self._motored = motors  # world joints with a motor, their slots, signs
         self._motored_slot, self._motored_sign = self._motor_of[motors], self._sign[motors]
         self._stale = True
+        self._starts = set_start(m, self._d, world, lay.joint_id)[rated]  # an MJCF robot's start (_native)
         for i, body in enumerate(world.bodies):
             if body.motion is Motion.DYNAMIC:
                 self._set_velocity(i, body.lin_vel, body.ang_vel)
@@ -301,7 +303,7 @@ class MujocoBackend(Backend):
         position, velocity, force = self._no_reading.copy(), self._no_reading.copy(), self._no_force.copy()
         if rated.size:
             sign = self._rated_sign
-            position[rated] = sign * self._qpos[self._rated_qpos]
+            position[rated] = sign * self._qpos[self._rated_qpos] - self._starts
             velocity[rated] = sign * self._qvel[self._rated_dof]
         if motored.size:
             force[motored] = self._motored_sign * self._motor_mean.mean[self._motored_slot]

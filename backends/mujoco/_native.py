@@ -142,7 +142,9 @@ def scale_total_mass(model: mujoco.MjModel, native: NativeModel) -> None:
 
 
 def apply_limits(model: mujoco.MjModel, world: CompiledWorld, native: NativeModel) -> None:
-    """A scenario's `limits`/`free` on a file's hinge or slide: its range set on the compiled model."""
+    """A scenario's `limits`/`free` on a file's hinge or slide: its range set on the compiled model (the
+    world's stops count from the joint's start, ``ModelFile.start``; MuJoCo's from the model's zero)."""
+    start = {name: q for file in world.models for name, q, _ in file.start}
     for joint in world.joints:
         name = native.joints.get(joint.name)
         if name is None or joint.kind.value not in ("hinge", "slider"):
@@ -150,12 +152,32 @@ def apply_limits(model: mujoco.MjModel, world: CompiledWorld, native: NativeMode
         j = model.joint(name).id
         limited = bool(model.jnt_limited[j])
         file = (float(model.jnt_range[j][0]), float(model.jnt_range[j][1])) if limited else (None, None)
-        if (joint.lo, joint.hi) == file:
+        q0 = start.get(joint.name, 0.0)
+        stops = tuple(None if x is None else x + q0 for x in (joint.lo, joint.hi))
+        if stops == file:  # (a start's round trip may move a stop by an ulp: then it is set, as good)
             continue
         model.jnt_limited[j] = joint.lo is not None or joint.hi is not None
-        lo = -math.inf if joint.lo is None else joint.lo
-        hi = math.inf if joint.hi is None else joint.hi
+        lo = -math.inf if stops[0] is None else stops[0]
+        hi = math.inf if stops[1] is None else stops[1]
         model.jnt_range[j] = (lo, hi)
+
+
+def set_start(model: mujoco.MjModel, data: mujoco.MjData, world: CompiledWorld, joint_id: Any) -> Any:
+    """The files' joints at their start (``ModelFile.start``: qpos = qpos0 + q, qvel = rate); the start
+    position of every world joint (0 but for those), which a reading subtracts (stops and readings count
+    from the start, backends/types.py)."""
+    import numpy as np
+
+    index = {joint.name: k for k, joint in enumerate(world.joints)}
+    starts = np.zeros(len(world.joints))
+    for file in world.models:
+        for name, q, rate in file.start:
+            k = index[name]
+            j = int(joint_id[k])
+            data.qpos[model.jnt_qposadr[j]] = model.qpos0[model.jnt_qposadr[j]] + q
+            data.qvel[model.jnt_dofadr[j]] = rate
+            starts[k] = q
+    return starts
 
 
 def without_file(world: CompiledWorld, native: NativeModel) -> CompiledWorld:

@@ -212,7 +212,7 @@ def build_program(loaded: LoadedScenario) -> Program:
         groups={**groups(model), **robot_groups(loaded.robots)},
         start_hpr=start_hpr,
         start_scale=start_scale,
-        joint_zeros=joint_zeros(model, world),
+        joint_zeros=joint_zeros(model, world, loaded.robots),
     )
 
 

@@ -28,11 +28,12 @@ from backends.types import (
     Surface,
 )
 from runner.compile.joints import dynamics, initial_motor
+from runner.compile.robot_start import LinkMotion, link_motions, root_motion, start_values
 from runner.language.hpr import hpr_to_quat
 from runner.language.model import Scenario
 from runner.language.model_physics import Limits
 from runner.language.model_robots import Robot
-from runner.language.robot_desc import JointDesc, LinkDesc, ModelDesc, principal_axes
+from runner.language.robot_desc import JointDesc, LinkDesc, ModelDesc, principal_axes, vec
 
 PALETTE = [(0.80, 0.45, 0.20, 1.0), (0.30, 0.50, 0.80, 1.0), (0.40, 0.70, 0.35, 1.0), (0.75, 0.30, 0.40, 1.0)]
 STATIC_COLOR = (0.55, 0.55, 0.55, 1.0)
@@ -60,7 +61,10 @@ def is_static(robot: Robot, desc: ModelDesc, link: str) -> bool:
     return link == desc.root and (robot.fixed or robot.format == "mjcf")
 
 
-def link_body(robot_name: str, robot: Robot, desc: ModelDesc, link: LinkDesc, number: int) -> BodySpec:
+def link_body(
+    robot_name: str, robot: Robot, desc: ModelDesc, link: LinkDesc, number: int, motion: LinkMotion | None = None
+) -> BodySpec:
+    """A link as a body, placed and moving as ``motion`` says (default: at its zero pose, at rest)."""
     import numpy as np
 
     pos0, quat0 = _placement(robot)
@@ -75,14 +79,22 @@ def link_body(robot_name: str, robot: Robot, desc: ModelDesc, link: LinkDesc, nu
     else:
         mass, com = link.mass, link.com
         inertia, axes = principal_axes(np.asarray(link.inertia, dtype=float))
+    pos, quat = link.pos, link.quat
+    lin_vel = ang_vel = (0.0, 0.0, 0.0)
+    if motion is not None and not static:
+        at = motion.apply(np.asarray(link.pos, dtype=float))
+        pos, quat = vec(at), quat_mul(motion.quat, link.quat)
+        lin_vel, ang_vel = quat_rotate(quat0, vec(motion.velocity(at))), quat_rotate(quat0, vec(motion.omega))
     return BodySpec(
         name=f"{robot_name}.{link.name}",
         motion=Motion.STATIC if static else Motion.DYNAMIC,
         shape=Shape(ShapeKind.COMPOUND),
         mass=mass,
         inertia=inertia,
-        pos=_add(pos0, quat_rotate(quat0, link.pos)),
-        quat=quat_mul(quat0, link.quat),
+        pos=_add(pos0, quat_rotate(quat0, pos)),
+        quat=quat_mul(quat0, quat),
+        lin_vel=lin_vel,
+        ang_vel=ang_vel,
         color=color,
         shapes=link.shapes,
         com=com,
@@ -90,7 +102,14 @@ def link_body(robot_name: str, robot: Robot, desc: ModelDesc, link: LinkDesc, nu
     )
 
 
-def _joint(robot_name: str, robot: Robot, desc: ModelDesc, joint: JointDesc) -> JointSpec:
+def _joint(
+    robot_name: str, robot: Robot, desc: ModelDesc, joint: JointDesc, motions: Mapping[str, LinkMotion],
+    start: float, driven: bool,
+) -> JointSpec:
+    """The joint at the start pose (its axis turned with the parent, its anchor with the child), its stops
+    from there (``start``: the position from the model's zero); ``driven``: a motor action drives it."""
+    import numpy as np
+
     pos0, quat0 = _placement(robot)
     override = robot.joints.get(joint.name)
     lo, hi = joint.lo, joint.hi
@@ -106,18 +125,24 @@ def _joint(robot_name: str, robot: Robot, desc: ModelDesc, joint: JointDesc) -> 
         if override.motor is not None:
             motor = Motor(override.motor.vel, override.motor.fmax)
     servo = override is not None and override.servo is not None  # the servo sets it every step (runner.sim.servo)
-    motor = initial_motor(motor, dyn, servo)
+    motor = initial_motor(motor, dyn, servo or driven)  # a motor action: off until the action sets it
     limits = override.limits if override is not None and isinstance(override.limits, Limits) else None
     other = None if is_static(robot, desc, joint.parent) else f"{robot_name}.{joint.parent}"
+    axis, anchor = joint.axis, joint.anchor
+    parent, child = motions.get(joint.parent), motions.get(joint.child)
+    if parent is not None:
+        axis = vec(parent.rot @ np.asarray(joint.axis, dtype=float))
+    if child is not None:
+        anchor = vec(child.apply(np.asarray(joint.anchor, dtype=float)))
     return JointSpec(
         name=f"{robot_name}.{joint.name}",
         kind=JointKind(joint.kind),
         body=f"{robot_name}.{joint.child}",
         other=other,
-        axis=quat_rotate(quat0, joint.axis),
-        anchor=_add(pos0, quat_rotate(quat0, joint.anchor)),
-        lo=lo,
-        hi=hi,
+        axis=quat_rotate(quat0, axis),
+        anchor=_add(pos0, quat_rotate(quat0, anchor)),
+        lo=None if lo is None else lo - start,
+        hi=None if hi is None else hi - start,
         stop_bounce=limits.bounce if limits is not None else 0.0,
         stop_stiffness=limits.stiffness if limits is not None else None,
         stop_damping=limits.damping if limits is not None else None,
@@ -127,10 +152,14 @@ def _joint(robot_name: str, robot: Robot, desc: ModelDesc, joint: JointDesc) -> 
 
 
 def compile_robots(
-    model: Scenario, robots: Mapping[str, ModelDesc], others: tuple[str, ...], arrays: Mapping[str, list[str]]
+    model: Scenario,
+    robots: Mapping[str, ModelDesc],
+    others: tuple[str, ...],
+    arrays: Mapping[str, list[str]],
+    driven: frozenset[str] = frozenset(),
 ) -> RobotParts:
-    """The robots' bodies, joints, excluded pairs and link surfaces; ``others`` are the hand-written bodies,
-    ``arrays`` their groups."""
+    """The robots' bodies, joints, excluded pairs and link surfaces, at their start (`initial`); ``others``
+    are the hand-written bodies, ``arrays`` their groups, ``driven`` the joints motor actions drive."""
     bodies: list[BodySpec] = []
     joints: list[JointSpec] = []
     excluded: list[tuple[str, str]] = []
@@ -139,8 +168,10 @@ def compile_robots(
     models: list[ModelFile] = []
     for name, robot in model.robots.items():
         desc = robots[name]
+        values, root = start_values(robot, desc), root_motion(robot, desc)
+        motions = link_motions(desc, values, root) if values or root is not None else {}
         for link in desc.links:
-            bodies.append(link_body(name, robot, desc, link, len(bodies)))
+            bodies.append(link_body(name, robot, desc, link, len(bodies), motions.get(link.name)))
             override = robot.links.get(link.name)
             if override is not None and override.surface is not None:
                 s = override.surface
@@ -151,14 +182,15 @@ def compile_robots(
                 continue
             if not (robot.format == "mjcf" and joint.parent == desc.root):  # MuJoCo: the world is no parent
                 excluded.append((f"{name}.{joint.parent}", f"{name}.{joint.child}"))
-            joints.append(_joint(name, robot, desc, joint))
+            start = values.get(joint.name, (0.0, 0.0))[0]
+            joints.append(_joint(name, robot, desc, joint, motions, start, f"{name}.{joint.name}" in driven))
         excluded.extend((f"{name}.{a}", f"{name}.{b}") for a, b in robot.exclude)
         if not robot.collides_with_itself:  # pybullet's default for URDF: no two links of the model touch
             links = group[name]
             excluded.extend((a, b) for i, a in enumerate(links) for b in links[i + 1 :])
         excluded.extend((f"{name}.{a}", f"{name}.{b}") for a, b in desc.excluded)
         if robot.format == "mjcf":
-            models.append(model_file(name, robot, desc))
+            models.append(model_file(name, robot, desc, values))
     members = {**arrays, **group}
     for a, b in model.exclude_contacts:
         for x in members.get(a, [a]):
@@ -169,9 +201,12 @@ def compile_robots(
     return RobotParts(tuple(bodies), tuple(joints), unique, surfaces, group, tuple(models))
 
 
-def model_file(name: str, robot: Robot, desc: ModelDesc) -> ModelFile:
+def model_file(
+    name: str, robot: Robot, desc: ModelDesc, values: Mapping[str, tuple[float, float]] | None = None
+) -> ModelFile:
     """An MJCF robot as its file: the description's links and joints are in MuJoCo's compiled order, welds
-    (a body without a joint, `<body>_weld`, the description's only fixed joints) aside."""
+    (a body without a joint, `<body>_weld`, the description's only fixed joints) aside; ``values``: the
+    joints' start (position from the model's zero, rate)."""
     pos, quat = _placement(robot)
     joints = tuple(f"{name}.{j.name}" for j in desc.joints if j.kind != "fixed")  # MJCF has no fixed joints
     return ModelFile(
@@ -183,4 +218,5 @@ def model_file(name: str, robot: Robot, desc: ModelDesc) -> ModelFile:
         bodies=tuple(f"{name}.{link.name}" for link in desc.links),
         joints=joints,
         needs=frozenset(Capability(n.capability) for n in desc.needs),
+        start=tuple((f"{name}.{j}", q, v) for j, (q, v) in (values or {}).items()),
     )

@@ -24,10 +24,13 @@ from backends.types import (
     Surface,
 )
 from runner.compile.joints import dynamics, initial_motor, stops, zero_offset
+from runner.compile.robot_start import start_values
 from runner.compile.robots import compile_robots
+from runner.language import model_behaviour as B
 from runner.language.hpr import hpr_to_quat
 from runner.language.model import Scenario
 from runner.language.model_physics import Body, Limits
+from runner.language.model_walk import all_actions
 from runner.language.names import BodyInstance, expand_bodies, groups
 from runner.language.robot_desc import ModelDesc
 
@@ -141,15 +144,27 @@ def compile_body(inst: BodyInstance, number: int) -> BodySpec:
     )
 
 
-def joint_zeros(model: Scenario, world: CompiledWorld) -> dict[str, float]:
+def joint_zeros(
+    model: Scenario, world: CompiledWorld, robots: Mapping[str, ModelDesc] | None = None
+) -> dict[str, float]:
     """Per joint whose zero is not the start, what to add to the backend's reading (from the start) to read
-    it from the stated zero (runner.compile.joints)."""
+    it from the stated zero (runner.compile.joints): a robot joint's start position (`initial`) too."""
     by_name = {b.name: b for b in world.bodies}
-    return {
+    zeros = {
         name: zero_offset(joint, _unit(joint.axis), by_name)
         for name, joint in model.joints.items()
         if isinstance(joint.limits, Limits) and joint.limits.zero == "absolute"
     }
+    for rname, robot in model.robots.items():
+        if robots is not None and rname in robots:
+            values = start_values(robot, robots[rname])
+            zeros.update({f"{rname}.{j}": q for j, (q, _) in values.items() if q != 0.0})
+    return zeros
+
+
+def motor_targets(model: Scenario) -> frozenset[str]:
+    """The joints a `motor` action drives."""
+    return frozenset(a.motor.joint for a, _ in all_actions(model) if isinstance(a, B.MotorAction))
 
 
 def _unit(v: Sequence[float]) -> tuple[float, float, float]:
@@ -161,7 +176,7 @@ def compile_world(model: Scenario, name: str, robots: Mapping[str, ModelDesc] | 
     """The world; ``robots`` holds the model of every entry of ``model.robots`` (runner.language.robots)."""
     instances = expand_bodies(model)
     bodies = tuple(compile_body(inst, i) for i, inst in enumerate(instances))
-    parts = compile_robots(model, robots or {}, tuple(b.name for b in bodies), groups(model))
+    parts = compile_robots(model, robots or {}, tuple(b.name for b in bodies), groups(model), motor_targets(model))
     positions = {b.name: b.pos for b in bodies}
     by_name = {b.name: b for b in bodies}
     joints = []

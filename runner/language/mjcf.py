@@ -18,8 +18,8 @@ message and line), and the compiled model is mapped into the engine-neutral desc
   (backends/mujoco), runs it; another engine refuses it before the run. Armature and stiffness are named
   there too (`joint:armature`, `joint:stiffness`), so that an engine without them refuses at their line.
 
-Sites, cameras, lights, `<custom>`, `<sensor>`, `<visual>`, `<statistic>`, `<keyframe>` do not change the
-dynamics of a step and are not read.
+Sites, cameras, lights, `<custom>`, `<sensor>`, `<visual>`, `<statistic>` do not change the dynamics of a step
+and are not read; `<keyframe>`s are read as start states a scenario may pick (`initial: {keyframe: NAME}`).
 """
 
 from __future__ import annotations
@@ -37,6 +37,7 @@ from runner.language.model_numbers import check_mjcf_numbers, check_number, chec
 from runner.language.robot_desc import (
     ActuatorDesc,
     JointDesc,
+    KeyframeDesc,
     LinkDesc,
     ModelDesc,
     ModelFileError,
@@ -296,6 +297,29 @@ def _check_compiled(model: Any, file: Path, bodies: list[str], lines: dict[tuple
         check_vertices(np.asarray(model.mesh_vert), file, line, "of the model")
 
 
+def _keyframes(model: Any, joints: list[str], tree: Any) -> list[KeyframeDesc]:
+    """The file's keys: hinge and slide values from the zero configuration (qpos0), and the other joints
+    they move."""
+    keys = list(tree.getroot().iter("key"))
+    out = []
+    for k in range(model.nkey):
+        name = model.key(k).name or f"key_{k}"
+        values, others = [], []
+        for j in range(model.njnt):
+            q, d = int(model.jnt_qposadr[j]), int(model.jnt_dofadr[j])
+            kind = _JOINTS[int(model.jnt_type[j])]
+            if kind in ("hinge", "slider"):
+                values.append((joints[j], float(model.key_qpos[k][q] - model.qpos0[q]), float(model.key_qvel[k][d])))
+                continue
+            nq, nv = (7, 6) if kind == "free" else (4, 3)
+            moved = np.any(model.key_qpos[k][q : q + nq] != model.qpos0[q : q + nq])
+            if moved or np.any(model.key_qvel[k][d : d + nv]):
+                others.append(joints[j])
+        line = (keys[k].sourceline or 0) if k < len(keys) else 0
+        out.append(KeyframeDesc(name, line, tuple(values), tuple(others)))
+    return out
+
+
 def load_mjcf(file: Path) -> ModelDesc:
     tree = parse_xml(file)
     check_mjcf_numbers(tree, file)
@@ -362,4 +386,5 @@ def load_mjcf(file: Path) -> ModelDesc:
         excluded=tuple(_excluded(model, bodies)),
         timestep=float(model.opt.timestep),
         gravity=vec(model.opt.gravity),
+        keyframes=tuple(_keyframes(model, joint_names, tree)),
     )

@@ -6,7 +6,7 @@ from typing import TYPE_CHECKING, Annotated, Any, Literal, Union
 
 from pydantic import Discriminator, Field, Tag, model_validator
 
-from runner.language.model_base import EventName, Expr, Name, NonNegFloat, Seconds, Strict, TimeOrEnd, Window
+from runner.language.model_base import EventName, Expr, Name, NonNegFloat, PartName, Seconds, Strict, TimeOrEnd, Window
 from runner.language.model_behaviour import tag_of
 
 Tolerance = Annotated[float, Field(ge=0, allow_inf_nan=False)] | Expr | dict[str, Annotated[float, Field(ge=0)] | Expr]
@@ -182,7 +182,7 @@ class SoundAssertion(AssertionBase):
 class ContactAssertion(AssertionBase):
     """Two bodies touch (physics contact): at a time, or always / never / eventually over a window."""
 
-    contact: tuple[Name, Name]
+    contact: tuple[PartName, PartName]
     at: TimeOrEnd | None = None
     when: Literal["always", "never", "eventually"] | None = None
     during: Window = (0.0, "end")

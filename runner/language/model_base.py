@@ -22,6 +22,15 @@ Name = Annotated[
         description="An identifier: letters, digits and underscores, not starting with a digit.",
     ),
 ]
+#: A body or joint: a hand-written one's name, or a robot's part `<robot>.<link>` / `<robot>.<joint>`.
+PartName = Annotated[
+    str,
+    Field(
+        pattern=r"^[A-Za-z_][A-Za-z0-9_]*(\.[A-Za-z_][A-Za-z0-9_]*)?$",
+        max_length=129,
+        description="A body or joint: its name, or a robot's link or joint as `<robot>.<name>`.",
+    ),
+]
 EventName = Annotated[
     str,
     Field(

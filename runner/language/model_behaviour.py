@@ -13,6 +13,7 @@ from runner.language.model_base import (
     FiniteFloat,
     Name,
     NonNegFloat,
+    PartName,
     PositiveFloat,
     PositiveSeconds,
     Quat,
@@ -85,13 +86,13 @@ class Collisions(Strict):
 
 # --- actions --------------------------------------------------------------------------------------
 class MotorCommand(Strict):
-    joint: Name
+    joint: PartName
     vel: FiniteFloat
     fmax: NonNegFloat | None = Field(None, description="Unchanged when omitted.")
 
 
 class ForceCommand(Strict):
-    body: Name
+    body: PartName
     value: Vec3 = Field(description="World frame, at the centre of mass (N, or N s for an impulse).")
     torque: Vec3 = Field((0.0, 0.0, 0.0), description="World frame (N m, or N m s for an impulse).")
 
@@ -99,7 +100,7 @@ class ForceCommand(Strict):
 
 
 class ResetCommand(Strict):
-    body: Name
+    body: PartName
     pos: Vec3 | None = Field(None, description="Default: the body's start position.")
     hpr: Vec3 | None = None
     quat: Quat | None = None
@@ -107,6 +108,35 @@ class ResetCommand(Strict):
     angvel: Vec3 = (0.0, 0.0, 0.0)
 
     _v = field_validator("pos", "hpr", "quat", "vel", "angvel", mode="before")(finite_vec)
+
+
+class ApplyCommand(Strict):
+    """A force and/or torque held on a body for a while: applied on every step (and every substep) from the
+    step the action runs in, for `for` seconds or until `until` holds (docs/semantics.md, "Held forces")."""
+
+    body: PartName
+    force: Vec3 = Field((0.0, 0.0, 0.0), description="N, in `frame`, acting at `at`.")
+    torque: Vec3 = Field((0.0, 0.0, 0.0), description="N m, in `frame`.")
+    frame: Literal["world", "body"] = Field(
+        "world", description="`body`: the vectors turn with the body (read at the start of each step)."
+    )
+    at: Vec3 | None = Field(
+        None, description="Where the force acts: a point in the body frame; default the centre of mass."
+    )
+    for_: PositiveSeconds | None = Field(
+        None, alias="for", description="How long: seconds, rounded to whole steps (at least one)."
+    )
+    until: Expr | None = Field(
+        None, description="A condition checked before each step: the force stops at the first step it holds."
+    )
+
+    _v = field_validator("force", "torque", "at", mode="before")(finite_vec)
+
+    @model_validator(mode="after")
+    def _one_end(self) -> ApplyCommand:
+        if (self.for_ is None) == (self.until is None):
+            raise ValueError("expected exactly one of `for` (seconds) or `until` (a condition)")
+        return self
 
 
 class LogCommand(Strict):
@@ -162,8 +192,12 @@ class ImpulseAction(Strict):
     impulse: ForceCommand
 
 
+class ApplyAction(Strict):
+    apply: ApplyCommand
+
+
 class ResetAction(Strict):
-    reset: Name | ResetCommand
+    reset: PartName | ResetCommand
 
 
 class LogAction(Strict):
@@ -197,6 +231,7 @@ ACTION_TAGS: dict[str, type[Strict]] = {
     "motor": MotorAction,
     "force": ForceAction,
     "impulse": ImpulseAction,
+    "apply": ApplyAction,
     "reset": ResetAction,
     "log": LogAction,
     "send": SendAction,
@@ -215,8 +250,8 @@ def tag_of(value: Any, tags: dict[str, type[Strict]]) -> str | None:
 if TYPE_CHECKING:  # the static view of the tagged union built below from ACTION_TAGS
     Action = (
         StartAction | PauseAction | ResumeAction | FinishAction | LoopAction | SetAction | CalcAction |
-        PlaySoundAction | StopSoundAction | MotorAction | ForceAction | ImpulseAction | ResetAction | LogAction |
-        SendAction | EndAction | IfAction
+        PlaySoundAction | StopSoundAction | MotorAction | ForceAction | ImpulseAction | ApplyAction | ResetAction |
+        LogAction | SendAction | EndAction | IfAction
     )
 else:
     Action = Annotated[

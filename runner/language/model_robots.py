@@ -83,6 +83,40 @@ class RobotLink(Strict):
         return v
 
 
+class JointStart(Strict):
+    """A joint's start: position from the model's zero and rate."""
+
+    pos: FiniteFloat = Field(0.0, description="Radians (hinge) or metres (slider), from the model's zero.")
+    vel: FiniteFloat = Field(0.0, description="rad/s or m/s, relative to the parent link.")
+
+
+class RobotStart(Strict):
+    """Where the robot's joints start (default: the model's zero configuration, at rest)."""
+
+    keyframe: PartName | None = Field(
+        None, description="An MJCF `<keyframe><key name=...>`: its joint positions and rates (hinges, slides)."
+    )
+    joints: dict[PartName, FiniteFloat | JointStart] = Field(
+        default_factory=dict,
+        description="Per joint (hinge or slider): its position, or {pos, vel}; over the keyframe's values.",
+    )
+
+    vel: Vec3 = Field(
+        (0.0, 0.0, 0.0), description="A free root link's velocity, m/s, world frame (URDF robots not `fixed`)."
+    )
+    angvel: Vec3 = Field((0.0, 0.0, 0.0), description="A free root link's angular velocity, rad/s, world frame.")
+
+    _v = field_validator("vel", "angvel", mode="before")(finite_vec)
+
+    @property
+    def moving_root(self) -> bool:
+        return any(self.vel) or any(self.angvel)
+
+    def values(self) -> dict[str, tuple[float, float]]:
+        """Joint -> (position, rate) as written here (a keyframe's are the model's)."""
+        return {j: (float(v), 0.0) if isinstance(v, float | int) else (v.pos, v.vel) for j, v in self.joints.items()}
+
+
 class Robot(Strict):
     """Bodies and joints from a URDF or MJCF file: each link is a body `<robot>.<link>`, each joint a joint
     `<robot>.<joint>`, and `<robot>` is the group of all its links."""
@@ -114,6 +148,11 @@ class Robot(Strict):
         description="Whether the model's links touch each other (a joint's two links never do): default off "
         "for URDF (pybullet's default), on for MJCF (MuJoCo's).",
     )
+    initial: RobotStart | None = Field(
+        None,
+        description="The joints' start: positions from the model's zero and rates, or an MJCF keyframe; the links "
+        "are placed there and the joints read from the model's zero.",
+    )
     exclude: list[tuple[PartName, PartName]] = Field(
         default_factory=list,
         description="Link pairs that never touch, beyond the adjacent ones (a joint's two links never touch).",
@@ -142,4 +181,4 @@ class Robot(Strict):
         return "urdf" if self.urdf is not None else "mjcf"
 
 
-__all__ = ["Robot", "RobotJoint", "RobotLink", "Servo"]
+__all__ = ["JointStart", "Robot", "RobotJoint", "RobotLink", "RobotStart", "Servo"]

@@ -26,6 +26,7 @@ from runner.language.names import (
 )
 from runner.language.patterns import possible_events
 from runner.language.robot_desc import ModelDesc
+from runner.language.robot_refs import check_initial, check_motor, jointed_links
 from runner.language.semantics import (
     check_backend_options,
     check_handlers,
@@ -190,10 +191,11 @@ def check_references(  # noqa: C901
             if step.interval is not None and step.interval not in model.intervals:
                 bad(path + ("interval",), _unknown("interval", step.interval, model.intervals))
     check_interval_cycles(model, bad)
-    _check_actions(model, bad, body_names, sound_lengths)
+    _check_actions(model, bad, body_names, sound_lengths, robots)
     _check_expressions(model, bad, body_names | group_names, robots)
     _check_events(model, bad, set(robot_links(robots)))
     _check_servos(model, bad, robots)
+    check_initial(model, bad, robots)
     check_handlers(model, bad, possible_events(model))
     check_times(model, bad)
     check_backend_options(model, bad)
@@ -210,7 +212,9 @@ _INTERVAL_ACTIONS: dict[type, str] = {
 }
 
 
-def _check_actions(model: Scenario, bad: Any, body_names: set[str], sounds: dict[str, float]) -> None:
+def _check_actions(
+    model: Scenario, bad: Any, body_names: set[str], sounds: dict[str, float], robots: Mapping[str, ModelDesc]
+) -> None:
     for action, path in all_actions(model):
         kind = _INTERVAL_ACTIONS.get(type(action))
         if kind is not None and getattr(action, kind) not in model.intervals:
@@ -226,24 +230,19 @@ def _check_actions(model: Scenario, bad: Any, body_names: set[str], sounds: dict
             if ref not in model.sounds:
                 bad(path + (field,), _unknown("sound", ref, model.sounds))
         if isinstance(action, B.MotorAction):
-            joint = model.joints.get(action.motor.joint)
-            if joint is None:
-                bad(path + ("motor", "joint"), _unknown("joint", action.motor.joint, model.joints))
-            elif joint.type not in ("slider", "hinge"):
-                bad(
-                    path + ("motor", "joint"),
-                    f"joint `{action.motor.joint}` is a {joint.type}; motors drive sliders and hinges",
-                )
-        if isinstance(action, B.ForceAction | B.ImpulseAction):
-            cmd = action.force if isinstance(action, B.ForceAction) else action.impulse
+            check_motor(model, bad, path, action.motor.joint, robots)
+        if isinstance(action, B.ForceAction | B.ImpulseAction | B.ApplyAction):
             field = "force" if isinstance(action, B.ForceAction) else "impulse"
+            field = "apply" if isinstance(action, B.ApplyAction) else field
+            cmd = getattr(action, field)
             if cmd.body not in body_names:
                 bad(path + (field, "body"), _unknown("body", cmd.body, body_names))
         if isinstance(action, B.ResetAction):
             ref = action.reset if isinstance(action.reset, str) else action.reset.body
+            held = {b for j in model.joints.values() for b in j.bodies} | set(jointed_links(robots))
             if ref not in body_names:
                 bad(path + ("reset",), _unknown("body", ref, body_names))
-            elif any(ref in j.bodies for j in model.joints.values()):
+            elif ref in held:
                 bad(path + ("reset",), f"body `{ref}` is held by a joint; only free bodies can be reset")
 
 
@@ -255,6 +254,8 @@ def expressions_in(model: Scenario) -> Iterator[tuple[str, Path]]:
         if isinstance(action, B.CalcAction):
             for var, text in action.calc.items():
                 yield text, path + ("calc", var)
+        if isinstance(action, B.ApplyAction) and action.apply.until is not None:
+            yield action.apply.until, path + ("apply", "until")
     for name, trigger in model.triggers.items():
         yield trigger.when, ("triggers", name, "when")
     for i, a in enumerate(model.assertions):

@@ -101,6 +101,16 @@ class ActuatorDesc:
 
 
 @dataclass(frozen=True)
+class KeyframeDesc:
+    """An MJCF `<key>`: its hinges' and slides' positions (from the zero configuration) and rates."""
+
+    name: str
+    line: int
+    values: tuple[tuple[str, float, float], ...]  # (joint, position, rate)
+    others: tuple[str, ...] = ()  # free or ball joints it moves away from their zero or at rest, not taken
+
+
+@dataclass(frozen=True)
 class ModelDesc:
     file: str  # as resolved (absolute)
     root: str  # the root link
@@ -116,6 +126,11 @@ class ModelDesc:
     #: the model's own step and gravity (MJCF `<option>`), for `world.options: model`
     timestep: float | None = None
     gravity: Vec3 | None = None
+    #: MJCF `<keyframe>`s, in the file's order
+    keyframes: tuple[KeyframeDesc, ...] = ()
+
+    def keyframe(self, name: str) -> KeyframeDesc | None:
+        return next((key for key in self.keyframes if key.name == name), None)
 
     def link(self, name: str) -> LinkDesc:
         return next(link for link in self.links if link.name == name)

@@ -38,6 +38,7 @@ from runner.sim.budget import Watchdog
 from runner.sim.collisions import EventHandler, SolidTraverser, quat_matrices
 from runner.sim.conditions import ConditionTriggers, HandlerGate, with_zeros
 from runner.sim.energy import EnergyWatch
+from runner.sim.held import HeldForces
 from runner.sim.intervals import IntervalManager
 from runner.sim.joint_dynamics import JointFriction, driven_joints, native_joints
 from runner.sim.kinematics import KinematicTable
@@ -161,6 +162,7 @@ class Session:
         self.sound_stops: list[tuple[float, str]] = []
         self.playing_sounds: dict[str, float] = {}
         self.forces: dict[int, np.ndarray] = {}
+        self.held = HeldForces(self.dt, [b.com for b in self.world.bodies])  # `apply` (runner.sim.held)
         self.queue: deque[tuple[str, str]] = deque()
         self.injected: list[str] = []  # input events for the next step boundary (inject(); scenario view)
         self.ended = False
@@ -266,6 +268,11 @@ class Session:
         self.energy.driven()  # a force's work is not booked: the energy check starts afresh after this step
         acc[:3] += np.asarray(force, float) * scale
         acc[3:] += np.asarray(torque, float) * scale
+
+    def hold_force(self, command: B.ApplyCommand, at: float) -> None:
+        steps = self.held.start(self.body_index[command.body], command)
+        how = f"for {steps} steps" if steps is not None else f"until `{command.until}`"
+        self.log(at, "debug", f"apply on `{command.body}`: held {how}", "handler")
 
     def reset(self, command: B.ResetCommand) -> None:
         """The lab's reset: a dynamic body teleported with new velocities, a kinematic one moved to a pose."""
@@ -474,6 +481,9 @@ class Session:
             self.intervals.step(t_next)
             if self.kinematics.drive(self.backend, self.dt):
                 self.energy.driven()  # a moving kinematic body pushes what it touches: unbooked work
+            if self.held:
+                for i, force, torque in self.held.step_inputs(self.snapshot.bodies.quat, self.truth):
+                    self.add_force(self.names[i], force.tolist(), torque.tolist(), 1.0)
             for i, f in self.forces.items():
                 self.backend.apply_force(i, tuple(f[:3]), tuple(f[3:]))
             self.forces.clear()

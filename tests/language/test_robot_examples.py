@@ -36,13 +36,17 @@ def test_the_examples_exist() -> None:
         "duck_drop.yaml",
         "mjcf_box.yaml",
         "pendulum5.yaml",
+        "swing_arm.yaml",
+        "keyframe_pendulum.yaml",
+        "kuka_start.yaml",
+        "thruster.yaml",
     }
 
 
 @pytest.mark.parametrize("path", ROBOTS, ids=[p.stem for p in ROBOTS])
 @pytest.mark.parametrize("engine", ENGINES)
 def test_every_engine_accepts_them(path: Path, engine: str) -> None:
-    if path.stem == "mjcf_box":
+    if path.stem in ("mjcf_box", "keyframe_pendulum"):
         pytest.importorskip("mujoco", reason="mujoco not installed (MJCF is read by MuJoCo's compiler)")
     try:
         cls = get_backend(engine)
@@ -72,6 +76,9 @@ def test_kuka_targets_match_yourdfpy_forward_kinematics() -> None:
         assert hand[1] == pytest.approx(0.0, abs=1e-9)
     urdf.update_cfg(np.zeros(7))
     assert urdf.get_transform("lbr_iiwa_link_7", "lbr_iiwa_link_0")[2, 3] == pytest.approx(1.261, abs=1e-12)
+    start = ROOT / "scenarios" / "robots" / "kuka_start.yaml"  # started at pose A: the same figures
+    for axis in ("x", "z"):
+        assert _assertion(start, f"hand-starts-at-{axis}")["near"] == _assertion(path, f"pose-a-hand-{axis}")["near"]
 
 
 def test_cartpole_period_from_the_urdf() -> None:
