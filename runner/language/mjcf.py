@@ -40,6 +40,7 @@ from runner.language.robot_desc import (
     vec,
 )
 from runner.language.urdf import parse_xml
+from runner.language.visuals import mjcf_visuals
 
 _JOINTS = {0: "free", 1: "ball", 2: "slider", 3: "hinge"}  # mjtJoint
 _IDENT = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
@@ -94,7 +95,7 @@ def _ellipsoid(radii: np.ndarray) -> Mesh:
     return _hull(np.asarray(sphere.vertices) * radii, "ellipsoid")
 
 
-def _shape(model: Any, g: int, mujoco: Any) -> Shape | None:
+def geom_shape(model: Any, g: int, mujoco: Any) -> Shape | None:
     """A geom's shape in its own frame; None for a kind no engine here collides with (height field, SDF)."""
     kind, size, t = int(model.geom_type[g]), model.geom_size[g], mujoco.mjtGeom
     if kind == t.mjGEOM_PLANE:
@@ -235,7 +236,7 @@ def load_mjcf(file: Path) -> ModelDesc:
         for g in range(model.body_geomadr[b], model.body_geomadr[b] + model.body_geomnum[b]):
             if not (model.geom_contype[g] or model.geom_conaffinity[g]):
                 continue  # a visual geom: it never touches anything
-            shape = _shape(model, g, mujoco)
+            shape = geom_shape(model, g, mujoco)
             if shape is None:
                 continue
             rgba = model.geom_rgba[g]
@@ -253,6 +254,7 @@ def load_mjcf(file: Path) -> ModelDesc:
                 tuple(shapes),
                 None,
                 lines.get(("body", bodies[b]), 0),
+                mjcf_visuals(model, b, mujoco),
             )
         )
     joints = []
