@@ -4,11 +4,12 @@ The shapes are the trace's /scene entities (:func:`reports.scene3d.model.scene_m
 (``body/<name>``: a robot link's visual meshes, else its shape) is logged at ``world/<name>``, its collision
 solids (``solid/<name>/...``) and collision shapes (``collision/<name>``, /scene/collision) together at
 ``world/<name>/collision`` (hidden by the blueprint), each joint drawn on it (``joint/<joint>``: its axis
-as ``Arrows3D``, its anchor as a small ellipsoid) at ``world/<name>/joint/<joint>``. Foxglove primitives map one to one: cubes to
-``Boxes3D``, spheres to ``Ellipsoids3D``, cylinders to ``Cylinders3D`` (both along local z), a capsule body's
-cylinder and end spheres to one ``Capsules3D``, triangle lists (meshes, convex hulls) to one ``Mesh3D`` per
-entity with per-vertex colours, lines to ``LineStrips3D``. Shapes are logged at the time the trace sets them
-(t = 0, and when an interval rescales a body), so a later update replaces the earlier one.
+as ``Arrows3D``, its anchor as a small ellipsoid) at ``world/<name>/joint/<joint>``. Foxglove primitives
+map one to one: cubes to ``Boxes3D``, spheres to ``Ellipsoids3D``, cylinders to ``Cylinders3D`` (both along
+local z), a capsule body's cylinder and end spheres to one ``Capsules3D``, triangle lists (meshes, convex
+hulls) to one ``Mesh3D`` per entity with per-vertex colours, lines to ``LineStrips3D``, arrows to
+``Arrows3D``. Shapes are logged at the time the trace sets them (t = 0, and when an interval rescales a
+body), so a later update replaces the earlier one.
 """
 
 from __future__ import annotations
