@@ -6,8 +6,8 @@
   joint (``joint/<name>``, at t = 0): its axis as an arrow through its anchor (hinge, universal: both axes),
   along its direction from the body's origin (slider), a ball at the anchor (ball, hinge);
   the collision solids (``solid/<body>/<node>``, translucent).
-* ``/scene/collision``: the collision shapes of every body drawn by its visuals (``collision/<name>``,
-  translucent amber), so a user can turn them on; the layout keeps that topic hidden.
+* ``/scene/collision``: the collision shapes of every body drawn by its visuals that has any
+  (``collision/<name>``, translucent amber), so a user can turn them on; the layout keeps that topic hidden.
 
 Entities are frame-locked to their body's frame (bodies move through /tf only) and never expire; a later
 call replaces them by id. Built by the trace writer and by the live viewer's tap (runner.view.tap), so
@@ -190,7 +190,7 @@ def scene_entities(ns: int, bodies: Sequence[BodySpec], joints: Sequence[JointSp
         scale = scales.get(b.name, 1.0)
         info = {"shape": b.shape.kind.value, "motion": b.motion.value}
         drawn.append(fx.entity(ns, b.name, f"body/{b.name}", info, **body_drawn(b, scale)))
-        if b.visuals:
+        if b.visuals and b.shapes:
             collision.append(fx.entity(ns, b.name, f"collision/{b.name}", info, **body_collision(b, scale)))
     drawn += joint_entities(ns, joints, {b.name: b for b in bodies})
     out = {tf.TOPIC_SCENE: drawn}
