@@ -254,7 +254,7 @@ def load_mjcf(file: Path) -> ModelDesc:
                 tuple(shapes),
                 None,
                 lines.get(("body", bodies[b]), 0),
-                mjcf_visuals(model, b, mujoco),
+                mjcf_visuals(model, b, mujoco, geom_shape),
             )
         )
     joints = []

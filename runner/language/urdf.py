@@ -398,7 +398,8 @@ def load_urdf(file: Path, package_root: Path | None, static_root: bool, static_t
                 tuple(shapes),
                 _color(link, materials),
                 line,
-                urdf_visuals(link, elements.get(link.name), file, materials, package_root, mesh_cache, notes),
+                urdf_visuals(link, elements.get(link.name), file, materials, package_root, mesh_cache, notes,
+                             mesh_scale),
             )
         )
     links, descs = merge_massless_fixed(root, links, descs)

@@ -14,13 +14,14 @@ viewer draws it by default (group 0, 1 or 2) and is not fully transparent.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from backends.types import Mesh, PlacedShape, Rgba, Shape, ShapeKind
-from runner.language.robot_desc import ModelFileError, quat4, quat_from_matrix, vec
+from runner.language.robot_desc import ModelFileError, quat4, quat_from_matrix, resolve_package, vec
 
 __all__ = ["MAX_TRIANGLES", "MJCF_VISIBLE_GROUPS", "mjcf_visuals", "simplified", "urdf_visuals"]
 
@@ -29,6 +30,8 @@ MAX_TRIANGLES = 5000
 #: geom groups MuJoCo's viewer shows by default (mjvOption.geomgroup: 1, 1, 1, 0, 0, 0)
 MJCF_VISIBLE_GROUPS = (0, 1, 2)
 _MJCF_DEFAULT_RGBA = (0.5, 0.5, 0.5, 1.0)
+ScaleOf = Callable[[Any, Path, int], tuple[float, float, float]]
+GeomShape = Callable[[Any, int, Any], Shape | None]
 
 
 def simplified(vertices: np.ndarray, faces: np.ndarray, limit: int = MAX_TRIANGLES) -> tuple[np.ndarray, np.ndarray]:
@@ -123,12 +126,11 @@ def _material_colour(visual: Any, materials: dict[str, Rgba]) -> Rgba | None:
 
 
 def urdf_visuals(link: Any, element: Any, file: Path, materials: dict[str, Rgba], package_root: Path | None,
-                 cache: dict[Any, Any], notes: list[str]) -> tuple[PlacedShape, ...]:  # fmt: skip
+                 cache: dict[Any, Any], notes: list[str], scale_of: ScaleOf) -> tuple[PlacedShape, ...]:  # fmt: skip
     """The `<visual>`s of one yourdfpy link (``element``: its lxml `<link>`, for lines and capsules), in the link
     frame. A visual whose geometry nothing draws (an empty `<geometry>`) is left out; one whose mesh cannot be
-    read is left out with a note (pybullet loads such a model and warns; it changes no dynamics)."""
-    from runner.language.robot_desc import resolve_package
-    from runner.language.urdf import mesh_scale
+    read is left out with a note (pybullet loads such a model and warns; it changes no dynamics).
+    ``scale_of``: the URDF reader's mesh scale rule (runner.language.urdf.mesh_scale)."""
 
     elements = element.findall("visual") if element is not None else []
     out = []
@@ -152,7 +154,7 @@ def urdf_visuals(link: Any, element: Any, file: Path, materials: dict[str, Rgba]
             line = (mesh_element.sourceline or line) if mesh_element is not None else line
             try:
                 target = resolve_package(g.mesh.filename, package_root, file, line)
-                mesh, own = _load(target, mesh_scale(g.mesh.scale, file, line), file, line, cache)
+                mesh, own = _load(target, scale_of(g.mesh.scale, file, line), file, line, cache)
             except ModelFileError as exc:
                 notes.append(f"link `{link.name}`: a visual is not drawn ({exc.message})")
                 continue
@@ -167,11 +169,9 @@ def urdf_visuals(link: Any, element: Any, file: Path, materials: dict[str, Rgba]
 # ---- MJCF --------------------------------------------------------------------------------------------------------
 
 
-def _mjcf_shape(model: Any, g: int, mujoco: Any) -> Shape | None:
-    """A visible geom's shape: primitives as they are, a plane at its size (0: infinite), meshes as MuJoCo
-    compiled them; None for kinds drawn by nothing here (height field, SDF)."""
-    from runner.language.mjcf import geom_shape
-
+def _mjcf_shape(model: Any, g: int, mujoco: Any, geom_shape: GeomShape) -> Shape | None:
+    """A visible geom's shape: primitives as they are (``geom_shape``), a plane at its size (0: infinite), meshes
+    as MuJoCo compiled them; None for kinds drawn by nothing here (height field, SDF)."""
     t = mujoco.mjtGeom
     kind, size = int(model.geom_type[g]), model.geom_size[g]
     if kind == t.mjGEOM_PLANE:
@@ -194,15 +194,16 @@ def _mjcf_colour(model: Any, g: int) -> Rgba:
     return (rgba[0], rgba[1], rgba[2], rgba[3])
 
 
-def mjcf_visuals(model: Any, body: int, mujoco: Any) -> tuple[PlacedShape, ...]:
-    """The geoms of MuJoCo body ``body`` that MuJoCo's viewer draws by default, in the body frame."""
+def mjcf_visuals(model: Any, body: int, mujoco: Any, geom_shape: GeomShape) -> tuple[PlacedShape, ...]:
+    """The geoms of MuJoCo body ``body`` that MuJoCo's viewer draws by default, in the body frame;
+    ``geom_shape``: the MJCF reader's shape of a primitive geom (runner.language.mjcf.geom_shape)."""
     out = []
     first = int(model.body_geomadr[body])
     for g in range(first, first + int(model.body_geomnum[body])):
         colour = _mjcf_colour(model, g)
         if int(model.geom_group[g]) not in MJCF_VISIBLE_GROUPS or colour[3] <= 0.0:
             continue
-        shape = _mjcf_shape(model, g, mujoco)
+        shape = _mjcf_shape(model, g, mujoco, geom_shape)
         if shape is not None:
             out.append(PlacedShape(shape, vec(model.geom_pos[g]), quat4(model.geom_quat[g]), colour))
     return tuple(out)
