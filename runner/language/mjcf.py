@@ -40,7 +40,7 @@ from runner.language.robot_desc import (
     vec,
 )
 from runner.language.urdf import parse_xml
-from runner.language.visuals import mjcf_visuals
+from runner.language.visuals import mjcf_visuals, within_budget
 
 _JOINTS = {0: "free", 1: "ball", 2: "slider", 3: "hinge"}  # mjtJoint
 _IDENT = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
@@ -275,7 +275,7 @@ def load_mjcf(file: Path) -> ModelDesc:
     return ModelDesc(
         str(file),
         "worldbody",
-        tuple(links),
+        tuple(within_budget(links)),
         tuple(joints),
         needs=tuple(_needs(model, tree, bodies, lines)),
         actuators=tuple(_actuators(model, joint_names, lines, mujoco)),

@@ -30,7 +30,7 @@ from runner.language.robot_desc import (
     vec,
 )
 from runner.language.urdf_rules import merge_massless_fixed, usable_inertia
-from runner.language.visuals import urdf_visuals
+from runner.language.visuals import urdf_visuals, within_budget
 
 #: A name expressions can read as `<robot>.<name>` (the language's identifiers).
 _IDENT = r"^[A-Za-z_][A-Za-z0-9_]*$"
@@ -404,5 +404,5 @@ def load_urdf(file: Path, package_root: Path | None, static_root: bool, static_t
         )
     links, descs = merge_massless_fixed(root, links, descs)
     links = [_default_mass(link) if link.name in no_inertial else link for link in links]
-    links = [usable_inertia(link) for link in links]
+    links = within_budget([usable_inertia(link) for link in links])
     return ModelDesc(str(file), root, tuple(links), tuple(descs), tuple(notes))

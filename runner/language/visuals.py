@@ -2,9 +2,10 @@
 
 The engines never see these (they collide with :attr:`LinkDesc.shapes`); the trace's scene, the report's
 pictures, the Rerun export and the viewer draw them (runner.trace.scene). A mesh is kept as its triangles
-(the file's, scaled; MuJoCo's compiled mesh for MJCF), at most :data:`MAX_TRIANGLES` per mesh: a larger one
-is simplified by vertex clustering on the coarsest grid that keeps it under the bound (deterministic:
-no randomness, sorted cells), so a trace stays small and byte-identical from run to run.
+(the file's, scaled; MuJoCo's compiled mesh for MJCF), at most :data:`MAX_TRIANGLES` per mesh and
+:data:`MAX_MODEL_TRIANGLES` per model: a larger one is simplified by vertex clustering on the finest grid
+(doubling) that keeps it under the bound (deterministic: no randomness, sorted cells), so a trace stays
+small and byte-identical from run to run.
 
 Colours: URDF, the visual's `<material>` (its own `<color>` or a robot-level material by name), else the
 mesh file's own colour (OBJ `.mtl`, DAE material), else none (the link's colour). MJCF, the geom's rgba,
@@ -23,10 +24,20 @@ import numpy as np
 from backends.types import Mesh, PlacedShape, Rgba, Shape, ShapeKind
 from runner.language.robot_desc import ModelFileError, quat4, quat_from_matrix, resolve_package, vec
 
-__all__ = ["MAX_TRIANGLES", "MJCF_VISIBLE_GROUPS", "mjcf_visuals", "simplified", "urdf_visuals"]
+__all__ = [
+    "MAX_MODEL_TRIANGLES",
+    "MAX_TRIANGLES",
+    "MJCF_VISIBLE_GROUPS",
+    "mjcf_visuals",
+    "simplified",
+    "urdf_visuals",
+    "within_budget",
+]
 
 #: triangles kept per visual mesh (KUKA iiwa's largest link mesh has 3,038; the trace stores each once)
 MAX_TRIANGLES = 5000
+#: triangles kept per model: above it every mesh is simplified further, in proportion (about 2.4 MB of trace)
+MAX_MODEL_TRIANGLES = 100_000
 #: geom groups MuJoCo's viewer shows by default (mjvOption.geomgroup: 1, 1, 1, 0, 0, 0)
 MJCF_VISIBLE_GROUPS = (0, 1, 2)
 _MJCF_DEFAULT_RGBA = (0.5, 0.5, 0.5, 1.0)
@@ -70,6 +81,30 @@ def _mesh(vertices: np.ndarray, faces: np.ndarray, source: str) -> Mesh:
     v, f = simplified(vertices, faces)
     return Mesh(vertices=tuple(vec(p) for p in v), faces=tuple((int(a), int(b), int(c)) for a, b, c in f),
                 source=source)  # fmt: skip
+
+
+def within_budget(links: list[Any], budget: int = MAX_MODEL_TRIANGLES) -> list[Any]:
+    """``links`` (LinkDesc) with their visual meshes simplified in proportion when they hold more than ``budget``
+    triangles together (each keeps at least 100)."""
+    from dataclasses import replace
+
+    total = sum(len(v.shape.mesh.faces) for link in links for v in link.visuals if v.shape.mesh is not None)
+    if total <= budget:
+        return links
+    out = []
+    for link in links:
+        visuals = []
+        for v in link.visuals:
+            mesh = v.shape.mesh
+            if mesh is not None:
+                limit = max(100, len(mesh.faces) * budget // total)
+                vertices, faces = simplified(np.asarray(mesh.vertices), np.asarray(mesh.faces), limit)
+                mesh = Mesh(tuple(vec(p) for p in vertices), tuple((int(a), int(b), int(c)) for a, b, c in faces),
+                            mesh.source)  # fmt: skip
+                v = replace(v, shape=replace(v.shape, mesh=mesh))
+            visuals.append(v)
+        out.append(replace(link, visuals=tuple(visuals)))
+    return out
 
 
 # ---- URDF --------------------------------------------------------------------------------------------------------
