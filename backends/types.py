@@ -275,6 +275,9 @@ class BodySpec:
     shapes: tuple[PlacedShape, ...] = ()
     com: Vec3 = (0.0, 0.0, 0.0)  # centre of mass in the body frame
     inertia_quat: Quat = IDENTITY_QUAT  # principal axes of inertia: the body frame rotated by this
+    #: what is drawn (a model's <visual>s) in the body frame, for the trace's scene only: no engine reads it;
+    #: () draws the collision shapes
+    visuals: tuple[PlacedShape, ...] = ()
 
     def inertia_tensor(self) -> np.ndarray:
         """The full inertia tensor about the COM in the body frame: R diag(inertia) R^T."""

@@ -1,12 +1,15 @@
 """A trace's scene as Rerun archetypes: one entity per body or robot link, its shapes in its own frame.
 
 The shapes are the trace's /scene entities (:func:`reports.scene3d.model.scene_model`): a body's visual
-(``body/<name>``) is logged at ``world/<name>`` and its collision solids (``solid/<name>/...``) at
-``world/<name>/collision`` (hidden by the blueprint). Foxglove primitives map one to one: cubes to
-``Boxes3D``, spheres to ``Ellipsoids3D``, cylinders to ``Cylinders3D`` (both along local z), a capsule body's
-cylinder and end spheres to one ``Capsules3D``, triangle lists (meshes, convex hulls) to one ``Mesh3D`` per
-entity with per-vertex colours, lines to ``LineStrips3D``. Shapes are logged at the time the trace sets them
-(t = 0, and when an interval rescales a body), so a later update replaces the earlier one.
+(``body/<name>``: a robot link's visual meshes, else its shape) is logged at ``world/<name>``, its collision
+solids (``solid/<name>/...``) and collision shapes (``collision/<name>``, /scene/collision) together at
+``world/<name>/collision`` (hidden by the blueprint), each joint drawn on it (``joint/<joint>``: its axis
+as ``Arrows3D``, its anchor as a small ellipsoid) at ``world/<name>/joint/<joint>``. Foxglove primitives
+map one to one: cubes to ``Boxes3D``, spheres to ``Ellipsoids3D``, cylinders to ``Cylinders3D`` (both along
+local z), a capsule body's cylinder and end spheres to one ``Capsules3D``, triangle lists (meshes, convex
+hulls) to one ``Mesh3D`` per entity with per-vertex colours, lines to ``LineStrips3D``, arrows to
+``Arrows3D``. Shapes are logged at the time the trace sets them (t = 0, and when an interval rescales a
+body), so a later update replaces the earlier one.
 """
 
 from __future__ import annotations
@@ -91,6 +94,10 @@ def entity_archetypes(entity: EntityVisual, capsule: bool = False) -> list[Any]:
         colors = np.concatenate([np.tile(np.asarray(p.rgba, dtype=np.float32), (len(v), 1))
                                  for p, v in zip(triangles, points, strict=True)])  # fmt: skip
         out.append(rr.Mesh3D(vertex_positions=np.concatenate(points), vertex_colors=colors))
+    if arrows := by_kind.get("arrow"):
+        vectors = [_rotate(p.quat, np.array([[p.size[0], 0.0, 0.0]]))[0] for p in arrows]
+        out.append(rr.Arrows3D(origins=[p.position for p in arrows], vectors=vectors,
+                               radii=[p.size[1] / 2 for p in arrows], colors=[p.rgba for p in arrows]))  # fmt: skip
     if lines := [p for p in by_kind.get("lines", []) if p.points]:
         strips = []
         for p in lines:
@@ -117,6 +124,8 @@ def scene_entities(model: SceneModel) -> list[tuple[float, str, list[Any]]]:
                 continue
             elif visual.solid:
                 solids.setdefault(visual.body, []).append(visual)
+            elif visual.layer == "joint":
+                out.append((t, _path_of(key, visual.body), entity_archetypes(visual)))
             else:
                 capsule = model.shape.get(visual.body) == "capsule"
                 out.append((t, body_path(visual.body), entity_archetypes(visual, capsule)))
@@ -133,8 +142,10 @@ def body_path(body: str, *below: str) -> str:
     return str(rr.new_entity_path([WORLD, body, *below]))
 
 
-def _path_of(entity_id: str) -> str:
+def _path_of(entity_id: str, body: str = "") -> str:
     kind, _, rest = entity_id.partition("/")
-    if kind == "solid":
-        return body_path(rest.partition("/")[0], "collision")
+    if kind in ("solid", "collision"):
+        return body_path(rest.partition("/")[0] if kind == "solid" else rest, "collision")
+    if kind == "joint":
+        return body_path(body, "joint", rest)
     return body_path(rest)

@@ -68,6 +68,7 @@ BODY_ROW: Final = ("pos.x", "pos.y", "pos.z", "quat.w", "quat.x", "quat.y", "qua
 # ---- topics -------------------------------------------------------------------------------------
 TOPIC_TF: Final = "/tf"  # foxglove.FrameTransforms: every body's pose, one message per step
 TOPIC_SCENE: Final = "/scene"  # foxglove.SceneUpdate, at t=0 and when a visual scale changes
+TOPIC_SCENE_COLLISION: Final = "/scene/collision"  # foxglove.SceneUpdate: collision shapes of bodies with visuals
 TOPIC_LOG: Final = "/log"  # foxglove.Log: events, handler logs, sounds, verdicts (when decided), summary
 TOPIC_BODIES: Final = "/bodies"  # physics_scenarios.Bodies: box.vel.{x,y,z}, box.angvel.{x,y,z} per step
 TOPIC_JOINTS: Final = "/joints"  # physics_scenarios.Joints: slider.{position,velocity,motor_force} per step

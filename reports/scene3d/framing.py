@@ -72,7 +72,7 @@ def local_box(model: SceneModel, body: str) -> tuple[np.ndarray, np.ndarray]:
         for prim in entity.primitives:
             centre, half = np.asarray(prim.position, float), np.asarray(prim.size, float) / 2
             if prim.points:
-                pts = np.asarray(prim.points, float)
+                pts = np.asarray(prim.points, float) @ quat_matrices(prim.quat).T
                 lows.append(pts.min(axis=0) + centre)
                 highs.append(pts.max(axis=0) + centre)
             elif prim.quat == (1.0, 0.0, 0.0, 0.0):

@@ -43,11 +43,28 @@ def _flat(vertices: np.ndarray, faces: np.ndarray) -> Mesh:
     return tri.reshape(-1, 3), np.repeat(normal, 3, axis=0)
 
 
+ARROW_SECTIONS = 12
+_Z_TO_X = np.array([[0.0, 0.0, 1.0], [0.0, 1.0, 0.0], [-1.0, 0.0, 0.0]])  # turns local z onto x
+
+
+def _arrow(length: float, shaft: float, head: float) -> tuple[np.ndarray, np.ndarray]:
+    """An arrow along +x from the origin, as Foxglove draws one: a shaft (3/4 of the length) and a cone."""
+    stem = trimesh.creation.cylinder(radius=shaft / 2, height=0.75 * length, sections=ARROW_SECTIONS)
+    stem.apply_translation((0.0, 0.0, 0.375 * length))
+    cone = trimesh.creation.cone(radius=head / 2, height=0.25 * length, sections=ARROW_SECTIONS)
+    cone.apply_translation((0.0, 0.0, 0.75 * length))
+    vertices = np.vstack([stem.vertices, cone.vertices]) @ _Z_TO_X.T
+    faces = np.vstack([stem.faces, np.asarray(cone.faces) + len(stem.vertices)])
+    return vertices, faces
+
+
 def primitive_mesh(prim: Primitive) -> Mesh:
     """(vertices, normals) of ``prim`` in its body's frame, its own pose applied; empty for lines."""
     if prim.kind == "lines":
         return np.zeros((0, 3)), np.zeros((0, 3))
-    if prim.kind == "triangles":
+    if prim.kind == "arrow":
+        vertices, normals = _flat(*_arrow(*prim.size))
+    elif prim.kind == "triangles":
         pts = np.asarray(prim.points, float).reshape(-1, 3)
         pts = pts[: len(pts) - len(pts) % 3]
         faces = np.arange(len(pts)).reshape(-1, 3)

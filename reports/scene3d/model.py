@@ -1,12 +1,15 @@
 """What a run looks like, engine-neutral: the bodies' visual primitives over time and their poses.
 
 The primitives are Foxglove's (``foxglove.SceneUpdate``): cubes, spheres and cylinders by their full
-extents, triangle lists and lines by points, each with a pose in its body's frame and an RGBA colour.
-The trace publishes every body's shape at t = 0 (entity ``body/<name>``, frame ``<name>``), collision
-solids (``solid/<body>/<node>``, translucent) and a new shape whenever an interval changes a body's
-scale, each replacing the entity of the same id (Foxglove's rule). :func:`scene_model` reads that
-channel; when a trace has none it can read (a cut-off partial trace), the shapes come from the
-``body_specs`` metadata at scale 1.
+extents, triangle lists and lines by points, arrows by their pose (+x) and lengths, each with a pose in its
+body's frame and an RGBA colour. The trace (runner.trace.scene) publishes every body as it is drawn at
+t = 0 (entity ``body/<name>``, frame ``<name>``: a model's visuals, else its collision shapes), the
+joints (``joint/<name>``), collision solids (``solid/<body>/<node>``, translucent), the collision shapes
+of bodies drawn by their visuals (``collision/<name>`` on /scene/collision: layer ``collision``, not
+drawn unless asked) and a new shape whenever an interval changes a body's scale, each replacing the
+entity of the same id (Foxglove's rule). :func:`scene_model` reads those channels; when a trace has none
+it can read (a cut-off partial trace), the collision shapes come from the ``body_specs`` metadata at
+scale 1.
 """
 
 from __future__ import annotations
@@ -37,7 +40,8 @@ DEFAULT_RGBA: RGBA = (0.7, 0.7, 0.7, 1.0)
 @dataclass(frozen=True)
 class Primitive:
     """One Foxglove primitive in its body's frame: ``cube``, ``sphere``, ``cylinder`` (along local z),
-    ``triangles`` (``points`` taken three at a time) or ``lines`` (a strip; ``closed`` for a loop)."""
+    ``triangles`` (``points`` taken three at a time), ``lines`` (a strip; ``closed`` for a loop) or ``arrow``
+    (along its local +x from its position; ``size``: total length, shaft diameter, head diameter)."""
 
     kind: str
     rgba: RGBA
@@ -50,12 +54,14 @@ class Primitive:
 
 @dataclass(frozen=True)
 class EntityVisual:
-    """A scene entity: primitives attached to one body's frame; ``solid`` for a collision solid."""
+    """A scene entity: primitives attached to one body's frame; ``solid`` for collision geometry (a collision
+    solid, or a body's collision shapes: ``layer`` says which)."""
 
     id: str
     body: str
     primitives: tuple[Primitive, ...]
     solid: bool = False
+    layer: str = "body"  # body | joint | solid | collision (drawn only when asked)
 
 
 @dataclass
@@ -208,11 +214,20 @@ def _color(c: Mapping[str, Any] | None) -> RGBA:
 
 
 _ARRAYS = {"cubes": "cube", "spheres": "sphere", "cylinders": "cylinder", "triangles": "triangles", "lines": "lines"}
-_LINE_LOOP = 1
+_LINE_LOOP, _LINE_LIST = 1, 2
+_LAYERS = {"solid": "solid", "collision": "collision", "joint": "joint"}  # by the entity id's first part
+
+
+def _arrow(p: Mapping[str, Any]) -> Primitive:
+    pos, quat = _pose(p.get("pose"))
+    length = float(p.get("shaft_length", 0.0)) + float(p.get("head_length", 0.0))
+    size = (length, float(p.get("shaft_diameter", 0.0)), float(p.get("head_diameter", 0.0)))
+    return Primitive("arrow", _color(p.get("color")), pos, quat, size)
 
 
 def entity_from_message(entity: Mapping[str, Any]) -> EntityVisual:
-    """An :class:`EntityVisual` from one ``foxglove.SceneEntity`` (arrows, texts and models are not drawn)."""
+    """An :class:`EntityVisual` from one ``foxglove.SceneEntity`` (texts and models are not drawn); a line list
+    becomes one two-point line per segment."""
     prims: list[Primitive] = []
     for array, kind in _ARRAYS.items():
         for p in entity.get(array) or []:
@@ -223,11 +238,17 @@ def entity_from_message(entity: Mapping[str, Any]) -> EntityVisual:
                 points = tuple(points[i] for i in indices if 0 <= i < len(points))
             line_type = p.get("type", 0)
             closed = kind == "lines" and (line_type == _LINE_LOOP or line_type == "LINE_LOOP")
-            prims.append(Primitive(kind, _color(p.get("color")), pos, quat, _vec(p.get("size")), points, closed))
+            rgba, size = _color(p.get("color")), _vec(p.get("size"))
+            if kind == "lines" and line_type in (_LINE_LIST, "LINE_LIST"):
+                pairs = range(0, len(points) - 1, 2)
+                prims += [Primitive(kind, rgba, pos, quat, size, points[k : k + 2]) for k in pairs]
+            else:
+                prims.append(Primitive(kind, rgba, pos, quat, size, points, closed))
+    prims += [_arrow(p) for p in entity.get("arrows") or []]
     meta = {str(m.get("key")): str(m.get("value")) for m in entity.get("metadata") or []}
     ident = str(entity.get("id", ""))
-    solid = "solid" in meta or ident.startswith("solid/")
-    return EntityVisual(ident, str(entity.get("frame_id", "")), tuple(prims), solid)
+    layer = _LAYERS.get(ident.partition("/")[0], "solid" if "solid" in meta else "body")
+    return EntityVisual(ident, str(entity.get("frame_id", "")), tuple(prims), layer in ("solid", "collision"), layer)
 
 
 def _updates(messages: Sequence[tuple[float, Mapping[str, Any]]]) -> list[tuple[float, dict[str, EntityVisual | None]]]:

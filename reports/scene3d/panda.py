@@ -114,6 +114,7 @@ class PandaScene:
         self.bodies = {name: self.root.attachNewNode(name) for name in model.bodies}
         self._built: dict[int, NodePath] = {}
         self._solids_visible = True
+        self._collision_visible = False  # a model's collision shapes: its visuals are what it looks like
 
     def _node(self, entity: EntityVisual) -> NodePath | None:
         key = id(entity)
@@ -144,6 +145,15 @@ class PandaScene:
         """Show or hide the collision solids (the lab's ``show()`` on a key)."""
         self._solids_visible = visible
 
+    def set_collision_visible(self, visible: bool) -> None:
+        """Show or hide the collision shapes of bodies drawn by their visuals (hidden at first)."""
+        self._collision_visible = visible
+
+    def _shown(self, entity: EntityVisual) -> bool:
+        if entity.layer == "collision":
+            return self._collision_visible
+        return self._solids_visible or not entity.solid
+
     def set_pose(self, body: str, pos: Iterable[float], quat: Iterable[float]) -> None:
         """Put ``body`` at ``pos`` with orientation ``quat`` (w, x, y, z)."""
         node = self.bodies[body]
@@ -154,7 +164,7 @@ class PandaScene:
     def show(self, t: float) -> None:
         """Every body at its recorded pose at ``t``, with the shapes and solids the scene has then; a body
         without a finite pose there (a run that blew up) is hidden."""
-        visible = {id(e) for e in self.model.entities_at(t).values() if self._solids_visible or not e.solid}
+        visible = {id(e) for e in self.model.entities_at(t).values() if self._shown(e)}
         for entity in self.model.entities_at(t).values():
             if id(entity) in visible:
                 self._node(entity)

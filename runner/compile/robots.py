@@ -11,7 +11,7 @@ nor any two links of a model without ``self_collision`` (a URDF's default, as py
 from __future__ import annotations
 
 from collections.abc import Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 from backends.geometry import IDENTITY, quat_mul, quat_rotate
 from backends.types import (
@@ -74,6 +74,9 @@ def link_body(
     if given is None:
         given = STATIC_COLOR if static else PALETTE[number % len(PALETTE)]
     color = (float(given[0]), float(given[1]), float(given[2]), float(given[3]) if len(given) > 3 else 1.0)
+    visuals = link.visuals
+    if override is not None and override.color is not None:  # the scenario's colour paints the whole link
+        visuals = tuple(replace(v, color=None) for v in visuals)
     if static:
         mass, inertia, com, axes = 0.0, (0.0, 0.0, 0.0), (0.0, 0.0, 0.0), IDENTITY
     else:
@@ -99,6 +102,7 @@ def link_body(
         shapes=link.shapes,
         com=com,
         inertia_quat=axes,
+        visuals=visuals,
     )
 
 

@@ -47,6 +47,7 @@ from runner.language.robot_desc import (
     vec,
 )
 from runner.language.urdf import parse_xml
+from runner.language.visuals import mjcf_visuals, within_budget
 
 _JOINTS = {0: "free", 1: "ball", 2: "slider", 3: "hinge"}  # mjtJoint
 #: Subdivisions of the icosphere whose hull stands for an ellipsoid on engines without one: 642 vertices,
@@ -100,7 +101,7 @@ def _ellipsoid(radii: np.ndarray) -> Mesh:
     return _hull(np.asarray(sphere.vertices) * radii, "ellipsoid")
 
 
-def _shape(model: Any, g: int, mujoco: Any) -> Shape | None:
+def geom_shape(model: Any, g: int, mujoco: Any) -> Shape | None:
     """A geom's shape in its own frame; None for a kind no engine here collides with (height field, SDF)."""
     kind, size, t = int(model.geom_type[g]), model.geom_size[g], mujoco.mjtGeom
     if kind == t.mjGEOM_PLANE:
@@ -341,7 +342,7 @@ def load_mjcf(file: Path) -> ModelDesc:
         for g in range(model.body_geomadr[b], model.body_geomadr[b] + model.body_geomnum[b]):
             if not (model.geom_contype[g] or model.geom_conaffinity[g]):
                 continue  # a visual geom: it never touches anything
-            shape = _shape(model, g, mujoco)
+            shape = geom_shape(model, g, mujoco)
             if shape is None:
                 continue
             rgba = model.geom_rgba[g]
@@ -359,6 +360,7 @@ def load_mjcf(file: Path) -> ModelDesc:
                 tuple(shapes),
                 None,
                 lines.get(("body", bodies[b]), 0),
+                mjcf_visuals(model, b, mujoco, geom_shape),
             )
         )
     joints = []
@@ -379,7 +381,7 @@ def load_mjcf(file: Path) -> ModelDesc:
     return ModelDesc(
         str(file),
         "worldbody",
-        tuple(links),
+        tuple(within_budget(links)),
         tuple(joints),
         needs=tuple(_needs(model, tree, bodies, joint_names, lines)),
         actuators=tuple(_actuators(model, joint_names, lines, mujoco)),

@@ -62,6 +62,8 @@ class LinkDesc:
     shapes: tuple[PlacedShape, ...]  # collision shapes in the link frame
     color: Rgba | None  # the first visual's colour, if the model gives one
     line: int
+    #: what the model draws (URDF <visual>, MJCF's visible geoms) in the link frame; engines never see it
+    visuals: tuple[PlacedShape, ...] = ()
 
 
 @dataclass(frozen=True)

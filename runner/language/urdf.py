@@ -33,6 +33,7 @@ from runner.language.robot_desc import (
     vec,
 )
 from runner.language.urdf_rules import merge_massless_fixed, usable_inertia
+from runner.language.visuals import urdf_visuals, within_budget
 
 _KINDS = {
     "revolute": "hinge",
@@ -232,12 +233,12 @@ def _shape(geometry: Any, file: Path, package_root: Path | None, mesh_lines: dic
     mesh = g.mesh
     line = mesh_lines.get(mesh.filename, 0)
     target = resolve_package(mesh.filename, package_root, file, line)
-    scale = _mesh_scale(mesh.scale, file, line)
+    scale = mesh_scale(mesh.scale, file, line)
     kind = ShapeKind.CONVEX if hull else ShapeKind.TRIMESH
     return Shape(kind, mesh=load_mesh(target, scale, file, line, hull, near=mesh.filename))
 
 
-def _mesh_scale(scale: Any, file: Path, line: int) -> tuple[float, float, float]:
+def mesh_scale(scale: Any, file: Path, line: int) -> tuple[float, float, float]:
     """`scale` as the loaders read it: none is 1; one number scales every axis; three are x, y, z; pybullet
     reads the first three of more (pybullet_data's racecar writes `scale="1 1 1 1"`)."""
     if scale is None:
@@ -388,6 +389,8 @@ def load_urdf(file: Path, package_root: Path | None, static_root: bool, static_t
         )
     links: list[LinkDesc] = []
     no_inertial = {link.name for link in robot.links if link.inertial is None and link.name != "world"}
+    elements = {e.get("name"): e for e in tree.getroot().iterfind("link")}
+    mesh_cache: dict[Any, Any] = {}
     for link in robot.links:
         line = link_lines.get(link.name, 0)
         inertial = link.inertial
@@ -422,9 +425,11 @@ def load_urdf(file: Path, package_root: Path | None, static_root: bool, static_t
                 tuple(shapes),
                 _color(link, materials),
                 line,
+                urdf_visuals(link, elements.get(link.name), file, materials, package_root, mesh_cache, notes,
+                             mesh_scale),
             )
         )
     links, descs = merge_massless_fixed(root, links, descs)
     links = [_default_mass(link) if link.name in no_inertial else link for link in links]
-    links = [usable_inertia(link) for link in links]
+    links = within_budget([usable_inertia(link) for link in links])
     return ModelDesc(str(file), root, tuple(links), tuple(descs), tuple(notes))

@@ -2,7 +2,7 @@
 
 * **Massless links on fixed joints** (frames such as Franka Panda's `panda_link8`, a tool flange, a
   `base_footprint` child) are merged into their parent, as MuJoCo's ``fusestatic`` and pybullet's
-  ``URDF_MERGE_FIXED_LINKS`` do: the link's collision shapes move onto the parent at the same place, the
+  ``URDF_MERGE_FIXED_LINKS`` do: the link's collision shapes and visuals move onto the parent at the same place, the
   joints hanging from it hang from the parent, and the link and its fixed joint are gone (not addressable).
   A chain of them merges into its first ancestor that stays.
 * **A link with mass but no usable inertia** (the tensor all zero, or a principal moment not above
@@ -49,7 +49,8 @@ def merge_massless_fixed(
         if joint.kind == "fixed" and child.mass <= 0 and joint.child != root:
             holder = by_name[parent]
             moved = tuple(_into_frame(holder, child, placed) for placed in child.shapes)
-            by_name[parent] = replace(holder, shapes=holder.shapes + moved)
+            drawn = tuple(_into_frame(holder, child, placed) for placed in child.visuals)
+            by_name[parent] = replace(holder, shapes=holder.shapes + moved, visuals=holder.visuals + drawn)
             into[joint.child] = parent
             continue
         kept_joints.append(joint if parent == joint.parent else replace(joint, parent=parent))

@@ -105,6 +105,7 @@ class TraceEncoder:
         out = [
             (tf.TOPIC_TF, fx.FrameTransforms),
             (tf.TOPIC_SCENE, fx.SceneUpdate),
+            (tf.TOPIC_SCENE_COLLISION, fx.SceneUpdate),  # written only when a body has visuals
             (tf.TOPIC_LOG, fx.Log),
             *zip(self.body_topics, m.bodies, strict=True),
             *zip(self.joint_topics, m.joints, strict=False),  # none when there are no joints

@@ -10,7 +10,7 @@ published once, frame-locked to each body's frame; bodies move through /tf only.
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
-from dataclasses import asdict
+from dataclasses import asdict, replace
 from typing import Any
 
 import numpy as np
@@ -187,7 +187,8 @@ def body_primitives(body: BodySpec, scale: float = 1.0) -> dict[str, list[Any]]:
 def body_spec_record(body: BodySpec) -> dict[str, Any]:
     """A body's spec for the trace metadata: the fields of a primitive body exactly as before robots (so their
     traces stay byte-identical); a compound body adds its shapes, meshes, COM and principal axes."""
-    record = asdict(body)
+    record = asdict(replace(body, visuals=()))
+    record.pop("visuals")  # drawn on /scene; the metadata keeps what the engines simulate
     if body.shape.kind is not ShapeKind.COMPOUND:
         for key in ("shapes", "com", "inertia_quat"):
             record.pop(key)

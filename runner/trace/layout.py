@@ -3,7 +3,8 @@
 One layout per trace folder, in Foxglove Studio's layout format (``configById`` + ``layout`` mosaic, as
 Foxglove Studio 1.48 imports and exports it; its newer releases and Lichtblick read the same):
 
-* a 3D panel following ``world``: the bodies and the collision solids (/scene, frame-locked to /tf),
+* a 3D panel following ``world``: the bodies as drawn, the joints and the collision solids (/scene,
+  frame-locked to /tf), the robots' collision shapes hidden (/scene/collision: the settings turn it on),
   the frames' labels, axes and links hidden (the settings turn them on), a neutral floor grid sized and
   centred on the bodies' extent at their start (:func:`_grid`), the camera framing that extent;
 * one Plot per unit of the scenario's asserted quantities (:class:`PlotPath`, from runner/cli/layouts.py:
@@ -120,7 +121,7 @@ def layout(spec: LayoutSpec) -> dict[str, Any]:
         "followTf": tf.WORLD_FRAME, "followMode": "follow-pose", "cameraState": _camera(spec.spheres),
         "scene": {"transforms": {"showLabel": False, "axisScale": 0, "lineWidth": 0}},  # bodies, not axes
         "transforms": {},
-        "topics": {tf.TOPIC_SCENE: {"visible": True}},
+        "topics": {tf.TOPIC_SCENE: {"visible": True}, tf.TOPIC_SCENE_COLLISION: {"visible": False}},
         "layers": {"grid": _grid(spec.spheres)},
         "publish": {"type": "point", "poseTopic": "/move_base_simple/goal", "pointTopic": "/clicked_point",
                     "poseEstimateTopic": "/initialpose", "poseEstimateXDeviation": 0.5,

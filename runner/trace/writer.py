@@ -35,6 +35,7 @@ from runner.trace import foxglove as fx
 from runner.trace import output
 from runner.trace.encoder import TraceEncoder, dumps, verdict_text
 from runner.trace.repeats import EventRuns
+from runner.trace.scene import scene_entities
 from runner.trace.sounds import SoundBank
 
 __all__ = ["COMPRESSION_THREADS", "ZSTD_LEVEL", "SolidVisual", "TraceMeta", "TraceWriter"]
@@ -180,6 +181,7 @@ class TraceWriter:
         self._steps = 0
         self._final: Path | None = None
         self._closed = False
+        self._scene_sent = False
         self._encoder = TraceEncoder(self._names, self._joint_names)
         self._runs = EventRuns(meta.dt)  # events delivered on every step: one Log line per run
         self._sounds = SoundBank()
@@ -299,25 +301,26 @@ class TraceWriter:
         self._sounds.add(name, bytes(data))
 
     def scene(self, t: float, solids: Sequence[SolidVisual] = (), scales: Mapping[str, float] | None = None) -> None:
-        """Publish every body's shape and the given solids (already scaled, body frame).
+        """Publish every body as it is drawn, its collision shapes, the joints (first call) and the given
+        solids (already scaled, body frame): runner.trace.scene.
 
         ``scales[name]`` multiplies the *compiled* shape (which already includes the start scale), so
         pass ``current scale / start scale``; default 1. Entities keep their ids ("body/<name>",
-        "solid/<body>/<node>"), so a later call replaces them; pass the solids again to resize them.
+        "collision/<name>", "joint/<name>", "solid/<body>/<node>"), so a later call replaces them; pass the
+        solids again to resize them.
         """
         ns = self._ns(t)
-        scales = scales or {}
-        entities = []
-        for b in self.meta.bodies:
-            prims = fx.body_primitives(b, scales.get(b.name, 1.0))
-            info = {"shape": b.shape.kind.value, "motion": b.motion.value}
-            entities.append(fx.entity(ns, b.name, f"body/{b.name}", info, **prims))
+        joints = () if self._scene_sent else self.meta.joints
+        self._scene_sent = True
+        by_topic = scene_entities(ns, self.meta.bodies, joints, scales)
         for s in solids:
             if s.body not in self._names:
                 raise ValueError(f"solid {s.node!r} is attached to unknown body {s.body!r}")
             prims = fx.solid_primitives(s.kind, s.center, s.radius, s.size, s.vertices)
-            entities.append(fx.entity(ns, s.body, f"solid/{s.body}/{s.node}", {"solid": s.node}, **prims))
-        self._write(tf.TOPIC_SCENE, ns, self._encoder.scene(entities))
+            by_topic[tf.TOPIC_SCENE].append(fx.entity(ns, s.body, f"solid/{s.body}/{s.node}", {"solid": s.node},
+                                                      **prims))  # fmt: skip
+        for topic, entities in by_topic.items():
+            self._write(topic, ns, self._encoder.scene(entities))
 
     def step(
         self,

@@ -12,7 +12,6 @@ from __future__ import annotations
 import dataclasses
 import json
 from collections.abc import Sequence
-from dataclasses import asdict
 from pathlib import Path
 from typing import Any
 
@@ -22,6 +21,7 @@ from runner.language.load import LoadedScenario
 from runner.sim.run import run_loaded, solid_visuals
 from runner.sim.session import RunResult
 from runner.trace.encoder import dumps
+from runner.trace.foxglove import body_spec_record
 from runner.view.display import ViewUnavailable, display_problem
 from runner.view.hud import Hud
 from runner.view.keys import RESERVED, named_events
@@ -56,10 +56,10 @@ def view_scenario(loaded: LoadedScenario, backend: str, out_dir: Path, *, record
         f"the scenario handles `{name}`, which the viewer keeps for itself ({RESERVED[name]}); it cannot be played"
         for name in sorted(set(program.handlers) & set(RESERVED))
     ]
-    specs = json.loads(dumps([asdict(b) for b in world.bodies]))  # as the trace's metadata has them
+    specs = json.loads(dumps([body_spec_record(b) for b in world.bodies]))  # as the trace's metadata has them
     model = SceneModel.from_specs(specs)
     model.updates = []
-    model.add_update(0.0, scene_entities(world.bodies, solid_visuals(program)))
+    model.add_update(0.0, scene_entities(world.bodies, solid_visuals(program), joints=world.joints))
     targets = [b.pos for b in world.bodies if b.shape.kind.value != "plane"]
     cam = LAB_CAMERA
     if camera == "auto":

@@ -31,7 +31,7 @@ RESERVED: Final = {
 }
 
 HELP_LINES: Final = (
-    "Esc close (the rest of the run goes on headless)   F1 this help   F2 collision solids",
+    "Esc close (the rest of the run goes on headless)   F1 this help   F2 collision shapes",
     "F3 pause / resume   F4 one step (paused)   F5 slower   F6 faster   F7 the lab's camera",
     "right-drag orbit   wheel zoom   other keys and clicks: the scenario's input events",
 )

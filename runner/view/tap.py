@@ -15,10 +15,11 @@ from typing import Any, Protocol
 
 from google.protobuf import json_format
 
-from backends.types import BodySpec
+from backends.types import BodySpec, JointSpec
 from reports import trace_format as tf
 from reports.scene3d.model import EntityVisual, entity_from_message
 from runner.trace import foxglove as fx
+from runner.trace import scene
 from runner.trace.writer import SolidVisual
 
 __all__ = ["TapListener", "TraceTap", "scene_entities"]
@@ -31,15 +32,11 @@ class TapListener(Protocol):
     def on_sound(self, t: float, name: str, action: str, offset: float, volume: float) -> None: ...
 
 
-def scene_entities(bodies: Sequence[BodySpec], solids: Sequence[SolidVisual] = (),
-                   scales: Mapping[str, float] | None = None) -> list[EntityVisual]:  # fmt: skip
-    """The entities one ``TraceWriter.scene`` call publishes, as a reader of the trace gets them back."""
-    scales = scales or {}
-    out = []
-    for b in bodies:
-        sh = b.shape
-        prims = fx.shape_primitives(sh.kind.value, sh.size, sh.radius, sh.length, b.color, scales.get(b.name, 1.0))
-        out.append(fx.entity(0, b.name, f"body/{b.name}", {"shape": sh.kind.value, "motion": b.motion.value}, **prims))
+def scene_entities(bodies: Sequence[BodySpec], solids: Sequence[SolidVisual] = (), scales: Mapping[str, float] | None
+                   = None, joints: Sequence[JointSpec] = ()) -> list[EntityVisual]:  # fmt: skip
+    """The entities one ``TraceWriter.scene`` call publishes (every topic), as a reader of the trace gets them
+    back."""
+    out = [e for entities in scene.scene_entities(0, bodies, joints, scales).values() for e in entities]
     for s in solids:
         prims = fx.solid_primitives(s.kind, s.center, s.radius, s.size, s.vertices)
         out.append(fx.entity(0, s.body, f"solid/{s.body}/{s.node}", {"solid": s.node}, **prims))
@@ -52,13 +49,17 @@ class TraceTap:
     def __init__(self, inner: Any, listener: TapListener) -> None:
         self._inner = inner
         self._listener = listener
+        self._drawn = False  # the joints are drawn with the first scene, as the writer does
 
     def __getattr__(self, name: str) -> Any:
         return getattr(self._inner, name)
 
     def scene(self, t: float, solids: Sequence[SolidVisual] = (), scales: Mapping[str, float] | None = None) -> None:
+        first = not self._drawn
+        self._drawn = True
         self._inner.scene(t, solids, scales)
-        self._listener.on_scene(t, scene_entities(self._inner.meta.bodies, solids, scales))
+        meta = self._inner.meta
+        self._listener.on_scene(t, scene_entities(meta.bodies, solids, scales, meta.joints if first else ()))
 
     def event(self, t: float, name: str, source: str, detail: Mapping[str, Any] | None = None) -> None:
         self._inner.event(t, name, source, detail)

@@ -54,6 +54,7 @@ class ViewWindow:
         n = max(1, len(self.scenes))
         for i, scene in enumerate(self.scenes):
             scene.set_solids_visible(self.solids)
+            scene.set_collision_visible(self.solids)
             lens = PerspectiveLens()
             lens.setNearFar(0.05, 2000.0)
             cam = base.makeCamera(base.win, displayRegion=(i / n, (i + 1) / n, 0.0, 1.0), lens=lens)
@@ -108,6 +109,7 @@ class ViewWindow:
             self.solids = not self.solids
             for scene in self.scenes:
                 scene.set_solids_visible(self.solids)
+                scene.set_collision_visible(self.solids)  # a model's collision shapes with them
             self.on_action("redraw")
         elif action == "help":
             self.hud.show_help = not self.hud.show_help

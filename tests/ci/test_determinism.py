@@ -2,8 +2,9 @@
 
 box_pile.yaml (five boxes stacking: many contacts, the most order-sensitive of the examples) runs in two
 `python -m runner` processes at once, with different string-hash seeds so that no set or dict order can leak
-into the result. About 1.5 s per backend. The guarantee holds for one engine version on one platform
-(docs/ci.md, "Determinism")."""
+into the result. About 1.5 s per backend. The KUKA arm (robots/kuka_arm.yaml) does the same on PyBullet: its
+scene holds the URDF's visual meshes (read by trimesh, simplified past a bound), which must come out alike.
+The guarantee holds for one engine version on one platform (docs/ci.md, "Determinism")."""
 
 from __future__ import annotations
 
@@ -19,16 +20,29 @@ from backends.registry import is_installed, list_backends
 from .conftest import SCENARIOS
 
 
+def _twice(scenario: Path, backend: str, tmp_path: Path) -> list[subprocess.Popen[str]]:
+    runs = []
+    for name, seed in (("a", "1"), ("b", "2")):
+        cmd = [sys.executable, "-m", "runner", "run", str(scenario), "--backend", backend,
+               "--out", str(tmp_path / name), "--quiet"]  # fmt: skip
+        env = {**os.environ, "PYTHONHASHSEED": seed}
+        runs.append(subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env))
+    return runs
+
+
+def test_a_robot_s_visual_meshes_give_identical_traces(tmp_path: Path) -> None:
+    for run in _twice(SCENARIOS / "robots" / "kuka_arm.yaml", "pybullet", tmp_path):
+        out, err = run.communicate(timeout=300)
+        assert run.returncode == 0, out + err
+    first, second = (tmp_path / n / "kuka-arm__base__pybullet.mcap" for n in "ab")
+    assert first.read_bytes() == second.read_bytes()
+
+
 @pytest.mark.parametrize("backend", [e.name for e in list_backends()])
 def test_fresh_processes_write_identical_traces(backend: str, tmp_path: Path) -> None:
     if not is_installed(backend):
         pytest.skip(f"engine not installed: {backend}")
-    runs = []
-    for name, seed in (("a", "1"), ("b", "2")):
-        cmd = [sys.executable, "-m", "runner", "run", str(SCENARIOS / "box_pile.yaml"), "--backend", backend,
-               "--out", str(tmp_path / name), "--quiet"]  # fmt: skip
-        env = {**os.environ, "PYTHONHASHSEED": seed}
-        runs.append(subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env))
+    runs = _twice(SCENARIOS / "box_pile.yaml", backend, tmp_path)
     for run in runs:
         out, err = run.communicate(timeout=300)
         assert run.returncode == 0, out + err  # every assertion of the pile passed: a real, settled run

@@ -154,3 +154,27 @@ def _run(path: Path, backend: str) -> Path:
     result = run_loaded(load_scenario(path, None), backend, out)
     assert result.trace is not None
     return Path(result.trace)
+
+
+#: kuka_iiwa/model.urdf's materials (Blue links 1, 2, 4, 5; Orange links 3, 6; Grey 0) and the scenario's red link 7
+KUKA_BLUE, KUKA_ORANGE, KUKA_RED = (0.5, 0.7, 1.0), (1.0, 0.423529411765, 0.0392156862745), (0.9, 0.2, 0.2)
+PATCH = 25  # pixels: a colour counts as drawn when it covers at least a 5 x 5 patch
+
+
+def test_a_robot_is_drawn_by_its_visual_meshes_in_their_materials(renderer: OffscreenRenderer) -> None:
+    """The KUKA arm's pictures show the URDF's <visual> meshes in their materials' colours (not the collision
+    hulls in one grey); its collision shapes (/scene/collision) are there but hidden until asked for."""
+    model = scene_model(read_trace(_run(HERE.parents[1] / "scenarios" / "robots" / "kuka_arm.yaml", "pybullet")))
+    at_start = model.entities_at(0.0)
+    assert {e.layer for e in at_start.values()} == {"body", "joint", "collision"}
+    scene = PandaScene(model)
+    camera = frame_camera([model])
+    scene.show(model.end_time)
+    image = np.asarray(renderer.render(scene, camera)).astype(float)
+    pixels = image.reshape(-1, 3)
+    for rgb in (KUKA_BLUE, KUKA_ORANGE, KUKA_RED):
+        assert sum(lit_like(p, rgb) for p in pixels) >= PATCH, rgb
+    scene.set_collision_visible(True)  # the translucent amber hulls over the meshes change the arm's pixels
+    scene.show(model.end_time)
+    hulls = np.asarray(renderer.render(scene, camera)).astype(float)
+    assert int((np.abs(hulls - image).sum(axis=2) > 20).sum()) >= PATCH

@@ -47,6 +47,7 @@ def test_the_layout_shows_the_scene_the_asserted_quantities_the_events_and_the_l
                                                          "RosOut!log"}  # fmt: skip
     scene = data["configById"]["3D!scene"]
     assert scene["followTf"] == tf.WORLD_FRAME and scene["topics"][tf.TOPIC_SCENE] == {"visible": True}
+    assert scene["topics"][tf.TOPIC_SCENE_COLLISION] == {"visible": False}  # a model's collision shapes: on demand
     plots = {p["label"]: p["value"] for _, paths in _plots(data).items() for p in paths}
     # assertions read box.vel.z (kick), box.pos.z (apex), door.vel.x, box-door contact, slider.position
     assert plots["box.vel.z"] == "/bodies.box.vel.z"

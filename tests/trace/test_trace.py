@@ -33,6 +33,7 @@ from reports.trace_reader import TraceReadError, read_trace
 from runner.errors import TraceError
 from runner.trace import foxglove as fx
 from runner.trace import output
+from runner.trace import scene as sc
 from runner.trace.writer import SolidVisual, TraceMeta, TraceWriter
 
 REPO = Path(__file__).resolve().parents[2]
@@ -191,7 +192,7 @@ def test_scene_entities_are_frame_locked_body_shapes_and_translucent_solids(trac
     scenes = [(ns, m) for topic, _, ns, m in messages if topic == "/scene"]
     assert [ns for ns, _ in scenes] == [0, round(20 * DT * 1e9)]
     first = {e.id: e for e in scenes[0][1].entities}
-    assert set(first) == {"body/floor", "body/box", "body/door", "solid/box/ball", "solid/door/lid"}
+    assert set(first) == {"body/floor", "body/box", "body/door", "solid/box/ball", "solid/door/lid", "joint/slider"}
     box = first["body/box"]
     assert (box.frame_id, box.frame_locked, box.lifetime.seconds, box.lifetime.nanos) == ("box", True, 0, 0)
     assert box.HasField("lifetime")
@@ -201,6 +202,8 @@ def test_scene_entities_are_frame_locked_body_shapes_and_translucent_solids(trac
     floor = first["body/floor"].cubes[0]
     assert floor.size.z == fx.PLANE_THICKNESS and floor.size.x >= 20
     assert floor.pose.position.z + floor.size.z / 2 == pytest.approx(0.0)  # top face = the plane
+    (grid,) = first["body/floor"].lines  # 1 m apart over the plane's width, both ways, just above it
+    assert len(grid.points) == 2 * 2 * (int(floor.size.x) + 1) and {p.z for p in grid.points} == {sc.GRID_LIFT}
     ball = first["solid/box/ball"].spheres[0]
     assert (ball.size.x, ball.size.y, ball.size.z) == (0.9, 0.9, 0.9) and ball.color.a < 1
     lid = first["solid/door/lid"]
@@ -209,6 +212,7 @@ def test_scene_entities_are_frame_locked_body_shapes_and_translucent_solids(trac
     rescaled = {e.id: e for e in scenes[1][1].entities}
     size = rescaled["body/box"].cubes[0].size
     assert (size.x, size.y, size.z) == (0.6, 0.4, 0.2)
+    assert "joint/slider" not in rescaled  # the joints are drawn once, frame-locked to their body
 
 
 def test_foxglove_channels_carry_foxglove_s_own_schemas(trace_file: Path) -> None:

@@ -115,3 +115,22 @@ def test_a_replay_plays_and_pauses_by_script(tmp_path: Path) -> None:
     assert done.returncode == 0, done.stderr
     t, _, mode = done.stdout.strip().splitlines()[-1].removeprefix("replay closed at t = ").partition(" s (")
     assert mode == "playing)" and float(t) >= 0.5, done.stdout
+
+
+#: kuka_iiwa/model.urdf's Blue and Orange materials; link 7 painted red by robots/kuka_arm.yaml
+KUKA_COLOURS = {"blue": (0.5, 0.7, 1.0), "orange": (1.0, 0.423529411765, 0.0392156862745), "red": (0.9, 0.2, 0.2)}
+PATCH = 25  # pixels: a colour counts as drawn when it covers at least a 5 x 5 patch
+
+
+def test_a_robot_is_drawn_by_its_visual_meshes(tmp_path: Path) -> None:
+    """`scenario view` of the KUKA arm shows the URDF's <visual> meshes in their materials' colours."""
+    need_panda3d()
+    script = tmp_path / "script.yaml"
+    script.write_text(f"- {{at: 1.0, screenshot: {tmp_path}/arm.png}}\n- {{at: 1.1, close: true}}\n")
+    arm = FACTORY.parent / "robots" / "kuka_arm.yaml"
+    done = scenario("view", str(arm), "--offscreen", "--script", str(script), "--camera", "auto",
+                    "--out", str(tmp_path / "live"), env=quiet_env())  # fmt: skip
+    assert done.returncode == 0, done.stderr
+    image = np.asarray(Image.open(tmp_path / "arm.png").convert("RGB"))
+    for name, rgb in KUKA_COLOURS.items():
+        assert centroid(image, rgb)[2] >= PATCH, name
