@@ -25,7 +25,7 @@ from dataclasses import replace
 import numpy as np
 
 from backends.geometry import quat_conj, quat_mul, quat_rotate
-from backends.types import PlacedShape
+from backends.types import PlacedShape, ShapeKind
 from runner.language.robot_desc import JointDesc, LinkDesc, vec
 
 #: a principal moment at most this fraction of the largest is none (cube_no_rotation.urdf: 5.6e-17 of 0.215)
@@ -114,6 +114,8 @@ def shape_points(placed: PlacedShape) -> np.ndarray:
         local = np.asarray(s.mesh.vertices, dtype=float).reshape(-1, 3)
     else:
         radius, length = s.radius, s.length
-        half = np.asarray(s.size, dtype=float) / 2 if any(s.size) else np.array([radius, radius, length / 2 or radius])
+        cap = radius if s.kind is ShapeKind.CAPSULE else 0.0  # a capsule's caps reach beyond its cylinder
+        along = length / 2 + cap or radius
+        half = np.asarray(s.size, dtype=float) / 2 if any(s.size) else np.array([radius, radius, along])
         local = np.array([[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)], dtype=float) * half
     return np.array([np.add(placed.pos, quat_rotate(placed.quat, vec(p))) for p in local])
