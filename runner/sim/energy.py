@@ -4,6 +4,7 @@ Nothing in a scene does work on its dynamic bodies except what the scenario driv
 energy), so their total mechanical energy
 
     E = sum over dynamic bodies of  1/2 m |v_c|^2  +  1/2 w^T I_world w  -  m g.p_c
+        + sum over joints with armature a or stiffness k of  1/2 a qdot^2  +  1/2 k (q - ref)^2
 
 at each body's centre of mass (``p_c = p + R com``, ``v_c = v + w x R com``: the states are the body
 frame's, a robot link's COM is off its frame) with its full inertia tensor in world axes (``I_world = R
@@ -141,6 +142,14 @@ class EnergyWatch:
         self.tensor = np.array([b.inertia_tensor() for b in bodies], float).reshape(-1, 3, 3) if turned else None
         self.gravity = np.asarray(world.gravity, float)
         self.motors = np.array([k for k, j in enumerate(world.joints) if j.motor is not None], dtype=int)
+        #: joints whose coordinate holds energy of its own: a rotor's (armature) kinetic energy 1/2 a qdot^2 and
+        #: a spring's (stiffness) 1/2 k (q - ref)^2, exchanged with the bodies' (docs/semantics.md, "Joint
+        #: dynamics"); without them a rotor slowing down would read as the bodies gaining energy
+        stored = [(k, j.dynamics) for k, j in enumerate(world.joints) if j.dynamics.armature or j.dynamics.stiffness]
+        self.stored = np.array([k for k, _ in stored], dtype=int)
+        self.armature = np.array([d.armature for _, d in stored], float)
+        self.stiffness = np.array([d.stiffness for _, d in stored], float)
+        self.springref = np.array([d.springref for _, d in stored], float)
         self.dt = world.dt
         g2 = float(self.gravity @ self.gravity)
         self.floor = float(self.mass.sum()) * g2 * world.dt * (WINDOW_STEPS * world.dt)
@@ -168,6 +177,11 @@ class EnergyWatch:
             self.work += float(np.abs(power).sum()) * self.dt
         kinetic, energy = body_energies(states, self.rows, self.mass, self.inertia, self.gravity, self.com, self.tensor)
         total = float(energy.sum()) - self.work
+        if self.stored.size:
+            rate, stretch = joints.velocity[self.stored], joints.position[self.stored] - self.springref
+            joint_kinetic = 0.5 * self.armature * rate * rate
+            total += float(np.nansum(joint_kinetic + 0.5 * self.stiffness * stretch * stretch))
+            kinetic = np.append(kinetic, np.nansum(joint_kinetic))
         entry = (total, energy)
         if self._driven:
             self._driven = False

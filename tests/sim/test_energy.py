@@ -24,6 +24,7 @@ import pytest
 
 from backends.fake import FakeBackend
 from backends.registry import entry, is_installed
+from backends.types import BodyStates, JointStates
 from runner.compile.program import build_program
 from runner.errors import EnergyGain
 from runner.exec.exits import classify
@@ -158,3 +159,43 @@ def test_the_mujoco_pile_of_100_is_caught(tmp_path: Path) -> None:
     )  # fmt: skip
     assert proc.returncode == 3, proc.stdout + proc.stderr
     assert "energy gain: body `crate_99` gained " in proc.stdout + proc.stderr
+
+
+ROTOR = f"""\
+schema_version: 1
+scenario: rotor
+world: {{gravity: [0, 0, -{G}], dt: {DT}, duration: 1}}
+bodies:
+  wheel: {{box: [0.2, 0.2, 0.2], mass: 2, pos: [0, 0, 1]}}
+joints:
+  axle: {{type: hinge, bodies: [wheel, environment], axis: [0, 0, 1], dynamics: {{armature: {{a}}}}}}
+"""
+
+
+@pytest.mark.parametrize("armature", [0.01, 0.5, 20.0])
+def test_a_rotor_s_energy_given_to_the_bodies_is_no_gain(armature: float, tmp_path: Path) -> None:
+    """A joint's armature (a rotor's reflected inertia) holds kinetic energy 1/2 a qdot^2 of its own: when the
+    rotor slows and the body speeds up by the same energy, nothing was gained. The wheel (I = m s^2/6 about z)
+    is given the rotor's energy exactly: the check passes; the same body energy with no rotor energy before
+    it is a gain beyond the bound (the body's whole kinetic energy above a reference with none)."""
+    path = tmp_path / "rotor.yaml"
+    path.write_text(ROTOR.replace("{a}", repr(armature)))
+    world = build_program(load_scenario(path, None)).world
+    inertia_z = 2 * 0.2**2 / 6
+    rotor_rate = math.sqrt(2 * 5.0 / armature)  # 5 J in the rotor: well above the bound's floor (0.48 J here)
+    body_rate = math.sqrt(armature / inertia_z) * rotor_rate  # 1/2 I w^2 = 1/2 a rotor_rate^2
+
+    def states(w: float) -> BodyStates:
+        return BodyStates(np.array([[0.0, 0.0, 1.0]]), np.array([[1.0, 0.0, 0.0, 0.0]]), np.zeros((1, 3)),
+                          np.array([[0.0, 0.0, w]]))  # fmt: skip
+
+    def joints(rate: float) -> JointStates:
+        return JointStates(np.zeros(1), np.array([rate]), np.zeros(1))
+
+    watch = EnergyWatch(world, "fake")
+    watch.check(DT, states(0.0), joints(rotor_rate))
+    watch.check(2 * DT, states(body_rate), joints(0.0))  # the rotor's energy moved into the wheel: no raise
+    fresh = EnergyWatch(world, "fake")
+    fresh.check(DT, states(0.0), joints(0.0))
+    with pytest.raises(EnergyGain):
+        fresh.check(2 * DT, states(body_rate), joints(0.0))  # the same energy from nowhere
