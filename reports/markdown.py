@@ -15,6 +15,7 @@ from reports.charts.style import looks as make_looks
 from reports.headline import amount
 from reports.html_case import agreement_word, groups_text
 from reports.html_charts import quantity_axis, truth_name
+from reports.markdown_text import text
 from reports.report_files import IMAGES_DIR, MD_MARK
 from reports.scene_pictures import CasePictures
 
@@ -22,19 +23,6 @@ __all__ = ["IMAGES_DIR", "MAX_LINES", "markdown_images", "render_markdown", "tex
 
 MAX_LINES = 20
 PICTURES_PER_CASE = 4
-
-
-#: the characters that can start Markdown (CommonMark and GitHub's extensions: emphasis, links, images,
-#: raw HTML, entities, tables, strikethrough, math, autolinks, headings' closing ``#``), escaped in user text
-_MARKUP = re.compile(r"([\\`*_{}\[\]<>#!|~&:@$^])")
-
-
-def text(value: object) -> str:
-    """``value`` (a name, description or message from a scenario or a trace) as Markdown that renders as
-    itself: one line, every character that could start markup backslash-escaped (also inside table cells,
-    where ``\\|`` is GitHub's escape of the cell separator)."""
-    one_line = " ".join(str(value).splitlines()) if value is not None else ""
-    return _MARKUP.sub(r"\\\1", one_line)
 
 
 def _num(v: float | None, unit: str = "") -> str:
