@@ -26,9 +26,9 @@ import numpy as np
 from mcap.data_stream import ReadDataStream
 from mcap.opcode import Opcode
 from mcap.records import Attachment, Channel, Chunk, Footer, Header, Message, Metadata, Schema
-from mcap.stream_reader import breakup_chunk
 
 from reports import trace_format as tf
+from reports.trace_chunks import chunk_records
 from reports.trace_decode import MessageDecoder, body_arrays
 
 __all__ = [
@@ -245,7 +245,7 @@ def _record(opcode: int, body: bytes) -> list[Any]:
             raise ValueError(f"a chunk declares {size} bytes uncompressed (at most {MAX_CHUNK_BYTES} are read)")
     record = read(ReadDataStream(io.BytesIO(body)), len(body))
     if isinstance(record, Chunk):
-        return list(breakup_chunk(record, validate_crc=True))
+        return chunk_records(record)
     return [record]
 
 
