@@ -259,12 +259,15 @@ def loads(text: str, origin: str = "<golden>") -> Recording:
     rows: Rows = {"body": {}, "joint": {}, "var": {}}
     steps: dict[int, int] = {}  # step -> the line that first sampled it
     where: dict[str, int] = {}  # header key -> its line
+    first_lines: dict[str, dict[str, int]] = {kind: {} for kind in rows}  # kind -> name -> its first line
     for number, line in enumerate(text.splitlines(), 1):
         if not line.strip() or line.startswith("#"):
             continue
         found = list(_TOKEN.finditer(line))
         try:
             _parse_line(rec, [m.group() for m in found], rows, steps, number, where)
+            if found[0].group() in first_lines and len(found) > 2:
+                first_lines[found[0].group()].setdefault(_untok(found[2].group()), number)
         except _Bad as exc:
             column = found[min(exc.token, len(found) - 1)].start() + 1
             raise BaselineError(f"{origin}:{number}:{column}: {exc}") from None
@@ -286,7 +289,7 @@ def loads(text: str, origin: str = "<golden>") -> Recording:
     if stray:
         raise BaselineError(f"{origin}:{steps[stray[0]]}: a state line at step {stray[0]}, off the grid of every "
                             f"{every} step(s) up to step {last}")  # fmt: skip
-    _fill(rec, rows, origin)
+    _fill(rec, rows, origin, first_lines)
     return rec
 
 
@@ -358,9 +361,10 @@ def _parse_line(rec: Recording, tokens: list[str], rows: Rows, steps: dict[int, 
         if "dt" not in rec.header:
             raise _Bad(f"a `{kind}` line before the header's `dt`", 0)
         time = _number(tokens, 1, f"{kind} time", low=0.0)
-        step = round(time / float(rec.header["dt"]))
-        if step > MAX_STEPS:
-            raise _Bad(f"{kind} time: {tokens[1]} s is more than {MAX_STEPS} steps", 1)
+        ratio = time / float(rec.header["dt"])  # inf for a time over a subnormal dt
+        if not ratio <= MAX_STEPS:
+            raise _Bad(f"{kind} time: {tokens[1]} s is more than {MAX_STEPS} steps of dt {rec.header['dt']}", 1)
+        step = round(ratio)
         steps.setdefault(step, number)
         name = _untok(tokens[2])
         if kind == "body":
@@ -388,12 +392,14 @@ def _parse_line(rec: Recording, tokens: list[str], rows: Rows, steps: dict[int, 
         raise _Bad(f"unknown line kind `{kind}`", 0)
 
 
-def _fill(rec: Recording, rows: Rows, origin: str) -> None:
+def _fill(rec: Recording, rows: Rows, origin: str, lines: dict[str, dict[str, int]]) -> None:
     """Rows per sampled step, carrying a value forward where its line was left out."""
     for kind, series in rows.items():
         for name, by_step in series.items():
             if not rec.steps or rec.steps[0] not in by_step:
-                raise BaselineError(f"{origin}: {kind} `{name}` has no line at the first sample")
+                first = min(by_step)
+                raise BaselineError(f"{origin}:{lines[kind][name]}: {kind} `{name}` has no line at the first sample "
+                                    f"(t = 0); its first is at step {first}")  # fmt: skip
             out: list[list[Any]] = []
             current = by_step[rec.steps[0]]
             for k in rec.steps:

@@ -127,3 +127,11 @@ def test_a_nan_tolerance_no_longer_hides_a_difference(tmp_path: Path) -> None:
     text = text.replace("body 0.2 box pos 0 0 1.7057", "body 0.2 box pos 0 0 7.4057")
     with pytest.raises(BaselineError, match=r"g\.golden:\d+:\d+: `tolerance pos atol`: expected a finite number"):
         loads(text, "g.golden")
+
+
+def test_a_subnormal_dt_refuses_the_first_time_it_cannot_count_in_steps() -> None:
+    """`dt 1e-320` is a number > 0, but 0.2 s is then inf steps (it was an OverflowError, exit 70)."""
+    text = dumps(recording()).replace("dt 0.1\n", "dt 1e-320\n")
+    number = next(i for i, line in enumerate(text.splitlines(), 1) if line.startswith("body 0.2 box"))
+    with pytest.raises(BaselineError, match=rf"^g\.golden:{number}:6: body time: 0\.2 s is more than"):
+        loads(text, "g.golden")
