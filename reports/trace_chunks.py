@@ -6,7 +6,8 @@ declares are inflated whole (a 40 KB chunk of 16 frames of zeros declaring 100 b
 data are inflated with no bound at all, and inflated zeros read as millions of empty records of opcode 0,
 one Python loop each (minutes for one chunk). Here the inflation stops one byte past the declared size
 (more is damage), the inflated bytes must have the declared size and CRC, and a record other than a
-schema, channel or message (opcode 0 included) is damage at once.
+schema, channel or message (opcode 0 included) is damage at once. A protobuf schema must build into a
+descriptor pool (:func:`check_schema`): the scene and the report build one from it.
 """
 
 from __future__ import annotations
@@ -20,7 +21,7 @@ from mcap.data_stream import ReadDataStream
 from mcap.opcode import Opcode
 from mcap.records import Channel, Chunk, Message, Schema
 
-__all__ = ["chunk_records", "inflate"]
+__all__ = ["check_schema", "chunk_records", "inflate"]
 
 _PIECE = 1 << 20
 
@@ -79,3 +80,27 @@ def chunk_records(chunk: Chunk) -> list[Any]:
         out.append(read(ReadDataStream(io.BytesIO(body)), length))
         at += 9 + length
     return out
+
+
+def check_schema(schema: Schema) -> None:
+    """A protobuf schema whose descriptors do not build (a flipped bit) is damage: ``ValueError``."""
+    if schema.encoding != "protobuf":
+        return
+    from google.protobuf import descriptor_pb2, descriptor_pool
+    from google.protobuf.message import DecodeError
+
+    try:
+        files = descriptor_pb2.FileDescriptorSet.FromString(schema.data)
+        pool = descriptor_pool.DescriptorPool()
+        pending = list(files.file)
+        while pending:  # each file after the files it depends on
+            done = {f.name for f in files.file if f not in pending}
+            added = [f for f in pending if all(d in done for d in f.dependency)]
+            if not added:
+                raise ValueError("it does not carry every file it depends on")
+            for f in added:
+                pool.Add(f)
+            pending = [f for f in pending if f not in added]
+        pool.FindMessageTypeByName(schema.name)
+    except (DecodeError, TypeError, KeyError, ValueError) as exc:
+        raise ValueError(f"the schema {schema.name[:80]!r} is damaged: {str(exc)[:200]}") from None
