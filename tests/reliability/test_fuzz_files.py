@@ -27,6 +27,7 @@ import signal
 import subprocess
 import sys
 import time
+import traceback
 from collections import Counter
 from collections.abc import Callable, Iterator
 from pathlib import Path
@@ -117,9 +118,28 @@ def bounded(kind: str, how: str, work: Callable[[], str]) -> None:
                                      f"largest peak added {max(peaks):.0f} MB"] = len(times)  # fmt: skip
 
 
-def refused(exc: BaseException, *places: Path, how: str) -> str:
-    """``exc`` as the CLI reports it: never exit 70; an exit 2 names one of ``places`` with a line."""
+#: the cases that ended in exit 70, by kind: every one is listed by the last test (none may be left), so that
+#: a long run names every kind of crash it met rather than stopping at the first
+CRASHES: dict[str, list[str]] = {}
+
+
+def crashed(kind: str, exc: BaseException, how: str) -> str:
+    where = next((f"{f.filename.rsplit('/', 1)[-1]}:{f.lineno}" for f in reversed(_frames(exc))
+                  if "/tests/" not in f.filename and "site-packages" not in f.filename), "?")  # fmt: skip
+    CRASHES.setdefault(kind, []).append(f"{type(exc).__name__} at {where}: {str(exc)[:120]} <- {how}")
+    return "exit 70"
+
+
+def _frames(exc: BaseException) -> list[traceback.FrameSummary]:
+    return list(traceback.extract_tb(exc.__traceback__))
+
+
+def refused(exc: BaseException, *places: Path, how: str, kind: str = "") -> str:
+    """``exc`` as the CLI reports it: never exit 70 (recorded for :func:`test_no_case_ended_in_exit_70`
+    where ``kind`` is given, else failed at once); an exit 2 names one of ``places`` with a line."""
     found = classify(exc)
+    if kind and found.code == ExitCode.INTERNAL_ERROR:
+        return crashed(kind, exc, how)
     assert found.code != ExitCode.INTERNAL_ERROR, f"exit 70 ({found.message[:300]}) for: {how}"
     if found.code == ExitCode.BAD_INPUT:
         located = any(re.search(rf"{re.escape(str(p))}:\d+", found.message) for p in places)
@@ -146,7 +166,7 @@ def test_a_mutated_model_file_loads_or_is_refused_at_its_line(folder: Path, data
         try:
             build_program(load_scenario(scenario))
         except Exception as exc:  # noqa: BLE001 - classified as the CLI does
-            return refused(exc, scenario, model, how=f"{seed}: {mutated.how}")
+            return refused(exc, scenario, model, how=f"{seed}: {mutated.how}", kind="model files")
         return "exit 0"
 
     bounded("model files", f"{seed}: {mutated.how}", work)
@@ -259,6 +279,12 @@ def test_a_damaged_trace_is_read_recovered_or_refused_naming_it(folder: Path, tr
         return ", ".join(outcomes)
 
     bounded("traces", mutated.how, work)
+
+
+def test_no_case_ended_in_exit_70() -> None:
+    """Every crash the model-file fuzzing met, one line each with where it was raised and the mutation."""
+    found = [f"{kind}: {line}" for kind, lines in CRASHES.items() for line in lines]
+    assert not found, f"{len(found)} cases ended in exit 70:\n" + "\n".join(sorted(set(found))[:60])
 
 
 def test_the_bomb_is_what_it_says() -> None:
