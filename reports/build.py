@@ -41,7 +41,6 @@ from reports.truth import Reference
 __all__ = ["ReportError", "ReportFiles", "dumps", "write_report"]
 
 
-
 @dataclass(frozen=True)
 class ReportFiles:
     document: dict[str, Any]
