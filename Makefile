@@ -7,7 +7,7 @@ STAMP := $(VENV)/.installed
 CACHE ?= $(or $(XDG_CACHE_HOME),$(HOME)/.cache)/physics-scenarios
 FOXGLOVE_STUDIO := $(CACHE)/foxglove-studio
 
-.PHONY: demo test lint setup clean sounds schema conformance baselines bench bench-quick fuzz proto foxglove editor-tools
+.PHONY: demo test lint setup clean sounds schema conformance baselines bench bench-quick fuzz fuzz-files proto foxglove editor-tools
 # npm packages used by tests (the editor schema's language-server test), kept outside the repository
 NPM_PREFIX ?= $(or $(XDG_CACHE_HOME),$(HOME)/.cache)/physics-scenarios/npm
 YAML_LANGUAGE_SERVER := yaml-language-server@1.25.0
@@ -45,7 +45,11 @@ baselines: $(STAMP)
 	$(BIN)/scenario baseline scenarios/*.yaml --backend pybullet,mujoco,dart,ode --baseline baselines
 
 fuzz: $(STAMP)
-	FUZZ_CASES=20000 FUZZ_STRUCTURED=20000 FUZZ_FAULTS=200 FUZZ_CONCURRENT=20 $(BIN)/python -m pytest -q -p no:cacheprovider tests/reliability
+	FUZZ_CASES=20000 FUZZ_STRUCTURED=20000 FUZZ_FILES=5000 FUZZ_FAULTS=200 FUZZ_CONCURRENT=20 $(BIN)/python -m pytest -q -p no:cacheprovider tests/reliability
+
+# the 20,000 input files of `make fuzz` alone (model files, WAVs, golden files, traces: 5,000 each)
+fuzz-files: $(STAMP)
+	FUZZ_FILES=5000 $(BIN)/python -m pytest -q -p no:cacheprovider tests/reliability/test_fuzz_files.py
 
 editor-tools:
 	mkdir -p $(NPM_PREFIX)

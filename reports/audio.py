@@ -10,6 +10,7 @@ clip. Pure numpy and the standard library's ``wave``; the same trace gives the s
 from __future__ import annotations
 
 import io
+import struct
 import wave
 from collections.abc import Sequence
 
@@ -29,8 +30,10 @@ def decode_wav(data: bytes) -> tuple[np.ndarray, int]:
         with wave.open(io.BytesIO(data), "rb") as w:
             channels, width, rate, n = w.getnchannels(), w.getsampwidth(), w.getframerate(), w.getnframes()
             raw = w.readframes(n)
-    except (wave.Error, EOFError) as exc:
-        raise ValueError(f"not a PCM WAV file: {exc}") from exc
+    except (wave.Error, EOFError, RuntimeError, ValueError, OverflowError, struct.error) as exc:
+        raise ValueError(f"not a PCM WAV file: {exc or type(exc).__name__}") from exc
+    if rate <= 0 or channels <= 0:  # a crafted attachment: mixing divides by the rate
+        raise ValueError(f"not a PCM WAV file: a sample rate of {rate} Hz, {channels} channels")
     if width == 1:
         samples = (np.frombuffer(raw, dtype=np.uint8).astype(float) - 128.0) / 128.0
     elif width == 2:

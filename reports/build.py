@@ -6,7 +6,8 @@ comparison's report and one rebuilt later from its traces are the same function 
 the same bytes). report.json is the comparison document (docs/report-schema.md, checked by
 docs/report.schema.json) as deterministic text: keys in the document's order, compact separators,
 floats as Python's shortest repr, no NaN (missing values are null), UTF-8. Every file is written beside
-its final name and renamed into place; pictures left from an earlier report are removed.
+its final name and renamed into place; pictures left from an earlier report are removed; nothing that is
+not the tool's own is replaced or removed (reports.report_files).
 """
 
 from __future__ import annotations
@@ -17,17 +18,27 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
+from urllib.parse import quote
 
 from reports.compare_data import build_document
 from reports.html import LAYOUT_NAME, render_html
-from reports.markdown import IMAGES_DIR, markdown_images, render_markdown
+from reports.markdown import markdown_images, render_markdown
+from reports.report_files import (
+    HTML_NAME,
+    IMAGES_DIR,
+    JSON_NAME,
+    MD_NAME,
+    foreign,
+    refusal,
+    remove_stale_images,
+    tag_png,
+    write_file,
+)
 from reports.runs import ReportError, Run, load_runs
 from reports.scene_pictures import CasePictures, case_pictures
 from reports.truth import Reference
 
 __all__ = ["ReportError", "ReportFiles", "dumps", "write_report"]
-
-JSON_NAME, HTML_NAME, MD_NAME = "report.json", "report.html", "report.md"
 
 
 @dataclass(frozen=True)
@@ -47,17 +58,10 @@ def dumps(doc: dict[str, Any]) -> str:
     return json.dumps(doc, separators=(",", ":"), allow_nan=False, ensure_ascii=False) + "\n"
 
 
-def _write(path: Path, data: str | bytes) -> None:
-    tmp = path.with_name(path.name + ".partial")
-    if isinstance(data, str):
-        tmp.write_text(data, encoding="utf-8")
-    else:
-        tmp.write_bytes(data)
-    os.replace(tmp, path)
-
-
 def _relative(target: Path, out_dir: Path) -> str:
-    return Path(os.path.relpath(target.resolve(), out_dir.resolve())).as_posix()
+    """A link from the report to ``target``: relative, percent-encoded and prefixed ``./``, so that no
+    folder's name (``javascript:alert(1)``) can read as a URL scheme, a query or a fragment."""
+    return "./" + quote(Path(os.path.relpath(target.resolve(), out_dir.resolve())).as_posix(), safe="/")
 
 
 def _links(doc: dict[str, Any], runs: Sequence[Run], out_dir: Path) -> tuple[list[dict[str, str | None]], str | None]:
@@ -96,9 +100,11 @@ def write_report(
     max_divergence: float | None = None,
     references: Sequence[Reference] = (),
     require_agreement: bool = False,
+    force: bool = False,
 ) -> ReportFiles:
     """Read the runs named by ``paths`` (trace, partial trace, outcome or cost files, or folders) and
-    write the reports into ``out_dir``; ``references`` are analytic truths (reports.truth.Reference)."""
+    write the reports into ``out_dir``; ``references`` are analytic truths (reports.truth.Reference). Files
+    in ``out_dir`` that this tool did not write are refused (:mod:`reports.report_files`) unless ``force``."""
     runs = load_runs(paths)
     doc = build_document(runs, reference=reference, max_divergence=max_divergence, references=references,
                          require_agreement=require_agreement)
@@ -107,20 +113,25 @@ def write_report(
         out_dir.mkdir(parents=True, exist_ok=True)
         pictures = _pictures(doc, runs)
         links, layout = _links(doc, runs, out_dir)
-        images = markdown_images(doc, pictures)
+        images = {name: tag_png(png) for name, png in markdown_images(doc, pictures).items()}
+        left = foreign(out_dir, images)
+        if left and not force:
+            raise ReportError(refusal(left))
         files = ReportFiles(doc, out_dir / JSON_NAME, out_dir / HTML_NAME, out_dir / MD_NAME)
         folder = out_dir / IMAGES_DIR
+        if force and left:
+            for path in left:
+                if path.is_dir() and not path.is_symlink():
+                    raise ReportError(f"cannot replace {path}: it is a folder")
+                path.unlink()
         if images:
             folder.mkdir(exist_ok=True)
         for name, data in images.items():
-            _write(folder / name, data)
-        if folder.is_dir():
-            for stale in folder.iterdir():
-                if stale.is_file() and stale.name not in images:
-                    stale.unlink()
-        _write(files.json, dumps(doc))
-        _write(files.markdown, render_markdown(doc, images, links, layout))
-        _write(files.html, render_html(doc, runs, pictures, links, layout))
+            write_file(folder / name, data)
+        remove_stale_images(folder, images)
+        write_file(files.json, dumps(doc))
+        write_file(files.markdown, render_markdown(doc, images, links, layout))
+        write_file(files.html, render_html(doc, runs, pictures, links, layout))
     except OSError as exc:
         raise ReportError(f"cannot write the report into {out_dir}: {exc.strerror or exc}") from exc
     return files

@@ -15,7 +15,6 @@ how each compares with that engine's run), why an engine departs where the data 
 
 from __future__ import annotations
 
-import json
 from collections.abc import Sequence
 from importlib.metadata import PackageNotFoundError, version
 from typing import Any
@@ -31,6 +30,7 @@ from reports.events_data import compare_events
 from reports.headline import headline, merge
 from reports.moments import key_moments
 from reports.quantities import KINDS, UNITS, quantities, truth_wins
+from reports.quantities import specs as body_joint_specs
 from reports.runs import ReportError, Run
 from reports.trace_reader import Trace
 from reports.truth import Reference, stated_values
@@ -115,7 +115,7 @@ def _verdict_matrix(runs: Sequence[Run]) -> dict[str, Any]:
 
 
 def _moving_bodies(trace: Trace) -> list[str]:
-    specs = json.loads(trace.scenario.get(tf.KEY_BODY_SPECS, "[]"))
+    specs = body_joint_specs(trace, tf.KEY_BODY_SPECS)
     static = {s["name"] for s in specs if s.get("motion") == "static"}
     return [b for b in trace.bodies if b not in static]
 

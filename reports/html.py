@@ -29,6 +29,7 @@ from reports.charts import render
 from reports.charts.style import looks as make_looks
 from reports.headline import amount as fmt_amount
 from reports.html_charts import deviation_charts, event_charts, trajectory_charts
+from reports.report_files import HTML_MARK
 from reports.runs import Run
 from reports.scene_pictures import CasePictures
 
@@ -225,7 +226,7 @@ def render_html(doc: dict[str, Any], runs: list[Run], pictures: list[CasePicture
     gate = " and --max-divergence" if doc["max_divergence"] is not None else ""
     gate += "; the engines must agree (--require-agreement)" if doc["require_agreement"] else ""
     return (
-        '<!DOCTYPE html>\n<html lang="en"><head><meta charset="utf-8">'
+        f'<!DOCTYPE html>\n<html lang="en"><head><meta charset="utf-8">{HTML_MARK}'
         '<meta name="viewport" content="width=device-width, initial-scale=1">'
         f'<link rel="icon" href="data:,"><title>{escape(title)}</title><style>{_asset("report.css")}</style></head>'
         f"<body><h1>{escape(title)}</h1>"

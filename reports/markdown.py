@@ -7,6 +7,7 @@ from __future__ import annotations
 import math
 import re
 from typing import Any
+from urllib.parse import quote, unquote
 
 from reports.charts import render
 from reports.charts.specs import Rule, Series, line_chart
@@ -14,17 +15,14 @@ from reports.charts.style import looks as make_looks
 from reports.headline import amount
 from reports.html_case import agreement_word, groups_text
 from reports.html_charts import quantity_axis, truth_name
+from reports.markdown_text import text
+from reports.report_files import IMAGES_DIR, MD_MARK
 from reports.scene_pictures import CasePictures
 
-__all__ = ["IMAGES_DIR", "MAX_LINES", "markdown_images", "render_markdown"]
+__all__ = ["IMAGES_DIR", "MAX_LINES", "markdown_images", "render_markdown", "text"]
 
-IMAGES_DIR = "report-images"
 MAX_LINES = 20
 PICTURES_PER_CASE = 4
-
-
-def _cell(text: str) -> str:
-    return text.replace("|", "\\|").replace("\n", " ")
 
 
 def _num(v: float | None, unit: str = "") -> str:
@@ -73,9 +71,10 @@ def _case_pictures(i: int, case: dict[str, Any], images: dict[str, bytes]) -> li
         names = sorted(n for n in images if n.startswith(f"{stem}-m{k}-"))
         for name in names:
             who = name[len(f"{stem}-m{k}-") : -4].replace("+", ", ")
-            shots.append(f"![{case['variant']}, t = {moments[k]['t']:g} s, {who}]({IMAGES_DIR}/{name})")
+            shots.append(f"![{text(case['variant'])}, t = {moments[k]['t']:g} s, {text(who)}]"
+                         f"(./{IMAGES_DIR}/{quote(name)})")  # fmt: skip
     if f"{stem}-deviation.png" in images:
-        shots.append(f"![{case['variant']}: deviation over time]({IMAGES_DIR}/{stem}-deviation.png)")
+        shots.append(f"![{text(case['variant'])}\\: deviation over time](./{IMAGES_DIR}/{quote(stem)}-deviation.png)")
     return shots
 
 
@@ -85,9 +84,10 @@ def _agreement_lines(h: dict[str, Any]) -> list[str]:
     for d in h["agreement"]["departures"]:
         c = d.get("cause")
         if c:
-            out.append(f"- **{d['backend']}** departs: {c['body']} {amount(c['measured'], 'm')} off its joint, the sag "
-                       f"ERP {c['erp']:g} / CFM {c['cfm']:g} predict for {c['load']:.4g} N at h = {c['h']:g} s: "
-                       f"{amount(c['predicted'], 'm')} (± {c['margin']:.0%}); see `{c['link']}`")  # fmt: skip
+            out.append(f"- **{text(d['backend'])}** departs: {text(c['body'])} {amount(c['measured'], 'm')} off "
+                       f"its joint, the sag ERP {c['erp']:g} / CFM {c['cfm']:g} predict for {c['load']:.4g} N at "
+                       f"h = {c['h']:g} s: "
+                       f"{amount(c['predicted'], 'm')} (± {c['margin']:.0%}); see {text(c['link'])}")  # fmt: skip
     return ["", *out] if out else []
 
 
@@ -95,21 +95,21 @@ def render_markdown(doc: dict[str, Any], images: dict[str, bytes], links: list[d
                     layout: str | None) -> str:  # fmt: skip
     backends = doc["backends"]
     h, s, t = doc["headline"], doc["summary"], doc["thresholds"]
-    scenarios = ", ".join(dict.fromkeys(c["scenario"] for c in doc["cases"]))
+    scenarios = ", ".join(text(s) for s in dict.fromkeys(c["scenario"] for c in doc["cases"]))
     limit = f"; `--max-divergence` {doc['max_divergence']:g} m" if doc["max_divergence"] is not None else ""
     limit += "; `--require-agreement`" if doc["require_agreement"] else ""
-    elsewhere = (f"against **{doc['reference']}**'s run elsewhere" if doc["comparison"] == "reference" else
+    elsewhere = (f"against **{text(doc['reference'])}**'s run elsewhere" if doc["comparison"] == "reference" else
                  "compared with the other engines elsewhere (no engine is the truth: a majority names the engines "
                  "that depart)")  # fmt: skip
     out = [
-        f"## Backend comparison: {scenarios} — {'✅ PASS' if h['badge'] == 'PASS' else '❌ FAIL'}: {h['text']}",
+        f"{MD_MARK} {scenarios} — {'✅ PASS' if h['badge'] == 'PASS' else '❌ FAIL'}: {text(h['text'])}",
         "",
         f"{s['ok']}/{s['runs']} runs pass their assertions. Each engine is measured against the truth where one is "
         f"known (values the assertions state, joint constraints, analytic references) and {elsewhere}. Thresholds: "
         f"positions {t['position']:g} m, angles {t['angle']:.3g} rad ({math.degrees(t['angle']):.3g}°){limit}.",
         *_agreement_lines(h),
         "",
-        "| variant | verdict | " + " | ".join(backends) + " |",
+        "| variant | verdict | " + " | ".join(text(b) for b in backends) + " |",
         "|---|---|" + "---|" * len(backends),
     ]  # fmt: skip
     lines: list[str] = []
@@ -128,35 +128,38 @@ def render_markdown(doc: dict[str, Any], images: dict[str, bytes], links: list[d
             limits = (
                 f", ⚠️ {a['known_limits']} known limit{'s' * (a['known_limits'] > 1)}" if a.get("known_limits") else ""
             )
-            cells.append(_cell(f"{'✅' if ok else '❌'} {a['passed']}/{a['total']}{limits}"
-                               f"{'' if ok else ' ' + r['label']} · {agree}"))  # fmt: skip
+            cells.append(f"{'✅' if ok else '❌'} {a['passed']}/{a['total']}{limits}"
+                         f"{'' if ok else ' ' + text(r['label'])} · {text(agree)}")  # fmt: skip
             for name in case["verdicts"]["assertions"]:
                 v = case["verdicts"]["cells"][name].get(b)
                 if v is not None and v.get("status") == "known limit":
-                    lines.append(f"- `{case['variant']}` · {b}: **{name}** ⚠️ {_cell(v['message'])}")
+                    lines.append(f"- {text(case['variant'])} · {text(b)}: **{text(name)}** ⚠️ {text(v['message'])}")
                 elif v is not None and v["passed"] is not True:
-                    lines.append(f"- `{case['variant']}` · {b}: **{name}** measured {v['measured']}, "
-                                 f"expected {v['expected']}")  # fmt: skip
+                    lines.append(f"- {text(case['variant'])} · {text(b)}: **{text(name)}** measured "
+                                 f"{text(v['measured'])}, expected {text(v['expected'])}")  # fmt: skip
             if r["outcome"] is not None or r["status"] not in ("passed", "failed"):
                 detail = f": {r['detail'][:200]}" if r["detail"] else ""
-                lines.append(f"- `{case['variant']}` · {b}: {r['label']}{_cell(detail)}")
+                lines.append(f"- {text(case['variant'])} · {text(b)}: {text(r['label'])}{text(detail)}")
         ch = case["headline"]
         mark = "✅" if ch["badge"] == "PASS" else "❌"
-        out.append(f"| {_cell(case['variant'])} | {mark} {_cell(ch['text'])} | " + " | ".join(cells) + " |")
+        out.append(f"| {text(case['variant'])} | {mark} {text(ch['text'])} | " + " | ".join(cells) + " |")
         for q in case["quantities"]:
             verdict = q.get("agreement")
             if verdict is not None and (q["diverging"] or verdict["no_majority_from"] is not None):
-                who = "; ".join(f"{d['backend']} departs from {', '.join(d['majority'])} from {d['from']:g} s, up to "
-                                f"{_num(d['max'], q['unit'])}" for d in verdict["departures"])  # fmt: skip
+                who = "; ".join(f"{text(d['backend'])} departs from {text(', '.join(d['majority']))} from "
+                                f"{d['from']:g} s, up to {text(_num(d['max'], q['unit']))}"
+                                for d in verdict["departures"])  # fmt: skip
                 split = (f"no majority from {verdict['no_majority_from']:g} s"
                          if verdict["no_majority_from"] is not None else "")  # fmt: skip
-                lines.append(f"- `{case['variant']}` · **{q['label']}** (engines compared, threshold "
-                             f"{q['threshold']:g} {q['unit']}; groups {_cell(groups_text(q))}): "
+                lines.append(f"- {text(case['variant'])} · **{text(q['label'])}** (engines compared, threshold "
+                             f"{q['threshold']:g} {text(q['unit'])}; groups {text(groups_text(q))}): "
                              f"{'; '.join(x for x in (who, split) if x)}")  # fmt: skip
             elif q["diverging"]:
-                who = ", ".join(f"{b} {_num(q['deviation'][b]['max'], q['unit'])}" for b in q["diverging"])
-                lines.append(f"- `{case['variant']}` · **{q['label']}** (against {truth_name(q)}, threshold "
-                             f"{q['threshold']:g} {q['unit']}): {who}, from {q['first_over']:g} s")  # fmt: skip
+                who = ", ".join(f"{text(b)} {text(_num(q['deviation'][b]['max'], q['unit']))}"
+                                for b in q["diverging"])  # fmt: skip
+                lines.append(f"- {text(case['variant'])} · **{text(q['label'])}** (against {text(truth_name(q))}, "
+                             f"threshold {q['threshold']:g} {text(q['unit'])}): {who}, "
+                             f"from {q['first_over']:g} s")  # fmt: skip
     if lines:
         out += ["", "### Problems and divergences", ""]
         out += lines[:MAX_LINES]
@@ -167,7 +170,7 @@ def render_markdown(doc: dict[str, Any], images: dict[str, bytes], links: list[d
         out += ["", "### Pictures", ""]
         for case, shots in pics:
             if shots:
-                out += [f"**{case['variant']}**", "", " ".join(shots), ""]
+                out += [f"**{text(case['variant'])}**", "", " ".join(shots), ""]
     out += ["", "### Cost (sum over cases)", "", "| backend | engine | wall time (s) | steps/s | real-time factor |",
             "|---|---|---|---|---|"]  # fmt: skip
     for b in backends:
@@ -177,10 +180,11 @@ def render_markdown(doc: dict[str, Any], images: dict[str, bytes], links: list[d
         steps = sum(r["cost"]["steps"] for r in known)
         sim = sum(r["cost"]["simulated_seconds"] or 0.0 for r in known)
         version = of_b[0]["engine_version"] if of_b else ""
-        out.append(f"| {b} | {_cell(version)} | {_num(wall)} | {_num(steps / wall if wall else None)} | "
+        out.append(f"| {text(b)} | {text(version)} | {_num(wall)} | {_num(steps / wall if wall else None)} | "
                    f"{_num(sim / wall if wall else None)} |")  # fmt: skip
     traces = sorted({v for case_links in links for v in case_links.values() if v})
-    out += ["", f"Traces ({len(traces)}): " + ", ".join(f"[{p.rsplit('/', 1)[-1]}]({p})" for p in traces[:8])
+    out += ["", f"Traces ({len(traces)}): " + ", ".join(f"[{text(unquote(p.rsplit('/', 1)[-1]))}]({p})"
+                                                    for p in traces[:8])  # fmt: skip
             + (" …" if len(traces) > 8 else "") + (f" · [Foxglove layout]({layout})" if layout else ""),
             "", "Full report with interactive charts, the 3D replay and sounds: `report.html`; data: `report.json`.",
             ""]  # fmt: skip

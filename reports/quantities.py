@@ -64,9 +64,9 @@ def specs(trace: Trace, key: str) -> list[dict[str, Any]]:
     """The scenario's JSON list under ``key`` in the trace (body or joint specs); [] when unreadable."""
     try:
         found = json.loads(trace.scenario.get(key, "[]"))
-    except json.JSONDecodeError:
+    except (json.JSONDecodeError, RecursionError):
         return []
-    return [s for s in found if isinstance(s, dict)]
+    return [s for s in found if isinstance(s, dict)] if isinstance(found, list) else []
 
 
 def _rot(q: np.ndarray) -> np.ndarray:

@@ -26,9 +26,9 @@ import numpy as np
 from mcap.data_stream import ReadDataStream
 from mcap.opcode import Opcode
 from mcap.records import Attachment, Channel, Chunk, Footer, Header, Message, Metadata, Schema
-from mcap.stream_reader import breakup_chunk
 
 from reports import trace_format as tf
+from reports.trace_chunks import check_schema, chunk_records
 from reports.trace_decode import MessageDecoder, body_arrays
 
 __all__ = [
@@ -248,7 +248,7 @@ def _record(opcode: int, body: bytes) -> list[Any]:
             raise ValueError(f"a chunk declares {size} bytes uncompressed (at most {MAX_CHUNK_BYTES} are read)")
     record = read(ReadDataStream(io.BytesIO(body)), len(body))
     if isinstance(record, Chunk):
-        return list(breakup_chunk(record, validate_crc=True))
+        return chunk_records(record)
     return [record]
 
 
@@ -317,17 +317,40 @@ def _json(text: str) -> Any:
         raise ValueError("JSON nested too deeply") from None
 
 
-def _names(metadata: dict[str, str], key: str) -> list[str]:
+def _names(path: Path, metadata: dict[str, str], key: str) -> list[str]:
     try:
         names = _json(metadata.get(key, "[]"))
     except ValueError as exc:
-        raise TraceReadError(f"the scenario record's {key!r} is not a JSON list: {exc}") from exc
+        raise TraceReadError(f"{path}: the scenario record's {key!r} is not a JSON list: {exc}") from exc
     if not isinstance(names, list):
-        raise TraceReadError(f"the scenario record's {key!r} is not a JSON list")
+        raise TraceReadError(f"{path}: the scenario record's {key!r} is not a JSON list")
     if len(names) > MAX_TRACE_NAMES:
-        raise TraceReadError(f"the scenario record names {len(names)} {key}; a trace holds at most {MAX_TRACE_NAMES}: "
-                             "not a physics-scenarios trace")  # fmt: skip
+        raise TraceReadError(f"{path}: the scenario record names {len(names)} {key}; a trace holds at most "
+                             f"{MAX_TRACE_NAMES}: not a physics-scenarios trace")  # fmt: skip
     return [str(n) for n in names]
+
+
+#: the scenario record's JSON values and their shapes, checked when it is read: what reports read from them
+#: (json.loads in the report, the scene, the causes) then never meets a malformed value
+_SCENARIO_JSON = {tf.KEY_BODIES: str, tf.KEY_JOINTS: str, tf.KEY_STATE: str, tf.KEY_ASSERTED: str,
+                  tf.KEY_BODY_SPECS: dict, tf.KEY_JOINT_SPECS: dict, "overrides": None,
+                  tf.KEY_ENGINE_SETTINGS: None}  # fmt: skip
+
+
+def _check_scenario_json(path: Path, metadata: dict[str, str]) -> None:
+    for key, item in _SCENARIO_JSON.items():
+        if key not in metadata:
+            continue
+        try:
+            value = _json(metadata[key])
+        except ValueError as exc:
+            raise TraceReadError(f"{path} is not a physics-scenarios trace: its scenario record's {key!r} is not "
+                                 f"JSON ({exc})") from exc  # fmt: skip
+        shape = dict if key == tf.KEY_ENGINE_SETTINGS else list
+        if not isinstance(value, shape) or (item is not None and not all(isinstance(v, item) for v in value)):
+            kind = "an object" if shape is dict else f"a list of {'names' if item is str else 'objects'}"
+            raise TraceReadError(f"{path} is not a physics-scenarios trace: its scenario record's {key!r} is not "
+                                 f"{kind}")  # fmt: skip
 
 
 def _check_summary(path: Path, metadata: dict[str, dict[str, str]]) -> None:
@@ -376,10 +399,12 @@ def read_trace(path: str | Path, recover: bool = False) -> Trace:
                         if scenario is None:
                             raise TraceReadError(f"{path} has messages before its scenario record: not a "
                                                  "physics-scenarios trace")  # fmt: skip
-                        decoder = MessageDecoder(_names(scenario, tf.KEY_BODIES), _names(scenario, tf.KEY_JOINTS))
+                        decoder = MessageDecoder(_names(path, scenario, tf.KEY_BODIES),
+                                                 _names(path, scenario, tf.KEY_JOINTS))  # fmt: skip
                     decoder.add(ch.topic, schemas.get(ch.schema_id), ch.message_encoding, record.log_time / 1e9,
                                 record.data)  # fmt: skip
                 elif isinstance(record, Schema):
+                    check_schema(record)
                     schemas[record.id] = record
                 elif isinstance(record, Channel):
                     channels[record.id] = record
@@ -387,6 +412,7 @@ def read_trace(path: str | Path, recover: bool = False) -> Trace:
                     metadata[record.name] = dict(record.metadata)
                     if record.name == tf.METADATA_SCENARIO:
                         _check_format(path, metadata[record.name])
+                        _check_scenario_json(path, metadata[record.name])
                 elif isinstance(record, Attachment):
                     attachments.append(AttachmentInfo(record.name, record.media_type, len(record.data), record.data))
                 elif isinstance(record, Footer):

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import stat
+import struct
 import wave
 from dataclasses import dataclass
 from pathlib import Path
@@ -44,8 +45,9 @@ def read_info(path: Path) -> SoundInfo:
             info = SoundInfo(path, frames / rate if rate else 0.0, rate, w.getnchannels(), w.getsampwidth())
     except FileNotFoundError:
         raise SoundFileError("file not found") from None
-    except (wave.Error, EOFError, OSError) as exc:
-        raise SoundFileError(f"not a WAV file ({exc})") from None
+    except (wave.Error, EOFError, OSError, RuntimeError, ValueError, OverflowError, struct.error) as exc:
+        # the standard library's chunk reader raises a bare RuntimeError on a chunk size past the file's end
+        raise SoundFileError(f"not a WAV file ({exc or type(exc).__name__})") from None
     if info.sample_rate <= 0 or info.channels <= 0 or info.sample_width <= 0:  # compare divides by the rate
         raise SoundFileError(
             f"a sample rate of {info.sample_rate} Hz, {info.channels} channels of {info.sample_width} bytes: "

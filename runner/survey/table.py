@@ -5,6 +5,7 @@ from __future__ import annotations
 import re
 from dataclasses import dataclass, field
 
+from reports.markdown_text import text as md_text
 from runner.errors import ExitCode
 from runner.exec.cases import CaseResult
 
@@ -62,8 +63,8 @@ class Survey:
 
 def _escape(text: str) -> str:
     short = re.sub(r"(?<![\w.~-])(?:/[^\s/:`']+)+/([^\s/:`']+)", r"\1", text)  # absolute paths as file names
-    one_line = " ".join(short.split()).replace("|", "\\|")
-    return one_line if len(one_line) <= _SHOWN else one_line[: _SHOWN - 1] + "…"
+    one_line = " ".join(short.split())
+    return md_text(one_line if len(one_line) <= _SHOWN else one_line[: _SHOWN - 1] + "…")  # an engine's text, as text
 
 
 def _cell_text(cell: Cell) -> str:

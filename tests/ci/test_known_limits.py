@@ -14,6 +14,7 @@ import jsonschema
 import pytest
 import xmlschema
 
+from reports.markdown import text as md_text
 from reports.trace_reader import read_trace
 from runner.language.load import load_scenario
 from runner.sim.run import run_loaded
@@ -121,7 +122,7 @@ def test_compare_report_shows_the_figure(drop: Path, tmp_path: Path, capsys: pyt
     assert run["assertions"] == {"total": 2, "passed": 1, "failed": 0, "known_limits": 1}
     assert doc["cases"][0]["verdicts"]["cells"]["height"]["fake"]["status"] == "known limit"
     markdown = (tmp_path / "c" / "report.md").read_text()
-    assert "✅ 1/2, ⚠️ 1 known limit" in markdown and f"**height** ⚠️ {MESSAGE}" in markdown
+    assert "✅ 1/2, ⚠️ 1 known limit" in markdown and f"**height** ⚠️ {md_text(MESSAGE)}" in markdown
     assert "⚠ known limit" in (tmp_path / "c" / "report.html").read_text()
 
 

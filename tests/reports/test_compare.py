@@ -90,8 +90,8 @@ def test_report_from_the_traces_reproduces_every_file_exactly(compare_run: Compa
     assert (tmp_path / "dir" / "report.json").read_bytes() == original
     html = (tmp_path / "dir" / "report.html").read_text(encoding="utf-8")
     ode = compare_run.traces / "factory-physics__door-stays-closed__ode.mcap"
-    assert f'href="{Path(os.path.relpath(ode, tmp_path / "dir")).as_posix()}"' in html  # links follow the folder
-    assert 'href="traces/factory-physics__door-stays-closed__ode.mcap"' in before["report.html"].decode()
+    assert f'href="./{Path(os.path.relpath(ode, tmp_path / "dir")).as_posix()}"' in html  # links follow the folder
+    assert 'href="./traces/factory-physics__door-stays-closed__ode.mcap"' in before["report.html"].decode()
     # the same from a copy of the files elsewhere, traces named one by one (outcome and cost files are
     # found beside them), through the function the command calls
     copy = tmp_path / "copy"
@@ -240,7 +240,8 @@ def test_bad_input_exits_two(tmp_path: Path) -> None:
 
 def test_the_report_links_the_foxglove_layout_beside_the_traces(compare_run: CompareRun, tmp_path: Path) -> None:
     assert (compare_run.traces / "foxglove-layout.json").is_file()  # `compare` leaves it with its traces
-    assert '<a href="traces/foxglove-layout.json">Foxglove layout</a>' in (compare_run.out / "report.html").read_text()
+    page = (compare_run.out / "report.html").read_text()
+    assert '<a href="./traces/foxglove-layout.json">Foxglove layout</a>' in page
     traces = tmp_path / "traces"
     shutil.copytree(compare_run.traces, traces)
     (traces / "foxglove-layout.json").unlink()  # a folder of traces without the layout: no link
@@ -248,8 +249,8 @@ def test_the_report_links_the_foxglove_layout_beside_the_traces(compare_run: Com
     assert "foxglove-layout.json" not in (tmp_path / "without" / "report.html").read_text(encoding="utf-8")
     (traces / "foxglove-layout.json").write_text("{}", encoding="utf-8")
     write_report([traces], tmp_path)
-    assert '<a href="traces/foxglove-layout.json">Foxglove layout</a>' in (tmp_path / "report.html").read_text()
-    assert "[Foxglove layout](traces/foxglove-layout.json)" in (tmp_path / "report.md").read_text()
+    assert '<a href="./traces/foxglove-layout.json">Foxglove layout</a>' in (tmp_path / "report.html").read_text()
+    assert "[Foxglove layout](./traces/foxglove-layout.json)" in (tmp_path / "report.md").read_text()
 
 
 ODE_ERP, ODE_CFM = 0.2, 1e-5  # the ode backend's defaults (docs/backends/ode.md, "Options")

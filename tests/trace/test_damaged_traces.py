@@ -113,7 +113,7 @@ def test_what_is_not_a_physics_scenarios_trace_is_refused_as_such(full: Path, tm
         expected = "trace format"
     elif case == "nested-bodies":
         crafted(path, {**scenario, tf.KEY_BODIES: "[" * 100_000 + "]" * 100_000}, schema=b"")
-        expected = "not a JSON list"
+        expected = "not a physics-scenarios trace: its scenario record's 'bodies' is not JSON"
     elif case == "nested-summary":
         crafted(path, scenario, {tf.KEY_STATUS: "passed", tf.KEY_SUMMARY: "[" * 100_000 + "]" * 100_000})
         expected = "not a physics-scenarios trace"

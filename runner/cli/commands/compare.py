@@ -11,7 +11,6 @@ that option), 2 for bad input found before anything ran.
 from __future__ import annotations
 
 import argparse
-import json
 import math
 import os
 from pathlib import Path
@@ -119,7 +118,8 @@ def execute(args: argparse.Namespace, out: Console, err: Console) -> int:
         return ExitCode.OUTPUT_ERROR
     try:
         files = write_report([p for p in inputs if p is not None], args.out, reference=args.reference,
-                             max_divergence=args.max_divergence, require_agreement=args.require_agreement)  # fmt: skip
+                             max_divergence=args.max_divergence, require_agreement=args.require_agreement,
+                             force=args.force)  # fmt: skip
     except ReportError as exc:
         cause = exc.__cause__
         if isinstance(cause, OSError):  # a full disk is an output error (74), a bad folder bad input (2)
@@ -148,30 +148,11 @@ def _case(args: argparse.Namespace, loaded: LoadedScenario, backend: str,
     )  # fmt: skip
 
 
-def _own_report(path: Path) -> bool:
-    """A report file `compare` or `report` wrote: this tool's generator (json, html) or heading (md)."""
-    try:
-        text = path.read_text(encoding="utf-8")
-    except (OSError, UnicodeDecodeError):
-        return False
-    if path.suffix == ".json":
-        try:
-            data = json.loads(text)
-        except json.JSONDecodeError:
-            return False
-        return isinstance(data, dict) and str(data.get("generator", "")).startswith("physics-scenarios")
-    if path.suffix == ".md":
-        return text.startswith("## Backend comparison:")
-    return "physics-scenarios" in text
-
-
 def _check_reports(out: Path, force: bool) -> None:
-    """The report files a comparison replaces must be its own (or --force)."""
-    from reports.build import HTML_NAME, JSON_NAME, MD_NAME
-    from runner.trace.output import refusal
+    """The report files a comparison replaces must be its own (or --force): checked before any run."""
+    from reports.report_files import foreign, refusal
 
-    found = [out / n for n in (JSON_NAME, HTML_NAME, MD_NAME) if (out / n).exists() or (out / n).is_symlink()]
-    left = [p for p in found if p.is_symlink() or not p.is_file() or not _own_report(p)]
+    left = foreign(out)
     if left and not force:
         raise TraceError(refusal(left))
 

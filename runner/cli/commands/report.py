@@ -25,18 +25,24 @@ def configure(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--out", type=Path, required=True, metavar="DIR", help="folder for report.html, report.md and report.json"
     )
+    parser.add_argument("--force", action="store_true",
+                        help="overwrite report files in DIR that scenario did not write (refused without it)")
     options.add_judgement(parser)
 
 
 def execute(args: argparse.Namespace, out: Console, err: Console) -> int:
     from reports.build import ReportError, write_report
+    from runner.trace.output import write_error
 
     if args.max_divergence is not None and not (args.max_divergence >= 0 and math.isfinite(args.max_divergence)):
         raise UsageError(f"Invalid `--max-divergence`. Expected a number >= 0. Received: {args.max_divergence}")
     try:
         files = write_report(args.traces, args.out, reference=args.reference, max_divergence=args.max_divergence,
-                             require_agreement=args.require_agreement)  # fmt: skip
+                             require_agreement=args.require_agreement, force=args.force)  # fmt: skip
     except ReportError as exc:
+        cause = exc.__cause__
+        if isinstance(cause, OSError):  # a full or read-only disk is an output error (74), a bad folder bad input
+            raise write_error(cause, f"the report into {args.out}") from exc
         err.print(f"[bold red]error:[/] {escape(str(exc))}")
         return ExitCode.BAD_INPUT
     print_verdict(out, files.document)
