@@ -35,9 +35,12 @@ def load_model(robot: Robot, base_dir: FsPath) -> ModelDesc:
     root = rooted[0].resolve() if rooted is not None else base_dir.resolve()
     if not file.is_relative_to(root):
         raise ModelFileError(file, 0, f"the model file must be inside {root}; found {robot.file!r}")
-    if not file.is_file():
+    try:
+        info = file.stat() if file.is_file() else None
+    except OSError as exc:  # a name the system refuses (too long, ...): the scenario's line, not a crash
+        raise ModelFileError(file, 0, f"no model file at {file} ({exc.strerror or exc})") from None
+    if info is None:
         raise ModelFileError(file, 0, f"no model file at {file}")
-    info = file.stat()
     triangles = robot.static_meshes == "triangles"
     return _read(robot.format, file, package_root(robot, file, base_dir), robot.fixed, triangles, info.st_mtime_ns)
 

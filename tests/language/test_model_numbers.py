@@ -273,3 +273,15 @@ def test_mutated_models_load_or_are_refused_located(tmp_path: Path) -> None:
             unlocated = [str(i) for i in exc.issues if not re.match(r".+:[1-9]\d*:[1-9]\d*: ", str(i))]
             assert not unlocated, (changes, unlocated)
     assert refused > MUTANTS // 2  # most mutations break the model: the checks above are exercised
+
+
+@pytest.mark.parametrize("kind", ["urdf", "mjcf"])
+def test_a_model_path_the_system_refuses_is_located_at_the_scenario_s_line(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], kind: str
+) -> None:
+    """A 300-character file name (beyond NAME_MAX, 255 on Linux): `stat` raises ENAMETOOLONG, which was exit 70
+    (found by the structured fuzzer); now exit 2 at the `urdf:`/`mjcf:` line, as a missing file is."""
+    scenario = tmp_path / "s.yaml"
+    scenario.write_text(SCENARIO.format(kind=kind, file="n" * 300 + ".xml"))
+    out = _refused_alike(capsys, scenario, tmp_path)
+    assert re.search(rf"^{re.escape(str(scenario))}:7:\d+: robots\.r\.{kind}: no model file at .*\(", out), out
