@@ -29,7 +29,8 @@ SKIPPED = {
     "make test": "this suite (it runs the test that runs the documented commands)",
     "make demo": "run by hand before each release (4 variants on every engine, then `compare`: about 2 min)",
     "git add baselines && git commit -m \"Baselines\"": "version control, not the tool",
-    "FUZZ_CASES=20000 FUZZ_STRUCTURED=20000 FUZZ_FAULTS=200 FUZZ_CONCURRENT=20 .venv/bin/python -m pytest -q "
+    "FUZZ_CASES=20000 FUZZ_STRUCTURED=20000 FUZZ_FILES=5000 FUZZ_FAULTS=200 FUZZ_CONCURRENT=20 .venv/bin/python -m "
+    "pytest -q "
     "-p no:cacheprovider tests/reliability":
         "`make fuzz` itself (about an hour); its figures are in docs/reliability.md",
     "scenario sweep scenarios/box_pile.yaml --param count=10,50,100,200 --backend pybullet,mujoco,dart "
