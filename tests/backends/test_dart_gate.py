@@ -13,10 +13,9 @@ pytest.importorskip("dartpy")
 
 from backends.dart import DartBackend  # noqa: E402 - after the engine check
 from backends.dart._gate import BounceGate, body_radius  # noqa: E402
+from backends.testing import worlds as w  # noqa: E402
 from backends.types import CompiledWorld, Shape, ShapeKind, Surface  # noqa: E402
 from bench import measure  # noqa: E402
-
-from . import worlds as w  # noqa: E402
 
 
 def _pile(bounce: float, bounce_vel: float, duration: float) -> CompiledWorld:

@@ -25,9 +25,8 @@ from backends._kit import (
 from backends.errors import UnsupportedFeature
 from backends.geometry import integrate_quat
 from backends.registry import check_capabilities, check_options, get_backend, is_installed, list_backends, options_of
+from backends.testing import worlds as w
 from backends.types import Contact
-
-from . import worlds as w
 
 # --- options ---------------------------------------------------------------------------------------------
 

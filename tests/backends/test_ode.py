@@ -21,6 +21,8 @@ from panda3d.ode import OdeMass  # noqa: E402 - after the skip guard
 from backends.errors import EngineFailure, UnsupportedFeature  # noqa: E402
 from backends.geometry import quat_from_axis_angle  # noqa: E402
 from backends.ode import OdeBackend  # noqa: E402
+from backends.testing import worlds as w  # noqa: E402
+from backends.testing.worlds import ZERO, G, make_backend  # noqa: E402
 from backends.types import (  # noqa: E402
     CompiledWorld,
     JointKind,
@@ -32,9 +34,6 @@ from backends.types import (  # noqa: E402
     ShapeKind,
     Surface,
 )
-
-from . import worlds as w  # noqa: E402
-from .worlds import ZERO, G, make_backend  # noqa: E402
 
 ERP, CFM = 0.2, 1e-5  # ODE's defaults in this build
 

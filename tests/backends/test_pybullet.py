@@ -14,6 +14,8 @@ import pytest
 
 from backends.errors import EngineFailure, UnsupportedFeature
 from backends.registry import create_backend, is_installed
+from backends.testing import worlds as w
+from backends.testing.worlds import ZERO
 from backends.types import (
     CompiledWorld,
     JointKind,
@@ -23,9 +25,6 @@ from backends.types import (
     PairSurface,
     Surface,
 )
-
-from . import worlds as w
-from .worlds import ZERO
 
 if TYPE_CHECKING:
     from backends.pybullet._surfaces import SurfaceFit
