@@ -14,6 +14,7 @@ import pytest
 from backends import registry
 from backends.entry_points import GROUP, BrokenBackend, registered
 from backends.errors import UnknownBackend
+from backends.testing.fixtures import available
 
 _MODULE = """
 ENTRY = {"name": "tiny", "target": "tiny_adapter:TinyBackend", "module": "numpy", "distribution": "numpy",
@@ -24,6 +25,7 @@ WRONG_NAME = dict(ENTRY, name="someone-else")
 BUILTIN = dict(ENTRY, name="fake")
 NOT_AN_ENTRY = 42
 BAD_TARGET = dict(ENTRY, name="badtarget", target="tiny_adapter.TinyBackend")
+ABSENT = dict(ENTRY, name="absent", module="tiny_absent_engine", distribution="tiny-absent-engine")
 """
 _POINTS = {
     "tiny": "tiny_registration:ENTRY",
@@ -33,6 +35,7 @@ _POINTS = {
     "fake": "tiny_registration:BUILTIN",
     "number": "tiny_registration:NOT_AN_ENTRY",
     "badtarget": "tiny_registration:BAD_TARGET",
+    "absent": "tiny_registration:ABSENT",
 }
 
 
@@ -53,8 +56,8 @@ def installed(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Iterator[Path]
 
 def test_an_entry_point_adds_a_backend_beside_the_built_in_ones(installed: Path) -> None:
     names = [e.name for e in registry.list_backends()]
-    assert names[: len(names) - 2] == [e.name for e in registry.list_backends() if not e.package]
-    assert names[-2:] == ["tiny", "tinycall"]  # after the built-in table, sorted
+    assert names[: len(names) - 3] == [e.name for e in registry.list_backends() if not e.package]
+    assert names[-3:] == ["absent", "tiny", "tinycall"]  # after the built-in table, sorted
     tiny = registry.entry("tiny")
     assert tiny.package == "tiny-engine" and tiny.precision.value == "float32"
     assert tiny.hint == "pip install numpy"  # the engine's distribution, not an extra of ours
@@ -97,3 +100,14 @@ def test_scenario_backends_lists_both_and_the_broken_one(installed: Path) -> Non
     assert done.returncode == 0, done.stderr
     assert "tiny" in done.stdout and "a test engine" in done.stdout
     assert "registered but broken" in done.stdout and "no_such_module_anywhere" in done.stdout
+
+
+def test_the_suite_fails_an_engine_whose_adapter_cannot_be_imported(installed: Path) -> None:
+    """`tiny`'s engine (numpy) is installed but its adapter module `tiny_adapter` does not exist: the suite's
+    fixture raises that import error (a failed test), where a missing engine distribution skips."""
+    with pytest.raises(ModuleNotFoundError, match="tiny_adapter"):
+        available("tiny")
+    with pytest.raises(pytest.skip.Exception, match="engine not installed: pip install tiny-absent-engine"):
+        available("absent")
+    with pytest.raises(BrokenBackend, match="no_such_module_anywhere"):
+        available("missing")
