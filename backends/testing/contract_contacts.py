@@ -26,7 +26,8 @@ from .worlds import ZERO, G, coulomb_stop, make_backend, require
 # 7. contacts -----------------------------------------------------------------------------------------
 
 
-def test_contact_resting(backend_name: str) -> None:
+def test_contact_resting(backend_name: str, backend_cls: type[Backend]) -> None:
+    require(backend_cls, Capability.CONTACTS)
     world = w.box_on_ground()
     with make_backend(backend_name, world) as sim:
         for _ in range(100):
@@ -41,8 +42,9 @@ def test_contact_resting(backend_name: str) -> None:
         assert c.normal_force == pytest.approx(weight, rel=tol("contact_force", backend_name))
 
 
-def test_no_contact_above_plane(backend_name: str) -> None:
+def test_no_contact_above_plane(backend_name: str, backend_cls: type[Backend]) -> None:
     """A box 1 cm above the plane touches nothing (engines that report near points must filter them)."""
+    require(backend_cls, Capability.CONTACTS)
     with make_backend(backend_name, w.box_on_ground(gap=0.01, gravity=ZERO)) as sim:
         for _ in range(3):
             sim.step()
@@ -61,6 +63,7 @@ _REST_SHAPES = {
 
 @pytest.mark.parametrize("shape_name", list(_REST_SHAPES))
 def test_resting_height(backend_name: str, backend_cls: type[Backend], shape_name: str) -> None:
+    require(backend_cls, Capability.CONTACTS)
     shape, height = _REST_SHAPES[shape_name]
     require(backend_cls, Capability(f"shape:{shape.kind.value}"))
     with make_backend(backend_name, w.resting_shape(shape)) as sim:
@@ -118,7 +121,8 @@ def test_orientation_convention(backend_name: str) -> None:
 # 11. restitution -------------------------------------------------------------------------------------
 
 
-def test_restitution(backend_name: str) -> None:
+def test_restitution(backend_name: str, backend_cls: type[Backend]) -> None:
+    require(backend_cls, Capability.CONTACTS)
     drop, bounce = 0.5, 0.5
     world = w.bouncing_sphere(bounce, drop, dt=0.001)
     apex, rising = -math.inf, False
@@ -137,9 +141,10 @@ def test_restitution(backend_name: str) -> None:
     assert ratio == pytest.approx(bounce**2, abs=tol("restitution", backend_name)), f"apex ratio {ratio:.4f}"
 
 
-def test_bouncy_surface_rests(backend_name: str) -> None:
+def test_bouncy_surface_rests(backend_name: str, backend_cls: type[Backend]) -> None:
     """A box resting on a bouncy surface (bounce 0.2, bounce_vel 0) at the lab's dt 0.04 stays still:
     ODE bounces on the approach speed before the step, which is 0 at rest, not on one step of gravity."""
+    require(backend_cls, Capability.CONTACTS)
     cube = w.box("box", w.LAB_BOX, (0.0, 0.0, 0.15), density=500.0)
     world = w.world("bouncy-rest", [w.ground(), cube], dt=0.04, surface=Surface(bounce=0.2, mu=5000.0))
     peak = 0.0
@@ -156,7 +161,8 @@ def test_bouncy_surface_rests(backend_name: str) -> None:
 # 12. friction ----------------------------------------------------------------------------------------
 
 
-def test_friction_stop_distance(backend_name: str) -> None:
+def test_friction_stop_distance(backend_name: str, backend_cls: type[Backend]) -> None:
+    require(backend_cls, Capability.CONTACTS)
     v0, mu = 2.0, 0.5
     world = w.sliding_box(v0, mu)
     with make_backend(backend_name, world) as sim:
@@ -168,8 +174,9 @@ def test_friction_stop_distance(backend_name: str) -> None:
     assert abs(s.lin_vel[1, 0]) < 1e-3
 
 
-def test_pair_surfaces(backend_name: str) -> None:
+def test_pair_surfaces(backend_name: str, backend_cls: type[Backend]) -> None:
     """Per-pair mu overrides the default: two boxes slide different distances on the same plane."""
+    require(backend_cls, Capability.CONTACTS)
     v0 = 2.0
     a = w.box("a", (0.2, 0.2, 0.2), (0.0, 0.0, 0.1), density=500.0, lin_vel=(v0, 0.0, 0.0))
     b = w.box("b", (0.2, 0.2, 0.2), (0.0, 1.0, 0.1), density=500.0, lin_vel=(v0, 0.0, 0.0))
@@ -184,8 +191,9 @@ def test_pair_surfaces(backend_name: str) -> None:
     assert s.pos[2, 0] == pytest.approx(coulomb_stop(v0, 0.25, world.dt), rel=rel)
 
 
-def test_tilted_plane(backend_name: str) -> None:
+def test_tilted_plane(backend_name: str, backend_cls: type[Backend]) -> None:
     """A plane's normal is its local +z: a cube on a 30 degree plane (mu 0.2) slides at g(sin - mu cos)."""
+    require(backend_cls, Capability.CONTACTS)
     tilt = math.radians(30.0)
     q = quat_from_axis_angle((0.0, 1.0, 0.0), tilt)  # normal (sin, 0, cos): downhill is +x
     normal = np.array([math.sin(tilt), 0.0, math.cos(tilt)])
@@ -205,8 +213,9 @@ def test_tilted_plane(backend_name: str) -> None:
 # 13. determinism -------------------------------------------------------------------------------------
 
 
-def test_determinism(backend_name: str) -> None:
+def test_determinism(backend_name: str, backend_cls: type[Backend]) -> None:
     """Two fresh instances, alive and stepped side by side, agree bit for bit."""
+    require(backend_cls, Capability.CONTACTS)
     world = w.busy()
     with make_backend(backend_name, world) as one, make_backend(backend_name, world) as two:
         for _ in range(150):

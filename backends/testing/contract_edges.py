@@ -168,6 +168,7 @@ def test_contacts_with_substeps_are_those_used_during_the_step(backend_name: str
     """Four substeps of 0.01 s. Resting, the pair's normal force is the mean over the substeps (m*g, not
     4*m*g). Kicked up, the box leaves the ground during the first substep: the pair is still reported
     for that step (it was touching when the step began), and for no later step."""
+    require(backend_cls, Capability.CONTACTS)
     require(backend_cls, Capability.SUBSTEPS)
     world = w.resting_box(substeps=4)
     m, h = world.bodies[1].mass, world.dt / world.substeps
@@ -221,6 +222,7 @@ def test_turning_kinematic_body_carries_what_rests_on_it(backend_name: str, back
     table's speed omega*r within omega*r/(mu*g) = 0.051 s, during which it trails by (omega*r)^2/(2*mu*g)
     of arc; omega^2*r = 0.5 m/s^2 of centripetal pull is far below mu*g, so it then turns with the table.
     Without the angular velocity (a teleported table) it would stay where it was."""
+    require(backend_cls, Capability.CONTACTS)
     require(backend_cls, Capability.KINEMATIC)
     world = w.turntable(mu=1.0)
     omega, r, mu, steps, dt = 1.0, 0.5, 1.0, 100, world.dt
