@@ -26,6 +26,7 @@ import pytest
 from backends.registry import is_installed
 from reports.trace_reader import read_trace
 from runner.sim.session import MAX_SPEED
+from tests.engines import ENGINES
 
 G = 9.81
 DT = 0.01
@@ -49,7 +50,7 @@ on:
 assertions:
   - {{name: reaches-the-end, at: end, check: time > 1.9}}
 """
-REAL = ["pybullet", "mujoco", "dart", "ode"]
+REAL = list(ENGINES)
 
 
 @pytest.fixture(params=REAL)

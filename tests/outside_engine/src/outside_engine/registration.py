@@ -4,7 +4,7 @@ backends this way). Hidden: a test engine without contacts is not offered to use
 ENTRY = {
     "name": "outside",
     "target": "outside_engine.engine:OutsideBackend",
-    "module": "outside_engine",
+    "module": "outside_engine.engine",  # the engine itself (the package is imported to read this entry)
     "distribution": "scenario-outside-engine",
     "extra": "",
     "description": "test-only: a pure-numpy rigid-body engine registered from outside the repository (no contacts)",
