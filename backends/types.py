@@ -223,9 +223,10 @@ class PlacedShape:
     color: Rgba | None = None  # None: the body's colour
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class Surface:
-    """ODE contact surface: restitution ``bounce`` above approach speed ``bounce_vel``; Coulomb ``mu``."""
+    """ODE contact surface: restitution ``bounce`` above approach speed ``bounce_vel``; Coulomb ``mu``.
+    Keyword-only: ``bounce`` and ``mu`` are both floats, and swapped by position they would pass unnoticed."""
 
     bounce: float = 0.0
     bounce_vel: float = 0.0

@@ -76,7 +76,8 @@ def test_gate_covers_free_bodies_only() -> None:
     world = _balls(0.5, 0.8)
     assert BounceGate(world, [1, 2], usable=True).usable
     assert not BounceGate(world, [1, 2], usable=False).usable
-    assert not BounceGate(dataclasses.replace(world, default_surface=Surface(0.0, 0.8, 1.0)), [1, 2], True).usable
+    thresholded = dataclasses.replace(world, default_surface=Surface(bounce=0.0, bounce_vel=0.8, mu=1.0))
+    assert not BounceGate(thresholded, [1, 2], True).usable
 
 
 def test_body_radius() -> None:

@@ -160,7 +160,8 @@ def test_mu_is_a_coulomb_coefficient(push: float, slides: bool) -> None:
 
 def test_infinite_mu_is_safe_when_contacts_separate() -> None:
     """mu = inf with approx1 bounds friction by inf * normal force; a separating contact has 0 of it."""
-    with make_backend("ode", dataclasses.replace(w.bouncing_sphere(0.5, 0.3), default_surface=Surface(0.5))) as sim:
+    world = dataclasses.replace(w.bouncing_sphere(0.5, 0.3), default_surface=Surface(bounce=0.5))
+    with make_backend("ode", world) as sim:
         for _ in range(600):
             sim.step()
         s = sim.body_states()
