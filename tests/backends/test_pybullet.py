@@ -35,7 +35,7 @@ pytestmark = pytest.mark.skipif(not is_installed("pybullet"), reason="engine not
 def _fit(world: CompiledWorld) -> SurfaceFit:
     from backends.pybullet._surfaces import fit_surfaces  # imports pybullet: only once it is known
 
-    return fit_surfaces(world, set())
+    return fit_surfaces(world)
 
 
 def _three_on_ground(pairs: tuple[PairSurface, ...], surface: Surface) -> CompiledWorld:
