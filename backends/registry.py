@@ -107,6 +107,8 @@ REFERENCE_BACKEND = "ode"
 
 
 def entry(name: str) -> BackendEntry:
+    if name in _KNOWN:  # a built-in name: no need to read the entry points
+        return _KNOWN[name]
     table = _table()
     try:
         return table[name]
