@@ -87,7 +87,8 @@ pytestmark = [
 FILES = sorted({p for folder in FOLDERS for p in folder.rglob("*.yaml")})
 #: the files whose asserted quantities are checked in Foxglove's plots: one command each, one folder
 PLOTTED_FILES = sorted([*(ROOT / "scenarios").glob("*.yaml"), *(ROOT / "scenarios" / "robots").glob("*.yaml")])
-PLOT_ENGINES = sorted(ENGINES, key=lambda b: b != "mujoco")  # the first installed that runs the file: MuJoCo first
+#: the first installed that runs the file plots it: MuJoCo, then PyBullet, then the registry's others
+PLOT_ENGINES = sorted(ENGINES, key=lambda b: {"mujoco": 0, "pybullet": 1}.get(b, 2))
 SEEK_TIMEOUT = 15.0  # seconds for Foxglove to show a seek's time and values
 
 
