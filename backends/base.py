@@ -107,7 +107,7 @@ class Backend(abc.ABC):
     #: What this backend can simulate; checked before a run starts.
     capabilities: ClassVar[frozenset[Capability]]
     #: The format the engine keeps its state in (its rounding: docs/semantics.md, "Rounding"); the same
-    #: as the registry entry's ``precision`` (tests/backends/test_backend_contract.py).
+    #: as the registry entry's ``precision`` (the contract suite, backends/testing).
     precision: ClassVar[Precision]
     #: The scenario's ``backend_options.<name>`` block, typed (backends._kit.options).
     Options: ClassVar[type[BackendOptions]] = BackendOptions

@@ -127,6 +127,10 @@ class Capability(str, enum.Enum):
     JOINT_MOTOR = "joint:motor"
     KINEMATIC = "motion:kinematic"
     SUBSTEPS = "world:substeps"
+    #: Bodies collide: contact points, normal forces, friction and restitution. Every engine declares it; the
+    #: contract suite's contact tests require it. It is not among a world's needs (required_capabilities):
+    #: the runner's fake backend, and the minimal engine of tests/outside_engine, run floors without it.
+    CONTACTS = "world:contacts"
     # What a model file may hold that only an engine building the robot from the file itself runs
     # (MuJoCo for MJCF, CompiledWorld.models): MODEL_FILE_CAPABILITIES.
     JOINT_SEVERAL_PER_BODY = "joint:several-per-body"  # an MJCF body moved by several joints, in order
@@ -219,9 +223,10 @@ class PlacedShape:
     color: Rgba | None = None  # None: the body's colour
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class Surface:
-    """ODE contact surface: restitution ``bounce`` above approach speed ``bounce_vel``; Coulomb ``mu``."""
+    """ODE contact surface: restitution ``bounce`` above approach speed ``bounce_vel``; Coulomb ``mu``.
+    Keyword-only: ``bounce`` and ``mu`` are both floats, and swapped by position they would pass unnoticed."""
 
     bounce: float = 0.0
     bounce_vel: float = 0.0

@@ -108,7 +108,7 @@ class PyBulletBackend(Backend):
         p.setTimeStep(self._h, physicsClientId=c)
         self._layout: Layout = build(p, c, world)
         self._frames = InertialFrames(world)
-        self._fit: SurfaceFit = fit_surfaces(world, self._layout.excluded)
+        self._fit: SurfaceFit = fit_surfaces(world)
         # ODE bounces when the approach speed *before* the step exceeds bounce_vel; Bullet compares the
         # speed after this substep's gravity, so a resting body approaches at about g*h and bounces every
         # step [checked: the lab's box on the door, dt 0.04, bounce 0.2, threshold 0: vz -0.32..+0.33

@@ -29,6 +29,7 @@ from backends.types import (
 )
 from runner.compile.joints import dynamics, initial_motor
 from runner.compile.robot_start import LinkMotion, link_motions, root_motion, start_values
+from runner.compile.surfaces import compiled_surface
 from runner.language.hpr import hpr_to_quat
 from runner.language.model import Scenario
 from runner.language.model_physics import Limits
@@ -178,8 +179,7 @@ def compile_robots(
             bodies.append(link_body(name, robot, desc, link, len(bodies), motions.get(link.name)))
             override = robot.links.get(link.name)
             if override is not None and override.surface is not None:
-                s = override.surface
-                link_surfaces.append((f"{name}.{link.name}", Surface(s.bounce, s.bounce_vel, s.mu)))
+                link_surfaces.append((f"{name}.{link.name}", compiled_surface(override.surface)))
         group[name] = [f"{name}.{link.name}" for link in desc.links]
         for joint in desc.joints:
             if joint.kind == "free":  # no joint: the body touches its parent (MuJoCo: the world) as any other

@@ -21,11 +21,11 @@ from backends.types import (
     PairSurface,
     Shape,
     ShapeKind,
-    Surface,
 )
 from runner.compile.joints import dynamics, initial_motor, stops, zero_offset
 from runner.compile.robot_start import start_values
 from runner.compile.robots import compile_robots
+from runner.compile.surfaces import compiled_surface
 from runner.language import model_behaviour as B
 from runner.language.hpr import hpr_to_quat
 from runner.language.model import Scenario
@@ -209,12 +209,11 @@ def compile_world(model: Scenario, name: str, robots: Mapping[str, ModelDesc] | 
     members = {**groups(model), **parts.groups}
     pairs: list[PairSurface] = []
     for override in model.surfaces:
-        surface = Surface(override.bounce, override.bounce_vel, override.mu)
+        surface = compiled_surface(override)
         side_a = members.get(override.bodies[0], [override.bodies[0]])
         side_b = members.get(override.bodies[1], [override.bodies[1]])
         pairs.extend(PairSurface(a, b, surface) for a in side_a for b in side_b if a != b)
     pairs.extend(parts.surfaces)  # after the scenario's pairs, which win (CompiledWorld.surface: the first)
-    d = model.surface
     return CompiledWorld(
         name=name,
         gravity=model.world.gravity,
@@ -223,7 +222,7 @@ def compile_world(model: Scenario, name: str, robots: Mapping[str, ModelDesc] | 
         duration=model.world.duration,
         bodies=bodies + parts.bodies,
         joints=tuple(joints) + parts.joints,
-        default_surface=Surface(d.bounce, d.bounce_vel, d.mu),
+        default_surface=compiled_surface(model.surface),
         pair_surfaces=tuple(pairs),
         backend_options={k: dict(v) for k, v in model.backend_options.items()},
         excluded_pairs=parts.excluded,

@@ -27,11 +27,10 @@ import numpy as np
 import pytest
 
 from backends.geometry import quat_mul
+from backends.testing import worlds as w
+from backends.testing.tolerances import tol
+from backends.testing.worlds import G, coulomb_stop, make_backend
 from backends.types import BodyStates, Motion, Shape, ShapeKind, Surface
-
-from . import worlds as w
-from .tolerances import tol
-from .worlds import G, coulomb_stop, make_backend
 
 V0, MU, DT = 2.0, 0.3, 0.001
 

@@ -34,6 +34,7 @@ import pytest
 
 from backends.registry import create_backend, is_installed
 from backends.types import BodySpec, CompiledWorld, Motion, Shape, ShapeKind, Surface
+from tests.engines import ENGINES
 
 G = 9.81
 DROP = 0.05  # m, the ball's bottom above the plane
@@ -44,7 +45,6 @@ MASSES = (0.01, 1.0, 100.0)
 RADII = (0.01, 0.1, 1.0)
 STEPS = (0.0005, 0.001, 0.004, 0.01)
 BOUNCES = (0.0, 0.5, 0.9)
-ENGINES = ("ode", "pybullet", "mujoco", "dart")
 
 #: Measured misses (e_eff at 1 m/s, every mass and radius alike) and their cause, docs/backends/*.md.
 _AFTER_GRAVITY = (

@@ -29,6 +29,7 @@ from runner.compile.program import build_program
 from runner.errors import ScenarioValidationError
 from runner.language.load import parse_overrides
 from runner.sim.run import trace_path
+from tests.engines import ENGINES
 
 from .conftest import FUZZ_STRUCTURED, STATS, count, fuzz_settings
 from .grammar import Mutant, mutants
@@ -81,7 +82,7 @@ def check_mutant(path: Path, mutant: Mutant, pick: int) -> str:
             assert_located(exc, path, line_count(mutant.data))
             return "refused when compiled"
         assert_sane(program)
-        for backend in ("pybullet", "mujoco"):
+        for backend in ENGINES:
             name = trace_path(Path("."), one, backend).name.removesuffix(".mcap") + LONGEST
             assert len(name.encode()) <= NAME_MAX, f"a trace file name of {len(name.encode())} bytes: {name[:80]}..."
     return "loaded"

@@ -2,7 +2,8 @@
 
 ``tol(check, backend)`` returns the backend's own line when there is one, else ``"default"``. Every
 value carries a comment with what was measured and why the tolerance is what it is. Backend owners
-add their own lines; the defaults are ODE's analytic expectations with float64 rounding room.
+add their own lines (an engine outside this repository through ``add_tolerances``, from its own tests); the
+defaults are ODE's analytic expectations with float64 rounding room.
 """
 
 from __future__ import annotations
@@ -147,3 +148,13 @@ def tol(check: str, backend: str) -> float:
     except KeyError:
         raise KeyError(f"no tolerance for check `{check}`; known: {', '.join(sorted(_TOLERANCES))}") from None
     return per_backend.get(backend, per_backend["default"])
+
+
+def add_tolerances(backend: str, lines: dict[str, float]) -> None:
+    """An engine's own lines (check -> tolerance), for an engine outside this repository: each, like the lines
+    above, owed to a measured figure and its cause, written beside the call."""
+    unknown = sorted(set(lines) - set(_TOLERANCES))
+    if unknown:
+        raise KeyError(f"no check named {', '.join(unknown)}; known: {', '.join(sorted(_TOLERANCES))}")
+    for check, value in lines.items():
+        _TOLERANCES[check][backend] = value
