@@ -16,9 +16,9 @@ from reports.markdown_text import text as md
 __all__ = ["flagged", "html_section", "markdown_section", "summary", "terminal_lines"]
 
 FLAG = "≠ "
-LEGEND = ("damping and friction: `engine` = the engine's own joint parameter, `runner` = the runner's motor (none "
-          "on a joint a servo or motor drives); effort and velocity: the tighter of the engine's limit and the runner's "
-          "cap")
+LEGEND = ("damping and friction: `engine` = the engine's own joint parameter, `runner` = the runner's motor "
+          "(none on a joint a servo or motor drives); effort and velocity: the tighter of the engine's limit and "
+          "the runner's cap")
 
 
 def _tables(section: dict[str, Any]) -> list[Table]:
