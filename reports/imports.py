@@ -35,11 +35,19 @@ ROUNDINGS = 4.0
 DYNAMICS = ("damping", "frictionloss", "effort", "velocity")
 
 
+#: decimal digits a float32 holds (24 bits: 7.2): a file written with fewer is stated by every engine's format
+#: as finely as it is written, so its precision is taken as no coarser than this
+FLOAT32_DIGITS = 7
+
+
 def tolerance(eps_a: float, eps_b: float, digits: int) -> float:
-    """Relative tolerance between two engines' reads of one value: :data:`ROUNDINGS` times the coarser engine
-    format's epsilon, or half a unit in the last digit of the file's most precise number, whichever is larger
-    (a difference the file cannot express is not one: it states nothing more finely)."""
-    return max(ROUNDINGS * max(eps_a, eps_b), 0.5 * 10.0 ** (1 - digits))
+    """Relative tolerance between two engines' reads of one value, from their float formats and the file's own
+    precision: :data:`ROUNDINGS` times the coarser format's epsilon, or half a unit in the last place of the
+    file's most precise number (``digits`` significant digits, at least :data:`FLOAT32_DIGITS`), whichever is
+    larger. A file written with 12 digits (kuka's pi/2 as 1.57079632679) states nothing more finely than 5e-12,
+    so an engine that carried a value at the file's precision differs from one that derived it in float64 by
+    that much, which is no difference of the import."""
+    return max(ROUNDINGS * max(eps_a, eps_b), 0.5 * 10.0 ** (1 - max(digits, FLOAT32_DIGITS)))
 
 
 def model_data(model: ImportedModel, runner: dict[str, dict[str, float | None]],

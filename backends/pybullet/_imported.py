@@ -13,7 +13,7 @@ from __future__ import annotations
 from typing import Any
 
 from .._kit.imported import ascending, body, stops, unit
-from ..geometry import quat_conj, quat_mul, quat_rotate
+from ..geometry import quat_rotate
 from ..types import CompiledWorld, ImportedBody, ImportedJoint, ImportedModel, JointKind, Motion
 from ._build import Layout
 
@@ -25,17 +25,17 @@ def _kinds(p: Any) -> dict[int, JointKind]:
             p.JOINT_SPHERICAL: JointKind.BALL, p.JOINT_FIXED: JointKind.FIXED}  # fmt: skip
 
 
-def _frame(p: Any, c: int, uid: int, link: int) -> tuple[tuple[float, ...], tuple[float, float, float, float]]:
-    """(COM world position, link frame orientation as (w, x, y, z)) as the engine computes them now."""
+def _inertial(p: Any, c: int, uid: int, link: int) -> tuple[tuple[float, ...], tuple[float, float, float, float]]:
+    """The inertial frame (COM world position, orientation as (w, x, y, z)) as the engine computes it now.
+    getJointInfo's axis is in this frame (Bullet keeps a link's joint axis in its COM frame) [checked: the
+    world axis of pendulum5's turned inertials]; getLinkState's link-frame entries (4, 5) come back in single
+    precision, the inertial frame's (0, 1) in double."""
     if link < 0:
         pos, xyzw = p.getBasePositionAndOrientation(uid, physicsClientId=c)
-        return tuple(pos), (xyzw[3], xyzw[0], xyzw[1], xyzw[2])
-    # the link frame's own entries (4, 5) come back in single precision: the link frame's orientation is the
-    # inertial frame's (1, double) less the local inertial orientation (3)
-    state = p.getLinkState(uid, link, computeForwardKinematics=1, physicsClientId=c)
-    world, local = state[1], state[3]
-    q = quat_mul((world[3], world[0], world[1], world[2]), quat_conj((local[3], local[0], local[1], local[2])))
-    return tuple(state[0]), q
+    else:
+        state = p.getLinkState(uid, link, computeForwardKinematics=1, physicsClientId=c)
+        pos, xyzw = state[0], state[1]
+    return tuple(pos), (xyzw[3], xyzw[0], xyzw[1], xyzw[2])
 
 
 def read_imported(p: Any, c: int, world: CompiledWorld, layout: Layout) -> ImportedModel:
@@ -45,7 +45,7 @@ def read_imported(p: Any, c: int, world: CompiledWorld, layout: Layout) -> Impor
             continue
         uid, link = layout.uid[i], layout.link[i]
         info = p.getDynamicsInfo(uid, link, physicsClientId=c)
-        com_world, _ = _frame(p, c, uid, link)
+        com_world, _ = _inertial(p, c, uid, link)
         shapes = len(p.getCollisionShapeData(uid, link, physicsClientId=c))
         bodies.append(body(spec, info[0], ascending(info[2]), com_world, shapes))
     p.syncBodyInfo(physicsClientId=c)
@@ -55,7 +55,7 @@ def read_imported(p: Any, c: int, world: CompiledWorld, layout: Layout) -> Impor
         info = p.getJointInfo(handle.uid, handle.link, physicsClientId=c)
         kind = kinds.get(int(info[2]), JointKind.FIXED)
         if kind in (JointKind.HINGE, JointKind.SLIDER):
-            _, orientation = _frame(p, c, handle.uid, handle.link)
+            _, orientation = _inertial(p, c, handle.uid, handle.link)
             axis = unit(quat_rotate(orientation, info[13]), handle.sign)
             lo, hi = (info[8], info[9]) if info[8] <= info[9] else (None, None)  # lower > upper: no limit
             lo, hi = stops(lo, hi, handle.sign)

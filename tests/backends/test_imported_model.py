@@ -1,5 +1,8 @@
-"""``Backend.imported_model()`` on every installed engine: kuka_arm's URDF as the engine holds it once built, read
-back from the engine, against the file's own numbers parsed here with xml.etree (not with the project's loader).
+"""``Backend.imported_model()`` on every installed engine: a URDF as the engine holds it once built, read back from
+the engine, against the file's own numbers parsed here with xml.etree (not with the project's loader). Two files:
+kuka_arm's (pybullet_data's KUKA iiwa: stops, damping, 12-digit pi in its rpy) and pendulum5's (turned, offset
+inertials with products of inertia, continuous joints, the robot placed by pos and hpr: an engine that keeps a
+joint axis in the link's inertial frame shows here).
 
 Tolerance (the comparison's own rule, reports.imports.tolerance): the file's numbers are exact inputs and the
 truth here is float64 arithmetic on them, so an engine's read may differ by the roundings of its float format
@@ -26,8 +29,8 @@ from runner.exec.imports import file_digits
 from runner.language.load import load_scenario
 from tests.paths import ROOT
 
-KUKA = ROOT / "scenarios" / "robots" / "kuka_arm.yaml"
-ROBOT = "arm"
+#: (scenario, its robot's name)
+CASES = {"kuka_arm": ("kuka_arm.yaml", "arm"), "pendulum5": ("pendulum5.yaml", "p")}
 
 
 def _floats(text: str | None, default: str) -> np.ndarray:
@@ -46,13 +49,15 @@ def _rpy(r: float, p: float, y: float) -> np.ndarray:
 class Urdf:
     """The file's links and joints, with the links' frames at the zero configuration (root at the origin)."""
 
-    def __init__(self, path: Path) -> None:
+    def __init__(self, path: Path, pos: np.ndarray, rotation: np.ndarray) -> None:
+        """``pos``/``rotation``: where the scenario placed the root link."""
         root = ET.parse(path).getroot()
         self.links = {str(link.get("name")): link for link in root.findall("link")}
         self.joints = {str(joint.get("name")): joint for joint in root.findall("joint")}
         children = {j.find("child").get("link") for j in self.joints.values()}  # type: ignore[union-attr]
         base = next(name for name in self.links if name not in children)
-        self.frame: dict[str, tuple[np.ndarray, np.ndarray]] = {base: (np.zeros(3), np.eye(3))}
+        self.root = base  # welded to the world (`fixed: true`): static, in no engine's bodies
+        self.frame: dict[str, tuple[np.ndarray, np.ndarray]] = {base: (pos, rotation)}
         pending = list(self.joints.values())
         while pending:
             for joint in list(pending):
@@ -85,7 +90,10 @@ class Urdf:
     def axis(self, joint: str) -> np.ndarray:
         return self.frame[self.child(joint)][1] @ _floats(self.joints[joint].find("axis").get("xyz"), "1 0 0")  # type: ignore[union-attr]
 
-    def limits(self, joint: str) -> tuple[float, float]:
+    def limits(self, joint: str) -> tuple[float | None, float | None]:
+        """A revolute joint's stops; a continuous joint has none."""
+        if self.joints[joint].get("type") == "continuous":
+            return None, None
         limit = self.joints[joint].find("limit")
         return float(limit.get("lower")), float(limit.get("upper"))  # type: ignore[union-attr,arg-type]
 
@@ -94,11 +102,18 @@ class Urdf:
         return float(dynamics.get("damping", 0.0)) if dynamics is not None else 0.0
 
 
-@pytest.fixture(scope="module")
-def kuka() -> tuple[object, Urdf, int]:
-    loaded = load_scenario(KUKA)
-    path = Path(loaded.robots[ROBOT].file)
-    return build_program(loaded).world, Urdf(path), file_digits([str(path)])
+@pytest.fixture(scope="module", params=sorted(CASES))
+def model(request: pytest.FixtureRequest) -> tuple[object, Urdf, int, str]:
+    """(world, the file parsed here, the file's digits, the robot's name)."""
+    from backends.geometry import quat_matrices
+
+    file, robot = CASES[request.param]
+    loaded = load_scenario(ROOT / "scenarios" / "robots" / file)
+    path = Path(loaded.robots[robot].file)
+    world = build_program(loaded).world
+    root = next(b for b in world.bodies if b.name.startswith(f"{robot}.") and b.motion.value == "static")
+    urdf = Urdf(path, np.asarray(root.pos, dtype=float), np.asarray(quat_matrices(root.quat), dtype=float))
+    return world, urdf, file_digits([str(path)]), robot
 
 
 def _read(backend_cls: type[Backend], world: object) -> ImportedModel:
@@ -113,14 +128,14 @@ def _near(got: object, want: object, scale: float, rel: float) -> bool:
     return bool(np.max(np.abs(np.asarray(got, dtype=float) - np.asarray(want, dtype=float))) <= rel * scale)
 
 
-def test_the_engine_holds_the_urdfs_masses_inertias_and_centres(backend_cls: type[Backend], kuka) -> None:  # noqa: ANN001
-    world, urdf, digits = kuka
+def test_the_engine_holds_the_urdfs_masses_inertias_and_centres(backend_cls: type[Backend], model) -> None:  # noqa: ANN001
+    world, urdf, digits, robot = model
     rel = tolerance(backend_cls.precision.eps, Precision.FLOAT64.eps, digits)
     model = _read(backend_cls, world)
-    moving = [name for name in urdf.links if urdf.mass(name) > 0]  # link_0 (mass 0) is the welded root
-    assert [b.name for b in model.bodies] == [f"{ROBOT}.{n}" for n in moving]
+    moving = [name for name in urdf.links if name != urdf.root]  # the root is welded to the world: static
+    assert [b.name for b in model.bodies] == [f"{robot}.{n}" for n in moving]
     for body in model.bodies:
-        link = body.name.removeprefix(f"{ROBOT}.")
+        link = body.name.removeprefix(f"{robot}.")
         spec = world.bodies[world.body_index(body.name)]
         reach = math.hypot(*spec.pos) + float(np.max(np.abs(urdf.com(link))))
         assert _near(body.mass, urdf.mass(link), urdf.mass(link), rel), (link, body.mass)
@@ -131,31 +146,34 @@ def test_the_engine_holds_the_urdfs_masses_inertias_and_centres(backend_cls: typ
         assert body.shapes == len(urdf.links[link].findall("collision"))
 
 
-def test_the_engine_holds_the_urdfs_joints(backend_cls: type[Backend], kuka) -> None:  # noqa: ANN001
+def test_the_engine_holds_the_urdfs_joints(backend_cls: type[Backend], model) -> None:  # noqa: ANN001
     """Axes and stops as the file states them; damping as the engine holds it: its own joint damping where the
     adapter gives the engine the file's damping (``native_damping``), else none (the runner's motor applies it)."""
-    world, urdf, digits = kuka
+    world, urdf, digits, robot = model
     rel = tolerance(backend_cls.precision.eps, Precision.FLOAT64.eps, digits)
     model = _read(backend_cls, world)
-    assert [j.name for j in model.joints] == [f"{ROBOT}.{n}" for n in urdf.joints]
+    assert [j.name for j in model.joints] == [f"{robot}.{n}" for n in urdf.joints]
     for joint in model.joints:
-        name = joint.name.removeprefix(f"{ROBOT}.")
-        assert joint.kind is JointKind.HINGE  # every kuka joint is revolute
+        name = joint.name.removeprefix(f"{robot}.")
+        assert joint.kind is JointKind.HINGE  # every joint of both files is revolute or continuous
         assert joint.axis is not None and _near(joint.axis, urdf.axis(name), 1.0, rel), (name, joint.axis)
         lo, hi = urdf.limits(name)
-        assert joint.lo is not None and joint.hi is not None
-        assert _near([joint.lo, joint.hi], [lo, hi], max(abs(lo), abs(hi)), rel), (name, joint.lo, joint.hi)
+        if lo is None or hi is None:
+            assert joint.lo is None and joint.hi is None, (name, joint.lo, joint.hi)
+        else:
+            assert joint.lo is not None and joint.hi is not None
+            assert _near([joint.lo, joint.hi], [lo, hi], max(abs(lo), abs(hi)), rel), (name, joint.lo, joint.hi)
         if backend_cls.native_damping:
             assert joint.damping == pytest.approx(urdf.damping(name), rel=rel)
         else:
             assert joint.damping in (None, 0.0)
 
 
-def test_the_read_is_of_the_world_as_built(backend_cls: type[Backend], kuka) -> None:  # noqa: ANN001
+def test_the_read_is_of_the_world_as_built(backend_cls: type[Backend], model) -> None:  # noqa: ANN001
     """After a step the bodies have moved: the contract refuses to call that the import."""
     from backends.errors import ContractViolation
 
-    world, _, _ = kuka
+    world, _, _, _ = model
     with backend_cls(world) as backend:
         backend.step()
         with pytest.raises(ContractViolation, match="imported_model"):
