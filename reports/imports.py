@@ -28,10 +28,12 @@ __all__ = ["FAILED", "IMPORTS_NAME", "NOT_REPORTED", "READ", "REFUSED", "Cell", 
            "model_data", "sections_beside", "tolerance", "write_imports"]
 
 READ, NOT_REPORTED, REFUSED, FAILED = "read", "not reported", "refused", "failed"
-#: roundings a read value carries in the engine's format, relative to its scale: stored once (eps/2), placed
-#: through a rotation kept in that format (a rotation matrix from a rounded quaternion is off by up to 2 eps,
-#: so a rotated vector by 2 eps of its length) and read back through it again (eps/2): 3 eps; 4 leaves margin
-ROUNDINGS = 4.0
+#: roundings a read value carries in the engine's format, relative to its scale: stored in the format (eps/2)
+#: and, for a vector or a position, passed through two rotations kept in that format (into the body's frame at
+#: build, back to the world when read, as ODE's hinge axis is); a rotation matrix from a rounded unit quaternion
+#: has entries off by up to about eps, so each rotation moves a component of a unit vector by up to 3 eps:
+#: 2 x 3 eps + 2 x eps/2 = 7 eps, rounded up to 8
+ROUNDINGS = 8.0
 DYNAMICS = ("damping", "frictionloss", "effort", "velocity")
 
 

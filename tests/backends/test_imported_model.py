@@ -6,7 +6,7 @@ joint axis in the link's inertial frame shows here).
 
 Tolerance (the comparison's own rule, reports.imports.tolerance): the file's numbers are exact inputs and the
 truth here is float64 arithmetic on them, so an engine's read may differ by the roundings of its float format
-(reports.imports.ROUNDINGS eps: stored once, placed and read back through a rotation kept in that format)
+(reports.imports.ROUNDINGS eps: stored once, placed and read back through rotations kept in that format)
 relative to the value's scale, or by half a unit in the last of the file's most precise digits, whichever is
 larger. Scales: a mass its value, principal moments the largest, a COM the body's distance from the world origin
 plus the COM's (it is read through world positions), an axis 1, a stop its magnitude.
