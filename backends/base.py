@@ -30,6 +30,14 @@ Semantics every backend must honour (ODE's):
 * States are read fresh after the step (never a stale cache), positions in metres, quaternions
   (w, x, y, z; a quaternion and its negation are the same orientation), velocities in the world frame.
 * ``drain_messages()`` returns what the engine printed about itself since the last call (lines).
+* ``imported_model()`` (optional hook ``_imported_model``) reads back, before any step, how the engine holds the
+  world it was built from: per dynamic body its mass, principal inertia about the COM, COM in the body frame
+  and collision shapes counted; per joint its kind, world axis, stops, and the damping, friction loss, effort
+  and velocity limits the engine itself holds (``backends.types.ImportedModel``). The values come FROM THE
+  ENGINE (pybullet getDynamicsInfo/getJointInfo, MuJoCo's mjModel arrays, DART's BodyNode/Joint getters,
+  ODE's OdeMass and joint params), never from ``self.world``: they show what the engine will simulate, which
+  is what ``scenario compare`` compares across engines. An adapter that cannot read them back returns None
+  (the default) and the comparison says "not reported".
 
 Robots (the capabilities in ``backends.types.ROBOT_CAPABILITIES``; the full text is in backends/types.py and
 docs/robots.md). An adapter declares one only when it honours all of it:
@@ -84,6 +92,7 @@ from .types import (
     Capability,
     CompiledWorld,
     Contact,
+    ImportedModel,
     JointKind,
     JointSpec,
     JointStates,
@@ -250,6 +259,17 @@ class Backend(abc.ABC):
         except self.engine_errors as exc:
             raise engine_failure(self.name, f"resetting `{name}`", exc) from exc
 
+    def imported_model(self) -> ImportedModel | None:
+        """How the engine holds the world, read back from it (module docstring); None: the adapter cannot say.
+        Only before the first step: afterwards the bodies have moved and the read would not be the import."""
+        self._open("imported_model")
+        if self.steps:
+            self._refuse(f"imported_model() after {self.steps} step(s); it reads the world as built")
+        try:
+            return self._imported_model()
+        except self.engine_errors as exc:
+            raise engine_failure(self.name, "reading the imported model back", exc) from exc
+
     def drain_messages(self) -> list[str]:
         """What the engine printed about itself since the last call, one line each (default: nothing)."""
         self._open("drain_messages")
@@ -315,6 +335,10 @@ class Backend(abc.ABC):
 
     def _drain_messages(self) -> list[str]:
         return []
+
+    def _imported_model(self) -> ImportedModel | None:
+        """Read the built world back from the engine (``imported_model``); None: this adapter cannot."""
+        return None
 
     def _close(self) -> None:  # noqa: B027 - optional hook
         """Release the engine's resources (called once)."""

@@ -412,6 +412,49 @@ class CompiledWorld:
         return frozenset(need)
 
 
+@dataclass(frozen=True)
+class ImportedBody:
+    """A body as the engine holds it once built (:meth:`backends.base.Backend.imported_model`), read back from
+    the engine: what it will simulate, whatever the world asked for."""
+
+    name: str  # the CompiledWorld body's name
+    mass: float  # kg
+    inertia: Vec3  # principal moments about the COM (kg m^2), ascending (the axes are not compared)
+    com: Vec3  # the centre of mass in the body frame (m)
+    shapes: int  # collision shapes the engine built for the body
+
+
+@dataclass(frozen=True)
+class ImportedJoint:
+    """A joint as the engine holds it once built, in the world joint's coordinate (counted from the start, its
+    sign), read back from the engine. ``None``: the engine holds no such value (no stop on that side, no own
+    damping or friction parameter, no limit it enforces by itself); what the runner realises instead (its
+    motor's damping and friction loss, its caps on effort and velocity) is not the engine's and is not here."""
+
+    name: str  # the CompiledWorld joint's name
+    kind: JointKind  # the engine's joint type, mapped to ours
+    axis: Vec3 | None  # world frame, unit, at the start (slider, hinge; universal: first axis); None: no axis
+    lo: float | None  # stops: metres or radians from the start
+    hi: float | None
+    damping: float | None  # the engine's own joint damping (N m s/rad or N s/m)
+    frictionloss: float | None  # the engine's own dry joint friction (N m or N)
+    effort: float | None  # a force limit the engine enforces by itself (N m or N)
+    velocity: float | None  # a rate limit the engine enforces by itself (rad/s or m/s)
+
+
+@dataclass(frozen=True)
+class ImportedModel:
+    """What an engine built, read back before any step: every dynamic body and every joint, in
+    ``CompiledWorld`` order (static bodies carry no mass in any engine and are left out)."""
+
+    backend: str
+    bodies: tuple[ImportedBody, ...]
+    joints: tuple[ImportedJoint, ...]
+    #: where a value is the adapter's rather than the engine's (e.g. ODE keeps the COM at the body's origin,
+    #: so the COM offset is the adapter's frame), one line each
+    notes: tuple[str, ...] = ()
+
+
 @dataclass
 class BodyStates:
     """States of every body in ``CompiledWorld.bodies`` order, world frame."""

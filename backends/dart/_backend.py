@@ -27,6 +27,7 @@ from ..types import (
     Capability,
     CompiledWorld,
     Contact,
+    ImportedModel,
     JointKind,
     JointStates,
     Motion,
@@ -38,6 +39,7 @@ from . import _contacts, _surfaces
 from ._build import BodyHandle, JointHandle, build, place_free
 from ._build import check as check_build
 from ._gate import BounceGate
+from ._imported import read_imported
 from ._options import MAX_CONE_MU, MAX_CONE_STACK, DartOptions
 from ._reads import state_readers
 
@@ -111,6 +113,9 @@ class DartBackend(Backend):
         for j, handle in enumerate(self._joints):
             if handle.spec.motor is not None:
                 self._set_motor(j, handle.spec.motor.vel, handle.spec.motor.fmax)
+
+    def _imported_model(self) -> ImportedModel:
+        return read_imported(self.world, self._bodies, self._joints)
 
     def _settings(self) -> dict[str, Any]:
         names = [b.name for b in self.world.bodies]

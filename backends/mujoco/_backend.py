@@ -21,6 +21,7 @@ from ..types import (
     Capability,
     CompiledWorld,
     Contact,
+    ImportedModel,
     JointKind,
     JointStates,
     Motion,
@@ -30,6 +31,7 @@ from ..types import (
 )
 from . import _coulomb, _native
 from ._bounce import Impacts
+from ._imported import read_imported
 from ._model import IMPEDANCE, KINEMATIC_MASS_RATIO, MU_MAX, build, plan_tree
 from ._native import set_start
 from ._options import MujocoOptions, check_stack, engine_substeps
@@ -308,6 +310,11 @@ class MujocoBackend(Backend):
         if motored.size:
             force[motored] = self._motored_sign * self._motor_mean.mean[self._motored_slot]
         return JointStates(position=position, velocity=velocity, motor_force=force)
+
+    def _imported_model(self) -> ImportedModel:
+        starts = np.zeros(len(self.world.joints))
+        starts[self._rated] = self._starts
+        return read_imported(self._m, self._d, self.world, self._layout, self._sign, starts)
 
     def _settings(self) -> dict[str, Any]:
         o = self.options

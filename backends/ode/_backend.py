@@ -26,6 +26,7 @@ from ..types import (
     Capability,
     CompiledWorld,
     Contact,
+    ImportedModel,
     JointKind,
     JointStates,
     Motion,
@@ -36,6 +37,7 @@ from ..types import (
 from . import _native
 from ._build import JointHandle, axis_arg, build_scene, destroy_scene, panda_quat, set_motor
 from ._contacts import Collider
+from ._imported import read_imported
 from ._options import OdeOptions, check_resting_stack, check_stack
 
 _ROTATIONAL = (JointKind.HINGE, JointKind.UNIVERSAL)
@@ -139,6 +141,9 @@ class OdeBackend(Backend):
         self._motor_mean = SubstepMean(len(world.joints))
         self._substep_contacts = SubstepContacts(world.substeps)
         self._states: BodyStates | None = None  # fresh states, dropped by anything that moves a body
+
+    def _imported_model(self) -> ImportedModel:
+        return read_imported(self.world, self._scene)
 
     def _settings(self) -> dict[str, Any]:
         o = self.options

@@ -26,6 +26,7 @@ from ..types import (
     Capability,
     CompiledWorld,
     Contact,
+    ImportedModel,
     JointKind,
     JointStates,
     Motion,
@@ -38,6 +39,7 @@ from ._build import PLANE_HALF_SIZE, Layout, build, initial_rate, xyzw
 from ._build import check as check_build
 from ._frames import InertialFrames
 from ._impacts import ImpactErp
+from ._imported import read_imported
 from ._options import PyBulletOptions, check_stack, solver_iterations
 from ._reads import ROW, ContactReader, base_rows
 from ._surfaces import FRICTION_CLAMP, SurfaceFit, fit_surfaces
@@ -345,6 +347,9 @@ class PyBulletBackend(Backend):
         self._cache = None
 
     # --- metadata and teardown --------------------------------------------------------------------
+
+    def _imported_model(self) -> ImportedModel:
+        return read_imported(p, self._c, self.world, self._layout)
 
     def _settings(self) -> dict[str, Any]:
         engine = dict(p.getPhysicsEngineParameters(physicsClientId=self._c))

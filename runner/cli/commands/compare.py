@@ -51,6 +51,10 @@ def configure(parser: argparse.ArgumentParser) -> None:
                         help="also overwrite files under the outputs' names that scenario did not write")  # fmt: skip
     options.add_overrides(parser)
     parser.add_argument(
+        "--imports-only", action="store_true",
+        help="show how each engine imported the scenario's robots (built, not stepped) and stop",
+    )  # fmt: skip
+    parser.add_argument(
         "--junit",
         type=Path,
         metavar="FILE",
@@ -88,6 +92,12 @@ def execute(args: argparse.Namespace, out: Console, err: Console) -> int:
     cases: list[LoadedScenario] = []
     cases.extend(load_files(options.scenario_files(args.files), args.variant, args.all_variants, overrides))
     work = [(case, b) for case in cases for b in backends]
+    if any(loaded.robots for loaded in cases):
+        _show_imports(args, out, [loaded for loaded in cases if loaded.robots], backends)
+        if args.imports_only:
+            return ExitCode.OK
+    elif args.imports_only:
+        raise UsageError("`--imports-only` needs a scenario with robots (URDF or MJCF models)")
     jobs = [_case(args, loaded, b, overrides) for loaded, b in work]
     check_outputs(jobs, args.force)
     _check_reports(args.out, args.force)
@@ -146,6 +156,37 @@ def _case(args: argparse.Namespace, loaded: LoadedScenario, backend: str,
         cost=estimate_cost(loaded), budget=budget, sha256=loaded.sha256,
         trace=str(trace_path(traces, loaded, backend)), scenario=loaded.model.scenario, loaded=loaded,
     )  # fmt: skip
+
+
+def _show_imports(args: argparse.Namespace, out: Console, cases: list[LoadedScenario], backends: list[str]) -> None:
+    """Before any run: every engine builds each robot case's world in a worker (runner.exec.imports) and the
+    import tables are printed, and kept beside the traces for the report (reports.imports)."""
+    from reports.imports import imports_path, is_own_imports, write_imports
+    from reports.imports_render import terminal_lines
+    from runner.exec.imports import file_digits, read_imports
+    from runner.trace.output import write_error
+
+    work = [(loaded, b) for loaded in cases for b in backends]
+    reads = read_imports([Case(str(loaded.path), None if loaded.variant == BASE_CASE else loaded.variant, b,
+                               loaded.overrides, loaded=loaded) for loaded, b in work], args.jobs)  # fmt: skip
+    sections = []
+    for k, loaded in enumerate(cases):
+        section = {"scenario": loaded.model.scenario, "variant": loaded.variant,
+                   "digits": file_digits([desc.file for desc in loaded.robots.values()]),
+                   "reads": reads[k * len(backends):(k + 1) * len(backends)]}  # fmt: skip
+        sections.append(section)
+        for line in terminal_lines(section):
+            out.print(line, markup=False, highlight=False)
+    if args.imports_only:
+        return
+    traces = args.out / "traces"
+    target = imports_path(traces)
+    if target.exists() and not args.force and not is_own_imports(target):
+        raise TraceError(f"{target} exists and was not written by this tool; use --force to replace it")
+    try:
+        write_imports(traces, sections)
+    except OSError as exc:
+        raise write_error(exc, str(target)) from exc
 
 
 def _check_reports(out: Path, force: bool) -> None:
