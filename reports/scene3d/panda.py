@@ -6,13 +6,13 @@ shown. Geometry is coloured per vertex and lit by one ambient and one directiona
 root, so any camera that sees the root (an offscreen buffer's, a ShowBase window's) shows it lit.
 Translucent primitives (collision solids) are alpha-blended without writing depth; lines are unlit.
 
-Shadows: every opaque shape of a moving or standing body casts a planar shadow on the ground (the highest
-upward-facing static plane below the bodies): the same geometry, instanced under a node whose matrix projects
-it along the directional light onto the plane (:func:`shadow_matrix`), drawn unlit just above it in the
-plane's colour times :data:`AMBIENT` (what the plane is where only the ambient light reaches; opaque, so where
-two shapes' shadows overlap it is no darker). It needs no shader, so Panda3D's software renderer (the report's
-pictures and replay) and the window (``scenario view``) show the same shadows; a scene without such a plane has
-none.
+Shadows: every opaque shape of a moving or standing body casts a planar shadow on the ground (the highest upward-
+facing static plane below the bodies): the same geometry, instanced under a node whose matrix projects it along the
+directional light onto the plane (:func:`shadow_matrix`), drawn unlit on it (after the plane, before the rest,
+without the depth test) in the plane's colour times :data:`AMBIENT` (what the plane is where only the ambient light
+reaches; opaque, so where two shapes' shadows overlap it is no darker). It needs no shader, so Panda3D's software
+renderer (the report's pictures and replay) and the window (``scenario view``) show the same shadows; a scene
+without such a plane has none.
 """
 
 from __future__ import annotations
@@ -43,6 +43,7 @@ from panda3d.core import (
 from backends.geometry import quat_matrices
 from reports.scene3d.meshes import primitive_mesh
 from reports.scene3d.model import EntityVisual, Primitive, SceneModel
+from reports.trace_format import WORLD_FRAME
 
 __all__ = ["AMBIENT", "BACKGROUND", "LIGHT_HPR", "PandaScene", "shadow_matrix", "software_camera_state"]
 
@@ -184,6 +185,13 @@ class PandaScene:
             self.shadows.setLightOff(1)
             self.shadows.setColor((*_shadow_rgb(model, ground[1]), 1.0), 1)  # over the vertex colours
             self.shadows.setTwoSided(True)
+            # Drawn right after the ground and before everything else, without the depth test: a shadow 1 mm
+            # above the plane fought with it in the software renderer's depth buffer (a speckled shadow at 5 m);
+            # what stands on the shadow is drawn later and covers it as it should.
+            self.bodies[ground[1]].setBin("background", 0, 1)  # over its translucent grid's "transparent" bin
+            self.shadows.setBin("background", 1)
+            self.shadows.setDepthTest(False)
+            self.shadows.setDepthWrite(False)
             # Panda3D culls by bounds carried through the node's matrix, which a flattening one gets wrong (every
             # shadow was culled): never cull the shadows.
             self.shadows.node().setBounds(OmniBoundingVolume())
@@ -198,7 +206,7 @@ class PandaScene:
         key = id(entity)
         if key in self._built:
             return self._built[key]
-        parent = self.bodies.get(entity.body)
+        parent = self.root if entity.body == WORLD_FRAME else self.bodies.get(entity.body)  # contact arrows: world
         if parent is None:
             return None
         node = GeomNode(entity.id)

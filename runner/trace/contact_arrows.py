@@ -28,7 +28,7 @@ ARROW_LENGTH = 0.25
 #: The default scale of a world with no weight to show (no gravity or no massive moving body): m/N.
 FALLBACK_SCALE = 0.01
 #: An arrow's head as a share of its length; its shaft's and head's diameters likewise (a thin arrow).
-HEAD, SHAFT_WIDTH, HEAD_WIDTH = 0.25, 0.06, 0.15
+HEAD, SHAFT_WIDTH, HEAD_WIDTH = 0.25, 0.08, 0.2
 ARROW_RGBA = (1.0, 0.25, 0.1, 1.0)
 ENTITY_ID = "contact_points"
 #: The scenario record's key for the scale (m/N).

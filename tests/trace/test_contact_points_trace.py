@@ -107,3 +107,30 @@ def test_own_scale(tmp_path: Path) -> None:
     assert float(read_trace(path).scenario[KEY_SCALE]) == 0.001
     assert arrows is not None
     assert arrows.vectors[-4:, 2].sum() == pytest.approx(0.001 * 13.5 * 9.81, rel=tol("contact_force", "mujoco"))
+
+
+def test_the_reports_pictures_draw_the_arrows(tmp_path: Path) -> None:
+    """The report's scene (reports.scene3d) reads /contact_points: at the end the 4 arrows, as long as the trace
+    draws them, and Panda3D's software renderer shows their colour where its lens puts their middles."""
+    pytest.importorskip("panda3d.core", reason="engine not installed: panda3d (the ode extra)")
+    from reports.scene3d import frame_camera, scene_model
+    from reports.scene3d.offscreen import OffscreenRenderer
+    from reports.scene3d.panda import PandaScene
+    from runner.trace.contact_arrows import ARROW_RGBA, ENTITY_ID
+    from tests.view.pictures import found_near
+
+    path = _run(SCENARIO, "pybullet", tmp_path)
+    model = scene_model(read_trace(path))
+    arrows = model.entities_at(model.end_time)[ENTITY_ID].primitives
+    drawn = read_arrows(path)
+    assert drawn is not None and len(arrows) == 4
+    assert sorted(a.size[0] for a in arrows) == pytest.approx(sorted(np.linalg.norm(drawn.vectors[-4:], axis=1)))
+    renderer = OffscreenRenderer(400, 300)
+    scene = PandaScene(model)
+    camera = frame_camera([model])
+    scene.show(model.end_time)
+    image = np.asarray(renderer.render(scene, camera))
+    middles = (drawn.origins[-4:] + 0.5 * drawn.vectors[-4:]).tolist()
+    seen = [found_near(image, px, ARROW_RGBA[:3]) for px in renderer.project(scene, camera, middles)]
+    assert sum(seen) >= 2, seen  # each arrow runs up a vertical edge of the box: the far ones may be hidden by it
+    renderer.close()
