@@ -27,6 +27,13 @@ Semantics every backend must honour (ODE's):
   substeps. Per pair: the most points and the deepest penetration of any substep, and the mean normal
   force over the substeps (the transmitted impulse / dt). Static and kinematic bodies never touch each
   other. ``JointStates.motor_force`` is likewise the mean over the step's substeps.
+* ``contact_points()`` (only an adapter that declares ``contacts:points``; the runner calls it only when a
+  scenario asks, as reading points costs time): every touching point (distance <= 0) of the step's **last**
+  engine step, sorted by (a, b) and in the engine's order within a pair, each with its world position, its
+  unit normal pointing from body ``a`` to body ``b`` (the force on ``b`` is ``+force * normal``), its depth
+  and its normal force in that engine step. With one engine step per scenario step a pair's point forces
+  sum to its ``contacts()`` normal force; with several, ``contacts()`` is the mean over them and the points
+  are the last one's (docs/semantics.md, "Contact points").
 * States are read fresh after the step (never a stale cache), positions in metres, quaternions
   (w, x, y, z; a quaternion and its negation are the same orientation), velocities in the world frame.
 * ``drain_messages()`` returns what the engine printed about itself since the last call (lines).
@@ -92,6 +99,7 @@ from .types import (
     Capability,
     CompiledWorld,
     Contact,
+    ContactPoint,
     ImportedModel,
     JointKind,
     JointSpec,
@@ -211,6 +219,16 @@ class Backend(abc.ABC):
         except self.engine_errors as exc:
             raise engine_failure(self.name, "reading contacts", exc) from exc
 
+    def contact_points(self) -> list[ContactPoint]:
+        """The touching points of the last step's last engine step, sorted by (a, b) (``contacts:points``)."""
+        self._open("contact_points")
+        if Capability.CONTACT_POINTS not in self.capabilities:
+            self._refuse("contact_points(): this backend does not declare contacts:points")
+        try:
+            return self._contact_points()
+        except self.engine_errors as exc:
+            raise engine_failure(self.name, "reading contact points", exc) from exc
+
     def set_kinematic(self, body: int, pos: Vec3, quat: Quat, lin_vel: Vec3, ang_vel: Vec3) -> None:
         """Place kinematic body ``body`` now and set the velocity it moves with during the next step."""
         self._open("set_kinematic")
@@ -326,6 +344,10 @@ class Backend(abc.ABC):
 
     @abc.abstractmethod
     def _reset_body(self, body: int, pos: Vec3, quat: Quat, lin_vel: Vec3, ang_vel: Vec3) -> None: ...
+
+    def _contact_points(self) -> list[ContactPoint]:
+        """The last engine step's touching points (an adapter that declares ``contacts:points``)."""
+        self._refuse("contact_points() is declared but not implemented")
 
     def _place_kinematic(self, body: int, pose: KinematicPose) -> None:  # noqa: B027 - optional hook
         """A kinematic body was given a new pose and velocity (``self.kinematic[body]``): impose it now."""

@@ -143,6 +143,8 @@ class Capability(str, enum.Enum):
     CONSTRAINT_TENDON = "constraint:tendon"  # MJCF <tendon>
     COLLISION_EXPLICIT_PAIRS = "collision:explicit-pairs"  # MJCF <contact><pair>
     WORLD_FLUID = "world:fluid"  # MJCF <option density viscosity wind>
+    # What a run reads beyond states and contact pairs (OUTPUT_CAPABILITIES).
+    CONTACT_POINTS = "contacts:points"  # Backend.contact_points(): each touching point, its normal and force
 
 
 #: Capabilities that no adapter maps to its engine yet (the stop bounce and softness of the language): no
@@ -182,8 +184,12 @@ MODEL_FILE_CAPABILITIES: frozenset[Capability] = frozenset(
 ALL_SHAPES: frozenset[Capability] = frozenset(
     c for c in Capability if c.value.startswith("shape:") and c not in ROBOT_CAPABILITIES
 )
+#: Reads an adapter implements beyond the contract's mandatory ones; each adapter names those it has, so a
+#: new adapter (built from ``RIGID_BODY_CAPABILITIES``) refuses them up front until it implements them.
+OUTPUT_CAPABILITIES: frozenset[Capability] = frozenset({Capability.CONTACT_POINTS})
 RIGID_BODY_CAPABILITIES: frozenset[Capability] = (
     frozenset(Capability)
+    - OUTPUT_CAPABILITIES
     - {Capability.JOINT_UNIVERSAL, Capability.JOINT_ARMATURE}
     - UNMAPPED_CAPABILITIES
     - ROBOT_CAPABILITIES
@@ -361,6 +367,9 @@ class CompiledWorld:
     #: True: the model file's own options rule (MJCF `<option>`, its geoms' contact parameters, MuJoCo's own
     #: mj_step); the scenario's dt and gravity equal the model's (`world.options: model`, docs/robots.md)
     model_options: bool = False
+    #: True: the run reads ``Backend.contact_points()`` (the scenario's ``trace: {contact_points: true}``);
+    #: it needs ``contacts:points``
+    contact_points: bool = False
 
     def body_index(self, name: str) -> int:
         for i, body in enumerate(self.bodies):
@@ -409,6 +418,8 @@ class CompiledWorld:
             need.add(Capability.SUBSTEPS)
         for model in self.models:
             need.update(model.needs)
+        if self.contact_points:
+            need.add(Capability.CONTACT_POINTS)
         return frozenset(need)
 
 
@@ -495,6 +506,19 @@ class Contact(NamedTuple):
     points: int  # number of contact points with distance <= 0
     depth: float  # largest penetration depth, >= 0
     normal_force: float  # summed normal force in N; NaN if the engine cannot say
+
+
+class ContactPoint(NamedTuple):
+    """One contact point of a touching pair (``a < b``, indices into ``CompiledWorld.bodies``) in the last
+    engine step of the last scenario step (``Backend.contact_points()``; docs/semantics.md, "Contact points").
+    """
+
+    a: int
+    b: int
+    pos: Vec3  # world frame, m: where the engine places the point (between the two surfaces)
+    normal: Vec3  # unit, world frame, pointing from body a to body b: a pushes b along +normal
+    depth: float  # penetration, m (>= 0 when touching)
+    force: float  # normal force, N, >= 0: the impulse along the normal in that engine step / its length
 
 
 #: ``Contact`` from a (a, b, points, depth, normal_force) tuple without ``NamedTuple.__new__``'s Python

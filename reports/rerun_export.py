@@ -10,6 +10,8 @@ seconds):
   ``contact(box, door)``), grouped by unit;
 * ``/forces/joints/<joint>`` (motor force or torque) and ``/forces/contacts/<a> - <b>`` (normal force, 0 while
   apart) for every joint and every pair that touched;
+* ``/world/contact_points``: a trace's contact points (``trace: {contact_points: true}``) as ``Arrows3D`` at
+  every recorded step (:mod:`reports.rerun_contacts`);
 * ``/log/<logger>``: the trace's /log as ``TextLog`` (events, handler logs, sounds, each verdict when it was
   decided, the summary);
 * a blueprint: the 3D view (collision solids hidden), one time-series view per unit of the asserted
@@ -34,6 +36,7 @@ from typing import Any
 import numpy as np
 
 from reports import trace_format as tf
+from reports.rerun_contacts import read_arrows, send_arrows
 from reports.rerun_scene import WORLD, body_path, scene_entities
 from reports.scene3d.framing import frame_camera, moving_bodies
 from reports.scene3d.model import SceneModel, scene_model
@@ -269,6 +272,9 @@ def export_rerun(trace_path: Path, out: Path, trace: Trace | None = None) -> tup
     for s in forces:
         _send_series(rec, _unit_path(FORCES, s.unit, s.name), s)
     _send_logs(rec, trace)
+    arrows = read_arrows(trace_path) if tf.TOPIC_CONTACT_POINTS in trace.channels else None
+    if arrows is not None:
+        send_arrows(rec, arrows, _duration, TIMELINE)
     rec.flush()
     rec.disconnect()
     if not out.exists():

@@ -73,6 +73,8 @@ TOPIC_LOG: Final = "/log"  # foxglove.Log: events, handler logs, sounds, verdict
 TOPIC_BODIES: Final = "/bodies"  # physics_scenarios.Bodies: box.vel.{x,y,z}, box.angvel.{x,y,z} per step
 TOPIC_JOINTS: Final = "/joints"  # physics_scenarios.Joints: slider.{position,velocity,motor_force} per step
 TOPIC_CONTACTS: Final = "/contacts"  # physics_scenarios.Contacts: count, pairs[{a,b,points,depth,normal_force}]
+#: foxglove.SceneUpdate: each recorded step's contact points as arrows (only with `trace: {contact_points: true}`)
+TOPIC_CONTACT_POINTS: Final = "/contact_points"
 TOPIC_STATE: Final = "/state"  # physics_scenarios.State: one field per state variable, per step
 TOPIC_EVENTS: Final = "/events"  # physics_scenarios.Event: time, name, source, detail
 TOPIC_SOUNDS: Final = "/sounds"  # physics_scenarios.Sound: time, name, action, offset, volume

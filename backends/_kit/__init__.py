@@ -14,7 +14,7 @@ Nothing here imports an engine.
 
 from __future__ import annotations
 
-from .contacts import SubstepContacts, group_by_pair, merge_substeps
+from .contacts import SubstepContacts, contact_point, group_by_pair, merge_substeps, sorted_points
 from .motion import KinematicPose, KinematicTrack, OneStepForces, SubstepMean, substep_times
 from .options import BackendOptions, Rule, option
 
@@ -26,8 +26,10 @@ __all__ = [
     "Rule",
     "SubstepContacts",
     "SubstepMean",
+    "contact_point",
     "group_by_pair",
     "merge_substeps",
     "option",
+    "sorted_points",
     "substep_times",
 ]

@@ -27,6 +27,7 @@ from ..types import (
     Capability,
     CompiledWorld,
     Contact,
+    ContactPoint,
     ImportedModel,
     JointKind,
     JointStates,
@@ -52,7 +53,9 @@ class DartBackend(Backend):
     precision: ClassVar[Precision] = Precision.FLOAT64  # Eigen doubles throughout
     #: Every robot capability: compound bodies, COM offsets, convex hulls and static triangle meshes (both as
     #: DART MeshShapes, ``_meshes``), excluded pairs (the solver's BodyNodeCollisionFilter).
-    capabilities: ClassVar[frozenset[Capability]] = RIGID_BODY_CAPABILITIES | ROBOT_CAPABILITIES
+    capabilities: ClassVar[frozenset[Capability]] = (
+        RIGID_BODY_CAPABILITIES | ROBOT_CAPABILITIES | {Capability.CONTACT_POINTS}
+    )
     Options: ClassVar[type[BackendOptions]] = DartOptions
     #: joint damping is DART's own (GenericJoint's damping coefficient, integrated implicitly): DART's servo
     #: constraint drops a bound as small as damping x a slow rate (docs/semantics.md, "Joint dynamics")
@@ -231,6 +234,9 @@ class DartBackend(Backend):
         if self._engine_steps > 1:
             return self._substep_contacts.merged() if self.steps else []
         return self._reader.contacts(self._dart.getLastCollisionResult().getContacts())
+
+    def _contact_points(self) -> list[ContactPoint]:
+        return self._reader.points(self._dart.getLastCollisionResult().getContacts()) if self.steps else []
 
     def _quiet(self, h: float) -> bool:
         """Whether no contact of the coming engine step (``h`` long) can bounce, so that the bounce_vel pass

@@ -8,7 +8,16 @@ from typing import Any, ClassVar
 import mujoco
 import numpy as np
 
-from .._kit import BackendOptions, KinematicPose, SubstepContacts, SubstepMean, group_by_pair, substep_times
+from .._kit import (
+    BackendOptions,
+    KinematicPose,
+    SubstepContacts,
+    SubstepMean,
+    contact_point,
+    group_by_pair,
+    sorted_points,
+    substep_times,
+)
 from .._kit.stacks import stack_height
 from ..base import Backend
 from ..errors import EngineFailure
@@ -21,6 +30,7 @@ from ..types import (
     Capability,
     CompiledWorld,
     Contact,
+    ContactPoint,
     ImportedModel,
     JointKind,
     JointStates,
@@ -69,7 +79,7 @@ class MujocoBackend(Backend):
         RIGID_BODY_CAPABILITIES
         | (ROBOT_CAPABILITIES - {Capability.SHAPE_TRIMESH})
         | MODEL_FILE_CAPABILITIES
-        | {Capability.JOINT_ARMATURE}  # dof_armature
+        | {Capability.JOINT_ARMATURE, Capability.CONTACT_POINTS}  # dof_armature
     )
     Options: ClassVar[type[BackendOptions]] = MujocoOptions
     #: mju_error and the bindings' own failures; MjSpec.compile's ValueError is translated where it is called.
@@ -275,6 +285,23 @@ class MujocoBackend(Backend):
         force = np.where(rows >= 0, d.efc_force[rows], 0.0) if d.nefc else np.zeros(rows.size)
         owner = self._geom_body
         return group_by_pair(len(self.world.bodies), owner[geom[:, 0]], owner[geom[:, 1]], -dist, force)
+
+    def _contact_points(self) -> list[ContactPoint]:
+        """MjData's contacts of the last engine step (distance <= 0): ``pos`` (midway between the surfaces),
+        ``frame[:3]`` (the normal, from geom1 to geom2) and the normal force of ``mj_contactForce`` (either
+        cone)."""
+        m, d = self._m, self._d
+        owner, out, wrench = self._geom_body, [], np.zeros(6)
+        for k in range(d.ncon if self.steps else 0):
+            c = d.contact[k]
+            if c.dist <= 0.0:
+                force = 0.0
+                if c.efc_address >= 0:
+                    mujoco.mj_contactForce(m, d, k, wrench)
+                    force = wrench[0]
+                g1, g2 = c.geom
+                out.append(contact_point(owner[g1], owner[g2], c.pos, c.frame[:3], -c.dist, force))
+        return sorted_points(out)
 
     def _contacts(self) -> list[Contact]:
         if self._listed is None:  # first call since the step: group the last engine step's contacts now

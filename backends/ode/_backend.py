@@ -26,6 +26,7 @@ from ..types import (
     Capability,
     CompiledWorld,
     Contact,
+    ContactPoint,
     ImportedModel,
     JointKind,
     JointStates,
@@ -344,6 +345,9 @@ class OdeBackend(Backend):
         if self.world.substeps > 1:
             return self._substep_contacts.merged() if self.steps else []
         return self._collider.contacts()
+
+    def _contact_points(self) -> list[ContactPoint]:
+        return self._collider.points() if self.steps else []
 
     def _drain_messages(self) -> list[str]:
         self._messages.extend(_native.take())

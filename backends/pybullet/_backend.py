@@ -26,6 +26,7 @@ from ..types import (
     Capability,
     CompiledWorld,
     Contact,
+    ContactPoint,
     ImportedModel,
     JointKind,
     JointStates,
@@ -73,6 +74,7 @@ class PyBulletBackend(Backend):
     #: Bullet's btScalar is double in pybullet's build (BT_USE_DOUBLE_PRECISION)
     precision: ClassVar[Precision] = Precision.FLOAT64
     capabilities: ClassVar[frozenset[Capability]] = RIGID_BODY_CAPABILITIES | {
+        Capability.CONTACT_POINTS,
         Capability.SHAPE_COMPOUND,
         Capability.SHAPE_CONVEX,
         Capability.COM_OFFSET,
@@ -323,6 +325,9 @@ class PyBulletBackend(Backend):
             else:
                 self._listed = self._contact_reader(p.getContactPoints(physicsClientId=self._c))
         return list(self._listed)
+
+    def _contact_points(self) -> list[ContactPoint]:
+        return self._contact_reader.points(p.getContactPoints(physicsClientId=self._c)) if self.steps else []
 
     # --- inputs ---------------------------------------------------------------------------------
 

@@ -85,6 +85,13 @@ _TOLERANCES: dict[str, dict[str, float]] = {
     # operation), over the sum of 4 points and the impulse-to-force division, ~10 operations: 6e-7.
     # Default 1e-6. Measured: pybullet 132.4350 N of 132.4350 N (4 points, depth 2.0e-5 m); worst 2e-7.
     "contact_force": {"default": 1e-6},
+    # The same force from one engine step of four (dt/4) alone: Backend.contact_points() gives the last engine
+    # step's points. The same derivation (the impulse is m*g*h exactly at rest) holds for pybullet, mujoco and
+    # ode (measured +1e-9, +2e-13, +4e-8). dart misses it: its last engine step measured 132.434826 N of
+    # 132.435 N (-1.3e-6), and the mean over the four (contacts()) as much: DART's contact solve at h = 2.5 ms
+    # leaves an impulse error of 4e-7 N s per engine step (at h = 10 ms it is within 1e-6). Shown as measured,
+    # bound 1e-5 (cause not mapped away).
+    "contact_force_last_substep": {"default": 1e-6, "dart": 1e-5},
     # Resting height of a shape's centre above a plane, m.
     # pybullet: -1.2e-5 to -1.7e-5 m for box, sphere, capsule, cylinder (and the 30 degree ramp).
     # dart: the 1 cm drop lands 4.7 mm deep in one 0.01 s step; the ODE mapping's push-out (ERP 0.2, capped

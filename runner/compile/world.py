@@ -228,4 +228,5 @@ def compile_world(model: Scenario, name: str, robots: Mapping[str, ModelDesc] | 
         excluded_pairs=parts.excluded,
         models=parts.models,
         model_options=model.world.options == "model",
+        contact_points=model.trace.contact_points,
     )

@@ -433,6 +433,8 @@ class Session:
             trace.scene(t, scales={n: k.scale / start[n] for n, k in self.kinematics.by_name.items()})
             self.kinematics.scale_changed.clear()
         trace.step(t, self.snapshot.bodies, self.snapshot.joints, self.contacts, self.state)
+        if self.world.contact_points:  # the scenario's trace.contact_points: read only when asked (costly)
+            trace.contact_points(t, self.backend.contact_points())
         self._recorded = t
 
     def run(self) -> RunResult:

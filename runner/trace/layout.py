@@ -121,7 +121,8 @@ def layout(spec: LayoutSpec) -> dict[str, Any]:
         "followTf": tf.WORLD_FRAME, "followMode": "follow-pose", "cameraState": _camera(spec.spheres),
         "scene": {"transforms": {"showLabel": False, "axisScale": 0, "lineWidth": 0}},  # bodies, not axes
         "transforms": {},
-        "topics": {tf.TOPIC_SCENE: {"visible": True}, tf.TOPIC_SCENE_COLLISION: {"visible": False}},
+        "topics": {tf.TOPIC_SCENE: {"visible": True}, tf.TOPIC_SCENE_COLLISION: {"visible": False},
+                   tf.TOPIC_CONTACT_POINTS: {"visible": True}},  # only in traces that ask for contact points
         "layers": {"grid": _grid(spec.spheres)},
         "publish": {"type": "point", "poseTopic": "/move_base_simple/goal", "pointTopic": "/clicked_point",
                     "poseEstimateTopic": "/initialpose", "poseEstimateXDeviation": 0.5,
