@@ -25,6 +25,25 @@ MEASURED = (
     "sys.exit(code)\n"
 )
 
+#: a program that runs the command line and prints the peak of its worker processes on stderr
+#: (``RUSAGE_CHILDREN``: finished children that were waited for, and theirs; the forkserver, whose children
+#: the workers are when the command cannot fork itself, is stopped and waited for first)
+WITH_WORKERS = (
+    "import resource, sys\n"
+    "from multiprocessing import forkserver\n"
+    "from runner.cli.main import main\n"
+    "code = main(sys.argv[1:])\n"
+    "forkserver._forkserver._stop()\n"
+    "print('workers-peak-kib', resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss, file=sys.stderr)\n"
+    "sys.exit(code)\n"
+)
+
+
+def workers_peak_mib(stderr: str) -> tuple[float, str]:
+    """The peak :data:`WITH_WORKERS` printed (MiB), and ``stderr`` without it."""
+    rest, _, kib = stderr.rpartition("workers-peak-kib ")
+    return int(kib) / 1024, rest
+
 
 def _read() -> dict[str, float]:
     return {name: int(kib) / 1024 for name, kib in _FIELD.findall(STATUS.read_text())}
