@@ -26,7 +26,7 @@ from reports import outcome as oc
 from reports import trace_format as tf
 from runner import interrupts
 from runner.errors import ExitCode, OutputError, ScenarioError, TraceError
-from runner.exec import memory
+from runner.exec import memory as mem
 from runner.exec.exits import Exit, classify
 from runner.exec.pool import CRASHED, EXITED, INTERRUPTED, OVER_MEMORY, RETURNED, TIMED_OUT, Ending
 from runner.exec.transport import decode_error, encode_error, result_from_json, result_to_json
@@ -55,7 +55,9 @@ class Case:
     force: bool = False  # also replace files under the output names that this tool did not write
     scenario: str = ""  # the scenario's name (for the outcome file), when the parent loaded it
     loaded: Any = field(default=None, compare=False, repr=False)  # the LoadedScenario, when the parent has it
-    memory: int | None = None  # the worker's memory ceiling (bytes; 0: none); None: SCENARIO_MEMORY_LIMIT's there
+    #: the worker's memory ceiling in bytes (0: none), SCENARIO_MEMORY_LIMIT's where the case is made (the command,
+    #: not a Ray worker)
+    memory: int = field(default_factory=lambda: mem.ceiling() or 0)
 
     @property
     def label(self) -> str:
@@ -101,7 +103,7 @@ def case_of(loaded: Any, backend: str, out_dir: Path | None, budget: float | Non
         str(loaded.path), None if loaded.variant == BASE_CASE else loaded.variant, backend, loaded.overrides,
         None if out_dir is None else str(out_dir), cost=estimate_cost(loaded), budget=limit, sha256=loaded.sha256,
         trace=None if out_dir is None else str(trace_path(out_dir, loaded, backend)),
-        scenario=loaded.model.scenario, loaded=loaded, memory=memory.ceiling() or 0,
+        scenario=loaded.model.scenario, loaded=loaded,
     )  # fmt: skip
 
 
@@ -235,11 +237,11 @@ class CaseResult:
 def _over_memory(res: CaseResult) -> str:
     """The first line names the ceiling and where it comes from (the same on every path); the second what was
     measured, which varies with the moment of the reading."""
-    limit = f"{(res.memory or 0) / memory.MIB:g} MiB"
-    held = f"{(res.peak or 0) / memory.MIB:.0f} MiB" if res.peak else "more"
+    limit = f"{(res.memory or 0) / mem.MIB:g} MiB"
+    held = f"{(res.peak or 0) / mem.MIB:.0f} MiB" if res.peak else "more"
     when = (f"after step {res.progress[0]} of {res.progress[1]} (as last reported)" if res.progress
             else "before its first step (loading the scenario or building the world)")  # fmt: skip
-    return (f"the worker went over its memory ceiling of {limit} ({memory.ENV}; docs/reliability.md); "
+    return (f"the worker went over its memory ceiling of {limit} ({mem.ENV}; docs/reliability.md); "
             f"stopped by signal 9\nit held {held} {when}")  # fmt: skip
 
 

@@ -19,7 +19,7 @@ import pytest
 from runner.errors import UsageError
 from runner.exec import memory
 
-from .memory import WITH_WORKERS, workers_peak_mib
+from .memory import run_measured
 from .processes import environment
 
 SCENARIO = """\
@@ -65,10 +65,9 @@ def test_a_worker_over_its_ceiling_is_stopped_with_exit_3_and_a_recoverable_trac
     if command == "sweep":
         args += ["--param", "world.dt=0.04"]
     env = {**environment(), memory.ENV: str(CEILING_MIB)}
-    done = subprocess.run([sys.executable, "-c", WITH_WORKERS, command, *args], capture_output=True, text=True,
-                          timeout=300, env=env, cwd=tmp_path)  # fmt: skip
-    peak_mib, done.stderr = workers_peak_mib(done.stderr)
-    assert done.returncode == 3, done.stdout[-2000:] + done.stderr[-2000:]
+    done = run_measured([command, *args], env, timeout=300, cwd=tmp_path)
+    peak_mib = done.workers_mib
+    assert done.code == 3, done.stdout[-2000:] + done.stderr[-2000:]
     assert HEADLINE in done.stdout + done.stderr and "Traceback" not in done.stderr
     assert CEILING_MIB < peak_mib < CEILING_MIB + OVERSHOOT_MIB < ASKED_MIB, peak_mib
     if command == "sweep":
