@@ -27,7 +27,7 @@ from backends.types import (
     ShapeKind,
     Surface,
 )
-from runner.compile.joints import dynamics, initial_motor
+from runner.compile.joints import drive_motor, dynamics, initial_motor
 from runner.compile.robot_start import LinkMotion, link_motions, root_motion, start_values
 from runner.language.hpr import hpr_to_quat
 from runner.language.model import Scenario
@@ -128,6 +128,7 @@ def _joint(
             lo, hi = override.limits
         if override.motor is not None:
             motor = Motor(override.motor.vel, override.motor.fmax)
+        motor = drive_motor(override.drive) or motor
     servo = override is not None and override.servo is not None  # the servo sets it every step (runner.sim.servo)
     motor = initial_motor(motor, dyn, servo or driven)  # a motor action: off until the action sets it
     limits = override.limits if override is not None and isinstance(override.limits, Limits) else None

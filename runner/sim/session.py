@@ -37,6 +37,7 @@ from runner.sim.assertions import AssertionTracker, Verdict
 from runner.sim.budget import Watchdog
 from runner.sim.collisions import EventHandler, SolidTraverser, quat_matrices
 from runner.sim.conditions import ConditionTriggers, HandlerGate, with_zeros
+from runner.sim.drives import Drives, initial_drives
 from runner.sim.energy import EnergyWatch
 from runner.sim.held import HeldForces
 from runner.sim.intervals import IntervalManager
@@ -188,6 +189,7 @@ class Session:
         self.handler_gate = HandlerGate()
         self._zeros = [(self.joint_index[j], offset) for j, offset in program.joint_zeros.items()]
         self.servos = Servos(servo_specs(model), self.joint_index, self.world)  # position servos (sim.servo)
+        self.drives = Drives(self.world, initial_drives(model))  # position and torque commands (sim.drives)
         # damping and friction loss as each joint's motor (runner.sim.joint_dynamics)
         self.joint_friction = JointFriction(
             self.world, driven_joints(model) | native_joints(self.world, backend), backend.native_damping
@@ -259,8 +261,24 @@ class Session:
         fmax = self.motors[joint][1] if fmax is None else fmax
         self.motors[joint] = (vel, fmax)
         self.joint_friction.release(joint)  # the scenario's motor is the joint's from now on
+        self.drives.release(joint)  # velocity mode: no position or torque command any more
         k = self.joint_index[joint]
         self.backend.set_motor(k, *capped(vel, fmax, self.world.joints[k].dynamics))
+
+    def set_drive(self, command: B.DriveCommand) -> None:
+        """A joint's command from now on: velocity mode is its motor; position and torque mode turn the motor
+        off and hand the engine a torque before every step (runner.sim.drives)."""
+        if command.vel is not None:
+            self.set_motor(command.joint, command.vel, command.fmax)
+            return
+        self.drives.set(command.joint, command)
+        if self.motors[command.joint][1] > 0:
+            self.motors[command.joint] = (0.0, 0.0)
+            self.backend.set_motor(self.joint_index[command.joint], 0.0, 0.0)
+
+    def _number(self, value: float | str) -> float:
+        """A command's number, or its expression's value now."""
+        return float(self.program.expressions[value].number(self.resolver)) if isinstance(value, str) else value
 
     def add_force(self, body: str, force: Sequence[float], torque: Sequence[float], scale: float) -> None:
         i = self.body_index[body]
@@ -483,6 +501,12 @@ class Session:
                 self.energy.driven()  # a moving kinematic body pushes what it touches: unbooked work
             if self.held:
                 for i, force, torque in self.held.step_inputs(self.snapshot.bodies.quat, self.truth):
+                    self.add_force(self.names[i], force.tolist(), torque.tolist(), 1.0)
+            if self.drives:
+                snap = self.snapshot
+                for i, force, torque in self.drives.wrenches(
+                    snap.bodies.pos, snap.bodies.quat, snap.joints.position, snap.joints.velocity, self._number
+                ):
                     self.add_force(self.names[i], force.tolist(), torque.tolist(), 1.0)
             for i, f in self.forces.items():
                 self.backend.apply_force(i, tuple(f[:3]), tuple(f[3:]))
