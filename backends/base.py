@@ -235,6 +235,19 @@ class Backend(abc.ABC):
         if self._motion_of(body, "apply_force") is Motion.DYNAMIC:
             self.forces.add(body, force, torque)
 
+    def set_control(self, actuator: int, ctrl: float) -> None:
+        """Set the control input of the model file's actuator ``actuator`` (MJCF `<actuator>`, in the file's
+        order) on an engine that builds the file itself (``Capability.ACTUATOR_NATIVE``); held until changed."""
+        self._open("set_control")
+        if Capability.ACTUATOR_NATIVE not in self.capabilities:
+            self._refuse(f"set_control: {self.name} does not run a model file's actuators")
+        if not math.isfinite(ctrl):
+            self._refuse(f"set_control: actuator {actuator} needs a finite ctrl; got {ctrl!r}")
+        try:
+            self._set_control(int(actuator), float(ctrl))
+        except self.engine_errors as exc:
+            raise engine_failure(self.name, f"setting the control of actuator {actuator}", exc) from exc
+
     def reset_body(self, body: int, pos: Vec3, quat: Quat, lin_vel: Vec3, ang_vel: Vec3) -> None:
         """Teleport a dynamic body that no joint holds and set its velocities."""
         self._open("reset_body")
@@ -312,6 +325,9 @@ class Backend(abc.ABC):
 
     def _settings(self) -> dict[str, Any]:
         return {"options": self.options.as_dict()} if self.Options.keys() else {}
+
+    def _set_control(self, actuator: int, ctrl: float) -> None:  # an engine running model files overrides it
+        self._refuse(f"set_control: {self.name} does not run a model file's actuators")
 
     def _drain_messages(self) -> list[str]:
         return []

@@ -98,6 +98,13 @@ class DriveCommand(Drive):
     joint: PartName
 
 
+class ControlCommand(Strict):
+    """An MJCF actuator's control input from now on (docs/robots.md, "MJCF actuators")."""
+
+    actuator: PartName = Field(description="`<robot>.<actuator>`, the actuator's name in the MJCF file.")
+    ctrl: FiniteFloat | Expr = Field(description="A number or an expression read before every step.")
+
+
 class ForceCommand(Strict):
     body: PartName
     value: Vec3 = Field(description="World frame, at the centre of mass (N, or N s for an impulse).")
@@ -195,6 +202,10 @@ class DriveAction(Strict):
     drive: DriveCommand
 
 
+class ControlAction(Strict):
+    control: ControlCommand
+
+
 class ForceAction(Strict):
     force: ForceCommand
 
@@ -241,6 +252,7 @@ ACTION_TAGS: dict[str, type[Strict]] = {
     "stop_sound": StopSoundAction,
     "motor": MotorAction,
     "drive": DriveAction,
+    "control": ControlAction,
     "force": ForceAction,
     "impulse": ImpulseAction,
     "apply": ApplyAction,
@@ -262,8 +274,8 @@ def tag_of(value: Any, tags: dict[str, type[Strict]]) -> str | None:
 if TYPE_CHECKING:  # the static view of the tagged union built below from ACTION_TAGS
     Action = (
         StartAction | PauseAction | ResumeAction | FinishAction | LoopAction | SetAction | CalcAction |
-        PlaySoundAction | StopSoundAction | MotorAction | DriveAction | ForceAction | ImpulseAction | ApplyAction |
-        ResetAction | LogAction | SendAction | EndAction | IfAction
+        PlaySoundAction | StopSoundAction | MotorAction | DriveAction | ControlAction | ForceAction | ImpulseAction |
+        ApplyAction | ResetAction | LogAction | SendAction | EndAction | IfAction
     )
 else:
     Action = Annotated[

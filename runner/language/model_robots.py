@@ -74,6 +74,15 @@ class RobotJoint(Strict):
         return self
 
 
+class ActuatorControl(Strict):
+    """The control input of an MJCF `<actuator>` (docs/robots.md, "MJCF actuators")."""
+
+    ctrl: FiniteFloat | Expr = Field(
+        description="MuJoCo's `ctrl`: a number or an expression read before every step (clamped to the "
+        "actuator's ctrlrange when it has one)."
+    )
+
+
 class RobotLink(Strict):
     """Scenario-level overrides of one link of a model."""
 
@@ -148,6 +157,10 @@ class Robot(Strict):
     )
     joints: dict[PartName, RobotJoint] = Field(default_factory=dict, description="Overrides per joint of the model.")
     links: dict[PartName, RobotLink] = Field(default_factory=dict, description="Overrides per link of the model.")
+    actuators: dict[PartName, ActuatorControl] = Field(
+        default_factory=dict,
+        description="An MJCF model's actuators driven by name: each one's `ctrl` from the start (docs/robots.md).",
+    )
     self_collision: bool | None = Field(
         None,
         description="Whether the model's links touch each other (a joint's two links never do): default off "
@@ -186,4 +199,4 @@ class Robot(Strict):
         return "urdf" if self.urdf is not None else "mjcf"
 
 
-__all__ = ["JointStart", "Robot", "RobotJoint", "RobotLink", "RobotStart", "Servo"]
+__all__ = ["ActuatorControl", "JointStart", "Robot", "RobotJoint", "RobotLink", "RobotStart", "Servo"]

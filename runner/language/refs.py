@@ -234,6 +234,11 @@ def _check_actions(
             check_motor(model, bad, path, action.motor.joint, robots)
         if isinstance(action, B.DriveAction):
             check_motor(model, bad, path, action.drive.joint, robots, "drive")
+        if isinstance(action, B.ControlAction):
+            names = [f"{r}.{a.name}" for r, desc in robots.items() for a in desc.actuators]
+            if action.control.actuator not in names:
+                bad(path + ("control", "actuator"), _unknown("actuator (MJCF <actuator>)", action.control.actuator,
+                                                             names))  # fmt: skip
         if isinstance(action, B.ForceAction | B.ImpulseAction | B.ApplyAction):
             field = "force" if isinstance(action, B.ForceAction) else "impulse"
             field = "apply" if isinstance(action, B.ApplyAction) else field
@@ -261,6 +266,8 @@ def expressions_in(model: Scenario) -> Iterator[tuple[str, Path]]:
             yield action.apply.until, path + ("apply", "until")
         if isinstance(action, B.DriveAction):
             yield from drive_expressions(action.drive, path + ("drive",))
+        if isinstance(action, B.ControlAction) and isinstance(action.control.ctrl, str):
+            yield action.control.ctrl, path + ("control", "ctrl")
     for jname, joint in model.joints.items():
         if joint.drive is not None:
             yield from drive_expressions(joint.drive, ("joints", jname, "drive"))
@@ -268,6 +275,9 @@ def expressions_in(model: Scenario) -> Iterator[tuple[str, Path]]:
         for jname, rjoint in robot.joints.items():
             if rjoint.drive is not None:
                 yield from drive_expressions(rjoint.drive, ("robots", rname, "joints", jname, "drive"))
+        for aname, control in robot.actuators.items():
+            if isinstance(control.ctrl, str):
+                yield control.ctrl, ("robots", rname, "actuators", aname, "ctrl")
     for name, trigger in model.triggers.items():
         yield trigger.when, ("triggers", name, "when")
     for i, a in enumerate(model.assertions):

@@ -97,6 +97,12 @@ def load_robots(model: Scenario, positions: Positions, base_dir: FsPath) -> dict
                     f"joint `{jname}` is a {joint.kind} joint in the model; it takes no motor, servo, drive or limits"
                 )
                 issues.append(positions.issue(("robots", name, "joints", jname), message, True))
+        actuators = [a.name for a in desc.actuators]
+        for aname in robot.actuators:
+            if aname not in actuators:
+                what = "actuator (MJCF <actuator>)" if robot.format == "mjcf" else "actuator (a URDF has none)"
+                issues.append(positions.issue(("robots", name, "actuators", aname), unknown(what, aname, actuators),
+                                              True))  # fmt: skip
         for lname in robot.links:
             if lname not in links:
                 issues.append(positions.issue(("robots", name, "links", lname), unknown("link", lname, links), True))

@@ -121,34 +121,41 @@ class Drives:
         positions: np.ndarray,
         rates: np.ndarray,
         number: Callable[[float | str], float],
+        extra: dict[int, float] | None = None,
     ) -> list[Wrench]:
-        """This step's forces and torques on the bodies, world frame at their centres of mass."""
+        """This step's forces and torques on the bodies, world frame at their centres of mass: the commands'
+        and ``extra`` (joint -> torque, e.g. MJCF actuators' forces, runner.sim.actuators)."""
         out: list[Wrench] = []
-        zero = np.zeros(3)
         for k, drive in self.active.items():
-            frame = self.frames[k]
-            tau = self.torque(k, drive, float(positions[k]), float(rates[k]), number)
-            if not np.isfinite(tau) or frame.body is None and frame.other is None:
-                continue  # a NaN reading is the engine's failure, which the runner reports itself
-            axis = _rotate(np.asarray(quats[frame.owner], float), frame.axis_local)
-            if frame.hinge:
-                if frame.body is not None:
-                    out.append((frame.body, zero, tau * axis))
-                if frame.other is not None:
-                    out.append((frame.other, zero, -tau * axis))
-                continue
-            force = tau * axis
-            centres = {
-                i: np.asarray(pos[i], float) + _rotate(np.asarray(quats[i], float), self.coms[i])
-                for i in (frame.body, frame.other)
-                if i is not None
-            }
-            if frame.body is not None and frame.other is not None:
-                couple = 0.5 * np.cross(centres[frame.body] - centres[frame.other], force)
-                out.append((frame.body, force, -couple))
-                out.append((frame.other, -force, -couple))
-            elif frame.body is not None:
-                out.append((frame.body, force, zero))
-            elif frame.other is not None:
-                out.append((frame.other, -force, zero))
+            self.joint_wrenches(k, self.torque(k, drive, float(positions[k]), float(rates[k]), number), pos, quats, out)
+        for k, tau in (extra or {}).items():
+            self.joint_wrenches(k, tau, pos, quats, out)
         return out
+
+    def joint_wrenches(self, k: int, tau: float, pos: np.ndarray, quats: np.ndarray, out: list[Wrench]) -> None:
+        """Joint ``k``'s torque (force) ``tau`` as the wrenches on its two bodies (module docstring)."""
+        frame = self.frames[k]
+        if not np.isfinite(tau) or frame.body is None and frame.other is None:
+            return  # a NaN reading is the engine's failure, which the runner reports itself
+        zero = np.zeros(3)
+        axis = _rotate(np.asarray(quats[frame.owner], float), frame.axis_local)
+        if frame.hinge:
+            if frame.body is not None:
+                out.append((frame.body, zero, tau * axis))
+            if frame.other is not None:
+                out.append((frame.other, zero, -tau * axis))
+            return
+        force = tau * axis
+        centres = {
+            i: np.asarray(pos[i], float) + _rotate(np.asarray(quats[i], float), self.coms[i])
+            for i in (frame.body, frame.other)
+            if i is not None
+        }
+        if frame.body is not None and frame.other is not None:
+            couple = 0.5 * np.cross(centres[frame.body] - centres[frame.other], force)
+            out.append((frame.body, force, -couple))
+            out.append((frame.other, -force, -couple))
+        elif frame.body is not None:
+            out.append((frame.body, force, zero))
+        elif frame.other is not None:
+            out.append((frame.other, -force, zero))
