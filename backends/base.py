@@ -4,6 +4,7 @@ A backend is built from a :class:`~backends.types.CompiledWorld` and then driven
 per scenario step, in this order (docs/semantics.md, "Step order")::
 
     set_kinematic(...) / set_motor(...) / apply_force(...) / reset_body(...)   # inputs for this step
+    set_control(...)                                                           # (model-file engines)
     step()                                                                     # advance by world.dt
     body_states(), joint_states(), contacts(), drain_messages()                # read the result
 
@@ -22,6 +23,8 @@ Semantics every backend must honour (ODE's):
   ``ang_vel*dt``. A kinematic body not set again keeps its last velocity for the next step (the runner
   always sets it, to zero when it stops).
 * ``reset_body`` teleports a dynamic body that no joint holds and sets its velocities (the lab's reset).
+* ``set_control`` sets the control input of a model file's actuator (MJCF `<actuator>`, by its index in the
+  file), held until changed; only an engine running model files' actuators itself (``actuator:native``).
 * ``contacts()`` lists the body pairs whose contacts the engine **used during the last step**: found at
   the start of each engine step (at the poses before it), touching (distance <= 0), in any of the step's
   substeps. Per pair: the most points and the deepest penetration of any substep, and the mean normal

@@ -42,6 +42,7 @@ def test_the_examples_exist() -> None:
         "thruster.yaml",
         "kuka_track.yaml",
         "gripper_push.yaml",
+        "actuated_rod.yaml",
     }
 
 
