@@ -4,6 +4,7 @@ A backend is built from a :class:`~backends.types.CompiledWorld` and then driven
 per scenario step, in this order (docs/semantics.md, "Step order")::
 
     set_kinematic(...) / set_motor(...) / apply_force(...) / reset_body(...)   # inputs for this step
+    set_control(...)                                                           # (model-file engines)
     step()                                                                     # advance by world.dt
     body_states(), joint_states(), contacts(), drain_messages()                # read the result
 
@@ -22,6 +23,8 @@ Semantics every backend must honour (ODE's):
   ``ang_vel*dt``. A kinematic body not set again keeps its last velocity for the next step (the runner
   always sets it, to zero when it stops).
 * ``reset_body`` teleports a dynamic body that no joint holds and sets its velocities (the lab's reset).
+* ``set_control`` sets the control input of a model file's actuator (MJCF `<actuator>`, by its index in the
+  file), held until changed; only an engine running model files' actuators itself (``actuator:native``).
 * ``contacts()`` lists the body pairs whose contacts the engine **used during the last step**: found at
   the start of each engine step (at the poses before it), touching (distance <= 0), in any of the step's
   substeps. Per pair: the most points and the deepest penetration of any substep, and the mean normal
@@ -262,6 +265,19 @@ class Backend(abc.ABC):
         if self._motion_of(body, "apply_force") is Motion.DYNAMIC:
             self.forces.add(body, force, torque)
 
+    def set_control(self, actuator: int, ctrl: float) -> None:
+        """Set the control input of the model file's actuator ``actuator`` (MJCF `<actuator>`, in the file's
+        order) on an engine that builds the file itself (``Capability.ACTUATOR_NATIVE``); held until changed."""
+        self._open("set_control")
+        if Capability.ACTUATOR_NATIVE not in self.capabilities:
+            self._refuse(f"set_control: {self.name} does not run a model file's actuators")
+        if not math.isfinite(ctrl):
+            self._refuse(f"set_control: actuator {actuator} needs a finite ctrl; got {ctrl!r}")
+        try:
+            self._set_control(int(actuator), float(ctrl))
+        except self.engine_errors as exc:
+            raise engine_failure(self.name, f"setting the control of actuator {actuator}", exc) from exc
+
     def reset_body(self, body: int, pos: Vec3, quat: Quat, lin_vel: Vec3, ang_vel: Vec3) -> None:
         """Teleport a dynamic body that no joint holds and set its velocities."""
         self._open("reset_body")
@@ -354,6 +370,9 @@ class Backend(abc.ABC):
 
     def _settings(self) -> dict[str, Any]:
         return {"options": self.options.as_dict()} if self.Options.keys() else {}
+
+    def _set_control(self, actuator: int, ctrl: float) -> None:  # an engine running model files overrides it
+        self._refuse(f"set_control: {self.name} does not run a model file's actuators")
 
     def _drain_messages(self) -> list[str]:
         return []

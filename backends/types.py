@@ -143,6 +143,9 @@ class Capability(str, enum.Enum):
     CONSTRAINT_TENDON = "constraint:tendon"  # MJCF <tendon>
     COLLISION_EXPLICIT_PAIRS = "collision:explicit-pairs"  # MJCF <contact><pair>
     WORLD_FLUID = "world:fluid"  # MJCF <option density viscosity wind>
+    #: an MJCF actuator the scenario drives that the runner's force law cannot reproduce (a site, body or tendon
+    #: transmission, activation dynamics): the engine must run the file's actuator itself (Backend.set_control)
+    ACTUATOR_NATIVE = "actuator:native"
     # What a run reads beyond states and contact pairs (OUTPUT_CAPABILITIES).
     CONTACT_POINTS = "contacts:points"  # Backend.contact_points(): each touching point, its normal and force
 
@@ -177,6 +180,7 @@ MODEL_FILE_CAPABILITIES: frozenset[Capability] = frozenset(
         Capability.CONSTRAINT_TENDON,
         Capability.COLLISION_EXPLICIT_PAIRS,
         Capability.WORLD_FLUID,
+        Capability.ACTUATOR_NATIVE,
     }
 )
 #: Every primitive shape; and everything but universal joints and the robot capabilities (what the pybullet,

@@ -166,6 +166,13 @@ class MujocoBackend(Backend):
         self._m.tendon_frictionloss[self._motor_tendon[slot]] = fmax  # 0: no row, the motor is off
         self._target[slot] = self._sign[joint] * vel
 
+    def _set_control(self, actuator: int, ctrl: float) -> None:
+        """The MJCF file's actuator, in the file's order (the scenario's own parts add no actuator): MuJoCo
+        clamps ``ctrl`` to its ctrlrange and computes the force itself, as the file runs."""
+        if not 0 <= actuator < self._m.nu:
+            self._refuse(f"set_control: the model has {self._m.nu} actuators, not {actuator + 1}")
+        self._d.ctrl[actuator] = ctrl
+
     def _reset_body(self, body: int, pos: Vec3, quat: Quat, lin_vel: Vec3, ang_vel: Vec3) -> None:
         qadr, _ = self._free[body]
         self._d.qpos[qadr : qadr + 3] = pos

@@ -17,6 +17,7 @@ from backends.geometry import IDENTITY, quat_mul, quat_rotate
 from backends.types import (
     BodySpec,
     Capability,
+    JointDynamics,
     JointKind,
     JointSpec,
     ModelFile,
@@ -27,13 +28,15 @@ from backends.types import (
     ShapeKind,
     Surface,
 )
-from runner.compile.joints import dynamics, initial_motor
+from runner.compile.joints import drive_motor, dynamics, initial_motor
 from runner.compile.robot_start import LinkMotion, link_motions, root_motion, start_values
 from runner.compile.surfaces import compiled_surface
 from runner.language.hpr import hpr_to_quat
 from runner.language.model import Scenario
+from runner.language.model_behaviour import ControlAction
 from runner.language.model_physics import Limits
 from runner.language.model_robots import Robot
+from runner.language.model_walk import all_actions
 from runner.language.robot_desc import JointDesc, LinkDesc, ModelDesc, principal_axes, vec
 
 PALETTE = [(0.80, 0.45, 0.20, 1.0), (0.30, 0.50, 0.80, 1.0), (0.40, 0.70, 0.35, 1.0), (0.75, 0.30, 0.40, 1.0)]
@@ -107,6 +110,23 @@ def link_body(
     )
 
 
+def actuator_effort(desc: ModelDesc, joint: JointDesc) -> JointDynamics:
+    """The joint's dynamics with, where the model gives it no effort limit, its actuators' largest force
+    limit as one: |gear| x max(|lo|, |hi|) of a `forcerange` (docs/robots.md, "MJCF actuators")."""
+    limits = [abs(a.gear) * max(abs(a.forcerange[0]), abs(a.forcerange[1]))
+              for a in desc.actuators if a.joint == joint.name and a.forcerange is not None]  # fmt: skip
+    if not limits or joint.dynamics.effort is not None:
+        return joint.dynamics
+    return replace(joint.dynamics, effort=max(limits))
+
+
+def commanded_actuators(model: Scenario, name: str) -> frozenset[str]:
+    """The actuators of robot ``name`` the scenario drives: given a `ctrl`, or named by a `control` action."""
+    robot = model.robots[name]
+    named = {a.control.actuator for a, _ in all_actions(model) if isinstance(a, ControlAction)}
+    return frozenset(robot.actuators) | frozenset(n[len(name) + 1 :] for n in named if n.startswith(f"{name}."))
+
+
 def _joint(
     robot_name: str, robot: Robot, desc: ModelDesc, joint: JointDesc, motions: Mapping[str, LinkMotion],
     start: float, driven: bool,
@@ -119,7 +139,7 @@ def _joint(
     override = robot.joints.get(joint.name)
     lo, hi = joint.lo, joint.hi
     motor = None
-    dyn = dynamics(joint.dynamics, override.dynamics if override is not None else None)
+    dyn = dynamics(actuator_effort(desc, joint), override.dynamics if override is not None else None)
     if override is not None:
         if override.free:
             lo = hi = None
@@ -129,6 +149,7 @@ def _joint(
             lo, hi = override.limits
         if override.motor is not None:
             motor = Motor(override.motor.vel, override.motor.fmax)
+        motor = drive_motor(override.drive) or motor
     servo = override is not None and override.servo is not None  # the servo sets it every step (runner.sim.servo)
     motor = initial_motor(motor, dyn, servo or driven)  # a motor action: off until the action sets it
     limits = override.limits if override is not None and isinstance(override.limits, Limits) else None
@@ -194,7 +215,7 @@ def compile_robots(
             excluded.extend((a, b) for i, a in enumerate(links) for b in links[i + 1 :])
         excluded.extend((f"{name}.{a}", f"{name}.{b}") for a, b in desc.excluded)
         if robot.format == "mjcf":
-            models.append(model_file(name, robot, desc, values))
+            models.append(model_file(name, robot, desc, values, commanded_actuators(model, name)))
     members = {**arrays, **group}
     for a, b in model.exclude_contacts:
         for x in members.get(a, [a]):
@@ -206,11 +227,14 @@ def compile_robots(
 
 
 def model_file(
-    name: str, robot: Robot, desc: ModelDesc, values: Mapping[str, tuple[float, float]] | None = None
+    name: str, robot: Robot, desc: ModelDesc, values: Mapping[str, tuple[float, float]] | None = None,
+    commanded: frozenset[str] = frozenset(),
 ) -> ModelFile:
     """An MJCF robot as its file: the description's links and joints are in MuJoCo's compiled order, welds
     (a body without a joint, `<body>_weld`, the description's only fixed joints) aside; ``values``: the
-    joints' start (position from the model's zero, rate)."""
+    joints' start (position from the model's zero, rate); ``commanded``: the actuators the scenario drives
+    (one the runner's force law cannot reproduce needs the engine's own, ``actuator:native``)."""
+    native = any(a.unmapped is not None for a in desc.actuators if a.name in commanded)
     pos, quat = _placement(robot)
     joints = tuple(f"{name}.{j.name}" for j in desc.joints if j.kind != "fixed")  # MJCF has no fixed joints
     return ModelFile(
@@ -221,6 +245,8 @@ def model_file(
         quat=quat,
         bodies=tuple(f"{name}.{link.name}" for link in desc.links),
         joints=joints,
-        needs=frozenset(Capability(n.capability) for n in desc.needs),
+        needs=frozenset(Capability(n.capability) for n in desc.needs) | (
+            frozenset({Capability.ACTUATOR_NATIVE}) if native else frozenset()
+        ),
         start=tuple((f"{name}.{j}", q, v) for j, (q, v) in (values or {}).items()),
     )

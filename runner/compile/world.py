@@ -22,7 +22,7 @@ from backends.types import (
     Shape,
     ShapeKind,
 )
-from runner.compile.joints import dynamics, initial_motor, stops, zero_offset
+from runner.compile.joints import drive_motor, dynamics, initial_motor, stops, zero_offset
 from runner.compile.robot_start import start_values
 from runner.compile.robots import compile_robots
 from runner.compile.surfaces import compiled_surface
@@ -163,8 +163,11 @@ def joint_zeros(
 
 
 def motor_targets(model: Scenario) -> frozenset[str]:
-    """The joints a `motor` action drives."""
-    return frozenset(a.motor.joint for a, _ in all_actions(model) if isinstance(a, B.MotorAction))
+    """The joints a `motor` action, or a `drive` action in velocity mode, drives."""
+    actions = [a for a, _ in all_actions(model)]
+    return frozenset(a.motor.joint for a in actions if isinstance(a, B.MotorAction)) | frozenset(
+        a.drive.joint for a in actions if isinstance(a, B.DriveAction) and a.drive.mode == "velocity"
+    )
 
 
 def _unit(v: Sequence[float]) -> tuple[float, float, float]:
@@ -199,7 +202,7 @@ def compile_world(model: Scenario, name: str, robots: Mapping[str, ModelDesc] | 
                 stop_stiffness=limits.stiffness if limits is not None else None,
                 stop_damping=limits.damping if limits is not None else None,
                 motor=initial_motor(
-                    Motor(joint.motor.vel, joint.motor.fmax) if joint.motor is not None else None,
+                    Motor(joint.motor.vel, joint.motor.fmax) if joint.motor is not None else drive_motor(joint.drive),
                     dynamics(NO_DYNAMICS, joint.dynamics),
                     driven=False,
                 ),

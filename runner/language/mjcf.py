@@ -244,8 +244,32 @@ def _actuators(model: Any, joints: list[str], lines: dict[tuple[str, str], int],
             kind = "velocity"  # bias (0, 0, -kv)
         on_joint = int(model.actuator_trntype[a]) in (mujoco.mjtTrn.mjTRN_JOINT, mujoco.mjtTrn.mjTRN_JOINTINPARENT)
         joint = joints[int(model.actuator_trnid[a][0])] if on_joint else None
+        if joint is not None and int(model.jnt_type[int(model.actuator_trnid[a][0])]) not in (2, 3):
+            joint = None  # a ball or free joint's actuator: several coordinates, MuJoCo's alone
         line = next((v for (tag, n), v in lines.items() if n == name and tag != "joint" and tag != "body"), 0)
-        out.append(ActuatorDesc(name, kind, joint, line))
+        trn = mujoco.mjtTrn(int(model.actuator_trntype[a])).name.removeprefix("mjTRN_").lower()
+        unmapped = None
+        if joint is None:
+            unmapped = f"a {trn} transmission"
+        elif key[2] != 0:
+            unmapped = "activation dynamics (`dyntype`)"
+        elif key[0] != 0 or key[1] not in (0, 1):
+            unmapped = "a gain or bias that is not fixed or affine"
+        limited = bool(model.actuator_ctrllimited[a]), bool(model.actuator_forcelimited[a])
+        out.append(
+            ActuatorDesc(
+                name, kind, joint, line,
+                gear=float(model.actuator_gear[a][0]),
+                gain=float(model.actuator_gainprm[a][0]),
+                bias=(float(model.actuator_biasprm[a][0]), float(model.actuator_biasprm[a][1]),
+                      float(model.actuator_biasprm[a][2])),
+                ctrlrange=(float(model.actuator_ctrlrange[a][0]), float(model.actuator_ctrlrange[a][1]))
+                if limited[0] else None,
+                forcerange=(float(model.actuator_forcerange[a][0]), float(model.actuator_forcerange[a][1]))
+                if limited[1] else None,
+                unmapped=unmapped,
+            )
+        )  # fmt: skip
     return out
 
 

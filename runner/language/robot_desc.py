@@ -100,6 +100,16 @@ class ActuatorDesc:
     kind: str  # motor | position | velocity | general
     joint: str | None  # the joint it drives (None: a tendon, site or body transmission)
     line: int
+    #: MuJoCo's force law, as compiled: force = gain ctrl + bias[0] + bias[1] length + bias[2] velocity with
+    #: length = gear q and velocity = gear qdot, clamped to ``forcerange``; the joint gets gear x force
+    gear: float = 1.0
+    gain: float = 1.0
+    bias: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    ctrlrange: tuple[float, float] | None = None  # None: ctrl not limited
+    forcerange: tuple[float, float] | None = None  # None: force not limited
+    #: why the runner's law cannot reproduce it off MuJoCo (a site or body transmission, activation
+    #: dynamics, a non-fixed gain or non-affine bias); None: it can
+    unmapped: str | None = None
 
 
 @dataclass(frozen=True)

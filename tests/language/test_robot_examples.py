@@ -40,6 +40,9 @@ def test_the_examples_exist() -> None:
         "keyframe_pendulum.yaml",
         "kuka_start.yaml",
         "thruster.yaml",
+        "kuka_track.yaml",
+        "gripper_push.yaml",
+        "actuated_rod.yaml",
     }
 
 
