@@ -4,8 +4,9 @@ Per step k, from t_k = k*dt to t_{k+1}:
  1. deliver events due at t_k: queued events (collisions seen at the end of the last step, in the order
     Panda3D's handler throws them) and timed inputs, to their handlers;
  2. step intervals to t_{k+1}: kinematic bodies get the pose they must have at the end of this step;
- 3. give the engine each kinematic body's pose *and* velocity over the step; apply one-step forces;
-    motor targets were set by the handlers;
+ 3. give the engine each kinematic body's pose *and* velocity over the step; apply one-step forces, held
+    forces and joint commands' torques (runner.sim.drives, runner.sim.actuators); motor targets were set by
+    the handlers;
  4. physics step (with substeps if set);
  5. read states; detect contacts and collision-solid overlaps at t_{k+1};
  6. turn them into in / again / out events, then evaluate the condition triggers (runner.sim.conditions),
