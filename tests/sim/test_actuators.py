@@ -138,3 +138,21 @@ def test_an_unknown_actuator_is_located(tmp_path: Path) -> None:
     with pytest.raises(ScenarioValidationError) as info:
         load_scenario(path, None)
     assert "t.yaml:7:" in str(info.value) and "did you mean `spin`" in str(info.value), str(info.value)
+
+
+@pytest.mark.parametrize("engine", ENGINES)
+def test_a_drive_on_an_mjcf_joint_is_capped_by_its_actuators_forcerange(tmp_path: Path, engine: str) -> None:
+    """`drive: {torque: 5}` on the hinge of a file whose motor has gear 2, forcerange [-1, 1]: the joint's
+    effort limit is 2 N m on every engine, so omega = 2 t/I (the file's motor, at ctrl 0, adds nothing)."""
+    (tmp_path / "rod.xml").write_text(
+        MJCF.replace("ACTUATOR", '<motor name="spin" joint="hinge" gear="2" forcerange="-1 1"/>')
+    )
+    path = tmp_path / "t.yaml"
+    path.write_text(
+        SCENARIO.replace("actuators: {NAME: {ctrl: CTRL}}", "joints: {hinge: {drive: {torque: 5}}}").replace(
+            "DURATION", "0.3"
+        )
+        + "assertions:\n  - {name: w, at: end, value: r.hinge.velocity, near: 0, tol: 100}\n"
+    )
+    omega = 2.0 * 0.3 / INERTIA
+    assert _run(path, engine)["w"] == pytest.approx(omega, abs=_bound(omega, 30))
