@@ -405,6 +405,7 @@ class Session:
                 last_good=self._last_good(i),
             )
         joints = with_zeros(self.backend.joint_states(), self._zeros)  # stated zeros (compile.joints)
+        joints = self.drives.with_torques(joints)  # `<joint>.force` includes a drive's torque (sim.drives)
         try:
             self.energy.check(t, states, joints)
         except EngineFailure as exc:
@@ -526,6 +527,8 @@ class Session:
                     self.add_force(self.names[i], force.tolist(), torque.tolist(), 1.0)
             if self.drives or self.actuators:
                 self._command_joints()
+            elif self.drives.applied:
+                self.drives.applied = {}  # the last command ended: the joint's force is its motor's again
             for i, f in self.forces.items():
                 self.backend.apply_force(i, tuple(f[:3]), tuple(f[3:]))
             self.forces.clear()
