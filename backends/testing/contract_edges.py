@@ -42,6 +42,9 @@ _MISUSE: dict[str, Callable[[Backend], object]] = {
     "negative joint index": lambda sim: sim.set_motor(-1, 0.1, 1.0),
     "set_motor with a negative fmax": lambda sim: sim.set_motor(0, 0.1, -1.0),
     "set_motor with a NaN vel": lambda sim: sim.set_motor(0, math.nan, 1.0),
+    # no model file's actuator in the world: refused by an engine without actuator:native, and by MuJoCo
+    "set_control without an actuator": lambda sim: sim.set_control(0, 1.0),
+    "set_control with a NaN ctrl": lambda sim: sim.set_control(0, math.nan),
 }
 
 
@@ -100,6 +103,7 @@ _CALLS: dict[str, Callable[[Backend], object]] = {
     "set_motor": lambda sim: sim.set_motor(0, 0.1, 1.0),
     "apply_force": lambda sim: sim.apply_force(2, (1.0, 0.0, 0.0), ZERO),
     "reset_body": lambda sim: sim.reset_body(2, *_POSE),
+    "set_control": lambda sim: sim.set_control(0, 1.0),
 }
 
 

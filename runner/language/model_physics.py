@@ -223,7 +223,9 @@ class Dynamics(Strict):
         "(hinge): MuJoCo only (`joint:armature`).",
     )
     effort: PositiveFloat | None = Field(
-        None, description="The largest force (N) or torque (N m) a motor or servo may apply: caps its fmax."
+        None,
+        description="The largest force (N) or torque (N m) a motor, servo, drive or MJCF actuator may apply: caps "
+        "fmax and the commanded torque.",
     )
     velocity: PositiveFloat | None = Field(
         None, description="The largest rate (m/s or rad/s) a motor or servo may command: caps its vel."

@@ -18,6 +18,7 @@ dynamics) are refused off MuJoCo before the run (``actuator:native``, runner.com
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 from dataclasses import dataclass
 
@@ -61,7 +62,9 @@ class Actuators:
     def drive_native(self, backend: Backend, number: Callable[[float | str], float]) -> None:
         """The engine runs the file's actuators: each one's `ctrl` now."""
         for name, ctrl in self.ctrl.items():
-            backend.set_control(self.known[name].index, number(ctrl))
+            value = number(ctrl)
+            if math.isfinite(value):  # a NaN from the readings is the engine's failure, reported by the runner
+                backend.set_control(self.known[name].index, value)
 
     def torques(
         self, positions: list[float], rates: list[float], number: Callable[[float | str], float]

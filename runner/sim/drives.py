@@ -28,7 +28,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from backends.geometry import quat_conj, quat_rotate
-from backends.types import CompiledWorld, Motion
+from backends.types import CompiledWorld, JointStates, Motion
 from runner.language.model import Scenario
 from runner.language.model_physics import Drive
 
@@ -90,6 +90,7 @@ class Drives:
                 spec.dynamics.effort,
             )
         self.active: dict[int, Drive] = {}
+        self.applied: dict[int, float] = {}  # joint -> the torque (force) handed out for the last step
         for name, drive in drives.items():
             self.set(name, drive)
 
@@ -126,11 +127,24 @@ class Drives:
         """This step's forces and torques on the bodies, world frame at their centres of mass: the commands'
         and ``extra`` (joint -> torque, e.g. MJCF actuators' forces, runner.sim.actuators)."""
         out: list[Wrench] = []
-        for k, drive in self.active.items():
-            self.joint_wrenches(k, self.torque(k, drive, float(positions[k]), float(rates[k]), number), pos, quats, out)
+        self.applied = {
+            k: self.torque(k, d, float(positions[k]), float(rates[k]), number) for k, d in self.active.items()
+        }
         for k, tau in (extra or {}).items():
+            self.applied[k] = self.applied.get(k, 0.0) + tau
+        for k, tau in self.applied.items():
             self.joint_wrenches(k, tau, pos, quats, out)
         return out
+
+    def with_torques(self, joints: JointStates) -> JointStates:
+        """``joints`` with the torque (force) handed out for the last step added to each commanded joint's motor
+        force: `<joint>.force` reads the joint's actuation (itself if none)."""
+        if not self.applied:
+            return joints
+        force = joints.motor_force.copy()
+        for k, tau in self.applied.items():
+            force[k] += tau
+        return JointStates(joints.position, joints.velocity, force)
 
     def joint_wrenches(self, k: int, tau: float, pos: np.ndarray, quats: np.ndarray, out: list[Wrench]) -> None:
         """Joint ``k``'s torque (force) ``tau`` as the wrenches on its two bodies (module docstring)."""

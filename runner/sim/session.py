@@ -4,8 +4,9 @@ Per step k, from t_k = k*dt to t_{k+1}:
  1. deliver events due at t_k: queued events (collisions seen at the end of the last step, in the order
     Panda3D's handler throws them) and timed inputs, to their handlers;
  2. step intervals to t_{k+1}: kinematic bodies get the pose they must have at the end of this step;
- 3. give the engine each kinematic body's pose *and* velocity over the step; apply one-step forces;
-    motor targets were set by the handlers;
+ 3. give the engine each kinematic body's pose *and* velocity over the step; apply one-step forces, held
+    forces and joint commands' torques (runner.sim.drives, runner.sim.actuators); motor targets were set by
+    the handlers;
  4. physics step (with substeps if set);
  5. read states; detect contacts and collision-solid overlaps at t_{k+1};
  6. turn them into in / again / out events, then evaluate the condition triggers (runner.sim.conditions),
@@ -404,6 +405,7 @@ class Session:
                 last_good=self._last_good(i),
             )
         joints = with_zeros(self.backend.joint_states(), self._zeros)  # stated zeros (compile.joints)
+        joints = self.drives.with_torques(joints)  # `<joint>.force` includes a drive's torque (sim.drives)
         try:
             self.energy.check(t, states, joints)
         except EngineFailure as exc:
@@ -527,6 +529,8 @@ class Session:
                     self.add_force(self.names[i], force.tolist(), torque.tolist(), 1.0)
             if self.drives or self.actuators:
                 self._command_joints()
+            elif self.drives.applied:
+                self.drives.applied = {}  # the last command ended: the joint's force is its motor's again
             for i, f in self.forces.items():
                 self.backend.apply_force(i, tuple(f[:3]), tuple(f[3:]))
             self.forces.clear()

@@ -58,6 +58,8 @@ def test_torque_changed_at_run_time_then_released(tmp_path: Path, engine: str) -
           coast: [{drive: {joint: hinge, torque: 0}}]
           back: [{drive: {joint: hinge, torque: -0.1}}]
         assertions:
+          - {name: force-while-held, at: 0.1, value: hinge.force, near: 0, tol: 100}
+          - {name: force-coasting, at: 0.3, value: hinge.force, near: 0, tol: 100}
           - {name: coasting, at: 0.3, value: hinge.velocity, near: 0, tol: 100}
           - {name: back, at: end, value: hinge.velocity, near: 0, tol: 100}
         """)
@@ -65,6 +67,8 @@ def test_torque_changed_at_run_time_then_released(tmp_path: Path, engine: str) -
     coast = 0.2 * 0.2 / INERTIA
     assert measured["coasting"] == pytest.approx(coast, abs=_bound(coast, 30))
     assert measured["back"] == pytest.approx(coast - 0.1 * 0.1 / INERTIA, abs=_bound(coast, 50))
+    assert measured["force-while-held"] == 0.2  # `<joint>.force` reads the torque handed out for the step
+    assert measured["force-coasting"] == 0.0  # (a hinge without a motor: its motor force is 0)
 
 
 @pytest.mark.parametrize("engine", ENGINES)
