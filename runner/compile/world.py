@@ -29,6 +29,7 @@ from runner.compile.robots import compile_robots
 from runner.language import model_behaviour as B
 from runner.language.hpr import hpr_to_quat
 from runner.language.model import Scenario
+from runner.language.model_inertia import principal_inertia
 from runner.language.model_physics import Body, Limits
 from runner.language.model_walk import all_actions
 from runner.language.names import BodyInstance, expand_bodies, groups
@@ -124,6 +125,9 @@ def compile_body(inst: BodyInstance, number: int) -> BodySpec:
     else:
         mass = (body.density or KINEMATIC_DENSITY) * volume(shape)
     inertia = mass_properties(shape, mass) if mass > 0 else (0.0, 0.0, 0.0)
+    axes = IDENTITY
+    if body.inertia is not None:  # the body's own (runner.language.model_inertia)
+        inertia, axes = principal_inertia(body.inertia)
     given = (
         tuple(body.color)
         if body.color is not None
@@ -141,6 +145,7 @@ def compile_body(inst: BodyInstance, number: int) -> BodySpec:
         lin_vel=body.vel,
         ang_vel=body.angvel,
         color=color,
+        inertia_quat=axes,
     )
 
 

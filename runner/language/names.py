@@ -16,8 +16,13 @@ BODY_FIELDS = {
     "vel": ("x", "y", "z"),
     "angvel": ("x", "y", "z"),
     "quat": ("w", "x", "y", "z"),
+    # runner.sim.body_quantities: from the state and the mass properties
+    "momentum": ("x", "y", "z"),
+    "angmom": ("x", "y", "z"),
+    "angmom_origin": ("x", "y", "z"),
+    "angvel_body": ("x", "y", "z"),
 }
-BODY_SCALARS = ("speed", "energy")
+BODY_SCALARS = ("speed", "energy", "kinetic_energy")
 JOINT_FIELDS = ("position", "velocity", "force")
 GLOBALS = ("time", "dt", "duration", "g", "gravity.x", "gravity.y", "gravity.z", "eps")
 RESERVED = frozenset(

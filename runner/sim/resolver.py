@@ -16,6 +16,7 @@ import numpy as np
 
 from backends.types import BodyStates, CompiledWorld, JointStates
 from runner.language.names import split_owner
+from runner.sim.body_quantities import BODY_VECTORS, body_quantity
 from runner.sim.collisions import quat_matrices
 
 _COMPONENT = {"x": 0, "y": 1, "z": 2}
@@ -108,18 +109,31 @@ class StateResolver:
             if isinstance(rows, int):
                 return lambda: float(energy()[0])
             return lambda: energy().tolist()
+        field, _, comp = rest.partition(".")
+        if rest == "kinetic_energy" or (field in BODY_VECTORS and comp in _COMPONENT):
+            return self._derived(rows, field, _COMPONENT.get(comp))
         if rest == "speed":
             if isinstance(rows, int):
                 return lambda: float(np.linalg.norm(snap.bodies.lin_vel[rows]))
             group = _index(rows)
             return lambda: _norms(snap.bodies.lin_vel[group]).tolist()
-        field, _, comp = rest.partition(".")
         attr = _BODY_ARRAYS[field]
         col = (_QUAT if field == "quat" else _COMPONENT)[comp]
         if isinstance(rows, int):
             return lambda: float(getattr(snap.bodies, attr)[rows, col])
         group = _index(rows)
         return lambda: getattr(snap.bodies, attr)[group, col].tolist()
+
+    def _derived(self, rows: list[int] | int, field: str, col: int | None) -> Callable[[], Any]:
+        """A getter of a quantity of runner.sim.body_quantities (``col``: the component of a vector)."""
+        members = [rows] if isinstance(rows, int) else rows
+        specs = [self.world.bodies[i] for i in members]
+        getter = body_quantity(field, specs, _index(members), lambda: self.snap.bodies)
+        if col is None:
+            return (lambda: float(getter()[0])) if isinstance(rows, int) else (lambda: getter().tolist())
+        if isinstance(rows, int):
+            return lambda: float(getter()[0, col])
+        return lambda: getter()[:, col].tolist()
 
     def _energy_of(self, rows: list[int]) -> Callable[[], np.ndarray]:
         """A getter of the mechanical energy (J) of the bodies ``rows`` (the module docstring's sum)."""
