@@ -139,14 +139,14 @@ class Capability(str, enum.Enum):
     CONSTRAINT_TENDON = "constraint:tendon"  # MJCF <tendon>
     COLLISION_EXPLICIT_PAIRS = "collision:explicit-pairs"  # MJCF <contact><pair>
     WORLD_FLUID = "world:fluid"  # MJCF <option density viscosity wind>
+    # Sensing: what a scenario may read that only the engine knows (CompiledWorld.reaction_joints)
+    JOINT_REACTION = "joint:reaction"  # Backend.joint_reactions(): the wrench a joint applies to its body
 
 
 #: Capabilities that no adapter maps to its engine yet (the stop bounce and softness of the language): no
 #: backend may declare them until its mapping exists and is tested, so a scenario using them is refused up
 #: front with the capability message.
-UNMAPPED_CAPABILITIES: frozenset[Capability] = frozenset(
-    {Capability.JOINT_STOP_BOUNCE, Capability.JOINT_STOP_SOFTNESS}
-)
+UNMAPPED_CAPABILITIES: frozenset[Capability] = frozenset({Capability.JOINT_STOP_BOUNCE, Capability.JOINT_STOP_SOFTNESS})
 #: What robot models (URDF, MJCF) need beyond hand-written bodies (docs/robots.md). Every adapter declares
 #: all but ``shape:trimesh``, which ODE and DART declare too; a scenario needing one its backend lacks is
 #: refused up front with the capability message.
@@ -178,9 +178,12 @@ MODEL_FILE_CAPABILITIES: frozenset[Capability] = frozenset(
 ALL_SHAPES: frozenset[Capability] = frozenset(
     c for c in Capability if c.value.startswith("shape:") and c not in ROBOT_CAPABILITIES
 )
+#: Sensing capabilities: each adapter adds the ones it implements by name (a new adapter has none until it does).
+SENSING_CAPABILITIES: frozenset[Capability] = frozenset({Capability.JOINT_REACTION})
 RIGID_BODY_CAPABILITIES: frozenset[Capability] = (
     frozenset(Capability)
     - {Capability.JOINT_UNIVERSAL, Capability.JOINT_ARMATURE}
+    - SENSING_CAPABILITIES
     - UNMAPPED_CAPABILITIES
     - ROBOT_CAPABILITIES
     - MODEL_FILE_CAPABILITIES
@@ -356,6 +359,9 @@ class CompiledWorld:
     #: True: the model file's own options rule (MJCF `<option>`, its geoms' contact parameters, MuJoCo's own
     #: mj_step); the scenario's dt and gravity equal the model's (`world.options: model`, docs/robots.md)
     model_options: bool = False
+    #: the joints whose reaction the scenario reads (``Backend.joint_reactions()`` gives them in this order);
+    #: an engine computes and keeps nothing for the others (capability ``joint:reaction``)
+    reaction_joints: tuple[str, ...] = ()
 
     def body_index(self, name: str) -> int:
         for i, body in enumerate(self.bodies):
@@ -402,6 +408,8 @@ class CompiledWorld:
                 need.add(Capability.JOINT_STIFFNESS)
         if self.substeps > 1:
             need.add(Capability.SUBSTEPS)
+        if self.reaction_joints:
+            need.add(Capability.JOINT_REACTION)
         for model in self.models:
             need.update(model.needs)
         return frozenset(need)

@@ -26,6 +26,7 @@ from backends.types import (
 from runner.compile.joints import dynamics, initial_motor, stops, zero_offset
 from runner.compile.robot_start import start_values
 from runner.compile.robots import compile_robots
+from runner.compile.sensed import reaction_joints
 from runner.language import model_behaviour as B
 from runner.language.hpr import hpr_to_quat
 from runner.language.model import Scenario
@@ -234,4 +235,5 @@ def compile_world(model: Scenario, name: str, robots: Mapping[str, ModelDesc] | 
         excluded_pairs=parts.excluded,
         models=parts.models,
         model_options=model.world.options == "model",
+        reaction_joints=reaction_joints(model, [j.name for j in (*joints, *parts.joints)]),
     )

@@ -24,6 +24,10 @@ BODY_FIELDS = {
 }
 BODY_SCALARS = ("speed", "energy", "kinetic_energy")
 JOINT_FIELDS = ("position", "velocity", "force")
+#: the wrench a joint applies to its first body, measured by the engine (runner.sim.reactions): force and
+#: torque about the joint's anchor in world axes, and the same in the body's axes
+REACTION_FIELDS = ("reaction",)
+REACTION_VECTORS = ("force", "torque", "force_body", "torque_body")
 GLOBALS = ("time", "dt", "duration", "g", "gravity.x", "gravity.y", "gravity.z", "eps")
 RESERVED = frozenset(
     {
@@ -123,6 +127,7 @@ def readable_names(model: Scenario, robots: Mapping[str, ModelDesc] | None = Non
         names += [f"{owner}.{s}" for s in BODY_SCALARS]
     for joint in [*model.joints, *robot_joints(robots)]:
         names += [f"{joint}.{f}" for f in JOINT_FIELDS]
+        names += [f"{joint}.reaction.{v}.{c}" for v in REACTION_VECTORS for c in "xyz"]
     return names
 
 

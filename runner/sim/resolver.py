@@ -18,6 +18,7 @@ from backends.types import BodyStates, CompiledWorld, JointStates
 from runner.language.names import split_owner
 from runner.sim.body_quantities import BODY_VECTORS, body_quantity
 from runner.sim.collisions import quat_matrices
+from runner.sim.reactions import reaction_getter
 
 _COMPONENT = {"x": 0, "y": 1, "z": 2}
 _QUAT = {"w": 0, "x": 1, "y": 2, "z": 3}
@@ -32,6 +33,7 @@ class Snapshot:
         self.time = 0.0
         self.bodies = BodyStates.from_rows(np.zeros((0, 13)))  # until the first read
         self.joints = JointStates(np.zeros(0), np.zeros(0), np.zeros(0))
+        self.reactions = np.zeros((0, 6))  # CompiledWorld.reaction_joints' wrenches (Backend.joint_reactions)
 
 
 class StateResolver:
@@ -96,6 +98,9 @@ class StateResolver:
         if head == "param":
             value = self.params[rest]
             return lambda: value
+        if head in self.joint_index and rest.startswith("reaction."):
+            _, vector, comp = rest.split(".")
+            return reaction_getter(self.world, head, vector, comp, lambda: (snap.bodies, snap.reactions))
         if head in self.joint_index and rest in _JOINT_ARRAYS:
             j, attr = self.joint_index[head], _JOINT_ARRAYS[rest]
             return lambda: float(getattr(snap.joints, attr)[j])

@@ -373,6 +373,8 @@ class Session:
         self.snapshot.time = t
         self.snapshot.bodies = states
         self.snapshot.joints = joints
+        if self.world.reaction_joints:  # only the joints the scenario reads (runner.compile.sensed)
+            self.snapshot.reactions = self.backend.joint_reactions()
         if contacts or self._contacts_always:
             self._read_contacts(t)
 
