@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -17,7 +17,7 @@ from runner.errors import ScenarioValidationError
 from runner.language import model_behaviour as B
 from runner.language.expressions import Expression, compile_expression
 from runner.language.load import LoadedScenario
-from runner.language.names import expand_bodies, groups, robot_groups
+from runner.language.names import expand_bodies, groups, robot_frames, robot_groups
 from runner.language.refs import expressions_in
 from runner.language.sounds import SoundInfo, read_info
 
@@ -68,6 +68,10 @@ class Program:
     start_scale: dict[str, float]
     #: joint -> what to add to the backend's reading to read it from the joint's stated zero (nonzero only)
     joint_zeros: dict[str, float]
+    #: `<robot>.<frame>` -> (its body, position and orientation in the body frame): runner.sim.frames
+    frames: dict[str, tuple[str, tuple[float, float, float], tuple[float, float, float, float]]] = field(
+        default_factory=dict
+    )
 
     @property
     def name(self) -> str:
@@ -213,6 +217,7 @@ def build_program(loaded: LoadedScenario) -> Program:
         start_hpr=start_hpr,
         start_scale=start_scale,
         joint_zeros=joint_zeros(model, world, loaded.robots),
+        frames=robot_frames(loaded.robots),
     )
 
 

@@ -14,10 +14,11 @@ from typing import Any
 
 import numpy as np
 
-from backends.types import BodyStates, CompiledWorld, JointStates
+from backends.types import BodyStates, CompiledWorld, JointStates, Quat, Vec3
 from runner.language.names import split_owner
 from runner.sim.body_quantities import BODY_VECTORS, body_quantity
 from runner.sim.collisions import quat_matrices
+from runner.sim.frames import frame_getter
 from runner.sim.reactions import reaction_getter
 
 _COMPONENT = {"x": 0, "y": 1, "z": 2}
@@ -49,11 +50,13 @@ class StateResolver:
         functions: dict[str, Callable[[Sequence[Any]], Any]],
         *,
         eps: float,
+        frames: dict[str, tuple[str, Vec3, Quat]] | None = None,
     ):
         self.world = world
         self.body_index = {b.name: i for i, b in enumerate(world.bodies)}
         self.joint_index = {j.name: i for i, j in enumerate(world.joints)}
-        self._members = frozenset(n for n in [*self.body_index, *self.joint_index] if "." in n)  # robots' parts
+        self.frames = frames or {}  # named frames on bodies (runner.sim.frames)
+        self._members = frozenset(n for n in [*self.body_index, *self.joint_index, *self.frames] if "." in n)
         self.groups = {g: [self.body_index[n] for n in names] for g, names in groups.items()}
         self.members = {g: list(names) for g, names in groups.items()}
         self.state = state
@@ -98,6 +101,10 @@ class StateResolver:
         if head == "param":
             value = self.params[rest]
             return lambda: value
+        if head in self.frames:
+            body, pos, quat = self.frames[head]
+            field, _, comp = rest.partition(".")
+            return frame_getter(self.body_index[body], pos, quat, field, comp, lambda: snap.bodies)
         if head in self.joint_index and rest.startswith("reaction."):
             _, vector, comp = rest.split(".")
             return reaction_getter(self.world, head, vector, comp, lambda: (snap.bodies, snap.reactions))

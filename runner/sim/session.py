@@ -179,6 +179,7 @@ class Session:
                 "count": lambda a: self.event_counts.get(str(a[0]), 0),
             },
             eps=backend.precision.eps,
+            frames=program.frames,
         )
         self.tracker = AssertionTracker(model.assertions, program.expressions, backend.name, self.dt)
         self.traverser = SolidTraverser(program.nodes, program.colliders)
