@@ -10,8 +10,8 @@ check the edge cases the contract settles identically on every backend (the fake
 from __future__ import annotations
 
 import math
-from dataclasses import replace
 from collections.abc import Callable
+from dataclasses import replace
 
 import numpy as np
 import pytest
