@@ -11,6 +11,7 @@ import numpy as np
 
 from backends.types import CompiledWorld, Motion
 from runner.compile.interval_specs import FuncSpec, LerpSpec, ParallelSpec, SequenceSpec, SoundSpec, WaitSpec
+from runner.compile.sensed import sensor_quantities
 from runner.compile.solids import NodeDef, SolidDef
 from runner.compile.world import compile_world, joint_zeros
 from runner.errors import ScenarioValidationError
@@ -72,6 +73,8 @@ class Program:
     frames: dict[str, tuple[str, tuple[float, float, float], tuple[float, float, float, float]]] = field(
         default_factory=dict
     )
+    #: the sensor quantities the expressions read, one body, joint or frame each (runner.compile.sensed)
+    sensors: list[str] = field(default_factory=list)
 
     @property
     def name(self) -> str:
@@ -218,6 +221,8 @@ def build_program(loaded: LoadedScenario) -> Program:
         start_scale=start_scale,
         joint_zeros=joint_zeros(model, world, loaded.robots),
         frames=robot_frames(loaded.robots),
+        sensors=sensor_quantities(model, world, {**groups(model), **robot_groups(loaded.robots)},
+                                  set(robot_frames(loaded.robots))),
     )
 
 

@@ -9,12 +9,13 @@ from __future__ import annotations
 
 from collections.abc import Iterator, Sequence
 
+from backends.types import CompiledWorld
 from runner.language.expressions import ExpressionError, compile_expression
 from runner.language.model import Scenario
-from runner.language.names import REACTION_FIELDS, split_owner
+from runner.language.names import FRAME_FIELDS, REACTION_FIELDS, split_owner
 from runner.language.refs import expressions_in
 
-__all__ = ["reaction_joints"]
+__all__ = ["reaction_joints", "sensor_quantities"]
 
 
 def _texts(model: Scenario) -> Iterator[str]:
@@ -39,3 +40,34 @@ def reaction_joints(model: Scenario, joints: Sequence[str]) -> tuple[str, ...]:
             if head in known and rest.partition(".")[0] in REACTION_FIELDS:
                 read.add(head)
     return tuple(j for j in joints if j in read)
+
+
+
+#: the body quantities only the runner computes (runner.sim.body_quantities): what /sensors carries for bodies
+_BODY_SENSORS = ("kinetic_energy", "momentum", "angmom", "angmom_origin", "angvel_body")
+
+
+def sensor_quantities(
+    model: Scenario, world: CompiledWorld, groups: dict[str, list[str]], frames: set[str]
+) -> list[str]:
+    """The sensor quantities (docs/language.md "Sensors") an expression of ``model`` reads, each for one body,
+    joint or frame (an array's name: every copy), sorted: what the trace's /sensors carries."""
+    bodies = {b.name for b in world.bodies}
+    joints = {j.name for j in world.joints}
+    members = bodies | joints | frames
+    out: set[str] = set()
+    for text in _texts(model):
+        try:
+            names = compile_expression(text).names
+        except ExpressionError:
+            continue
+        for name in names:
+            head, rest = split_owner(name, members)
+            field = rest.partition(".")[0]
+            if head in joints and field in REACTION_FIELDS:
+                out.add(name)
+            elif head in frames and field in FRAME_FIELDS:
+                out.add(name)
+            elif field in _BODY_SENSORS and (head in bodies or head in groups):
+                out.update(f"{b}.{rest}" for b in ([head] if head in bodies else groups[head]))
+    return sorted(out)

@@ -436,6 +436,8 @@ class Session:
             trace.scene(t, scales={n: k.scale / start[n] for n, k in self.kinematics.by_name.items()})
             self.kinematics.scale_changed.clear()
         trace.step(t, self.snapshot.bodies, self.snapshot.joints, self.contacts, self.state)
+        if self.program.sensors:  # the sensor quantities the scenario reads (docs/trace-format.md, /sensors)
+            trace.sensors(t, [self.resolver.value(name) for name in self.program.sensors])
         self._recorded = t
 
     def run(self) -> RunResult:

@@ -164,6 +164,9 @@ class BackgroundTraceWriter:
              state_vars: Mapping[str, bool | float | str]) -> None:  # fmt: skip
         self._send("step", t, *_pack_step(states, joints, contacts), dict(state_vars) if state_vars else {})
 
+    def sensors(self, t: float, values: Sequence[float]) -> None:
+        self._send("sensors", t, [float(v) for v in values])
+
     def event(self, t: float, name: str, source: str, detail: Mapping[str, Any] | None = None) -> None:
         self._send("event", t, name, source, dict(detail) if detail else None)
 
