@@ -124,6 +124,19 @@ def sensor_field(name: str) -> str:
     return "__".join(field_name(part) for part in name.split("."))
 
 
+_SENSOR_UNITS = {"kinetic_energy": "J", "momentum": "N·s", "angmom": "N·m·s", "angmom_origin": "N·m·s",
+                 "angvel_body": "rad/s", "pos": "m", "vel": "m/s", "angvel": "rad/s", "quat": "1"}  # fmt: skip
+
+
+def sensor_unit(name: str) -> str:
+    """The unit of a sensor quantity (docs/language.md "Sensors"), for plots: N or N·m for a reaction, J, N·s,
+    N·m·s, rad/s, m, m/s for a body's or a frame's."""
+    parts = name.split(".")
+    if "reaction" in parts[1:]:
+        return "N" if parts[-2].startswith("force") else "N·m"
+    return _SENSOR_UNITS.get(parts[-1], _SENSOR_UNITS.get(parts[-2], "1") if len(parts) > 1 else "1")
+
+
 def field_path(name: str) -> str:
     """The message path of a body or joint within /bodies or /joints: ``box``, ``arm.link_7``, ``arm._8``
     (a robot's member through its robot's message, with its :func:`field_name`)."""
