@@ -85,6 +85,7 @@ class MujocoBackend(Backend):
         if isinstance(options, MujocoOptions) and options.engine_substeps is None:
             check_stack(stack_height(world))  # set by hand, the column is the scenario's to judge
         plan_tree(world, _native.load(world))  # a kinematic loop, one MJCF robot at most, ... (no model built)
+        _check_reactions(world)
 
     def _build(self) -> None:
         world = self.world
@@ -419,3 +420,20 @@ def _reaction_rows(world: CompiledWorld, m: mujoco.MjModel, lay: Layout) -> tupl
         sign.append(1.0 if below == body else -1.0)
         first.append(body)
     return np.array(child, dtype=np.intp), np.array(sign), np.array(first, dtype=np.intp)
+
+
+def _check_reactions(world: CompiledWorld) -> None:
+    """Refuse, before anything is built, reading the reaction of a joint that shares its body with another joint
+    of a model file (MJCF's several joints in one body): MuJoCo's ``cfrc_int`` is one wrench per body."""
+    files = [m for m in world.models if Capability.JOINT_SEVERAL_PER_BODY in m.needs]
+    if not files or not world.reaction_joints:
+        return
+    own = {j for m in files for j in m.joints}
+    by_name = {j.name: j for j in world.joints}
+    for name in world.reaction_joints:
+        body = by_name[name].body
+        if name in own and sum(1 for j in own if by_name[j].body == body) > 1:
+            raise UnsupportedFeature(
+                f"mujoco: the reaction of joint `{name}`: its body `{body}` is moved by several joints of the model "
+                f"file, and MuJoCo gives one wrench per body (cfrc_int), not one per joint"
+            )
