@@ -886,3 +886,18 @@ def test_a_backend_without_joint_reactions_refuses_a_world_that_reads_one_up_fro
     world = replace(w.lab_door(), reaction_joints=(w.lab_door().joints[0].name,))
     with pytest.raises(UnsupportedFeature, match="needs joint:reaction, which backend `fake` does not support"):
         make_backend("fake", world)
+
+
+def test_watching_a_joint_reaction_changes_nothing_in_the_motion(
+    backend_name: str, backend_cls: type[Backend]
+) -> None:
+    """A sensor only reads: a swinging pendulum with and without `reaction_joints` moves to the same bits."""
+    _require_joint(backend_cls, Capability.JOINT_HINGE, Capability.JOINT_REACTION)
+    world = w.offset_hinge()
+    rows = []
+    for watched in ((), (world.joints[0].name,)):
+        with make_backend(backend_name, replace(world, reaction_joints=watched)) as sim:
+            for _ in range(50):
+                sim.step()
+            rows.append(sim.body_states().rows().copy())
+    assert np.array_equal(rows[0], rows[1])
