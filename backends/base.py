@@ -65,6 +65,16 @@ docs/robots.md). An adapter declares one only when it honours all of it:
 * Joints of a model are ordinary ``JointSpec`` entries (world-frame axis and anchor at the start; positions
   from the start pose); the position servo is the runner's (``set_motor`` every step), never the adapter's.
 
+Sensing (``joint:reaction``, declared by an adapter that implements ``_joint_reactions``):
+
+* ``joint_reactions()`` gives, for each joint of ``CompiledWorld.reaction_joints`` in that order, the wrench
+  the joint applied to its first body (``JointSpec.body``) during the last step: its constraint rows, its
+  motor and its stops together (everything the joint transmits; contacts, gravity and applied forces are not
+  the joint's), as the mean over the step's substeps (as ``motor_force``). One row of six numbers: the force
+  (N, world frame), then the torque (N m, world frame) **about that body's centre of mass** (the runner moves
+  it to the joint's anchor). Zeros before the first step. An engine computes it only for those joints (it
+  may cost a sensor or a pass over the tree); the runner calls it only when the list is not empty.
+
 Edge cases, the same on every backend (checked here, before any engine call):
 
 * a body or joint index outside the world, ``set_kinematic`` on a body that is not kinematic,
@@ -213,6 +223,17 @@ class Backend(abc.ABC):
             return self._joint_states()
         except self.engine_errors as exc:
             raise engine_failure(self.name, "reading joint states", exc) from exc
+
+    def joint_reactions(self) -> np.ndarray:
+        """(len(world.reaction_joints), 6): force, then torque about the first body's COM, world frame, that
+        each watched joint applied to its first body during the last step (see the module docstring)."""
+        self._open("joint_reactions")
+        if Capability.JOINT_REACTION not in self.capabilities:
+            self._refuse("joint_reactions: this backend does not declare joint:reaction")
+        try:
+            return self._joint_reactions()
+        except self.engine_errors as exc:
+            raise engine_failure(self.name, "reading joint reactions", exc) from exc
 
     def contacts(self) -> list[Contact]:
         """The pairs in contact during the last step, sorted by (a, b)."""
@@ -364,6 +385,9 @@ class Backend(abc.ABC):
     def _contact_points(self) -> list[ContactPoint]:
         """The last engine step's touching points (an adapter that declares ``contacts:points``)."""
         self._refuse("contact_points() is declared but not implemented")
+    def _joint_reactions(self) -> np.ndarray:
+        """``joint:reaction``: the rows of :meth:`joint_reactions` (only adapters that declare it)."""
+        self._refuse("joint_reactions: not implemented by this adapter")
 
     def _place_kinematic(self, body: int, pose: KinematicPose) -> None:  # noqa: B027 - optional hook
         """A kinematic body was given a new pose and velocity (``self.kinematic[body]``): impose it now."""

@@ -148,14 +148,14 @@ class Capability(str, enum.Enum):
     ACTUATOR_NATIVE = "actuator:native"
     # What a run reads beyond states and contact pairs (OUTPUT_CAPABILITIES).
     CONTACT_POINTS = "contacts:points"  # Backend.contact_points(): each touching point, its normal and force
+    # Sensing: what a scenario may read that only the engine knows (CompiledWorld.reaction_joints)
+    JOINT_REACTION = "joint:reaction"  # Backend.joint_reactions(): the wrench a joint applies to its body
 
 
 #: Capabilities that no adapter maps to its engine yet (the stop bounce and softness of the language): no
 #: backend may declare them until its mapping exists and is tested, so a scenario using them is refused up
 #: front with the capability message.
-UNMAPPED_CAPABILITIES: frozenset[Capability] = frozenset(
-    {Capability.JOINT_STOP_BOUNCE, Capability.JOINT_STOP_SOFTNESS}
-)
+UNMAPPED_CAPABILITIES: frozenset[Capability] = frozenset({Capability.JOINT_STOP_BOUNCE, Capability.JOINT_STOP_SOFTNESS})
 #: What robot models (URDF, MJCF) need beyond hand-written bodies (docs/robots.md). Every adapter declares
 #: all but ``shape:trimesh``, which ODE and DART declare too; a scenario needing one its backend lacks is
 #: refused up front with the capability message.
@@ -191,10 +191,13 @@ ALL_SHAPES: frozenset[Capability] = frozenset(
 #: Reads an adapter implements beyond the contract's mandatory ones; each adapter names those it has, so a
 #: new adapter (built from ``RIGID_BODY_CAPABILITIES``) refuses them up front until it implements them.
 OUTPUT_CAPABILITIES: frozenset[Capability] = frozenset({Capability.CONTACT_POINTS})
+#: Sensing capabilities: each adapter adds the ones it implements by name (a new adapter has none until it does).
+SENSING_CAPABILITIES: frozenset[Capability] = frozenset({Capability.JOINT_REACTION})
 RIGID_BODY_CAPABILITIES: frozenset[Capability] = (
     frozenset(Capability)
     - OUTPUT_CAPABILITIES
     - {Capability.JOINT_UNIVERSAL, Capability.JOINT_ARMATURE}
+    - SENSING_CAPABILITIES
     - UNMAPPED_CAPABILITIES
     - ROBOT_CAPABILITIES
     - MODEL_FILE_CAPABILITIES
@@ -374,6 +377,9 @@ class CompiledWorld:
     #: True: the run reads ``Backend.contact_points()`` (the scenario's ``trace: {contact_points: true}``);
     #: it needs ``contacts:points``
     contact_points: bool = False
+    #: the joints whose reaction the scenario reads (``Backend.joint_reactions()`` gives them in this order);
+    #: an engine computes and keeps nothing for the others (capability ``joint:reaction``)
+    reaction_joints: tuple[str, ...] = ()
 
     def body_index(self, name: str) -> int:
         for i, body in enumerate(self.bodies):
@@ -420,6 +426,8 @@ class CompiledWorld:
                 need.add(Capability.JOINT_STIFFNESS)
         if self.substeps > 1:
             need.add(Capability.SUBSTEPS)
+        if self.reaction_joints:
+            need.add(Capability.JOINT_REACTION)
         for model in self.models:
             need.update(model.needs)
         if self.contact_points:

@@ -50,7 +50,7 @@ TIMELINE = "sim_time"
 ASSERTED, FORCES, LOG = "asserted", "forces", "log"
 #: a unit's entity path part (a path part cannot hold "/" unescaped)
 UNIT_PARTS = {"m": "m", "m/s": "m_per_s", "rad": "rad", "rad/s": "rad_per_s", "N": "N", "N·m": "N_m", "J": "J",
-              "1": "1", "m or rad": "m_or_rad"}  # fmt: skip
+              "1": "1", "m or rad": "m_or_rad", "N·s": "N_s", "N·m·s": "N_m_s"}  # fmt: skip
 _BODY_UNITS = {"pos": "m", "vel": "m/s", "angvel": "rad/s", "quat": "1"}
 _LEVELS = {"debug": "DEBUG", "info": "INFO", "warning": "WARN", "warn": "WARN", "error": "ERROR", "fatal": "CRITICAL"}
 
@@ -108,6 +108,8 @@ def _one(trace: Trace, name: str, kinds: dict[str, str]) -> Series | None:
     if name.startswith("contact(") and name.endswith(")"):
         a, _, b = name[len("contact(") : -1].partition(", ")
         return Series(name, "N", trace.times, _contact_force(trace, a, b))
+    if name in trace.sensors:  # a sensor quantity, from /sensors
+        return Series(name, tf.sensor_unit(name), trace.sensor_times, trace.sensors[name])
     head, _, field = name.rpartition(".")
     if head in trace.joints:
         times, values = trace.series(f"{head}.{'motor_force' if field == 'force' else field}")

@@ -79,6 +79,7 @@ class PyBulletBackend(Backend):
         Capability.SHAPE_CONVEX,
         Capability.COM_OFFSET,
         Capability.COLLISION_FILTER,
+        Capability.JOINT_REACTION,  # enableJointForceTorqueSensor
     }
     Options: ClassVar[type[BackendOptions]] = PyBulletOptions
     #: pybullet raises only ``pybullet.error`` (a failed command, a lost client).
@@ -166,8 +167,12 @@ class PyBulletBackend(Backend):
             handle = layout.joints[k]
             if joint.kind is JointKind.BALL:  # PyBullet holds spherical links with a default motor
                 p.setJointMotorControlMultiDof(
-                    handle.uid, handle.link, p.POSITION_CONTROL, targetPosition=[0.0, 0.0, 0.0, 1.0],
-                    force=[0.0, 0.0, 0.0], physicsClientId=c,
+                    handle.uid,
+                    handle.link,
+                    p.POSITION_CONTROL,
+                    targetPosition=[0.0, 0.0, 0.0, 1.0],
+                    force=[0.0, 0.0, 0.0],
+                    physicsClientId=c,
                 )
             if handle.dofs != 1:
                 continue
@@ -178,7 +183,10 @@ class PyBulletBackend(Backend):
                 hi = joint.hi if joint.hi is not None else math.inf
                 lo, hi = (lo, hi) if handle.sign > 0 else (-hi, -lo)
                 p.changeDynamics(
-                    handle.uid, handle.link, jointLowerLimit=max(lo, -1e30), jointUpperLimit=min(hi, 1e30),
+                    handle.uid,
+                    handle.link,
+                    jointLowerLimit=max(lo, -1e30),
+                    jointUpperLimit=min(hi, 1e30),
                     physicsClientId=c,
                 )
             rate = initial_rate(world, joint)
@@ -197,6 +205,8 @@ class PyBulletBackend(Backend):
         self._joint_order = np.array(order, dtype=np.int64)
         self._joint_sign = np.array([layout.joints[k].sign for k in order], dtype=float)
         self._motor_mean = SubstepMean(len(world.joints))
+        self._watched = self._watch_reactions()
+        self._reaction_mean = SubstepMean(6 * len(self._watched))
         self._times = substep_times(world.dt, world.substeps)
         self._substep_contacts = SubstepContacts(world.substeps)
         lut = np.full((max(layout.uid) + 1, max(layout.link) + 2), -1, dtype=np.int64)
@@ -213,7 +223,7 @@ class PyBulletBackend(Backend):
     def _step(self) -> None:
         c, n = self._c, self.world.substeps
         motors = n > 1 and bool(self._motor_joints)  # the substeps' motor torques, for their mean
-        if n == 1 and not (self.forces or self.kinematic or self._impacts.active):  # nothing around the step
+        if n == 1 and not (self.forces or self.kinematic or self._impacts.active or self._watched):  # nothing around
             p.stepSimulation(c)
         else:
             self._step_with_inputs(c, n, motors)
@@ -224,6 +234,8 @@ class PyBulletBackend(Backend):
         """The substeps with one-step forces, kinematic bodies, motor torques or contacts to collect."""
         if motors:
             self._motor_mean.start()
+        if self._watched:
+            self._reaction_mean.start()
         if n > 1:
             self._substep_contacts.start()
         for t in self._times:
@@ -236,10 +248,65 @@ class PyBulletBackend(Backend):
                 self._follow_track(t)
             if motors:
                 self._motor_mean.add(self._motor_torques())
+            if self._watched:
+                self._reaction_mean.add(self._reactions_now())
             if n > 1:
                 self._substep_contacts.add(self._contact_reader(p.getContactPoints(physicsClientId=c)))
         if motors:
             self._motor_mean.finish()
+        if self._watched:
+            self._reaction_mean.finish()
+
+    def _watch_reactions(self) -> list[tuple[int, int, float, int, int, tuple[float, ...], bool]]:
+        """A force/torque sensor on each joint of ``world.reaction_joints``, reporting in world axes about the
+        joint's pivot (the child link's frame origin: jointFeedbackMode world space | joint frame); per joint
+        (multibody, link, +1 when the link is the joint's first body else -1, the first body's multibody and
+        link, the joint's axis in the link frame for a motor's torque (empty without one), whether it is a
+        slider). The sensor leaves out what a joint's motor applies along its axis: added from its applied
+        torque (getJointState's fourth value, the coordinate's force). Only when the scenario reads a
+        reaction: the mode is the client's, the sensors cost a pass."""
+        names = self.world.reaction_joints
+        if not names:
+            return []
+        c, layout = self._c, self._layout
+        p.setPhysicsEngineParameter(
+            jointFeedbackMode=p.JOINT_FEEDBACK_IN_WORLD_SPACE | p.JOINT_FEEDBACK_IN_JOINT_FRAME, physicsClientId=c
+        )
+        index = {j.name: k for k, j in enumerate(self.world.joints)}
+        out = []
+        for name in names:
+            k = index[name]
+            handle = layout.joints[k]
+            first = self.world.body_index(self.world.joints[k].body)
+            p.enableJointForceTorqueSensor(handle.uid, handle.link, True, physicsClientId=c)
+            axis = tuple(p.getJointInfo(handle.uid, handle.link, physicsClientId=c)[13]) if handle.dofs == 1 else ()
+            slider = self.world.joints[k].kind is JointKind.SLIDER
+            out.append((handle.uid, handle.link, handle.sign, layout.uid[first], layout.link[first], axis, slider))
+        return out
+
+    def _reactions_now(self) -> list[float]:
+        """The watched joints' wrenches on their first bodies after this engine step: force, and torque about
+        the first body's centre of mass (moved from the pivot: tau_c = tau_p + (pivot - c) x F)."""
+        c, out = self._c, []  # type: tuple[int, list[float]]
+        for uid, link, sign, body_uid, body_link, axis, slider in self._watched:
+            state = p.getJointState(uid, link, physicsClientId=c)
+            frame = p.getLinkState(uid, link, physicsClientId=c)
+            pivot, wrench = np.asarray(frame[4]), np.array(state[2])
+            if axis:  # the motor's force or torque along the axis (the link frame's orientation: frame[5])
+                turn = np.asarray(p.getMatrixFromQuaternion(frame[5], physicsClientId=c)).reshape(3, 3)
+                along = state[3] * (turn @ np.asarray(axis))
+                wrench[0:3] += along if slider else 0.0
+                wrench[3:6] += 0.0 if slider else along
+            if body_link < 0:
+                com = np.asarray(p.getBasePositionAndOrientation(body_uid, physicsClientId=c)[0])
+            else:
+                com = np.asarray(p.getLinkState(body_uid, body_link, physicsClientId=c)[0])
+            force, torque = sign * np.asarray(wrench[:3]), sign * np.asarray(wrench[3:])
+            out.extend((*force, *(torque + np.cross(pivot - com, force))))
+        return out
+
+    def _joint_reactions(self) -> np.ndarray:
+        return self._reaction_mean.mean.reshape(-1, 6).copy()
 
     def _follow_track(self, t: float) -> None:
         """PyBullet does not move mass-0 bases: put each kinematic body where its velocity says at ``t``."""

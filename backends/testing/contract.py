@@ -46,6 +46,10 @@ from .contract_motion import (
     test_slider_motor,
     test_slider_stop,
 )
+from .contract_sensing import (
+    test_joint_reaction_is_the_wrench_on_the_first_body,
+    test_watching_a_joint_reaction_changes_nothing_in_the_motion,
+)
 
 __all__ = [
     "test_a_force_given_before_every_step_is_held_on_every_substep",
@@ -64,6 +68,7 @@ __all__ = [
     "test_hinge_between_bodies",
     "test_hinge_stop",
     "test_inertia",
+    "test_joint_reaction_is_the_wrench_on_the_first_body",
     "test_joint_states_fresh",
     "test_kinematic_keeps_velocity",
     "test_kinematic_platform",
@@ -85,4 +90,5 @@ __all__ = [
     "test_static_and_kinematic_bodies_report_states",
     "test_tilted_plane",
     "test_turning_kinematic_body_carries_what_rests_on_it",
+    "test_watching_a_joint_reaction_changes_nothing_in_the_motion",
 ]

@@ -26,9 +26,11 @@ from runner.compile.joints import drive_motor, dynamics, initial_motor, stops, z
 from runner.compile.robot_start import start_values
 from runner.compile.robots import compile_robots
 from runner.compile.surfaces import compiled_surface
+from runner.compile.sensed import reaction_joints
 from runner.language import model_behaviour as B
 from runner.language.hpr import hpr_to_quat
 from runner.language.model import Scenario
+from runner.language.model_inertia import principal_inertia
 from runner.language.model_physics import Body, Limits
 from runner.language.model_walk import all_actions
 from runner.language.names import BodyInstance, expand_bodies, groups
@@ -124,6 +126,9 @@ def compile_body(inst: BodyInstance, number: int) -> BodySpec:
     else:
         mass = (body.density or KINEMATIC_DENSITY) * volume(shape)
     inertia = mass_properties(shape, mass) if mass > 0 else (0.0, 0.0, 0.0)
+    axes = IDENTITY
+    if body.inertia is not None:  # the body's own (runner.language.model_inertia)
+        inertia, axes = principal_inertia(body.inertia)
     given = (
         tuple(body.color)
         if body.color is not None
@@ -141,6 +146,7 @@ def compile_body(inst: BodyInstance, number: int) -> BodySpec:
         lin_vel=body.vel,
         ang_vel=body.angvel,
         color=color,
+        inertia_quat=axes,
     )
 
 
@@ -232,4 +238,5 @@ def compile_world(model: Scenario, name: str, robots: Mapping[str, ModelDesc] | 
         models=parts.models,
         model_options=model.world.options == "model",
         contact_points=model.trace.contact_points,
+        reaction_joints=reaction_joints(model, [j.name for j in (*joints, *parts.joints)]),
     )

@@ -18,7 +18,8 @@ message and line), and the compiled model is mapped into the engine-neutral desc
   (backends/mujoco), runs it; another engine refuses it before the run. Armature and stiffness are named
   there too (`joint:armature`, `joint:stiffness`), so that an engine without them refuses at their line.
 
-Sites, cameras, lights, `<custom>`, `<sensor>`, `<visual>`, `<statistic>` do not change the dynamics of a step
+Named sites become frames on their bodies (``ModelDesc.frames``: readable, never simulated); cameras, lights,
+`<custom>`, `<sensor>`, `<visual>`, `<statistic>` do not change the dynamics of a step
 and are not read; `<keyframe>`s are read as start states a scenario may pick (`initial: {keyframe: NAME}`).
 """
 
@@ -36,6 +37,7 @@ from runner.language.model_names import check_names
 from runner.language.model_numbers import check_mjcf_numbers, check_number, check_vertices
 from runner.language.robot_desc import (
     ActuatorDesc,
+    FrameDesc,
     JointDesc,
     KeyframeDesc,
     LinkDesc,
@@ -413,4 +415,19 @@ def load_mjcf(file: Path) -> ModelDesc:
         timestep=float(model.opt.timestep),
         gravity=vec(model.opt.gravity),
         keyframes=tuple(_keyframes(model, joint_names, tree)),
+        frames=tuple(_sites(model, bodies, set(joint_names))),
     )
+
+
+def _sites(model: Any, bodies: list[str], joints: set[str]) -> list[FrameDesc]:
+    """Every named site as a frame on its body (as MuJoCo compiled its pose in the body frame); a site named as
+    a body or joint is left out (the body or joint keeps the name)."""
+    taken = set(bodies) | joints
+    out = []
+    for i in range(model.nsite):
+        name = model.site(i).name
+        if name and name not in taken:
+            out.append(
+                FrameDesc(name, bodies[int(model.site_bodyid[i])], vec(model.site_pos[i]), quat4(model.site_quat[i]))
+            )
+    return out

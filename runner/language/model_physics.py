@@ -19,6 +19,7 @@ from runner.language.model_base import (
     Vec3,
     finite_vec,
 )
+from runner.language.model_inertia import Inertia, moments_list_schema
 
 
 class World(Strict):
@@ -85,6 +86,14 @@ class Body(Strict):
     )
     mass: PositiveFloat | None = Field(None, description="kg; inertia from the shape (ODE dMassSet*Total).")
     density: PositiveFloat | None = Field(None, description="kg/m^3; mass = density x volume (ODE dMassSet*).")
+    inertia: Inertia | None = Field(
+        None,
+        description="kg m^2 about the centre of mass, instead of the shape's: principal moments along the body's "
+        "axes `[Ixx, Iyy, Izz]`, `{moments: [I1, I2, I3], quat | hpr}` along turned axes, or the full tensor "
+        "`{ixx, iyy, izz, ixy, ixz, iyz}` in the body frame; positive definite, with each principal moment at most "
+        "the sum of the other two. Dynamic bodies only.",
+        json_schema_extra=moments_list_schema,
+    )
     pos: Vec3 = (0.0, 0.0, 0.0)
     hpr: Vec3 | None = Field(None, description="Heading, pitch, roll in degrees, Panda3D's convention.")
     quat: Quat | None = Field(None, description="Orientation as (w, x, y, z).")
@@ -114,6 +123,8 @@ class Body(Strict):
             raise ValueError(f"a plane must be static, found motion: {self.motion}")
         if self.motion == "dynamic" and self.mass is None and self.density is None:
             raise ValueError("a dynamic body needs mass or density, found neither")
+        if self.inertia is not None and self.motion != "dynamic":
+            raise ValueError(f"`inertia` is for dynamic bodies, found motion: {self.motion}")
         if self.color is not None and not all(0.0 <= c <= 1.0 for c in self.color):
             raise ValueError(f"expected colour components in 0..1, found {list(self.color)}")
         return self

@@ -52,6 +52,17 @@ def line_column(file: str, line: int, near: str = "") -> int:
 
 
 @dataclass(frozen=True)
+class FrameDesc:
+    """A named frame fixed on a link (an MJCF site; a URDF link without mass on a fixed joint, merged into its
+    parent): readable as `<robot>.<name>.pos|quat|vel|angvel` (docs/language.md, "Sensors")."""
+
+    name: str
+    link: str  # the link that carries it
+    pos: Vec3  # in the link frame
+    quat: Quat
+
+
+@dataclass(frozen=True)
 class LinkDesc:
     name: str
     mass: float  # kg; 0: the model says none (only a fixed root may have none)
@@ -138,6 +149,8 @@ class ModelDesc:
     #: the model's own step and gravity (MJCF `<option>`), for `world.options: model`
     timestep: float | None = None
     gravity: Vec3 | None = None
+    #: named frames on links (MJCF sites, merged URDF links), never a link's or joint's name
+    frames: tuple[FrameDesc, ...] = ()
     #: MJCF `<keyframe>`s, in the file's order
     keyframes: tuple[KeyframeDesc, ...] = ()
 

@@ -122,6 +122,7 @@ def run_loaded(
             extra={
                 "overrides": json.dumps([[k, v] for k, v in loaded.overrides], default=str),
                 tf.KEY_ASSERTED: json.dumps(asserted_quantities(program)),
+                **({tf.KEY_SENSORS: json.dumps(program.sensors)} if program.sensors else {}),
                 **({"record_every": str(record_every)} if record_every > 1 else {}),
                 **_arrow_scale(loaded, world),
             },

@@ -182,6 +182,7 @@ class Session:
                 "count": lambda a: self.event_counts.get(str(a[0]), 0),
             },
             eps=backend.precision.eps,
+            frames=program.frames,
         )
         self.tracker = AssertionTracker(model.assertions, program.expressions, backend.name, self.dt)
         self.traverser = SolidTraverser(program.nodes, program.colliders)
@@ -414,6 +415,8 @@ class Session:
         self.snapshot.time = t
         self.snapshot.bodies = states
         self.snapshot.joints = joints
+        if self.world.reaction_joints:  # only the joints the scenario reads (runner.compile.sensed)
+            self.snapshot.reactions = self.backend.joint_reactions()
         if contacts or self._contacts_always:
             self._read_contacts(t)
 
@@ -476,6 +479,8 @@ class Session:
         trace.step(t, self.snapshot.bodies, self.snapshot.joints, self.contacts, self.state)
         if self.world.contact_points:  # the scenario's trace.contact_points: read only when asked (costly)
             trace.contact_points(t, self.backend.contact_points())
+        if self.program.sensors:  # the sensor quantities the scenario reads (docs/trace-format.md, /sensors)
+            trace.sensors(t, [self.resolver.value(name) for name in self.program.sensors])
         self._recorded = t
 
     def run(self) -> RunResult:

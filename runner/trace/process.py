@@ -166,6 +166,8 @@ class BackgroundTraceWriter:
 
     def contact_points(self, t: float, points: Sequence[ContactPoint]) -> None:
         self._send("contact_points", t, list(points))
+    def sensors(self, t: float, values: Sequence[float]) -> None:
+        self._send("sensors", t, [float(v) for v in values])
 
     def event(self, t: float, name: str, source: str, detail: Mapping[str, Any] | None = None) -> None:
         self._send("event", t, name, source, dict(detail) if detail else None)

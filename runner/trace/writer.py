@@ -16,6 +16,7 @@ every call here re-raises it, so a full disk still ends the run with its error (
 from __future__ import annotations
 
 import contextlib
+import json
 import math
 import os
 from collections.abc import Callable, Mapping, Sequence
@@ -364,6 +365,15 @@ class TraceWriter:
         ns = self._ns(t)
         message = contact_arrows.scene_update(ns, points, float(scale))
         self._write(tf.TOPIC_CONTACT_POINTS, ns, message.SerializeToString(deterministic=True))
+    def sensors(self, t: float, values: Sequence[float]) -> None:
+        """/sensors at a recorded step: the values of the sensor quantities ``meta.extra[KEY_SENSORS]`` lists,
+        in that order (the channel is registered with the first)."""
+        ns = self._ns(t)
+        if tf.TOPIC_SENSORS not in self._channels:
+            names = json.loads(self.meta.extra.get(tf.KEY_SENSORS, "[]"))
+            channel = self._encoder.sensors_channel(names)
+            self._register(channel.topic, channel.schema_name, channel.schema_data)
+        self._write(tf.TOPIC_SENSORS, ns, self._encoder.sensors_message(values))
 
     def event(self, t: float, name: str, source: str, detail: Mapping[str, Any] | None = None) -> None:
         """Every delivery on /events; on /log, those that start a run (runner/trace/repeats.py)."""

@@ -20,10 +20,10 @@ FILES = sorted(DEFAULT_SUITE.glob("*.yaml"))
 def test_one_scenario_per_semantic_of_the_issue() -> None:
     """Issue 6 lists 12 semantics, issue 17 adds 13 (isotropic friction), 14 and 15 (energy of a tumbling
     body and of a pendulum), 16 (stacks of 5-30) and 17 (restitution over mass, size, dt and e), issue 29
-    18 (held forces) and 19 (joint commands); the files are numbered after them (10 has three parts: a, b,
-    c)."""
+    18 (held forces), 19 (joint reactions), 20 (a body's energy, momentum and body-frame spin) and 21 (named
+    frames on links) and 22 (joint commands); the files are numbered after them (10 has three parts: a, b, c)."""
     numbers = {int(re.match(r"(\d+)", f.name).group(1)) for f in FILES}
-    assert numbers == set(range(1, 20))
+    assert numbers == set(range(1, 23))
 
 
 @pytest.mark.parametrize("path", FILES, ids=[f.stem for f in FILES])

@@ -43,6 +43,7 @@ def test_the_examples_exist() -> None:
         "kuka_track.yaml",
         "gripper_push.yaml",
         "actuated_rod.yaml",
+        "kuka_loads.yaml",
     }
 
 
@@ -161,3 +162,15 @@ def test_kuka_links_never_touch_along_the_commanded_path() -> None:
                 if (x, y) not in adjacent:
                     assert slack(placed[x], placed[y]) < 0, (x, y, cfg)
             assert min(placed[n].vertices[:, 2].min() for n in placed if n >= "lbr_iiwa_link_2") > 0.05
+
+
+def test_kuka_loads_are_the_urdf_masses_above_each_joint() -> None:
+    """kuka_loads.yaml's params: the masses of links 1..7, 4..7 and 7 as the URDF's <inertial> gives them."""
+    import yourdfpy
+
+    urdf = yourdfpy.URDF.load(str(DATA / "kuka_iiwa" / "model.urdf"), load_meshes=False)
+    mass = {name: link.inertial.mass for name, link in urdf.link_map.items() if link.inertial is not None}
+    params = load_all(ROOT / "scenarios" / "robots" / "kuka_loads.yaml", None, False)[0].model.params
+    for param, first in (("m1", 1), ("m4", 4), ("m7", 7)):
+        held = sum(mass[f"lbr_iiwa_link_{k}"] for k in range(first, 8))
+        assert params[param] == pytest.approx(held, abs=1e-12)

@@ -1,6 +1,6 @@
 """Joint commands (`drive`, runner/sim/drives.py, docs/semantics.md "Joint commands") on the four engines:
 torque mode switched at run time, the effort limit, a slider's equal and opposite forces, a servo-held joint
-refused, bad input located. Conformance 19 checks the position mode's step response and tau = I alpha.
+refused, bad input located. Conformance 22 checks the position mode's step response and tau = I alpha.
 
 The rod: a 1 x 0.1 x 0.1 m box of 1 kg on a hinge about z through its centre, no gravity:
 I = m (1 + 0.01)/12 = 0.0841667 kg m^2. A constant torque integrates exactly under semi-implicit Euler
