@@ -25,8 +25,8 @@ from backends.types import (
 from runner.compile.joints import drive_motor, dynamics, initial_motor, stops, zero_offset
 from runner.compile.robot_start import start_values
 from runner.compile.robots import compile_robots
-from runner.compile.surfaces import compiled_surface
 from runner.compile.sensed import reaction_joints
+from runner.compile.surfaces import compiled_surface
 from runner.language import model_behaviour as B
 from runner.language.hpr import hpr_to_quat
 from runner.language.model import Scenario
