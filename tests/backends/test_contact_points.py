@@ -11,10 +11,9 @@ import pytest
 
 from backends.errors import ContractViolation, UnsupportedFeature
 from backends.fake import FakeBackend
+from backends.testing import worlds as w
+from backends.testing.tolerances import tol
 from backends.types import Capability, CompiledWorld
-
-from . import worlds as w
-from .tolerances import tol
 
 HALF = w.LAB_BOX[0] / 2
 

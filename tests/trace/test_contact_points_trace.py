@@ -17,11 +17,11 @@ from foxglove_schemas_protobuf.SceneUpdate_pb2 import SceneUpdate
 from mcap.reader import make_reader
 
 from backends.registry import is_installed, list_backends
+from backends.testing.tolerances import tol
 from reports import trace_format as tf
 from reports.rerun_contacts import ENTITY, read_arrows
 from reports.trace_reader import read_trace
 from runner.trace.contact_arrows import ARROW_LENGTH, KEY_SCALE
-from tests.backends.tolerances import tol
 from tests.paths import ROOT
 
 SCENARIO = ROOT / "tests" / "trace" / "data" / "contact_points.yaml"
