@@ -325,21 +325,30 @@ class MujocoBackend(Backend):
         return group_by_pair(len(self.world.bodies), owner[geom[:, 0]], owner[geom[:, 1]], -dist, force)
 
     def _contact_points(self) -> list[ContactPoint]:
-        """MjData's contacts of the last engine step (distance <= 0): ``pos`` (midway between the surfaces),
-        ``frame[:3]`` (the normal, from geom1 to geom2) and the normal force of ``mj_contactForce`` (either
-        cone)."""
+        """MjData's contacts of the last engine step (distance <= 0), read as columns: ``pos`` (midway between
+        the surfaces), ``frame[:3]`` (the normal, from geom1 to geom2) and the normal force: on the elliptic
+        cone the contact's first constraint row (as ``_touching``), on a model's pyramidal cone
+        ``mj_contactForce`` (its rows are the pyramid's edges)."""
         m, d = self._m, self._d
-        owner, out, wrench = self._geom_body, [], np.zeros(6)
-        for k in range(d.ncon if self.steps else 0):
-            c = d.contact[k]
-            if c.dist <= 0.0:
-                force = 0.0
-                if c.efc_address >= 0:
+        n = d.ncon if self.steps else 0
+        if n == 0:
+            return []
+        c = d.contact
+        keep = np.flatnonzero(c.dist[:n] <= 0.0)
+        rows = c.efc_address[keep]
+        if m.opt.cone == mujoco.mjtCone.mjCONE_ELLIPTIC:
+            force = np.where(rows >= 0, d.efc_force[rows] if d.nefc else 0.0, 0.0)
+        else:
+            force, wrench = np.zeros(len(keep)), np.zeros(6)
+            for i, k in enumerate(keep.tolist()):
+                if rows[i] >= 0:
                     mujoco.mj_contactForce(m, d, k, wrench)
-                    force = wrench[0]
-                g1, g2 = c.geom
-                out.append(contact_point(owner[g1], owner[g2], c.pos, c.frame[:3], -c.dist, force))
-        return sorted_points(out)
+                    force[i] = wrench[0]
+        owner = self._geom_body
+        geom = c.geom[keep]
+        columns = zip(owner[geom[:, 0]].tolist(), owner[geom[:, 1]].tolist(), c.pos[keep].tolist(),
+                      c.frame[keep, :3].tolist(), (-c.dist[keep]).tolist(), force.tolist(), strict=True)  # fmt: skip
+        return sorted_points([contact_point(*column) for column in columns])
 
     def _contacts(self) -> list[Contact]:
         if self._listed is None:  # first call since the step: group the last engine step's contacts now
