@@ -23,10 +23,12 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
+from pydrake.common import MemoryFile
+from pydrake.common.eigen_geometry import Quaternion
 from pydrake.geometry import (
     AddCompliantHydroelasticProperties,
-    AddRigidHydroelasticProperties,
     AddContactMaterial,
+    AddRigidHydroelasticProperties,
     Box,
     Capsule,
     CollisionFilterDeclaration,
@@ -38,9 +40,7 @@ from pydrake.geometry import (
     ProximityProperties,
     Sphere,
 )
-from pydrake.common import MemoryFile
-from pydrake.math import RigidTransform, RotationMatrix
-from pydrake.common.eigen_geometry import Quaternion
+from pydrake.math import RigidTransform
 from pydrake.multibody.plant import AddMultibodyPlant, CoulombFriction, MultibodyPlantConfig
 from pydrake.multibody.tree import (
     BallRpyJoint,
@@ -132,14 +132,20 @@ def check(world: CompiledWorld) -> None:
                 raise UnsupportedFeature(f"Backend `drake`: plane `{body.name}` must be static.")
 
 
+def vec(values: Any) -> Any:
+    """A float64 array typed Any (pydrake's stubs accept no numpy annotation)."""
+    return np.asarray(values, dtype=float)
+
+
 def _transform(pos: Any, quat: Any) -> RigidTransform:
     w, x, y, z = (float(v) for v in quat)
     n = math.sqrt(w * w + x * x + y * y + z * z)
-    return RigidTransform(Quaternion(w / n, x / n, y / n, z / n), np.asarray(pos, dtype=float))
+    return RigidTransform(Quaternion(w / n, x / n, y / n, z / n), vec(pos))
 
 
 def _obj(shape: Shape) -> str:
-    assert shape.mesh is not None
+    if shape.mesh is None:
+        raise UnsupportedFeature(f"Backend `drake`: convex shape without a mesh ({shape})")
     lines = [f"v {x!r} {y!r} {z!r}" for x, y, z in shape.mesh.vertices]
     lines += [f"f {a + 1} {b + 1} {c + 1}" for a, b, c in shape.mesh.faces]
     return "\n".join(lines) + "\n"
@@ -158,7 +164,7 @@ def _geometry(shape: Shape, label: str) -> Any:
     if kind is ShapeKind.PLANE:
         return HalfSpace()
     if kind is ShapeKind.CONVEX:
-        return Convex(InMemoryMesh(MemoryFile(_obj(shape), ".obj", label)))
+        return Convex(InMemoryMesh(mesh_file=MemoryFile(_obj(shape), ".obj", label)))
     raise UnsupportedFeature(f"Backend `drake` has no mapping for shape kind `{kind.value}` ({label}).")
 
 
@@ -176,7 +182,7 @@ def _properties(shape: Shape, mu: float, options: DrakeOptions, static: bool) ->
     compliant-compliant half space contact; a rigid-rigid pair falls back to point contact)."""
     props = ProximityProperties()
     AddContactMaterial(friction=CoulombFriction(mu, mu), properties=props)
-    if options.contact_model != "point":
+    if options.contact_model != "point" and shape.kind is not ShapeKind.CONVEX:  # hulls: point contact (fallback)
         modulus = options.hydroelastic_modulus
         if shape.kind is ShapeKind.PLANE:
             AddRigidHydroelasticProperties(props)
@@ -190,7 +196,7 @@ def _properties(shape: Shape, mu: float, options: DrakeOptions, static: bool) ->
 def _inertia(body: BodySpec, mass: float, inertia: Any) -> SpatialInertia:
     tensor = body.inertia_tensor() * (mass / body.mass if body.mass > 0 else 1.0) if inertia is None else inertia
     central = RotationalInertia(tensor[0, 0], tensor[1, 1], tensor[2, 2], tensor[0, 1], tensor[0, 2], tensor[1, 2])
-    return SpatialInertia.MakeFromCentralInertia(mass, np.asarray(body.com, dtype=float), central)
+    return SpatialInertia.MakeFromCentralInertia(mass, vec(body.com), central)
 
 
 def build(world: CompiledWorld, options: DrakeOptions, h: float) -> Built:
@@ -204,7 +210,7 @@ def build(world: CompiledWorld, options: DrakeOptions, h: float) -> Built:
         adjacent_bodies_collision_filters=False,
     )
     plant, scene_graph = AddMultibodyPlant(config, builder)
-    plant.mutable_gravity_field().set_gravity_vector(np.asarray(world.gravity, dtype=float))
+    plant.mutable_gravity_field().set_gravity_vector(vec(world.gravity))
     friction = _friction.solve(world)
     heavy = KINEMATIC_MASS_RATIO * max([1.0] + [b.mass for b in world.bodies if b.motion is Motion.DYNAMIC])
     bodies: list[Any] = []
@@ -226,7 +232,11 @@ def build(world: CompiledWorld, options: DrakeOptions, h: float) -> Built:
             label = f"{spec.name}#{k}"
             x_bg = x_wb.multiply(_transform(placed.pos, placed.quat))
             gid = plant.RegisterCollisionGeometry(
-                frame_body, x_bg, _geometry(placed.shape, label), label, _properties(placed.shape, friction[i], options, spec.motion is Motion.STATIC)
+                frame_body,
+                x_bg,
+                _geometry(placed.shape, label),
+                label,
+                _properties(placed.shape, friction[i], options, spec.motion is Motion.STATIC),
             )
             geometry_body[gid.get_value()] = i
             ids.append(gid)
@@ -242,7 +252,7 @@ def build(world: CompiledWorld, options: DrakeOptions, h: float) -> Built:
 
 def _joint_frames(plant: Any, spec: JointSpec, parent: Any, child: Any, specs: dict[str, BodySpec]) -> tuple[Any, Any]:
     """Frames at the anchor with the world's orientation at the start, on the parent and the child."""
-    x_wj = RigidTransform(np.asarray(spec.anchor, dtype=float))
+    x_wj = RigidTransform(vec(spec.anchor))
     frames = []
     for name, body in ((parent, None), (child, None)):
         del body
@@ -261,7 +271,7 @@ def _joints(world: CompiledWorld, plant: Any, bodies: list[Any], options: DrakeO
     handles = []
     for spec, (parent, child, sign) in zip(world.joints, tree(world), strict=True):
         f_parent, f_child = _joint_frames(plant, spec, parent, child, specs)
-        axis = np.asarray(spec.axis, dtype=float)
+        axis = vec(spec.axis)
         lo = -math.inf if spec.lo is None else spec.lo
         hi = math.inf if spec.hi is None else spec.hi
         if sign < 0:
