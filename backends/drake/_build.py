@@ -64,7 +64,7 @@ from ._options import DrakeOptions
 #: the pose and velocity before every engine step anyway.
 KINEMATIC_MASS_RATIO = 1e6
 #: The resolution hint of compliant hydroelastic meshes, as a fraction of a shape's smallest dimension.
-HYDRO_RESOLUTION = 0.25
+HYDRO_RESOLUTION = 0.1
 
 
 @dataclass

@@ -83,10 +83,11 @@ _TOLERANCES: dict[str, dict[str, float]] = {
     # relative improvement of 1e-8) well under 1e-6; ODE stores float32 (2^-24 = 6e-8 relative per
     # operation), over the sum of 4 points and the impulse-to-force division, ~10 operations: 6e-7.
     # Default 1e-6. Measured: pybullet 132.4350 N of 132.4350 N (4 points, depth 2.0e-5 m); worst 2e-7.
-    # drake: 132.43549 N (+3.7e-6) resting, +4.0e-6 with substeps. NOT derived (measured deviation, cause):
-    # the compliant hydroelastic box (modulus 1e7 Pa) and SAP's regularised, relaxation-damped contact are still
-    # settling at the check; no SAP tolerance is reachable from pydrake 1.51 to tighten it.
-    "contact_force": {"default": 1e-6, "drake": 1e-5},
+    # drake: the two-box compound (test_robot_contract.py) 19.62028 N of 19.62 (+1.4e-5); the resting box within
+    # 1e-6. NOT derived (measured deviation, cause): the compliant hydroelastic contact (modulus 1e6 Pa) of the
+    # compound's two boxes is still settling at the check (SAP's relaxation-time damping), and no SAP solver
+    # tolerance is reachable from pydrake 1.51 to tighten it.
+    "contact_force": {"default": 1e-6, "drake": 2e-5},
     # Resting height of a shape's centre above a plane, m.
     # pybullet: -1.2e-5 to -1.7e-5 m for box, sphere, capsule, cylinder (and the 30 degree ramp).
     # dart: the 1 cm drop lands 4.7 mm deep in one 0.01 s step; the ODE mapping's push-out (ERP 0.2, capped
@@ -98,6 +99,12 @@ _TOLERANCES: dict[str, dict[str, float]] = {
     # (modulus 1e7 Pa, tessellated at a quarter of the shape's smallest size) sinks until its pressure field
     # carries the weight; the sphere's coarse mesh sinks most. NOT derived (measured deviation, cause).
     # The ramp (test_tilted_plane): +3.3 mm along the normal.
+    # drake (hydroelastic, modulus E = 1e6 Pa): a compliant body sinks until its pressure field carries its
+    # weight. A face of a box of thickness h: d = m g h / (2 E A) (0.1 mm for the 0.2 m cube); a sphere:
+    # d = sqrt(m g / (pi E)) = 2.6 mm for the 2.09 kg sphere, plus its tessellation (resolution 0.02 m, a sagitta
+    # of 0.5 mm): 3.1 mm. Measured: box -0.1 mm, sphere -3.2 mm, capsule and cylinder within 1 mm; the cube on the
+    # 30 degree ramp +3.8 mm along the normal (it slides on its leading edge's pressure). 4e-3, flagged: the
+    # sphere's figure is not met by the formula alone.
     "resting_height": {"default": 2e-3, "drake": 4e-3},
     # Resting height of a convex hull box's centre (test_robot_contract.py), m: as resting_height (one step of
     # landing), the hull being the box's exact vertices. pybullet: +9.0e-5 m (the adapter's 1e-4 m hull margin,
@@ -144,7 +151,7 @@ _TOLERANCES: dict[str, dict[str, float]] = {
     # drake: 0.39353 m (-1.07 %): SAP regularises friction (a slip-dependent force below mu*N while the slip
     # speed is under its stiction tolerance) and the compliant box rocks on its pressure field. NOT derived
     # (measured deviation, cause); with point contact the box rests on one corner and slides 0.4758 m (+19.6 %).
-    "friction_stop": {"default": 6.5e-3, "drake": 1.5e-2},
+    "friction_stop": {"default": 6.5e-3},
     # One step of free fall read back at once, m: the contract says "exactly". Also states read right
     # after the build or a reset_body (pose, velocities, joint coordinates at 0). pybullet: < 1e-15.
     # ode: 4.9e-8 m (box z) and 5.3e-8 m (door x): float32 positions, one ulp at 2 m is 2.4e-7.
