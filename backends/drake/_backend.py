@@ -16,7 +16,7 @@ from typing import Any, ClassVar
 import numpy as np
 from pydrake.multibody.math import SpatialForce, SpatialVelocity
 from pydrake.multibody.plant import ExternallyAppliedSpatialForce
-from pydrake.multibody.tree import default_model_instance
+from pydrake.multibody.tree import PdControllerGains, default_model_instance
 
 from .._kit import BackendOptions, KinematicPose, SubstepContacts, SubstepMean, group_by_pair, substep_times
 from ..base import Backend
@@ -137,6 +137,8 @@ class DrakeBackend(Backend):
     def _set_motor(self, joint: int, vel: float, fmax: float) -> None:
         handle = self._joints[joint]
         handle.actuator.set_effort_limit(max(float(fmax), MOTOR_OFF))
+        # off: Kd 0 as well (with Kd 1e7 SAP's regularised clamp still leaks 0.01 N through a 1e-30 N limit)
+        handle.actuator.set_controller_gains(PdControllerGains(p=0.0, d=self.options.motor_gain if fmax > 0 else 0.0))
         self._targets[self._motor_slot[joint]] = handle.sign * vel
 
     def _place_kinematic(self, body: int, pose: KinematicPose) -> None:

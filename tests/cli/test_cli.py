@@ -115,7 +115,7 @@ assertions:
 def test_backends_lists_versions() -> None:
     done = scenario("backends")
     assert done.returncode == 0
-    for name in ("pybullet", "mujoco", "dart", "ode"):
+    for name in ("pybullet", "mujoco", "dart", "ode", "drake"):
         assert name in done.stdout
     text = " ".join(done.stdout.split())  # rich wraps long cells
     assert "ODE 0.13.1" in text and "MuJoCo " in text and "DART " in text  # the engines' own versions

@@ -49,7 +49,7 @@ on:
 assertions:
   - {{name: reaches-the-end, at: end, check: time > 1.9}}
 """
-REAL = ["pybullet", "mujoco", "dart", "ode"]
+REAL = ["pybullet", "mujoco", "dart", "ode", "drake"]
 
 
 @pytest.fixture(params=REAL)

@@ -45,7 +45,7 @@ bodies:
 assertions:
   - {{name: runs-to-the-end, at: end, check: time > 0}}
 """
-REAL = [b for b in ("pybullet", "mujoco", "dart", "ode") if is_installed(b)]
+REAL = [b for b in ("pybullet", "mujoco", "dart", "ode", "drake") if is_installed(b)]
 
 
 def _default_sigint() -> None:
