@@ -19,6 +19,7 @@ from pydrake.multibody.plant import ExternallyAppliedSpatialForce
 from pydrake.multibody.tree import PdControllerGains, default_model_instance
 
 from .._kit import BackendOptions, KinematicPose, SubstepContacts, SubstepMean, group_by_pair, substep_times
+from .._kit.stacks import stack_height
 from ..base import Backend
 from ..types import (
     RIGID_BODY_CAPABILITIES,
@@ -36,7 +37,7 @@ from ..types import (
 )
 from ._build import JointHandle, _transform, build, vec
 from ._build import check as check_build
-from ._options import DrakeOptions
+from ._options import DrakeOptions, check_stack
 
 #: The effort limit of a motor that is off (``fmax`` 0): Drake needs a limit > 0, and the PD force is clamped to
 #: it, so the motor applies at most this many newtons (or N m).
@@ -63,6 +64,7 @@ class DrakeBackend(Backend):
     @classmethod
     def check_world(cls, world: CompiledWorld, options: BackendOptions) -> None:
         check_build(world)  # a loop of joints, a pair's mu the geometries cannot combine to, ... (no engine)
+        check_stack(stack_height(world))
 
     def _build(self) -> None:
         world = self.world
