@@ -1,9 +1,10 @@
 """The Drake backend: the contract of backends/base.py on the MultibodyPlant that ``_build`` makes.
 
-One scenario step is ``world.substeps`` discrete plant updates of ``dt / substeps`` (``Simulator.AdvanceTo``).
-Before each: the one-step forces and the kinematic bodies' weight compensation go into the applied spatial
-force port (a fixed value persists, so it is refixed, empty, when nothing acts), the kinematic bodies get
-their pose and velocity, the motors their target rate (the desired-state port; Kp 0). After each: the
+One scenario step is ``world.substeps`` discrete plant updates of ``dt / substeps``
+(``Diagram.ExecuteForcedEvents``: exactly one update each; the context's time is set by hand). Before the
+step: the one-step forces and the kinematic bodies' weight compensation go into the applied spatial
+force port (a fixed value persists, so it is refixed every step), the motors' target rates into the
+desired-state port (Kp 0); before each update the kinematic bodies get their pose and velocity. After each: the
 contacts Drake used (its sampled ContactResults: computed at the step's start poses, as ODE collides before
 stepping) and the motors' net actuation. docs/backends/drake.md has the mapping and its measured limits.
 """
@@ -199,8 +200,7 @@ class DrakeBackend(Backend):
 
     def _step(self) -> None:
         n = self.world.substeps
-        applied = self._applied()
-        self._forces(applied)
+        self._forces(self._applied())  # refixed every step: a force lasts one
         if self._actuated:
             self._desired_port.FixValue(self._pc, np.concatenate([np.zeros(len(self._actuated)), self._targets]))
             self._motor_mean.start()
@@ -219,18 +219,10 @@ class DrakeBackend(Backend):
             self._substep_contacts.add(self._read_contacts(deepest))
         if self._actuated:
             self._motor_mean.finish()
-        if applied and not self._kinematic_weight:
-            self._forces([])
-        elif self.forces:
-            self._forces(self._applied_without_forces())
         dt = self.world.dt
         for i, pose in self.kinematic.items():
             self._put(i, KinematicPose(*pose.at(dt), pose.lin_vel, pose.ang_vel), 0.0)
         self._contacts_now = self._substep_contacts.merged()
-
-    def _applied_without_forces(self) -> list[Any]:
-        g = vec(self.world.gravity)
-        return [self._spatial(i, -mass * g, np.zeros(3)) for i, mass in self._kinematic_weight]
 
     def _penetrations(self) -> dict[tuple[int, int], float]:
         """The deepest penetration per body pair at the poses the coming step starts from (hydroelastic

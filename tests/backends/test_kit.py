@@ -172,7 +172,7 @@ def test_the_registry_checks_options_without_the_engine() -> None:
         check_options("ode", {"cfm": 1e-10})
     code = "import sys\nfrom backends.registry import check_options\n" + "".join(
         f"check_options({e.name!r}, {{}})\n" for e in list_backends(include_hidden=True)
-    ) + "print(sorted({'pybullet', 'mujoco', 'dartpy', 'panda3d'} & set(sys.modules)))\n"
+    ) + "print(sorted({'pybullet', 'mujoco', 'dartpy', 'panda3d', 'pydrake'} & set(sys.modules)))\n"
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
     assert out.strip() == "[]"
 
