@@ -55,7 +55,7 @@ from pydrake.multibody.tree import (
 from pydrake.systems.framework import DiagramBuilder
 
 from ..errors import UnsupportedFeature
-from ..types import BodySpec, CompiledWorld, JointKind, JointSpec, Motion, PlacedShape, Shape, ShapeKind
+from ..types import BodySpec, CompiledWorld, JointKind, JointSpec, Motion, Shape, ShapeKind
 from . import _friction
 from ._options import DrakeOptions
 
@@ -250,12 +250,12 @@ def build(world: CompiledWorld, options: DrakeOptions, h: float) -> Built:
     return Built(diagram, plant, scene_graph, bodies, joints, geometry_body, friction, actuated)
 
 
-def _joint_frames(plant: Any, spec: JointSpec, parent: Any, child: Any, specs: dict[str, BodySpec]) -> tuple[Any, Any]:
-    """Frames at the anchor with the world's orientation at the start, on the parent and the child."""
+def _joint_frames(plant: Any, spec: JointSpec, parent: str | None, child: str,
+                  specs: dict[str, BodySpec]) -> tuple[Any, Any]:  # fmt: skip
+    """Frames at the anchor with the world's orientation at the start, on the parent and on the child."""
     x_wj = RigidTransform(vec(spec.anchor))
     frames = []
-    for name, body in ((parent, None), (child, None)):
-        del body
+    for name in (parent, child):
         if name is None:
             x_bj, base = x_wj, plant.world_frame()
         else:
@@ -313,4 +313,4 @@ def _filters(world: CompiledWorld, scene_graph: Any, geometries: list[list[Any]]
             manager.Apply(CollisionFilterDeclaration().ExcludeWithin(GeometrySet(geometries[a])))
 
 
-__all__ = ["KINEMATIC_MASS_RATIO", "Built", "JointHandle", "PlacedShape", "build", "check", "tree"]
+__all__ = ["KINEMATIC_MASS_RATIO", "Built", "JointHandle", "build", "check", "tree", "vec"]
