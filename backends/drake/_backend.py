@@ -11,6 +11,7 @@ stepping) and the motors' net actuation. docs/backends/drake.md has the mapping 
 
 from __future__ import annotations
 
+import logging
 import math
 from typing import Any, ClassVar
 
@@ -39,6 +40,17 @@ from ..types import (
 from ._build import JointHandle, _transform, build, vec
 from ._build import check as check_build
 from ._options import DrakeOptions, check_stack
+
+
+class _NoDeformableNotice(logging.Filter):
+    """Drop Drake's notice that rigid half spaces get no deformable contact (printed at every build with a
+    plane; this adapter makes no deformable bodies, so it says nothing about the run)."""
+
+    def filter(self, record: logging.LogRecord) -> bool:
+        return "not currently supported for deformable contact" not in record.getMessage()
+
+
+logging.getLogger("drake").addFilter(_NoDeformableNotice())
 
 #: The effort limit of a motor that is off (``fmax`` 0): Drake needs a limit > 0, and the PD force is clamped to
 #: it, so the motor applies at most this many newtons (or N m).
