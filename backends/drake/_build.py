@@ -90,12 +90,19 @@ class Built:
 def tree(world: CompiledWorld) -> list[tuple[str | None, str, float]]:
     """(parent, child, sign) per joint: Drake's joints form a tree, each body the child of one joint at most.
 
-    The body is the child of its joint (``other`` or the environment the parent); a body already a child is
-    swapped to parent when ``other`` is still free (the coordinate then reads negated). Raises
-    UnsupportedFeature for loops and for joints on kinematic bodies."""
+    The joints are oriented away from the world (static bodies and the environment are the world) or, in a
+    group of bodies not joined to it, from the group's first body; a joint whose ``body`` ends up the parent
+    reads its coordinate negated (sign -1). Raises UnsupportedFeature for a loop of joints and for joints on
+    kinematic bodies (no engine call)."""
     motion = {b.name: b.motion for b in world.bodies}
-    has_parent: set[str] = set()
-    out: list[tuple[str | None, str, float]] = []
+    ends: list[tuple[str | None, str]] = []
+    root: dict[str | None, str | None] = {None: None}
+
+    def find(node: str | None) -> str | None:
+        while root.setdefault(node, node) != node:
+            node = root[node]
+        return node
+
     for joint in world.joints:
         for name in (joint.body, joint.other):
             if name is not None and motion[name] is Motion.KINEMATIC:
@@ -103,21 +110,41 @@ def tree(world: CompiledWorld) -> list[tuple[str | None, str, float]]:
                     f"Backend `drake` drives a kinematic body as a heavy free body, which no joint may hold; joint "
                     f"`{joint.name}` holds kinematic body `{name}`."
                 )
-        other = None if joint.other is None or motion[joint.other] is Motion.STATIC else joint.other
         if motion[joint.body] is Motion.STATIC:
             raise UnsupportedFeature(f"Backend `drake`: joint `{joint.name}` moves static body `{joint.body}`.")
-        if joint.body not in has_parent:
-            out.append((other, joint.body, 1.0))
-            has_parent.add(joint.body)
-        elif other is not None and other not in has_parent:
-            out.append((joint.body, other, -1.0))
-            has_parent.add(other)
-        else:
+        other = None if joint.other is None or motion[joint.other] is Motion.STATIC else joint.other
+        a, b = find(joint.body), find(other)
+        if a == b:
             raise UnsupportedFeature(
                 f"Backend `drake` builds joints as a tree (Drake's MultibodyPlant); joint `{joint.name}` closes a "
-                f"loop: `{joint.body}` already hangs from another joint."
+                f"loop of joints between `{joint.body}` and `{joint.other or 'the environment'}`."
             )
-    return out
+        if b is None:  # keep the world as the root of its group
+            a, b = b, a
+        root[b] = a
+        ends.append((other, joint.body))
+    adjacent: dict[str | None, list[int]] = {}
+    for k, (other, body) in enumerate(ends):
+        adjacent.setdefault(other, []).append(k)
+        adjacent.setdefault(body, []).append(k)
+    oriented: dict[int, tuple[str | None, str, float]] = {}
+    starts = [None, *(b.name for b in world.bodies if b.name in adjacent)]
+    placed: set[str | None] = set()
+    for start in starts:
+        if start in placed or start not in adjacent:
+            continue
+        placed.add(start)
+        queue = [start]
+        for node in queue:  # breadth first; `queue` grows while iterating
+            for k in adjacent[node]:
+                if k in oriented:
+                    continue
+                other, body = ends[k]
+                child = body if node == other else (other or body)  # the world (None) is only ever a root
+                oriented[k] = (node, child, 1.0 if child == body else -1.0)
+                placed.add(child)
+                queue.append(child)
+    return [oriented[k] for k in range(len(ends))]
 
 
 def check(world: CompiledWorld) -> None:
