@@ -30,6 +30,7 @@ if not is_installed("drake"):
     pytest.skip("engine not installed: pip install 'physics-scenarios[drake]'", allow_module_level=True)
 
 from backends.drake import _friction  # noqa: E402 - after the engine check (engine-free, but drake's)
+from backends.drake._build import tree as _drake_tree  # noqa: E402
 
 NAME = "drake"
 
@@ -225,3 +226,36 @@ def test_shapes_of_every_primitive_kind_build() -> None:
     with create_backend(NAME, w.world("shapes", bodies)) as sim:
         sim.step()
         assert len(sim.body_states().pos) == 5
+
+
+def test_a_joint_whose_body_is_the_tree_parent_reads_its_coordinate_from_its_body() -> None:
+    """Drake's tree runs from the world: `h1` hangs `a` from the environment, so `h2` (body `a`, other `b`)
+    is built with `b` as its child and read negated. Its rate is still `a`'s about the axis relative to `b`,
+    (w_a - w_b) . axis (backends/types.py), as the body states say, to rounding."""
+    a = w.box("a", (0.1, 0.1, 0.1), (0.3, 0.0, 1.0))
+    b = w.box("b", (0.1, 0.1, 0.1), (0.6, 0.0, 1.0))
+    joints = (
+        JointSpec("h1", JointKind.HINGE, "a", None, axis=(0.0, 1.0, 0.0), anchor=(0.0, 0.0, 1.0)),
+        JointSpec("h2", JointKind.HINGE, "a", "b", axis=(0.0, 1.0, 0.0), anchor=(0.45, 0.0, 1.0)),
+    )
+    assert _drake_tree(w.world("chain", [a, b], joints=joints)) == [(None, "a", 1.0), ("a", "b", -1.0)]
+    with create_backend(NAME, w.world("chain", [a, b], joints=joints)) as sim:
+        for _ in range(20):
+            sim.step()
+        s, js = sim.body_states(), sim.joint_states()
+    relative = float(s.ang_vel[0, 1] - s.ang_vel[1, 1])
+    assert abs(relative) > 0.1  # the double pendulum folds: the check is not vacuous
+    assert js.velocity[1] == pytest.approx(relative, abs=1e-9)
+    assert js.velocity[0] == pytest.approx(float(s.ang_vel[0, 1]), abs=1e-9)
+
+
+def test_a_loop_between_two_bodies_is_refused() -> None:
+    """Hinge a-b, then hinge b-a: the second closes a loop even though each names a different `body`."""
+    a = w.box("a", (0.1, 0.1, 0.1), (0.0, 0.0, 1.0))
+    b = w.box("b", (0.1, 0.1, 0.1), (0.2, 0.0, 1.0))
+    joints = (
+        JointSpec("ab", JointKind.HINGE, "a", "b", axis=(0.0, 1.0, 0.0), anchor=(0.1, 0.0, 1.0)),
+        JointSpec("ba", JointKind.HINGE, "b", "a", axis=(0.0, 1.0, 0.0), anchor=(0.1, 0.0, 1.05)),
+    )
+    with pytest.raises(UnsupportedFeature, match="joint `ba` closes a loop"):
+        create_backend(NAME, w.world("loop", [a, b], joints=joints))
