@@ -39,6 +39,15 @@ _KNOWN: dict[str, BackendEntry] = {
         "DART (dartpy), ODE collision detector by default",
         options="backends.dart._options:DartOptions",
     ),
+    "drake": BackendEntry(
+        "drake",
+        "backends.drake:DrakeBackend",
+        "pydrake",
+        "drake",
+        "drake",
+        "Drake (pydrake MultibodyPlant + SceneGraph), point contact and the SAP solver by default",
+        options="backends.drake._options:DrakeOptions",
+    ),
     "fake": BackendEntry(
         "fake",
         "backends.fake:FakeBackend",

@@ -125,6 +125,7 @@ class Capability(str, enum.Enum):
     JOINT_STOP_BOUNCE = "joint:stop-bounce"  # stops with restitution (JointSpec.stop_bounce > 0)
     JOINT_STOP_SOFTNESS = "joint:stop-softness"  # spring-damper stops (JointSpec.stop_stiffness)
     JOINT_MOTOR = "joint:motor"
+    CONTACT_BOUNCE = "contact:bounce"  # a contact surface with restitution (Surface.bounce > 0)
     KINEMATIC = "motion:kinematic"
     SUBSTEPS = "world:substeps"
     #: Bodies collide: contact points, normal forces, friction and restitution. Every engine declares it; the
@@ -424,6 +425,8 @@ class CompiledWorld:
                 need.add(Capability.JOINT_ARMATURE)
             if joint.dynamics.stiffness > 0:
                 need.add(Capability.JOINT_STIFFNESS)
+        if self.default_surface.bounce > 0 or any(p.surface.bounce > 0 for p in self.pair_surfaces):
+            need.add(Capability.CONTACT_BOUNCE)
         if self.substeps > 1:
             need.add(Capability.SUBSTEPS)
         if self.reaction_joints:

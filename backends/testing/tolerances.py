@@ -84,7 +84,11 @@ _TOLERANCES: dict[str, dict[str, float]] = {
     # relative improvement of 1e-8) well under 1e-6; ODE stores float32 (2^-24 = 6e-8 relative per
     # operation), over the sum of 4 points and the impulse-to-force division, ~10 operations: 6e-7.
     # Default 1e-6. Measured: pybullet 132.4350 N of 132.4350 N (4 points, depth 2.0e-5 m); worst 2e-7.
-    "contact_force": {"default": 1e-6},
+    # drake: the two-box compound (test_robot_contract.py) 19.62028 N of 19.62 (+1.4e-5); the resting box within
+    # 1e-6. NOT derived (measured deviation, cause): the compliant hydroelastic contact (modulus 1e6 Pa) of the
+    # compound's two boxes is still settling at the check (SAP's relaxation-time damping), and no SAP solver
+    # tolerance is reachable from pydrake 1.51 to tighten it.
+    "contact_force": {"default": 1e-6, "drake": 2e-5},
     # The same force from one engine step of four (dt/4) alone: Backend.contact_points() gives the last engine
     # step's points. The same derivation (the impulse is m*g*h exactly at rest) holds for pybullet, mujoco and
     # ode (measured +1e-9, +2e-13, +4e-8). dart misses it: its last engine step measured 132.434826 N of
@@ -99,7 +103,17 @@ _TOLERANCES: dict[str, dict[str, float]] = {
     # (With DART's own 1 mm/s cap it was -3.77 mm after 1 s, and this bound 5e-3.)
     # mujoco: -1.2e-6 to -4.9e-6 m at rest for all four shapes, -1.1e-6 m sliding down the 30 degree ramp
     # (it hovered +2.2 mm before the Coulomb correction of docs/backends/mujoco.md).
-    "resting_height": {"default": 2e-3},
+    # drake: box -0.1 mm, sphere -2.4 mm, capsule and cylinder within 1 mm: compliant hydroelastic geometry
+    # (modulus 1e7 Pa, tessellated at a quarter of the shape's smallest size) sinks until its pressure field
+    # carries the weight; the sphere's coarse mesh sinks most. NOT derived (measured deviation, cause).
+    # The ramp (test_tilted_plane): +3.3 mm along the normal.
+    # drake (hydroelastic, modulus E = 1e6 Pa): a compliant body sinks until its pressure field carries its
+    # weight. A face of a box of thickness h: d = m g h / (2 E A) (0.1 mm for the 0.2 m cube); a sphere:
+    # d = sqrt(m g / (pi E)) = 2.6 mm for the 2.09 kg sphere, plus its tessellation (resolution 0.02 m, a sagitta
+    # of 0.5 mm): 3.1 mm. Measured: box -0.1 mm, sphere -3.2 mm, capsule and cylinder within 1 mm; the cube on the
+    # 30 degree ramp +3.8 mm along the normal (it slides on its leading edge's pressure). 4e-3, flagged: the
+    # sphere's figure is not met by the formula alone.
+    "resting_height": {"default": 2e-3, "drake": 4e-3},
     # Resting height of a convex hull box's centre (test_robot_contract.py), m: as resting_height (one step of
     # landing), the hull being the box's exact vertices. pybullet: +9.0e-5 m (the adapter's 1e-4 m hull margin,
     # outside the vertices; with PyBullet's own 1 mm margin it was +9.9e-4). Compound of two cubes: -2.0e-5 m.
@@ -108,7 +122,9 @@ _TOLERANCES: dict[str, dict[str, float]] = {
     # pybullet: 5.6e-17 (Bullet integrates the rotation exactly for constant omega).
     # ode: 1.5e-5 (w, z after 1 rad): ODE's default rotation update is first order, each step turns
     # 2*atan(w*h/2) instead of w*h, 3.3e-5 rad short after 50 steps of 0.02 rad (the lab's mode).
-    "orientation": {"default": 1e-6, "ode": 3e-5},
+    # drake: 1.46e-5 (w, z after 1 rad), ODE's figure: its discrete update integrates q' = q + h/2*Omega*q and
+    # renormalises, which turns each step by 2*atan(w*h/2), the same first-order shortfall: 3e-5.
+    "orientation": {"default": 1e-6, "ode": 3e-5, "drake": 3e-5},
     # Apex ratio of a bouncing sphere, absolute around e^2 = 0.25.
     # pybullet: 0.2694 (e = 0.519 for bounce 0.5) at dt 0.001; 0.306, 0.298, 0.314 at dt 0.004, 0.01,
     # 0.04. Needs the adapter's 1 mm contactBreakingThreshold: with Bullet's 0.02 m a contact point
@@ -140,6 +156,9 @@ _TOLERANCES: dict[str, dict[str, float]] = {
     # most mu*dz/d: 0.5*2e-3/0.398 = 2.5e-3 (mu 0.5), 0.8*2e-3/0.255 = 6.3e-3 (mu 0.8), 0.25*2e-3/0.815 =
     # 6.1e-4 (mu 0.25); the largest, rounded up: 6.5e-3.
     # Measured: pybullet +9e-6, mujoco -4e-7 / +1.4e-5, worst of the four 2.6e-5.
+    # drake: 0.39353 m (-1.07 %): SAP regularises friction (a slip-dependent force below mu*N while the slip
+    # speed is under its stiction tolerance) and the compliant box rocks on its pressure field. NOT derived
+    # (measured deviation, cause); with point contact the box rests on one corner and slides 0.4758 m (+19.6 %).
     "friction_stop": {"default": 6.5e-3},
     # One step of free fall read back at once, m: the contract says "exactly". Also states read right
     # after the build or a reset_body (pose, velocities, joint coordinates at 0). pybullet: < 1e-15.
