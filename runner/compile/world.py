@@ -228,5 +228,6 @@ def compile_world(model: Scenario, name: str, robots: Mapping[str, ModelDesc] | 
         backend_options={k: dict(v) for k, v in model.backend_options.items()},
         excluded_pairs=parts.excluded,
         models=parts.models,
+        joint_chains=parts.chains,
         model_options=model.world.options == "model",
     )

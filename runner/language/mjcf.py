@@ -12,7 +12,9 @@ message and line), and the compiled model is mapped into the engine-neutral desc
 - body pairs MuJoCo never lets touch (contype/conaffinity of all their geoms, `<exclude>`) are excluded;
 - actuators are listed (the robot's controllable joints);
 - every hinge's and slide's damping, friction loss, armature and stiffness (:class:`JointDynamics`);
-- what only an engine that reads the file itself can run (several joints in one body, `<equality>`,
+- several joints in one body, in order (every engine: a chain of light bodies where MuJoCo is not the engine,
+  backends/_kit/chains.py);
+- what only an engine that reads the file itself can run (`<equality>`,
   `<tendon>`, a ball joint's dynamics, explicit contact pairs, a massless moving body, fluid forces) is
   recorded in :attr:`ModelDesc.needs` as capabilities: MuJoCo, which builds the robot from the file
   (backends/mujoco), runs it; another engine refuses it before the run. Armature and stiffness are named
@@ -183,13 +185,7 @@ def _needs(
     def need(capability: str, what: str, line: int) -> None:
         out.setdefault(capability, ModelNeed(capability, what, line))
 
-    for b in range(1, model.nbody):
-        if int(model.body_jntnum[b]) > 1:
-            need(
-                "joint:several-per-body",
-                f"body `{bodies[b]}` moves on several joints",
-                lines.get(("body", bodies[b]), 0),
-            )
+    for b in range(1, model.nbody):  # several joints in one body are every engine's (CompiledWorld.joint_chains)
         if model.body_mass[b] <= 0 and int(model.body_jntnum[b]) > 0:
             need("body:massless", f"body `{bodies[b]}` moves but has no mass", lines.get(("body", bodies[b]), 0))
     for j in range(model.njnt):  # damping and friction loss of hinges and slides are every engine's (the runner's)
