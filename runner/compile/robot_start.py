@@ -25,12 +25,14 @@ from runner.language.model_robots import Robot
 from runner.language.robot_desc import ModelDesc
 
 
-def start_values(robot: Robot, desc: ModelDesc) -> dict[str, tuple[float, float]]:
-    """Joint -> (position from the model's zero, rate): the keyframe's, then the scenario's own."""
+def start_values(robot: Robot, desc: ModelDesc, as_file: bool = False) -> dict[str, tuple[float, float]]:
+    """Joint -> (position from the model's zero, rate): the model's own start (a joint whose zero is outside its
+    range starts at its nearest end: ``ModelDesc.start``; not ``as_file``, with `world.options: model`, where
+    the file starts as MuJoCo starts it), the keyframe's, then the scenario's own."""
+    out: dict[str, tuple[float, float]] = {} if as_file else {j: (q, 0.0) for j, q in desc.start}
     start = robot.initial
     if start is None:
-        return {}
-    out: dict[str, tuple[float, float]] = {}
+        return out
     if start.keyframe is not None:
         key = desc.keyframe(start.keyframe)
         if key is not None:  # refused when loaded otherwise (runner.language.refs)

@@ -108,8 +108,13 @@ def link_body(
 
 
 def _joint(
-    robot_name: str, robot: Robot, desc: ModelDesc, joint: JointDesc,
-    motions: Mapping[str, tuple[LinkMotion, LinkMotion]], start: float, driven: bool,
+    robot_name: str,
+    robot: Robot,
+    desc: ModelDesc,
+    joint: JointDesc,
+    motions: Mapping[str, tuple[LinkMotion, LinkMotion]],
+    start: float,
+    driven: bool,
 ) -> JointSpec:
     """The joint at the start pose (its axis turned with the parent, its anchor with the child), its stops
     from there (``start``: the position from the model's zero); ``driven``: a motor action drives it."""
@@ -173,7 +178,8 @@ def compile_robots(
     chains: list[tuple[str, ...]] = []
     for name, robot in model.robots.items():
         desc = robots[name]
-        values, root = start_values(robot, desc), root_motion(robot, desc)
+        values = start_values(robot, desc, as_file=model.world.options == "model")
+        root = root_motion(robot, desc)
         moved = values or root is not None
         motions = link_motions(desc, values, root) if moved else {}
         carriers = joint_motions(desc, values, root) if moved else {}

@@ -157,7 +157,7 @@ def joint_zeros(
     }
     for rname, robot in model.robots.items():
         if robots is not None and rname in robots:
-            values = start_values(robot, robots[rname])
+            values = start_values(robot, robots[rname], as_file=model.world.options == "model")
             zeros.update({f"{rname}.{j}": q for j, (q, _) in values.items() if q != 0.0})
     return zeros
 

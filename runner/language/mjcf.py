@@ -360,6 +360,8 @@ def load_mjcf(file: Path) -> ModelDesc:
             )
         )
     joints = []
+    start: list[tuple[str, float]] = []
+    notes: list[str] = []
     for b in range(1, model.nbody):
         parent = bodies[int(model.body_parentid[b])]
         line = lines.get(("body", bodies[b]), 0)
@@ -370,7 +372,15 @@ def load_mjcf(file: Path) -> ModelDesc:
         for j in range(first, first + int(model.body_jntnum[b])):
             kind = _JOINTS[int(model.jnt_type[j])]
             limited = bool(model.jnt_limited[j]) and kind in ("hinge", "slider")
-            lo, hi = (float(model.jnt_range[j][0]), float(model.jnt_range[j][1])) if limited else (None, None)
+            zero = float(model.qpos0[int(model.jnt_qposadr[j])]) if limited else 0.0  # `ref`: the file's pose
+            lo, hi = (None, None) if not limited else (float(model.jnt_range[j][0]) - zero,
+                                                       float(model.jnt_range[j][1]) - zero)  # fmt: skip
+            if lo is not None and hi is not None and not lo <= 0.0 <= hi:  # ant's ankles: range="30 100"
+                begin = lo if lo > 0.0 else hi
+                start.append((joint_names[j], begin))
+                notes.append(f"joint `{joint_names[j]}`: its zero (the file's pose) is outside its range [{lo:g}, "
+                             f"{hi:g}]; it starts at {begin:g}, the nearest end (MuJoCo would start it outside "
+                             f"and the limit would throw it)")  # fmt: skip
             anchor = vec(data.xanchor[j]) if kind != "free" else vec(data.xpos[b])
             joints.append(JointDesc(joint_names[j], kind, parent, bodies[b], vec(data.xaxis[j]), anchor, lo, hi,
                                     lines.get(("joint", joint_names[j]), line), _dynamics(model, j)))  # fmt: skip
@@ -379,10 +389,12 @@ def load_mjcf(file: Path) -> ModelDesc:
         "worldbody",
         tuple(within_budget(links)),
         tuple(joints),
+        notes=tuple(notes),
         needs=tuple(_needs(model, tree, bodies, joint_names, lines)),
         actuators=tuple(_actuators(model, joint_names, lines, mujoco)),
         excluded=tuple(_excluded(model, bodies)),
         timestep=float(model.opt.timestep),
         gravity=vec(model.opt.gravity),
         keyframes=tuple(_keyframes(model, joint_names, tree)),
+        start=tuple(start),
     )

@@ -154,3 +154,44 @@ def test_a_placed_robot_starts_where_the_description_puts_it_on_mujoco(tmp_path:
         for i, body in enumerate(world.bodies):
             assert np.allclose(states.pos[i], body.pos, rtol=0, atol=1e-12), body.name
             assert np.allclose(states.quat[i], body.quat, rtol=0, atol=1e-12), body.name
+
+
+OUT_OF_RANGE = """<mujoco>
+  <compiler angle="degree"/>
+  <worldbody>
+    <body name="arm" pos="0 0 1">
+      <joint name="shoulder" type="hinge" axis="0 1 0" range="30 60"/>
+      <geom type="capsule" fromto="0 0 0 .4 0 0" size=".02" mass="1"/>
+      <body name="hand" pos=".4 0 0">
+        <joint name="wrist" type="hinge" axis="0 1 0" ref="-90" range="-110 110"/>
+        <geom type="sphere" size=".03" mass=".2"/>
+      </body>
+    </body>
+  </worldbody>
+</mujoco>
+"""
+
+
+@pytest.mark.parametrize("engine", ["mujoco", "pybullet"])
+def test_a_zero_outside_the_range_starts_at_the_nearest_end(tmp_path: Path, engine: str) -> None:
+    """pybullet_data's ant: ankles with range="30 100" at a zero of 0. The joint starts at 30 degrees (noted),
+    read from the file's zero; a `ref` (MuJoCo's qpos0) shifts the range into the joint's own coordinate."""
+    import math
+
+    from reports.trace_reader import read_trace
+    from runner.sim.run import run_loaded
+
+    loaded = load_scenario(_scenario(tmp_path, "ranged", OUT_OF_RANGE))
+    desc = loaded.robots["r"]
+    lo = math.radians(30)
+    assert desc.start == (("shoulder", pytest.approx(lo, abs=1e-12)),)
+    assert "`shoulder`" in desc.notes[0] and "nearest end" in desc.notes[0]
+    wrist = next(j for j in desc.joints if j.name == "wrist")
+    assert (wrist.lo, wrist.hi) == pytest.approx((math.radians(-20), math.radians(200)), abs=1e-12)  # -110 + 90
+    result = run_loaded(loaded, engine, tmp_path / engine)
+    assert result.status == "passed" and result.trace is not None, result.failure
+    trace = read_trace(result.trace)
+    assert float(trace.joints["r.shoulder"].position[0]) == pytest.approx(lo, abs=1e-9)
+    hand = trace.bodies["r.hand"].pos[0]  # the hinge about +y turns +x towards -z: the hand 0.4 sin(30) lower
+    assert hand[0] == pytest.approx(0.4 * math.cos(lo), abs=1e-9)
+    assert hand[2] == pytest.approx(1 - 0.4 * math.sin(lo), abs=1e-9)
