@@ -40,6 +40,7 @@ from ._frames import InertialFrames
 from ._impacts import ImpactErp
 from ._options import PyBulletOptions, check_stack, solver_iterations
 from ._reads import ROW, ContactReader, base_rows
+from ._rotors import add_rotors
 from ._surfaces import FRICTION_CLAMP, SurfaceFit, fit_surfaces
 
 _flat = chain.from_iterable
@@ -71,6 +72,7 @@ class PyBulletBackend(Backend):
     #: Bullet's btScalar is double in pybullet's build (BT_USE_DOUBLE_PRECISION)
     precision: ClassVar[Precision] = Precision.FLOAT64
     capabilities: ClassVar[frozenset[Capability]] = RIGID_BODY_CAPABILITIES | {
+        Capability.JOINT_ARMATURE,  # a rotor geared to the joint (_rotors)
         Capability.SHAPE_COMPOUND,
         Capability.SHAPE_CONVEX,
         Capability.COM_OFFSET,
@@ -158,6 +160,7 @@ class PyBulletBackend(Backend):
             if link < 0:  # the COM's velocity (the body's origin's, given, plus omega x arm)
                 lin = self._frames.to_inertial(i, spec.pos, spec.quat, spec.lin_vel, spec.ang_vel)[2]
                 p.resetBaseVelocity(uid, list(lin), list(spec.ang_vel), physicsClientId=c)
+        rates: dict[int, float] = {}
         for k, joint in enumerate(world.joints):
             handle = layout.joints[k]
             if joint.kind is JointKind.BALL:  # PyBullet holds spherical links with a default motor
@@ -178,8 +181,10 @@ class PyBulletBackend(Backend):
                     physicsClientId=c,
                 )
             rate = initial_rate(world, joint)
+            rates[k] = handle.sign * rate
             if rate:  # a link's initial velocity is its joint rate (ball and fixed children inherit)
                 p.resetJointState(handle.uid, handle.link, 0.0, handle.sign * rate, physicsClientId=c)
+        add_rotors(p, c, world, layout, rates)  # joint armature: a rotor geared to the joint (_rotors)
         bases = [i for i in range(len(world.bodies)) if layout.link[i] < 0]
         self._base_uids = [layout.uid[i] for i in bases]
         self._base_rows = None if bases == list(range(len(world.bodies))) else bases  # None: every body, in order

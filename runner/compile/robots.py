@@ -125,6 +125,8 @@ def _joint(
     lo, hi = joint.lo, joint.hi
     motor = None
     dyn = dynamics(joint.dynamics, override.dynamics if override is not None else None)
+    if dyn.stiffness > 0:  # the model's spring rest counts from its zero; a JointSpec's from the start
+        dyn = replace(dyn, springref=dyn.springref - start)
     if override is not None:
         if override.free:
             lo = hi = None
