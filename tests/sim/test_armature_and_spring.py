@@ -7,7 +7,8 @@ others refuse them before the run, naming the capability).
   theta0^2 / 16) with I = m (L^2 + 2/5 r^2); without the armature it would be 29 % shorter.
 * **Spring** (MJCF: a 0.5 m box, 1 kg, on a vertical hinge at its end, so gravity has no torque about it;
   stiffness k = I (2 pi)^2, started at 0.2 rad from its spring's rest): MuJoCo's passive spring, DART's own
-  joint spring (setSpringStiffness). Period T = 2 pi sqrt(I / k) = 1 s, exact for any amplitude (linear).
+  joint spring (setSpringStiffness), PyBullet's joint torque -k (q - ref) from the step's start
+  (backends/pybullet/_springs.py). Period T = 2 pi sqrt(I / k) = 1 s, exact for any amplitude (linear).
 
 Periods are read from the upward zero crossings (linear interpolation between samples), averaged over the
 run. Tolerance, relative: the step changes a harmonic oscillator's frequency by (w h)^2 / 24 for
