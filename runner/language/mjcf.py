@@ -210,9 +210,24 @@ def _needs(
     return list(out.values())
 
 
+def _welded(model: Any, a: int, b: int) -> bool:
+    """MuJoCo's parent filter (mj_collision), unless the file disables it (`<flag filterparent="disable"/>`)."""
+    import mujoco  # loaded: the model is MuJoCo's
+
+    wa, wb = int(model.body_weldid[a]), int(model.body_weldid[b])
+    if wa == wb:
+        return True
+    if int(model.opt.disableflags) & int(mujoco.mjtDisableBit.mjDSBL_FILTERPARENT) or not (wa and wb):
+        return False
+    pa, pb = int(model.body_weldid[model.body_parentid[wa]]), int(model.body_weldid[model.body_parentid[wb]])
+    return wa == pb or wb == pa
+
+
 def _excluded(model: Any, bodies: list[str]) -> list[tuple[str, str]]:
     """Body pairs (both with collision shapes) that MuJoCo never lets touch: no geom pair passes the
-    contype/conaffinity test, or an `<exclude>` names them."""
+    contype/conaffinity test, MuJoCo's parent filter (on the bodies' weld roots, ``body_weldid``: two bodies
+    welded together, or one welded group the parent of the other, neither the world's: humanoid_CMU's neck
+    and head overlap across a weld), or an `<exclude>` names them."""
     masks: dict[int, list[tuple[int, int]]] = {}
     for g in range(model.ngeom):
         t, a = int(model.geom_contype[g]), int(model.geom_conaffinity[g])
@@ -222,7 +237,7 @@ def _excluded(model: Any, bodies: list[str]) -> list[tuple[str, str]]:
     ids = sorted(masks)
     for i, a in enumerate(ids):
         for b in ids[i + 1 :]:
-            if not any(ta & ab or tb & aa for ta, aa in masks[a] for tb, ab in masks[b]):
+            if not any(ta & ab or tb & aa for ta, aa in masks[a] for tb, ab in masks[b]) or _welded(model, a, b):
                 out.append((bodies[a], bodies[b]))
     for signature in model.exclude_signature:
         a, b = int(signature) >> 16, int(signature) & 0xFFFF

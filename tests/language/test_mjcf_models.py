@@ -195,3 +195,44 @@ def test_a_zero_outside_the_range_starts_at_the_nearest_end(tmp_path: Path, engi
     hand = trace.bodies["r.hand"].pos[0]  # the hinge about +y turns +x towards -z: the hand 0.4 sin(30) lower
     assert hand[0] == pytest.approx(0.4 * math.cos(lo), abs=1e-9)
     assert hand[2] == pytest.approx(1 - 0.4 * math.sin(lo), abs=1e-9)
+
+
+WELDED = """<mujoco>
+  <worldbody>
+    <body name="a" pos="0 0 1">
+      <joint name="ja" type="hinge" axis="0 1 0"/>
+      <geom type="sphere" size=".16"/>
+      <body name="b" pos=".1 0 0">
+        <geom type="sphere" size=".16"/>
+        <body name="c" pos=".1 0 0">
+          <joint name="jc" type="hinge" axis="0 1 0"/>
+          <geom type="sphere" size=".16"/>
+          <body name="d" pos=".1 0 0">
+            <joint name="jd" type="hinge" axis="0 1 0"/>
+            <geom type="sphere" size=".16"/>
+          </body>
+        </body>
+      </body>
+    </body>
+  </worldbody>
+</mujoco>
+"""
+
+
+def test_mujocos_parent_filter_works_on_weld_roots(tmp_path: Path) -> None:
+    """b has no joint: MuJoCo welds it into a, so a and b never touch (same weld root) and neither do a and c
+    (c's parent weld root is a); c and d are parent and child; a and d, b and d may touch. The spheres (r 0.16,
+    0.1 apart) all overlap; MuJoCo's own contacts are exactly the pairs not excluded."""
+    import mujoco
+
+    desc = load_scenario(_scenario(tmp_path, "welded", WELDED)).robots["r"]
+    pairs = {frozenset(p) for p in desc.excluded}
+    assert {frozenset(("a", "b")), frozenset(("a", "c")), frozenset(("b", "c"))} <= pairs
+    assert frozenset(("a", "d")) not in pairs
+    model = mujoco.MjModel.from_xml_path(str(tmp_path / "welded.xml"))  # MuJoCo's own: every overlapping pair
+    data = mujoco.MjData(model)
+    mujoco.mj_forward(model, data)
+    touching = {frozenset((model.body(int(model.geom_bodyid[c.geom1])).name, model.body(int(model.geom_bodyid[c.geom2])).name))
+                for c in data.contact[: data.ncon]}  # fmt: skip
+    every = {frozenset((x, y)) for x in "abcd" for y in "abcd" if x < y}
+    assert touching == every - pairs == {frozenset(("a", "d")), frozenset(("b", "d"))}
