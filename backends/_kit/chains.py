@@ -15,8 +15,10 @@ x, y, z hinges at one point, a planar root's slides and hinge), a copy moves no 
 the same joint rates, and the accelerations change by a relative ``(n - 1) LIGHT`` at most: 2e-4 for the
 largest chain (3 joints), far below what separates two engines' integrators. ``LIGHT`` is 1e-4, not smaller,
 because ODE keeps its state in single precision and solves every joint's constraint row with the bodies'
-inverse masses: a mass ratio of ``1/LIGHT`` loses ``log10(1/LIGHT)`` of its 7 digits, 4 here (measured in
-tests/backends/test_joint_chains.py against MuJoCo, which runs the file's joints natively).
+inverse masses: a mass ratio of ``1/LIGHT`` loses ``log10(1/LIGHT)`` of its 7 digits. Measured on a two-hinge
+pendulum against MuJoCo (which runs the file's joints natively), 1 s at h = 1 ms: at 1e-6 ODE gained 8 mJ in
+10 ms (the energy watchdog stopped it); at 1e-4 ODE stays within 4.5e-5 rad, PyBullet and DART within 1.4e-6;
+at 1e-2 all drift by 1.4e-4 rad (tests/backends/test_joint_chains.py checks the bound).
 
 The intermediate bodies come after the world's own (the runner never sees them: the base class reports the
 world's bodies only); they have no shapes, so they are in no contact.
