@@ -104,10 +104,12 @@ from typing import Any, ClassVar, NoReturn
 
 import numpy as np
 
+from ._kit.chains import chained
 from ._kit.motion import KinematicPose, KinematicTrack, OneStepForces
 from ._kit.options import BackendOptions
 from .errors import ContractViolation, engine_failure
 from .types import (
+    MODEL_FILE_CAPABILITIES,
     BodyStates,
     Capability,
     CompiledWorld,
@@ -148,7 +150,8 @@ class Backend(abc.ABC):
     native_damping: ClassVar[bool] = False
 
     def __init__(self, world: CompiledWorld) -> None:
-        self.world = world
+        self.world = self.engine_world(world)
+        self._shown = len(world.bodies)  # the world's bodies; the chains' light bodies come after them
         self.options = self.Options.parse(world.options_for(self.name), self.name)
         self.kinematic = KinematicTrack(world)
         self.forces = OneStepForces()
@@ -178,6 +181,15 @@ class Backend(abc.ABC):
     def engine_label(cls) -> str:
         """The engine's own name and version, and its wrapper's where they differ (``scenario backends``)."""
         return f"{cls.engine_distribution} {cls.engine_version()}"
+
+    @classmethod
+    def engine_world(cls, world: CompiledWorld) -> CompiledWorld:
+        """The world the adapter builds: several joints moving one body (``joint_chains``) become a chain
+        through light bodies (backends/_kit/chains.py), except on an engine that builds model files itself
+        (MuJoCo runs a body's joints natively)."""
+        if not world.joint_chains or MODEL_FILE_CAPABILITIES <= cls.capabilities:
+            return world
+        return chained(world)
 
     @classmethod
     def check_world(cls, world: CompiledWorld, options: BackendOptions) -> None:
@@ -212,9 +224,13 @@ class Backend(abc.ABC):
         """Fresh states of all bodies, in ``world.bodies`` order."""
         self._open("body_states")
         try:
-            return self._body_states()
+            states = self._body_states()
         except self.engine_errors as exc:
             raise engine_failure(self.name, "reading body states", exc) from exc
+        if len(states.pos) == self._shown:
+            return states
+        n = self._shown
+        return BodyStates(states.pos[:n], states.quat[:n], states.lin_vel[:n], states.ang_vel[:n])
 
     def joint_states(self) -> JointStates:
         """Fresh states of all joints, in ``world.joints`` order."""

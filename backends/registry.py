@@ -205,7 +205,7 @@ def check_capabilities(cls: type[Backend], world: CompiledWorld) -> None:
         refusal.missing = frozenset(lacking)
         raise refusal
     options = cls.Options.parse(world.options_for(cls.name), cls.name)  # unknown keys and bad values
-    cls.check_world(world, options)  # the engine's limits (Backend.check_world)
+    cls.check_world(cls.engine_world(world), options)  # the engine's limits (Backend.check_world)
 
 
 def _alternatives(refusing: type[Backend], lacking: frozenset[Capability] | set[Capability]) -> str:

@@ -133,8 +133,9 @@ class Capability(str, enum.Enum):
     #: the runner's fake backend, and the minimal engine of tests/outside_engine, run floors without it.
     CONTACTS = "world:contacts"
     # What a model file may hold that only an engine building the robot from the file itself runs
-    # (MuJoCo for MJCF, CompiledWorld.models): MODEL_FILE_CAPABILITIES.
-    JOINT_SEVERAL_PER_BODY = "joint:several-per-body"  # an MJCF body moved by several joints, in order
+    # (MuJoCo for MJCF, CompiledWorld.models): MODEL_FILE_CAPABILITIES. Several joints per body are every
+    # adapter's: the base class builds them as a chain of light bodies (backends/_kit/chains.py).
+    JOINT_SEVERAL_PER_BODY = "joint:several-per-body"  # CompiledWorld.joint_chains: one body moved by several joints
     JOINT_ARMATURE = "joint:armature"  # JointDynamics.armature: rotor inertia added to the joint's coordinate
     JOINT_STIFFNESS = "joint:stiffness"  # JointDynamics.stiffness: a spring on the coordinate towards springref
     JOINT_BALL_RANGE = "joint:ball-range"  # a ball joint's cone limit
@@ -172,7 +173,6 @@ ROBOT_CAPABILITIES: frozenset[Capability] = frozenset(
 #: What only an engine that builds a robot from its model file runs (MuJoCo, for MJCF; docs/robots.md).
 MODEL_FILE_CAPABILITIES: frozenset[Capability] = frozenset(
     {
-        Capability.JOINT_SEVERAL_PER_BODY,
         Capability.JOINT_STIFFNESS,
         Capability.JOINT_BALL_RANGE,
         Capability.JOINT_BALL_DYNAMICS,
@@ -372,6 +372,9 @@ class CompiledWorld:
     excluded_pairs: tuple[tuple[str, str], ...] = ()
     #: robots an engine may build from their model file (MJCF on MuJoCo)
     models: tuple[ModelFile, ...] = ()
+    #: joints that move one body together, each group in the file's order (MJCF: several joints in one body):
+    #: the same ``body`` and ``other``; joint k+1 turns or slides about its axis as joints 1..k left it
+    joint_chains: tuple[tuple[str, ...], ...] = ()
     #: True: the model file's own options rule (MJCF `<option>`, its geoms' contact parameters, MuJoCo's own
     #: mj_step); the scenario's dt and gravity equal the model's (`world.options: model`, docs/robots.md)
     model_options: bool = False
@@ -431,6 +434,8 @@ class CompiledWorld:
             need.add(Capability.SUBSTEPS)
         if self.reaction_joints:
             need.add(Capability.JOINT_REACTION)
+        if self.joint_chains:
+            need.add(Capability.JOINT_SEVERAL_PER_BODY)
         for model in self.models:
             need.update(model.needs)
         if self.contact_points:

@@ -53,10 +53,13 @@ class DartBackend(Backend):
     precision: ClassVar[Precision] = Precision.FLOAT64  # Eigen doubles throughout
     #: Every robot capability: compound bodies, COM offsets, convex hulls and static triangle meshes (both as
     #: DART MeshShapes, ``_meshes``), excluded pairs (the solver's BodyNodeCollisionFilter).
+    #: stiffness: DART's own joint spring (_build). Not armature: DART 6.20 has none, and a rotor held by its
+    #: coupler constraint does not reflect it (the constraint's impulse counts the rotor's inertia only: a
+    #: wheel at 10 rad/s coupled to an equal rotor at rest swaps rates with it each step, instead of 5 and 5)
     capabilities: ClassVar[frozenset[Capability]] = (
         RIGID_BODY_CAPABILITIES
         | ROBOT_CAPABILITIES
-        | {Capability.CONTACT_POINTS}
+        | {Capability.CONTACT_POINTS, Capability.JOINT_STIFFNESS}
         | {Capability.JOINT_REACTION}  # getWrenchToChildBodyNode
     )
     Options: ClassVar[type[BackendOptions]] = DartOptions

@@ -43,6 +43,8 @@ from ._impacts import ImpactErp
 from ._imported import read_imported
 from ._options import PyBulletOptions, check_stack, solver_iterations
 from ._reads import ROW, ContactReader, base_rows
+from ._rotors import add_rotors
+from ._springs import Springs
 from ._surfaces import FRICTION_CLAMP, SurfaceFit, fit_surfaces
 
 _flat = chain.from_iterable
@@ -75,6 +77,8 @@ class PyBulletBackend(Backend):
     precision: ClassVar[Precision] = Precision.FLOAT64
     capabilities: ClassVar[frozenset[Capability]] = RIGID_BODY_CAPABILITIES | {
         Capability.CONTACT_POINTS,
+        Capability.JOINT_ARMATURE,  # a rotor geared to the joint (_rotors)
+        Capability.JOINT_STIFFNESS,  # the spring's torque each engine step (_springs)
         Capability.SHAPE_COMPOUND,
         Capability.SHAPE_CONVEX,
         Capability.COM_OFFSET,
@@ -163,6 +167,7 @@ class PyBulletBackend(Backend):
             if link < 0:  # the COM's velocity (the body's origin's, given, plus omega x arm)
                 lin = self._frames.to_inertial(i, spec.pos, spec.quat, spec.lin_vel, spec.ang_vel)[2]
                 p.resetBaseVelocity(uid, list(lin), list(spec.ang_vel), physicsClientId=c)
+        rates: dict[int, float] = {}
         for k, joint in enumerate(world.joints):
             handle = layout.joints[k]
             if joint.kind is JointKind.BALL:  # PyBullet holds spherical links with a default motor
@@ -190,8 +195,11 @@ class PyBulletBackend(Backend):
                     physicsClientId=c,
                 )
             rate = initial_rate(world, joint)
+            rates[k] = handle.sign * rate
             if rate:  # a link's initial velocity is its joint rate (ball and fixed children inherit)
                 p.resetJointState(handle.uid, handle.link, 0.0, handle.sign * rate, physicsClientId=c)
+        add_rotors(p, c, world, layout, rates)  # joint armature: a rotor geared to the joint (_rotors)
+        self._springs = Springs(world, layout)  # joint stiffness: the spring's torque each engine step (_springs)
         bases = [i for i in range(len(world.bodies)) if layout.link[i] < 0]
         self._base_uids = [layout.uid[i] for i in bases]
         self._base_rows = None if bases == list(range(len(world.bodies))) else bases  # None: every body, in order
@@ -223,7 +231,7 @@ class PyBulletBackend(Backend):
     def _step(self) -> None:
         c, n = self._c, self.world.substeps
         motors = n > 1 and bool(self._motor_joints)  # the substeps' motor torques, for their mean
-        if n == 1 and not (self.forces or self.kinematic or self._impacts.active or self._watched):  # nothing around
+        if n == 1 and not (self.forces or self.kinematic or self._impacts.active or self._watched or self._springs):
             p.stepSimulation(c)
         else:
             self._step_with_inputs(c, n, motors)
@@ -243,6 +251,8 @@ class PyBulletBackend(Backend):
                 self._apply_forces()
             if self._impacts.active:
                 self._impacts.before_substep(self._fresh_rows)
+            if self._springs:
+                self._springs.apply(p, c)
             p.stepSimulation(physicsClientId=c)
             if self.kinematic:
                 self._follow_track(t)

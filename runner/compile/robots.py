@@ -29,7 +29,7 @@ from backends.types import (
     Surface,
 )
 from runner.compile.joints import drive_motor, dynamics, initial_motor
-from runner.compile.robot_start import LinkMotion, link_motions, root_motion, start_values
+from runner.compile.robot_start import LinkMotion, joint_motions, link_motions, root_motion, start_values
 from runner.compile.surfaces import compiled_surface
 from runner.language.hpr import hpr_to_quat
 from runner.language.model import Scenario
@@ -51,6 +51,7 @@ class RobotParts:
     surfaces: tuple[PairSurface, ...]  # link overrides: (link, other body) for every other body
     groups: dict[str, list[str]]  # robot -> its links' body names
     models: tuple[ModelFile, ...] = ()  # the MJCF robots, for an engine that builds them from the file
+    chains: tuple[tuple[str, ...], ...] = ()  # joints moving one body together, in order (MJCF)
 
 
 def _placement(robot: Robot) -> tuple[tuple[float, float, float], tuple[float, float, float, float]]:
@@ -128,8 +129,13 @@ def commanded_actuators(model: Scenario, name: str) -> frozenset[str]:
 
 
 def _joint(
-    robot_name: str, robot: Robot, desc: ModelDesc, joint: JointDesc, motions: Mapping[str, LinkMotion],
-    start: float, driven: bool,
+    robot_name: str,
+    robot: Robot,
+    desc: ModelDesc,
+    joint: JointDesc,
+    motions: Mapping[str, tuple[LinkMotion, LinkMotion]],
+    start: float,
+    driven: bool,
 ) -> JointSpec:
     """The joint at the start pose (its axis turned with the parent, its anchor with the child), its stops
     from there (``start``: the position from the model's zero); ``driven``: a motor action drives it."""
@@ -140,6 +146,8 @@ def _joint(
     lo, hi = joint.lo, joint.hi
     motor = None
     dyn = dynamics(actuator_effort(desc, joint), override.dynamics if override is not None else None)
+    if dyn.stiffness > 0:  # the model's spring rest counts from its zero; a JointSpec's from the start
+        dyn = replace(dyn, springref=dyn.springref - start)
     if override is not None:
         if override.free:
             lo = hi = None
@@ -155,11 +163,10 @@ def _joint(
     limits = override.limits if override is not None and isinstance(override.limits, Limits) else None
     other = None if is_static(robot, desc, joint.parent) else f"{robot_name}.{joint.parent}"
     axis, anchor = joint.axis, joint.anchor
-    parent, child = motions.get(joint.parent), motions.get(joint.child)
-    if parent is not None:
-        axis = vec(parent.rot @ np.asarray(joint.axis, dtype=float))
-    if child is not None:
-        anchor = vec(child.apply(np.asarray(joint.anchor, dtype=float)))
+    carried = motions.get(joint.name)  # (the frame carrying the joint, the frame it moves): runner.compile.robot_start
+    if carried is not None:
+        axis = vec(carried[0].rot @ np.asarray(joint.axis, dtype=float))
+        anchor = vec(carried[1].apply(np.asarray(joint.anchor, dtype=float)))
     return JointSpec(
         name=f"{robot_name}.{joint.name}",
         kind=JointKind(joint.kind),
@@ -192,10 +199,14 @@ def compile_robots(
     link_surfaces: list[tuple[str, Surface]] = []
     group: dict[str, list[str]] = {}
     models: list[ModelFile] = []
+    chains: list[tuple[str, ...]] = []
     for name, robot in model.robots.items():
         desc = robots[name]
-        values, root = start_values(robot, desc), root_motion(robot, desc)
-        motions = link_motions(desc, values, root) if values or root is not None else {}
+        values = start_values(robot, desc, as_file=model.world.options == "model")
+        root = root_motion(robot, desc)
+        moved = values or root is not None
+        motions = link_motions(desc, values, root) if moved else {}
+        carriers = joint_motions(desc, values, root) if moved else {}
         for link in desc.links:
             bodies.append(link_body(name, robot, desc, link, len(bodies), motions.get(link.name)))
             override = robot.links.get(link.name)
@@ -208,7 +219,7 @@ def compile_robots(
             if not (robot.format == "mjcf" and joint.parent == desc.root):  # MuJoCo: the world is no parent
                 excluded.append((f"{name}.{joint.parent}", f"{name}.{joint.child}"))
             start = values.get(joint.name, (0.0, 0.0))[0]
-            joints.append(_joint(name, robot, desc, joint, motions, start, f"{name}.{joint.name}" in driven))
+            joints.append(_joint(name, robot, desc, joint, carriers, start, f"{name}.{joint.name}" in driven))
         excluded.extend((f"{name}.{a}", f"{name}.{b}") for a, b in robot.exclude)
         if not robot.collides_with_itself:  # pybullet's default for URDF: no two links of the model touch
             links = group[name]
@@ -216,6 +227,7 @@ def compile_robots(
         excluded.extend((f"{name}.{a}", f"{name}.{b}") for a, b in desc.excluded)
         if robot.format == "mjcf":
             models.append(model_file(name, robot, desc, values, commanded_actuators(model, name)))
+        chains.extend(joint_chains(name, desc))
     members = {**arrays, **group}
     for a, b in model.exclude_contacts:
         for x in members.get(a, [a]):
@@ -223,7 +235,16 @@ def compile_robots(
     everyone = list(others) + [b.name for b in bodies]
     surfaces = tuple(PairSurface(link, other, s) for link, s in link_surfaces for other in everyone if other != link)
     unique = tuple(dict.fromkeys((a, b) if a <= b else (b, a) for a, b in excluded))
-    return RobotParts(tuple(bodies), tuple(joints), unique, surfaces, group, tuple(models))
+    return RobotParts(tuple(bodies), tuple(joints), unique, surfaces, group, tuple(models), tuple(chains))
+
+
+def joint_chains(name: str, desc: ModelDesc) -> list[tuple[str, ...]]:
+    """The joints of each link moved by several (MJCF), in the file's order: `CompiledWorld.joint_chains`."""
+    moving: dict[str, list[str]] = {}
+    for joint in desc.joints:
+        if joint.kind not in ("fixed", "free"):
+            moving.setdefault(joint.child, []).append(f"{name}.{joint.name}")
+    return [tuple(names) for names in moving.values() if len(names) > 1]
 
 
 def model_file(

@@ -163,7 +163,7 @@ def joint_zeros(
     }
     for rname, robot in model.robots.items():
         if robots is not None and rname in robots:
-            values = start_values(robot, robots[rname])
+            values = start_values(robot, robots[rname], as_file=model.world.options == "model")
             zeros.update({f"{rname}.{j}": q for j, (q, _) in values.items() if q != 0.0})
     return zeros
 
@@ -236,6 +236,7 @@ def compile_world(model: Scenario, name: str, robots: Mapping[str, ModelDesc] | 
         backend_options={k: dict(v) for k, v in model.backend_options.items()},
         excluded_pairs=parts.excluded,
         models=parts.models,
+        joint_chains=parts.chains,
         model_options=model.world.options == "model",
         contact_points=model.trace.contact_points,
         reaction_joints=reaction_joints(model, [j.name for j in (*joints, *parts.joints)]),

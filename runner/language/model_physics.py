@@ -231,7 +231,7 @@ class Dynamics(Strict):
     armature: NonNegFloat | None = Field(
         None,
         description="Inertia added to the coordinate (a rotor's reflected inertia), kg (slider) or kg m^2 "
-        "(hinge): MuJoCo only (`joint:armature`).",
+        "(hinge): MuJoCo and PyBullet (`joint:armature`).",
     )
     effort: PositiveFloat | None = Field(
         None,

@@ -153,6 +153,9 @@ class ModelDesc:
     frames: tuple[FrameDesc, ...] = ()
     #: MJCF `<keyframe>`s, in the file's order
     keyframes: tuple[KeyframeDesc, ...] = ()
+    #: (joint, position from the zero) where the model starts a joint whose zero is outside its range (MJCF:
+    #: the nearest end, noted; a keyframe or the scenario's `initial` overrides it)
+    start: tuple[tuple[str, float], ...] = ()
 
     def keyframe(self, name: str) -> KeyframeDesc | None:
         return next((key for key in self.keyframes if key.name == name), None)

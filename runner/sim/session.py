@@ -199,7 +199,8 @@ class Session:
         self.joint_friction = JointFriction(
             self.world, driven_joints(model) | native_joints(self.world, backend), backend.native_damping
         )
-        self.energy = EnergyWatch(self.world, backend.name)  # energy from nowhere: exit 3 (runner.sim.energy)
+        # energy from nowhere: exit 3 (runner.sim.energy)
+        self.energy = EnergyWatch(self.world, backend.name, program.joint_zeros)
 
     # --- services used by actions and intervals (runner.sim.intervals.IntervalHost) --------------------
     def evaluate(self, text: str) -> Any:
