@@ -55,6 +55,10 @@ def survey(request: pytest.FixtureRequest, tmp_path_factory: pytest.TempPathFact
 #: reads it"). Each engine is an expected miss here until it reaches the target; reaching it fails the test, so
 #: that this list goes.
 MJCF_BELOW_TARGET = frozenset(ENGINES)
+#: Issue 32's Drake adapter refuses convex hulls (a hull box rests 45.6 mm deep with point contact and is thrown
+#: 6.7 m up with hydroelastic contact: docs/backends/drake.md), which most URDF links are: measured 51 of 95 URDF
+#: models run, 40 of the 44 others refused for `shape:convex`. An expected miss until the mapping exists.
+URDF_BELOW_TARGET = frozenset({"drake"}) & frozenset(ENGINES)
 
 
 @pytest.mark.parametrize("engine", ENGINES)
@@ -65,6 +69,10 @@ def test_at_least_90_percent_run_on_each_engine(survey: Survey, engine: str, req
         ran = f"{engine} runs {counts[RAN]} of {sum(counts.values())} MJCF models"
         assert not met, f"{ran}: drop it from MJCF_BELOW_TARGET"
         pytest.xfail(f"issue 28 open: {ran} (MJCF_BELOW_TARGET)")
+    if request.node.callspec.params["survey"] == "urdf" and engine in URDF_BELOW_TARGET:
+        ran = f"{engine} runs {counts[RAN]} of {sum(counts.values())} URDF models"
+        assert not met, f"{ran}: drop it from URDF_BELOW_TARGET"
+        pytest.xfail(f"issue 32 open: {ran} (URDF_BELOW_TARGET: shape:convex)")
     assert met, f"{engine}: {counts}\n{markdown(survey)}"
 
 
