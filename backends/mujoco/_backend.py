@@ -474,15 +474,13 @@ def _reaction_rows(world: CompiledWorld, m: mujoco.MjModel, lay: Layout) -> tupl
 
 def _check_reactions(world: CompiledWorld) -> None:
     """Refuse, before anything is built, reading the reaction of a joint that shares its body with another joint
-    of a model file (MJCF's several joints in one body): MuJoCo's ``cfrc_int`` is one wrench per body."""
-    files = [m for m in world.models if Capability.JOINT_SEVERAL_PER_BODY in m.needs]
-    if not files or not world.reaction_joints:
-        return
-    own = {j for m in files for j in m.joints}
+    of a model file (MJCF's several joints in one body, ``CompiledWorld.joint_chains``): MuJoCo's ``cfrc_int``
+    is one wrench per body."""
+    chained = {j: chain for chain in world.joint_chains for j in chain}
     by_name = {j.name: j for j in world.joints}
     for name in world.reaction_joints:
-        body = by_name[name].body
-        if name in own and sum(1 for j in own if by_name[j].body == body) > 1:
+        if name in chained:
+            body = by_name[name].body
             raise UnsupportedFeature(
                 f"mujoco: the reaction of joint `{name}`: its body `{body}` is moved by several joints of the model "
                 f"file, and MuJoCo gives one wrench per body (cfrc_int), not one per joint"
