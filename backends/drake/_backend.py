@@ -30,6 +30,7 @@ from ..types import (
     Capability,
     CompiledWorld,
     Contact,
+    ImportedModel,
     JointKind,
     JointStates,
     Motion,
@@ -39,6 +40,7 @@ from ..types import (
 )
 from ._build import JointHandle, _transform, build, vec
 from ._build import check as check_build
+from ._imported import read_imported
 from ._options import DrakeOptions, check_stack
 
 
@@ -131,6 +133,9 @@ class DrakeBackend(Backend):
 
     def _free(self, i: int) -> bool:
         return bool(self._bodies[i].is_floating_base_body()) if self._bodies[i] is not None else False
+
+    def _imported_model(self) -> ImportedModel:
+        return read_imported(self.world, self._built, self._pc)
 
     def _settings(self) -> dict[str, Any]:
         o = self.options
