@@ -20,6 +20,6 @@ CompiledWorlds. Importing this package does not import pytest; the fixtures and 
 from __future__ import annotations
 
 from .fixtures import engine_fixtures
-from .tolerances import add_tolerances, tol
+from .tolerances import DEVIATIONS, add_deviations, add_tolerances, tol
 
-__all__ = ["add_tolerances", "engine_fixtures", "tol"]
+__all__ = ["DEVIATIONS", "add_deviations", "add_tolerances", "engine_fixtures", "tol"]
