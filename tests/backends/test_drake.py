@@ -19,12 +19,11 @@ import pytest
 
 from backends.errors import UnsupportedFeature
 from backends.registry import check_options, create_backend, get_backend, is_installed
+from backends.testing import worlds as w
+from backends.testing.tolerances import tol
+from backends.testing.worlds import G, coulomb_stop
 from backends.types import Capability, JointKind, JointSpec, Motor, PairSurface, Shape, ShapeKind, Surface
 from tests.paths import ROOT
-
-from . import worlds as w
-from .tolerances import tol
-from .worlds import G, coulomb_stop
 
 if not is_installed("drake"):
     pytest.skip("engine not installed: pip install 'physics-scenarios[drake]'", allow_module_level=True)
