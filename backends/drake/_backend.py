@@ -233,6 +233,8 @@ class DrakeBackend(Backend):
                 for i, pose in self.kinematic.items():
                     self._put(i, pose, self._times[k - 1])
             deepest = self._penetrations() if self._hydroelastic else None
+            if self._reactions is not None:
+                self._reactions.before()
             # one discrete plant update of exactly h (Simulator.AdvanceTo's event times drift by rounding)
             self._diagram.ExecuteForcedEvents(self._context, publish=False)
             self._engine_steps += 1
