@@ -30,6 +30,7 @@ from ..types import (
     Capability,
     CompiledWorld,
     Contact,
+    ContactPoint,
     ImportedModel,
     JointKind,
     JointStates,
@@ -42,6 +43,7 @@ from ._build import JointHandle, _transform, build, vec
 from ._build import check as check_build
 from ._imported import read_imported
 from ._options import DrakeOptions, check_stack
+from ._points import read_points
 from ._reactions import Reactions
 
 
@@ -71,7 +73,7 @@ class DrakeBackend(Backend):
     #: point contact and is thrown 6.7 m up as a compliant hydroelastic hull (docs/backends/drake.md).
     capabilities: ClassVar[frozenset[Capability]] = (
         RIGID_BODY_CAPABILITIES | (ROBOT_CAPABILITIES - {Capability.SHAPE_TRIMESH, Capability.SHAPE_CONVEX})
-    ) - {Capability.CONTACT_BOUNCE} | {Capability.JOINT_REACTION}
+    ) - {Capability.CONTACT_BOUNCE} | {Capability.JOINT_REACTION, Capability.CONTACT_POINTS}
     Options: ClassVar[type[BackendOptions]] = DrakeOptions
     #: pybind11 turns Drake's C++ exceptions (std::exception, DRAKE_THROW_UNLESS) into RuntimeError.
     engine_errors: ClassVar[tuple[type[BaseException], ...]] = (RuntimeError,)
@@ -119,6 +121,7 @@ class DrakeBackend(Backend):
         rated = (JointKind.SLIDER, JointKind.HINGE)
         self._coordinates = [(j, h) for j, h in enumerate(self._joints) if h.spec.kind in rated]
         self._contacts_now: list[Contact] = []
+        self._points_now: list[ContactPoint] = []
         watched = [[j.name for j in world.joints].index(name) for name in world.reaction_joints]
         self._reactions = Reactions(plant, self._pc, self._joints, watched) if watched else None
         self._reaction_mean = SubstepMean(6 * len(watched))
@@ -242,6 +245,8 @@ class DrakeBackend(Backend):
             if self._actuated:
                 self._motor_mean.add(self._actuation_port.Eval(self._pc) * self._motor_sign)
             self._substep_contacts.add(self._read_contacts(deepest))
+            if k == n - 1 and self.world.contact_points:
+                self._points_now = read_points(self._contact_port.Eval(self._pc), self._built.geometry_body, deepest)
             if self._reactions is not None:
                 self._reaction_mean.add(self._reactions.read().ravel())
         if self._actuated:
@@ -327,6 +332,9 @@ class DrakeBackend(Backend):
 
     def _joint_reactions(self) -> np.ndarray:
         return self._reaction_mean.mean.reshape(-1, 6).copy()
+
+    def _contact_points(self) -> list[ContactPoint]:
+        return list(self._points_now)
 
     def _contacts(self) -> list[Contact]:
         return list(self._contacts_now)

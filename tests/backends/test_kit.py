@@ -247,7 +247,7 @@ def test_a_blend_combines_two_coefficients() -> None:
 
 
 def test_a_deviation_names_a_test_that_exists_and_marks_only_its_case() -> None:
-    """Every ``DEVIATIONS`` line names a test function of the shipped suite or tests/backends (a renamed test
+    """Every ``DEVIATIONS`` line names a test function of the shipped suite or of tests/ (a renamed test
     must not leave its line behind, unapplied), and a ``test[params]`` line marks that case alone."""
     import ast
     from pathlib import Path
@@ -256,7 +256,7 @@ def test_a_deviation_names_a_test_that_exists_and_marks_only_its_case() -> None:
 
     root = Path(__file__).resolve().parents[2]
     names: set[str] = set()
-    for path in [*(root / "backends" / "testing").glob("*.py"), *(root / "tests" / "backends").glob("test_*.py")]:
+    for path in [*(root / "backends" / "testing").glob("*.py"), *(root / "tests").rglob("test_*.py")]:
         tree = ast.parse(path.read_text())
         names |= {n.name for n in ast.walk(tree) if isinstance(n, ast.FunctionDef) and n.name.startswith("test_")}
     for test, _ in DEVIATIONS:
