@@ -18,8 +18,8 @@ the ideal row gives e exactly, MuJoCo's constant impedance 0.999 leaks 1e-3*(1 +
 e 0.5), ODE's impact CFM 1e-4: both are far inside. For e = 0 the bound is the issue's bounce-0 hop: a
 rebound below 2 mm, i.e. a separation speed under sqrt(2 g 0.002) = 0.198 m/s. Cells an engine misses
 are strict xfails with the measured figure and cause (docs/backends/<engine>.md): they run, and fail the
-suite the day the engine meets the bound. An engine that does not declare contact:bounce (drake) is checked to refuse every
-cell with bounce > 0 up front, naming the feature.
+suite the day the engine meets the bound. An engine that does not declare contact:bounce (drake) is checked
+to refuse every cell with bounce > 0 up front, naming the feature.
 
 Grid (issue 17): masses 0.01, 1, 100 kg; radii 0.01, 0.1, 1 m; dt 0.5, 1, 4, 10 ms; e 0, 0.5, 0.9. The
 ball's bottom starts 5 cm above the plane, so every cell hits at about 1 m/s (0.99 m/s: sqrt(2 g 0.05)
