@@ -30,6 +30,8 @@ from ..types import (
     Capability,
     CompiledWorld,
     Contact,
+    ContactPoint,
+    ImportedModel,
     JointKind,
     JointStates,
     Motion,
@@ -39,7 +41,10 @@ from ..types import (
 )
 from ._build import JointHandle, _transform, build, vec
 from ._build import check as check_build
+from ._imported import read_imported
 from ._options import DrakeOptions, check_stack
+from ._points import read_points
+from ._reactions import Reactions
 
 
 class _NoDeformableNotice(logging.Filter):
@@ -68,7 +73,7 @@ class DrakeBackend(Backend):
     #: point contact and is thrown 6.7 m up as a compliant hydroelastic hull (docs/backends/drake.md).
     capabilities: ClassVar[frozenset[Capability]] = (
         RIGID_BODY_CAPABILITIES | (ROBOT_CAPABILITIES - {Capability.SHAPE_TRIMESH, Capability.SHAPE_CONVEX})
-    ) - {Capability.CONTACT_BOUNCE}
+    ) - {Capability.CONTACT_BOUNCE} | {Capability.JOINT_REACTION, Capability.CONTACT_POINTS}
     Options: ClassVar[type[BackendOptions]] = DrakeOptions
     #: pybind11 turns Drake's C++ exceptions (std::exception, DRAKE_THROW_UNLESS) into RuntimeError.
     engine_errors: ClassVar[tuple[type[BaseException], ...]] = (RuntimeError,)
@@ -116,6 +121,10 @@ class DrakeBackend(Backend):
         rated = (JointKind.SLIDER, JointKind.HINGE)
         self._coordinates = [(j, h) for j, h in enumerate(self._joints) if h.spec.kind in rated]
         self._contacts_now: list[Contact] = []
+        self._points_now: list[ContactPoint] = []
+        watched = [[j.name for j in world.joints].index(name) for name in world.reaction_joints]
+        self._reactions = Reactions(plant, self._pc, self._joints, watched) if watched else None
+        self._reaction_mean = SubstepMean(6 * len(watched))
         for i, body in enumerate(world.bodies):
             if body.motion is not Motion.STATIC and self._free(i):
                 plant.SetFreeBodyPose(self._pc, self._bodies[i], _transform(body.pos, body.quat))
@@ -131,6 +140,9 @@ class DrakeBackend(Backend):
 
     def _free(self, i: int) -> bool:
         return bool(self._bodies[i].is_floating_base_body()) if self._bodies[i] is not None else False
+
+    def _imported_model(self) -> ImportedModel:
+        return read_imported(self.world, self._built, self._pc)
 
     def _settings(self) -> dict[str, Any]:
         o = self.options
@@ -217,11 +229,15 @@ class DrakeBackend(Backend):
             self._desired_port.FixValue(self._pc, np.concatenate([np.zeros(len(self._actuated)), self._targets]))
             self._motor_mean.start()
         self._substep_contacts.start()
+        if self._reactions is not None:
+            self._reaction_mean.start()
         for k in range(n):
             if k:
                 for i, pose in self.kinematic.items():
                     self._put(i, pose, self._times[k - 1])
             deepest = self._penetrations() if self._hydroelastic else None
+            if self._reactions is not None:
+                self._reactions.before()
             # one discrete plant update of exactly h (Simulator.AdvanceTo's event times drift by rounding)
             self._diagram.ExecuteForcedEvents(self._context, publish=False)
             self._engine_steps += 1
@@ -229,8 +245,14 @@ class DrakeBackend(Backend):
             if self._actuated:
                 self._motor_mean.add(self._actuation_port.Eval(self._pc) * self._motor_sign)
             self._substep_contacts.add(self._read_contacts(deepest))
+            if k == n - 1 and self.world.contact_points:
+                self._points_now = read_points(self._contact_port.Eval(self._pc), self._built.geometry_body, deepest)
+            if self._reactions is not None:
+                self._reaction_mean.add(self._reactions.read().ravel())
         if self._actuated:
             self._motor_mean.finish()
+        if self._reactions is not None:
+            self._reaction_mean.finish()
         dt = self.world.dt
         for i, pose in self.kinematic.items():
             self._put(i, KinematicPose(*pose.at(dt), pose.lin_vel, pose.ang_vel), 0.0)
@@ -307,6 +329,12 @@ class DrakeBackend(Backend):
         if self._actuated:
             force[self._actuated] = self._motor_mean.mean
         return JointStates(position, velocity, force)
+
+    def _joint_reactions(self) -> np.ndarray:
+        return self._reaction_mean.mean.reshape(-1, 6).copy()
+
+    def _contact_points(self) -> list[ContactPoint]:
+        return list(self._points_now)
 
     def _contacts(self) -> list[Contact]:
         return list(self._contacts_now)

@@ -13,13 +13,15 @@ In the engine's test directory::
 A registered engine whose distribution is not installed is skipped with its install hint; one whose adapter
 module cannot be imported fails with that import error. Tolerances default to ODE's analytic expectations
 with float64 rounding room (``backends.testing.tolerances``); an engine that is owed more says so with
-``add_tolerances``, a measured figure and its cause beside each line. ``worlds`` builds the suite's small
+``add_tolerances``, derived from its numerics beside each line. Where an engine misses the truth, the test keeps
+its bound and ``add_deviations`` lists it with the measured deviation and cause: the fixtures mark it
+``xfail(strict=True)`` on that engine (``DEVIATIONS``). ``worlds`` builds the suite's small
 CompiledWorlds. Importing this package does not import pytest; the fixtures and the tests do.
 """
 
 from __future__ import annotations
 
 from .fixtures import engine_fixtures
-from .tolerances import add_tolerances, tol
+from .tolerances import DEVIATIONS, add_deviations, add_tolerances, tol
 
-__all__ = ["add_tolerances", "engine_fixtures", "tol"]
+__all__ = ["DEVIATIONS", "add_deviations", "add_tolerances", "engine_fixtures", "tol"]

@@ -142,6 +142,32 @@ def test_options_are_checked_without_the_engine() -> None:
 # --- contact model option ------------------------------------------------------------------------------
 
 
+
+@pytest.mark.parametrize("model", ["point", "hydroelastic_with_fallback"])
+def test_contact_points_are_the_solvers_contacts_and_sum_to_the_pairs_force(model: str) -> None:
+    """The lab's box (0.3 m, 13.5 kg) on the ground, contact points asked for. Hydroelastic: one point per face
+    of the contact surface (the box's tessellated bottom), each carrying the pair's deepest penetration (the
+    depth of contacts()); point contact: Drake's one point of the pair (the middle of its witness points), its
+    depth the pair's. Each lies on the bottom face within that depth (|x|, |y| <= 0.15 m + depth, |z| <= depth),
+    normal +z (the ground is body a) to float64 rounding of a face normal (1e-9); their forces share the pair's
+    normal force, so they sum to contacts()' to rounding (1e-9 relative)."""
+    world = dataclasses.replace(w.resting_box(substeps=1), contact_points=True,
+                                backend_options={NAME: {"contact_model": model}})  # fmt: skip
+    half = 0.15
+    with create_backend(NAME, world) as sim:
+        assert sim.contact_points() == []
+        for _ in range(25):
+            sim.step()
+        points = sim.contact_points()
+        (pair,) = sim.contacts()
+    assert len(points) == (1 if model == "point" else 16), points
+    for p in points:
+        assert (p.a, p.b) == (0, 1)
+        assert p.depth == pair.depth and p.depth >= 0.0 and p.force >= 0.0
+        assert abs(p.pos[0]) <= half + p.depth and abs(p.pos[1]) <= half + p.depth and abs(p.pos[2]) <= p.depth
+        assert p.normal == pytest.approx((0.0, 0.0, 1.0), abs=1e-9)
+    assert sum(p.force for p in points) == pytest.approx(pair.normal_force, rel=1e-9)
+
 @pytest.mark.parametrize("model", ["point", "hydroelastic_with_fallback"])
 def test_both_contact_models_carry_a_resting_box(model: str) -> None:
     """The lab's box (13.5 kg) on the ground: at rest the contact impulse per step is m*g*dt, so the reported

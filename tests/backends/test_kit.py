@@ -244,3 +244,24 @@ def test_a_blend_combines_two_coefficients() -> None:
     for blend in Blend:
         per_body = solve_exact(blend, 3, target, ["x", "y", "z"], "test")
         assert {p: blend.combine(per_body[p[0]], per_body[p[1]]) for p in target} == pytest.approx(target, rel=1e-12)
+
+
+def test_a_deviation_names_a_test_that_exists_and_marks_only_its_case() -> None:
+    """Every ``DEVIATIONS`` line names a test function of the shipped suite or of tests/ (a renamed test
+    must not leave its line behind, unapplied), and a ``test[params]`` line marks that case alone."""
+    import ast
+    from pathlib import Path
+
+    from backends.testing.tolerances import DEVIATIONS, deviation
+
+    root = Path(__file__).resolve().parents[2]
+    names: set[str] = set()
+    for path in [*(root / "backends" / "testing").glob("*.py"), *(root / "tests").rglob("test_*.py")]:
+        tree = ast.parse(path.read_text())
+        names |= {n.name for n in ast.walk(tree) if isinstance(n, ast.FunctionDef) and n.name.startswith("test_")}
+    for test, _ in DEVIATIONS:
+        assert test.partition("[")[0] in names, test
+    assert deviation("test_resting_height", "sphere", "drake") is not None
+    assert deviation("test_resting_height", "box", "drake") is None
+    assert deviation("test_contact_resting", "", "drake") is not None
+    assert deviation("test_contact_resting", "", "mujoco") is None

@@ -17,7 +17,7 @@ from foxglove_schemas_protobuf.SceneUpdate_pb2 import SceneUpdate
 from mcap.reader import make_reader
 
 from backends.registry import is_installed, list_backends
-from backends.testing.tolerances import tol
+from backends.testing.tolerances import deviation, tol
 from reports import trace_format as tf
 from reports.rerun_contacts import ENTITY, read_arrows
 from reports.trace_reader import read_trace
@@ -43,7 +43,10 @@ def _run(path: Path, backend: str, out: Path, *extra: str) -> Path:
 
 
 @pytest.mark.parametrize("backend", ENGINES)
-def test_resting_box_arrows_in_mcap_and_rrd(backend: str, tmp_path: Path) -> None:
+def test_resting_box_arrows_in_mcap_and_rrd(backend: str, tmp_path: Path, request: pytest.FixtureRequest) -> None:
+    reason = deviation("test_resting_box_arrows_in_mcap_and_rrd", "", backend)  # the 4 corners: drake's differ
+    if reason is not None:
+        request.applymarker(pytest.mark.xfail(strict=True, reason=f"{backend}: {reason}"))
     extra = ("--rerun",) if RERUN else ()
     path = _run(SCENARIO, backend, tmp_path, *extra, *(("--trace-process",) if backend == "ode" else ()))
     trace = read_trace(path)
