@@ -178,6 +178,12 @@ def get_backend(name: str) -> type[Backend]:
     return cls
 
 
+def import_adapter(name: str) -> None:
+    """Import backend ``name``'s adapter module, letting its ImportError through as it is (the shipped suite:
+    an adapter that cannot be imported fails its tests with the reason; get_backend turns it into a hint)."""
+    importlib.import_module(entry(name).target.partition(":")[0])
+
+
 def options_of(name: str) -> type[BackendOptions]:
     """The class of backend ``name``'s ``backend_options`` block, imported without the engine."""
     module_name, _, class_name = entry(name).options.partition(":")

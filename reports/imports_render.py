@@ -30,9 +30,10 @@ def _backends(section: dict[str, Any]) -> list[str]:
 
 
 def _others(section: dict[str, Any]) -> list[str]:
-    """The engines that did not report, with why."""
-    return [f"{r['backend']}: {r['status']}" + (f" ({r['message']})" if r.get("message") else "")
-            for r in section["reads"] if r.get("status") != READ]  # fmt: skip
+    """The engines that did not report, with why; and those that imported a world they would not run."""
+    lines = [f"{r['backend']}: {r['status']}" + (f" ({r['message']})" if r.get("message") else "")
+             for r in section["reads"] if r.get("status") != READ]  # fmt: skip
+    return lines + [f"{r['backend']}: {r['runs']}" for r in section["reads"] if r.get("runs")]
 
 
 def _engines(section: dict[str, Any]) -> str:

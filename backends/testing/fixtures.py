@@ -2,12 +2,11 @@
 
 from __future__ import annotations
 
-import importlib
 from collections.abc import Callable, Sequence
 from typing import Any
 
 from ..base import Backend
-from ..registry import distribution_installed, entry, get_backend
+from ..registry import distribution_installed, entry, get_backend, import_adapter
 from .tolerances import deviation
 
 
@@ -20,7 +19,7 @@ def available(name: str) -> str:
     item = entry(name)  # UnknownBackend, BrokenBackend: fail
     if not distribution_installed(name):
         pytest.skip(f"engine not installed: {item.hint}")
-    importlib.import_module(item.target.partition(":")[0])  # ImportError from the adapter: fail
+    import_adapter(name)  # ImportError from the adapter: fail
     return name
 
 

@@ -55,6 +55,7 @@ def import_job(case: Case, report: Any = None) -> dict[str, Any]:
 
 
 def _read(case: Case) -> dict[str, Any]:
+    from backends.errors import UnsupportedFeature
     from backends.registry import check_capabilities, get_backend
     from runner.compile.program import build_program
     from runner.language.load import load_scenario
@@ -63,13 +64,25 @@ def _read(case: Case) -> dict[str, Any]:
     loaded = case.loaded if case.loaded is not None else load_scenario(Path(case.path), case.variant, case.overrides)
     program = build_program(loaded)
     cls = get_backend(case.backend)
-    check_capabilities(cls, program.world)
     world = program.world
-    with cls(world) as backend:
-        model = backend.imported_model()
-        skip = driven_joints(loaded.model) | native_joints(world, backend)
+    try:
+        check_capabilities(cls, world)
+        refusal = None
+    except UnsupportedFeature as exc:  # the engine would not *run* it; it may still import it: show what it read
+        refusal = exc
+    try:
+        with cls(world) as backend:
+            model = backend.imported_model()
+            skip = driven_joints(loaded.model) | native_joints(world, backend)
+    except Exception:
+        if refusal is not None:  # it cannot even build the world: the refusal is the answer
+            raise refusal from None
+        raise
     read: dict[str, Any] = {"status": im.READ if model is not None else im.NOT_REPORTED,
                             "eps": cls.precision.eps, "version": cls.engine_version()}  # fmt: skip
+    if refusal is not None:
+        needs = ", ".join(sorted(str(getattr(c, "value", c)) for c in refusal.missing)) or str(refusal)
+        read["runs"] = f"imported, but `scenario run` refuses this world on it (needs {needs})"
     if model is None:
         return read
     runner = {}
