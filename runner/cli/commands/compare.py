@@ -70,6 +70,30 @@ def _backends(args: argparse.Namespace) -> list[str]:
     return names
 
 
+def _runnable(work: list[tuple[LoadedScenario, str]], out: Console) -> list[tuple[LoadedScenario, str]]:
+    """The (case, engine) pairs whose engine accepts the case (what `scenario validate --backend` checks); the
+    others are named, with the refusal's reason, and left out of the comparison. Only when the engines were not
+    named: an engine the user names that refuses a case is an error row, as in `scenario run`."""
+    from backends.errors import UnsupportedFeature
+    from backends.registry import check_capabilities, get_backend
+    from runner.compile.program import build_program
+
+    kept = []
+    worlds: dict[int, object] = {}
+    for loaded, backend in work:
+        world = worlds.setdefault(id(loaded), build_program(loaded).world)
+        try:
+            check_capabilities(get_backend(backend), world)  # type: ignore[arg-type]
+        except UnsupportedFeature as refusal:
+            needs = ", ".join(sorted(str(getattr(c, "value", c)) for c in refusal.missing)) or str(refusal)
+            out.print(f"not compared: {loaded.model.scenario} · {loaded.variant} on {backend}, which refuses it up "
+                      f"front ({needs}; name the engines with --backend to see the refusal as an error)",
+                      markup=False, highlight=False)  # fmt: skip
+            continue
+        kept.append((loaded, backend))
+    return kept
+
+
 def _check(args: argparse.Namespace) -> None:
     if args.jobs < 1:
         raise UsageError(f"Invalid `-j`. Expected an integer >= 1. Received: {args.jobs}")
@@ -92,6 +116,8 @@ def execute(args: argparse.Namespace, out: Console, err: Console) -> int:
     cases: list[LoadedScenario] = []
     cases.extend(load_files(options.scenario_files(args.files), args.variant, args.all_variants, overrides))
     work = [(case, b) for case in cases for b in backends]
+    if args.backend is None:  # every installed engine by default: those that refuse a case up front sit it out
+        work = _runnable(work, out)
     if any(loaded.robots for loaded in cases):
         _show_imports(args, out, [loaded for loaded in cases if loaded.robots], backends)
         if args.imports_only:
