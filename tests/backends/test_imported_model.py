@@ -29,8 +29,47 @@ from runner.exec.imports import file_digits
 from runner.language.load import load_scenario
 from tests.paths import ROOT
 
-#: (scenario, its robot's name)
-CASES = {"kuka_arm": ("kuka_arm.yaml", "arm"), "pendulum5": ("pendulum5.yaml", "p")}
+#: (scenario, its robot's name); "legs" is written below
+CASES = {"kuka_arm": ("kuka_arm.yaml", "arm"), "pendulum5": ("pendulum5.yaml", "p"), "legs": ("", "legs")}
+
+
+def _link(name: str, mass: float, com_z: float, moments: str, box: str) -> str:
+    ixx, iyy, izz = moments.split()
+    inertia = f'<inertia ixx="{ixx}" ixy="0" ixz="0" iyy="{iyy}" iyz="0" izz="{izz}"/>'
+    return (f'<link name="{name}"><inertial><mass value="{mass}"/><origin xyz="0 0 {com_z}"/>{inertia}</inertial>'
+            f'<collision><geometry><box size="{box}"/></geometry></collision></link>')
+
+
+def _joint(name: str, parent: str, child: str, xyz: str, lower: float, upper: float) -> str:
+    return (f'<joint name="{name}" type="revolute"><parent link="{parent}"/><child link="{child}"/>'
+            f'<origin xyz="{xyz}"/><axis xyz="0 1 0"/><limit lower="{lower}" upper="{upper}" effort="10" '
+            f'velocity="5"/></joint>')
+
+
+def _thigh(side: str, y: float, mass: float) -> str:
+    return (_link(f"{side}_thigh", mass, -0.1, "0.02 0.018 0.005", "0.05 0.05 0.2")
+            + _joint(f"{side}_hip", "torso", f"{side}_thigh", f"0 {y} -0.1", -1.0, 1.0))  # fmt: skip
+
+
+def _shin(side: str, mass: float) -> str:
+    return (_link(f"{side}_shin", mass, -0.15, "0.006 0.0055 0.002", "0.04 0.04 0.3")
+            + _joint(f"{side}_knee", f"{side}_thigh", f"{side}_shin", "0 0 -0.2", -2.0, 0.0))  # fmt: skip
+
+
+#: a branching tree (a free torso with two two-link legs of different masses), its links listed
+#: breadth first (both thighs, then both shins): PyBullet's createMultiBody renumbers them depth first
+#: (backends/pybullet/_build.py, _link_indices)
+LEGS_URDF = (f'<robot name="legs">{_link("torso", 8.0, 0.0, "0.1 0.2 0.15", "0.3 0.2 0.1")}'
+             f'{_thigh("left", 0.15, 3.0)}{_thigh("right", -0.15, 2.0)}{_shin("left", 1.5)}{_shin("right", 1.0)}'
+             "</robot>")  # fmt: skip
+LEGS_YAML = """schema_version: 1
+scenario: legs
+world: {gravity: [0, 0, -9.81], dt: 0.01, duration: 0.1}
+bodies:
+  ground: {plane: {}, motion: static}
+robots:
+  legs: {urdf: legs.urdf, pos: [0, 0, 1.5]}   # free: the torso is the base of one branching tree
+"""
 
 
 def _floats(text: str | None, default: str) -> np.ndarray:
@@ -56,7 +95,7 @@ class Urdf:
         self.joints = {str(joint.get("name")): joint for joint in root.findall("joint")}
         children = {j.find("child").get("link") for j in self.joints.values()}  # type: ignore[union-attr]
         base = next(name for name in self.links if name not in children)
-        self.root = base  # welded to the world (`fixed: true`): static, in no engine's bodies
+        self.root = base  # the root link (static when the scenario welds it: `fixed: true`)
         self.frame: dict[str, tuple[np.ndarray, np.ndarray]] = {base: (pos, rotation)}
         pending = list(self.joints.values())
         while pending:
@@ -103,15 +142,21 @@ class Urdf:
 
 
 @pytest.fixture(scope="module", params=sorted(CASES))
-def model(request: pytest.FixtureRequest) -> tuple[object, Urdf, int, str]:
+def model(request: pytest.FixtureRequest, tmp_path_factory: pytest.TempPathFactory) -> tuple[object, Urdf, int, str]:
     """(world, the file parsed here, the file's digits, the robot's name)."""
     from backends.geometry import quat_matrices
 
     file, robot = CASES[request.param]
-    loaded = load_scenario(ROOT / "scenarios" / "robots" / file)
+    if file:
+        loaded = load_scenario(ROOT / "scenarios" / "robots" / file)
+    else:
+        folder = tmp_path_factory.mktemp("legs")
+        (folder / "legs.urdf").write_text(LEGS_URDF)
+        (folder / "legs.yaml").write_text(LEGS_YAML)
+        loaded = load_scenario(folder / "legs.yaml")
     path = Path(loaded.robots[robot].file)
     world = build_program(loaded).world
-    root = next(b for b in world.bodies if b.name.startswith(f"{robot}.") and b.motion.value == "static")
+    root = world.bodies[world.body_index(f"{robot}.{Urdf(path, np.zeros(3), np.eye(3)).root}")]
     urdf = Urdf(path, np.asarray(root.pos, dtype=float), np.asarray(quat_matrices(root.quat), dtype=float))
     return world, urdf, file_digits([str(path)]), robot
 
@@ -132,8 +177,9 @@ def test_the_engine_holds_the_urdfs_masses_inertias_and_centres(backend_cls: typ
     world, urdf, digits, robot = model
     rel = tolerance(backend_cls.precision.eps, Precision.FLOAT64.eps, digits)
     model = _read(backend_cls, world)
-    moving = [name for name in urdf.links if name != urdf.root]  # the root is welded to the world: static
-    assert [b.name for b in model.bodies] == [f"{robot}.{n}" for n in moving]
+    static = {b.name for b in world.bodies if b.motion.value == "static"}  # a root welded to the world
+    moving = [name for name in urdf.links if f"{robot}.{name}" not in static]
+    assert sorted(b.name for b in model.bodies) == sorted(f"{robot}.{n}" for n in moving)
     for body in model.bodies:
         link = body.name.removeprefix(f"{robot}.")
         spec = world.bodies[world.body_index(body.name)]
@@ -152,7 +198,7 @@ def test_the_engine_holds_the_urdfs_joints(backend_cls: type[Backend], model) ->
     world, urdf, digits, robot = model
     rel = tolerance(backend_cls.precision.eps, Precision.FLOAT64.eps, digits)
     model = _read(backend_cls, world)
-    assert [j.name for j in model.joints] == [f"{robot}.{n}" for n in urdf.joints]
+    assert sorted(j.name for j in model.joints) == sorted(f"{robot}.{n}" for n in urdf.joints)
     for joint in model.joints:
         name = joint.name.removeprefix(f"{robot}.")
         assert joint.kind is JointKind.HINGE  # every joint of both files is revolute or continuous
@@ -167,6 +213,19 @@ def test_the_engine_holds_the_urdfs_joints(backend_cls: type[Backend], model) ->
             assert joint.damping == pytest.approx(urdf.damping(name), rel=rel)
         else:
             assert joint.damping in (None, 0.0)
+
+
+def test_each_body_is_read_where_the_world_placed_it(backend_cls: type[Backend], model) -> None:  # noqa: ANN001
+    """Before any step every link's state is its own placement (a body read from another link's slot shows here:
+    PyBullet renumbers a branching tree's links)."""
+    world, _, _, _ = model
+    with backend_cls(world) as backend:
+        states = backend.body_states()
+    rel = tolerance(backend_cls.precision.eps, Precision.FLOAT64.eps, 17)
+    for i, spec in enumerate(world.bodies):
+        if spec.motion.value == "dynamic":
+            reach = math.hypot(*spec.pos) + math.hypot(*spec.com)
+            assert _near(states.pos[i], spec.pos, reach, rel), (spec.name, states.pos[i], spec.pos)
 
 
 def test_the_read_is_of_the_world_as_built(backend_cls: type[Backend], model) -> None:  # noqa: ANN001
