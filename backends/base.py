@@ -100,7 +100,7 @@ from __future__ import annotations
 import abc
 import math
 from types import TracebackType
-from typing import Any, ClassVar, NoReturn
+from typing import TYPE_CHECKING, Any, ClassVar, NoReturn
 
 import numpy as np
 
@@ -124,6 +124,9 @@ from .types import (
     Quat,
     Vec3,
 )
+
+if TYPE_CHECKING:
+    from .batch import WorldBatch
 
 #: Joint kinds that have a coordinate and so a velocity motor (a universal joint's first axis).
 MOTORISED = frozenset({JointKind.SLIDER, JointKind.HINGE, JointKind.UNIVERSAL})
@@ -190,6 +193,12 @@ class Backend(abc.ABC):
         if not world.joint_chains or MODEL_FILE_CAPABILITIES <= cls.capabilities:
             return world
         return chained(world)
+
+    @classmethod
+    def world_batch(cls) -> type[WorldBatch] | None:
+        """The class that runs many worlds of this backend in one engine call (backends.batch), or None: a
+        batched sweep (`scenario sweep --batch`) then runs each variant on its own."""
+        return None
 
     @classmethod
     def check_world(cls, world: CompiledWorld, options: BackendOptions) -> None:
