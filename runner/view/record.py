@@ -140,8 +140,12 @@ def variant_text(plan: RecordPlan, loaded: LoadedScenario, played: Sequence[Play
         if loaded.variant != BASE_CASE
         else f"Played in `scenario view` on {backend}: {listed}."
     )
-    if source.get("set"):
-        body["set"] = copy.deepcopy(source["set"])
+    settings = CommentedMap(copy.deepcopy(source.get("set") or {}))
+    for key, value in loaded.overrides:  # `--set` on the command line: the variant replays what was played
+        if key.split(".")[0] != "variants":
+            settings[key] = copy.deepcopy(value)
+    if settings:
+        body["set"] = settings
     inputs = CommentedSeq()
     for item in (source["inputs"] if "inputs" in source else data.get("inputs")) or []:
         inputs.append(copy.deepcopy(item))  # the inputs the played variant had (its own, else the file's)

@@ -80,10 +80,12 @@ def test_bad_requests_are_refused_before_the_window_opens(tmp_path: Path) -> Non
     _refused(scenario("view", str(path), "--offscreen", "--script", str(bad), env=quiet_env()), "unknown key `kick`")
     _refused(scenario("view", str(path), "--speed", "0", env=quiet_env()), "--speed")
     _refused(scenario("view", str(path), "--variant", "nope", "--offscreen", env=quiet_env()), "unknown variant")
+    _refused(scenario("view", str(path), "--set", "params.nope=1", "--offscreen", env=quiet_env()), "params.nope")
     trace = tmp_path / "x.mcap"
     trace.write_bytes(b"not a trace")
     _refused(scenario("view", str(trace), "--offscreen", env=quiet_env()), "cannot read the trace")
     _refused(scenario("view", str(path), str(trace), env=quiet_env()), "not both")
+    _refused(scenario("view", str(trace), "--set", "world.dt=0.01", env=quiet_env()), "--set apply to a scenario")
 
 
 def test_without_panda3d_the_hint_names_the_extra(tmp_path: Path) -> None:

@@ -129,3 +129,16 @@ def test_a_file_changed_meanwhile_is_not_overwritten(tmp_path: Path) -> None:
         write_record(plan, loaded, [Played(30, "space")], 0.04, [], "ode", "0.16")
     assert path.read_text() == edited
     assert [p.name for p in tmp_path.iterdir() if p.name.startswith(".")] == []
+
+
+def test_a_command_line_set_is_recorded_with_the_played_inputs(tmp_path: Path) -> None:
+    """`scenario view --set`: the recorded variant replays the run that was played, so the values set on the
+    command line go into its `set:` (beside the played variant's own, which they beat, as in the run)."""
+    path = copy_scenario(ROOT / "scenarios" / "factory_physics.yaml", tmp_path)
+    overrides = (("world.duration", 12.0), ("world.dt", 0.02))
+    loaded = load_scenario(path, "door-moves-away-box-falls", overrides)
+    assert build_program(loaded).world.duration == 12.0  # beats the variant's own `world.duration: 10`
+    write_record(plan_record(loaded, "mine"), loaded, [Played(30, "space")], 0.02, VERDICTS, "ode", "0.16")
+    replay = build_program(load_scenario(path, "mine"))
+    assert (replay.world.duration, replay.world.dt) == (12.0, 0.02)
+    assert (30, "space") in [(i.step, i.event) for i in replay.inputs]

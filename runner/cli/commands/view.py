@@ -9,6 +9,7 @@ from rich.console import Console
 from rich.markup import escape
 
 from backends.registry import DEFAULT_BACKEND, entry, is_installed
+from runner.cli import options
 from runner.errors import BackendNotInstalled, ExitCode, UsageError
 
 NAME = "view"
@@ -23,6 +24,7 @@ def configure(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--backend", "-b", default=DEFAULT_BACKEND, help=f"engine (default {DEFAULT_BACKEND})")
     parser.add_argument("--record", metavar="NEW_VARIANT",
                         help="on closing the window, write the inputs played into FILE as a new variant")  # fmt: skip
+    options.add_overrides(parser)
     parser.add_argument("--speed", type=float, default=1.0,
                         help="simulated seconds per wall-clock second (default 1; F5/F6 change it)")  # fmt: skip
     parser.add_argument("--paused", action="store_true",
@@ -49,8 +51,8 @@ def execute(args: argparse.Namespace, out: Console, err: Console) -> int:
     if traces:
         if len(traces) != len(args.files):
             raise UsageError("give either one scenario file or .mcap traces, not both")
-        if args.record or args.variant:
-            raise UsageError("--record and --variant apply to a scenario file, not to traces")
+        if args.record or args.variant or args.set:
+            raise UsageError("--record, --variant and --set apply to a scenario file, not to traces")
         from runner.view.app import view_traces
 
         where = view_traces(traces, at=args.at, paused=args.paused, speed=args.speed, offscreen=args.offscreen,
@@ -64,14 +66,14 @@ def execute(args: argparse.Namespace, out: Console, err: Console) -> int:
 
 def _live(args: argparse.Namespace, out: Console, err: Console, script: list) -> int:  # noqa: ANN001
     from runner.ci.render import verdict_table
-    from runner.language.load import load_all
+    from runner.language.load import load_all, parse_overrides
     from runner.view.app import view_scenario
 
     entry(args.backend)  # an unknown name is bad input (exit 2)
     if not is_installed(args.backend):
         hint = entry(args.backend).hint
         raise BackendNotInstalled(f"Backend `{args.backend}` is not installed. Install it with: {hint}")
-    (loaded,) = load_all(args.files[0], args.variant, False)
+    (loaded,) = load_all(args.files[0], args.variant, False, parse_overrides(args.set))
     outcome = view_scenario(loaded, args.backend, args.out, record=args.record, speed=args.speed, paused=args.paused,
                             offscreen=args.offscreen, script=script, camera=args.camera or "lab")  # fmt: skip
     for warning in outcome.warnings:
