@@ -7,7 +7,7 @@ fmax; kinematic bodies follow the kit's track exactly. There are no contacts, so
 
 from __future__ import annotations
 
-from typing import ClassVar
+from typing import TYPE_CHECKING, ClassVar
 
 import numpy as np
 
@@ -26,6 +26,9 @@ from .types import (
     Quat,
     Vec3,
 )
+
+if TYPE_CHECKING:
+    from .batch import WorldBatch
 
 
 class FakeBackend(Backend):
@@ -110,3 +113,9 @@ class FakeBackend(Backend):
 
     def _reset_body(self, body: int, pos: Vec3, quat: Quat, lin_vel: Vec3, ang_vel: Vec3) -> None:
         self.pos[body], self.quat[body], self.vel[body], self.ang[body] = pos, quat, lin_vel, ang_vel
+
+    @classmethod
+    def world_batch(cls) -> type[WorldBatch]:
+        from .fake_batch import FakeWorldBatch
+
+        return FakeWorldBatch
