@@ -18,7 +18,8 @@ from collections.abc import Callable, Generator, Sequence
 from pathlib import Path
 
 from backends.base import Backend
-from backends.errors import EngineFailure
+from backends.batch import WorldBatch
+from backends.errors import EngineFailure, PhysicsScenariosError
 from backends.registry import check_capabilities, get_backend
 from runner import interrupts
 from runner.compile.program import Program, build_program
@@ -28,7 +29,7 @@ from runner.sim.run import failure_result, finish_trace, open_trace, start_trace
 from runner.sim.session import BEFORE_STEP, RunResult, Session
 from runner.trace.output import Claim, write_error
 
-__all__ = ["batch_refusal", "run_batch"]
+__all__ = ["NotBatched", "batch_refusal", "run_batch"]
 
 Steps = Generator[float | str, None, RunResult]
 
@@ -39,6 +40,28 @@ def batch_refusal(cls: type[Backend], programs: Sequence[Program]) -> str | None
     if batch is None:
         return f"backend {cls.name} does not batch worlds"
     return batch.why_not([p.world for p in programs])
+
+
+class NotBatched(Exception):  # noqa: N818 - a decision, not an error: the variants run one by one instead
+    """These variants cannot run as one batch; the message says why (:func:`batch_refusal`, or a variant that
+    cannot be set up at all: alone, it reports that in its own words)."""
+
+
+def prepare(loads: Sequence[LoadedScenario], backend_name: str) -> tuple[type[WorldBatch], list[Program]]:
+    """The batch class and the variants' programs, or :class:`NotBatched`."""
+    try:
+        programs = [build_program(loaded) for loaded in loads]
+        cls = get_backend(backend_name)
+        interrupts.check()  # a signal during the engine's import is an interruption
+        for program in programs:
+            check_capabilities(cls, program.world)
+    except PhysicsScenariosError as exc:
+        raise NotBatched(f"a case cannot be set up ({exc})") from exc
+    batch_class = cls.world_batch()
+    reason = batch_refusal(cls, programs)
+    if batch_class is None or reason is not None:
+        raise NotBatched(str(reason))
+    return batch_class, programs
 
 
 class _Variant:
@@ -75,17 +98,9 @@ def run_batch(
 ) -> list[RunResult]:
     """Run ``loads`` as one batch on ``backend_name``, each with its trace in its ``out_dirs`` entry (None: no
     trace); one result per variant, in order. ``progress(k, n)``: the batch's steps done of its longest
-    variant's. Refuses (ValueError, naming :func:`batch_refusal`'s reason) variants that do not batch."""
+    variant's. Variants that do not batch raise :class:`NotBatched` before anything runs."""
     started = wallclock.perf_counter()
-    programs = [build_program(loaded) for loaded in loads]
-    cls = get_backend(backend_name)
-    interrupts.check()  # a signal during the engine's import is an interruption
-    for program in programs:
-        check_capabilities(cls, program.world)
-    batch_class = cls.world_batch()
-    reason = batch_refusal(cls, programs)
-    if batch_class is None or reason is not None:
-        raise ValueError(f"these variants do not batch on {backend_name}: {reason}")
+    batch_class, programs = prepare(loads, backend_name)
     total = max(p.steps for p in programs)
     with contextlib.ExitStack() as stack:
         for loaded, out_dir in zip(loads, out_dirs, strict=True):
