@@ -37,7 +37,7 @@ Steps = Generator[float | str, None, RunResult]
 def batch_refusal(cls: type[Backend], programs: Sequence[Program]) -> str | None:
     """Why these variants cannot run as one batch on ``cls`` (in words a user reads), or None."""
     batch = cls.world_batch()
-    if batch is None:
+    if batch is None or batch.backend.name != cls.name:  # another backend's batch (an inherited one): not this
         return f"backend {cls.name} does not batch worlds"
     return batch.why_not([p.world for p in programs])
 
