@@ -76,7 +76,8 @@ def _load(case: Case, k: int) -> Any:
         if case.sha256 is not None and loaded.sha256 != case.sha256:
             raise ScenarioError(f"{case.path} changed after it was loaded; run again")
     except PhysicsScenariosError as exc:
-        raise _Refused(f"case {k} cannot be loaded ({exc})") from exc
+        first = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+        raise _Refused(f"variant {k} cannot be loaded ({first})") from exc
     return loaded
 
 

@@ -49,14 +49,18 @@ class NotBatched(Exception):  # noqa: N818 - a decision, not an error: the varia
 
 def prepare(loads: Sequence[LoadedScenario], backend_name: str) -> tuple[type[WorldBatch], list[Program]]:
     """The batch class and the variants' programs, or :class:`NotBatched`."""
+    programs: list[Program] = []
+    which = "the backend"
     try:
-        programs = [build_program(loaded) for loaded in loads]
         cls = get_backend(backend_name)
         interrupts.check()  # a signal during the engine's import is an interruption
-        for program in programs:
-            check_capabilities(cls, program.world)
+        for k, loaded in enumerate(loads):
+            which = f"variant {k}"
+            programs.append(build_program(loaded))
+            check_capabilities(cls, programs[-1].world)
     except PhysicsScenariosError as exc:
-        raise NotBatched(f"a case cannot be set up ({exc})") from exc
+        first = str(exc).splitlines()[0].split(". ")[0].rstrip(".")
+        raise NotBatched(f"{which} cannot be set up ({first})") from exc
     batch_class = cls.world_batch()
     reason = batch_refusal(cls, programs)
     if batch_class is None or reason is not None:
