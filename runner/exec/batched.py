@@ -91,7 +91,8 @@ def groups(cases: Sequence[Case]) -> list[list[int]]:
 
 class BatchedExecutor:
     """Runs each backend's cases as one batch where they batch, else through ``separate`` (module docstring).
-    ``jobs``: batches run at once (of different backends)."""
+    ``jobs``: batches run at once (of different backends). ``on_progress`` gets a batch's steps (done, of its
+    longest variant's) under the index of its first case; cases run separately report none."""
 
     def __init__(self, separate: Executor, jobs: int = 1, *, force: bool = False, grace: float = TIMEOUT_GRACE,
                  on_fallback: OnFallback | None = None) -> None:  # fmt: skip
@@ -140,8 +141,7 @@ class BatchedExecutor:
             pool.run(jobs, end, progress, lambda j: started(j))
         if alone:
             alone.sort()
-            self.separate.run([cases[i] for i in alone], lambda k, r: settle(alone[k], r),
-                              None if on_progress is None else lambda k, s, n: on_progress(alone[k], s, n),
+            self.separate.run([cases[i] for i in alone], lambda k, r: settle(alone[k], r), None,
                               None if on_start is None else lambda k: on_start(alone[k]))  # fmt: skip
         return [results[i] for i in range(len(cases))]
 

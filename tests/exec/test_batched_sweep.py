@@ -183,3 +183,10 @@ def test_worlds_that_differ_in_structure_are_not_batched(fall: Path) -> None:
     dt = [load_scenario(fall, None, (("world.dt", d),)) for d in (0.01, 0.02)]
     with pytest.raises(NotBatched, match="dt 0.02 s x 1 substeps, where variant 0 has 0.01 s x 1"):
         run_batch(dt, "fake", [None] * 2)
+
+
+def test_a_batch_runs_here_not_on_ray(fall: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    code = main(["sweep", str(fall), "--param", "z0=1,2", "-b", "fake", "--batch", "--executor", "ray",
+                 "--out", str(tmp_path)])  # fmt: skip
+    assert code == 2 and "`--batch` runs its batches on this machine" in capsys.readouterr().err
+    assert not (tmp_path / "sweep.csv").exists()
