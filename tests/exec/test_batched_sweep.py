@@ -11,11 +11,13 @@ import csv
 import io
 import json
 from pathlib import Path
+from typing import Any
 
 import pytest
 from rich.console import Console
 
 from backends.fake import FakeWorldBatch
+from reports.trace_reader import read_trace
 from runner.cli.main import main
 from runner.cli.progress import BatchProgress
 from runner.exec.batched import BatchedExecutor
@@ -190,3 +192,31 @@ def test_a_batch_runs_here_not_on_ray(fall: Path, tmp_path: Path, capsys: pytest
                  "--out", str(tmp_path)])  # fmt: skip
     assert code == 2 and "`--batch` runs its batches on this machine" in capsys.readouterr().err
     assert not (tmp_path / "sweep.csv").exists()
+
+
+def test_ctrl_c_finishes_every_variants_trace_as_interrupted(fall: Path, tmp_path: Path) -> None:
+    cases = [Case(str(fall), None, "fake", (("params.z0", z), ("world.duration", 100.0)), str(tmp_path / f"c{z}"))
+             for z in (1e4, 2e4)]  # fmt: skip  (10,000 steps each: still running when interrupted)
+    seen: dict[int, Any] = {}
+
+    def interrupt(index: int, done: int, total: int) -> None:
+        if done >= 20:
+            raise KeyboardInterrupt  # what runner.interrupts raises for Ctrl-C
+
+    with pytest.raises(KeyboardInterrupt):
+        BatchedExecutor(LocalExecutor()).run(cases, seen.__setitem__, interrupt)
+    assert [seen[i].status for i in range(2)] == ["interrupted", "interrupted"]
+    for case in cases:
+        (trace,) = Path(case.out_dir or "").glob("*.mcap")
+        assert read_trace(trace).status == "interrupted" and read_trace(trace).times.size > 20
+
+
+def test_each_variant_keeps_its_budget(fall: Path, tmp_path: Path) -> None:
+    # 100,000 steps of 0.01 s (about 40 s here): after 1 s of stepping each variant's watchdog projects its steps
+    # past a 3 s budget and stops it (runner.sim.budget), as it does a separate run, before the job's 3 s limit
+    cases = [Case(str(fall), None, "fake", (("params.z0", z), ("world.duration", 1000.0)), None, budget=3.0)
+             for z in (1e5, 2e5)]  # fmt: skip
+    results = BatchedExecutor(LocalExecutor()).run(cases)
+    assert [r.status for r in results] == ["engine-failure", "engine-failure"]
+    assert all("over the wall-clock budget of 3 s" in (r.failure or "") for r in results)
+    assert all(r.exit.code == 3 for r in results)
