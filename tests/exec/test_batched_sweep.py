@@ -195,8 +195,9 @@ def test_a_batch_runs_here_not_on_ray(fall: Path, tmp_path: Path, capsys: pytest
 
 
 def test_ctrl_c_finishes_every_variants_trace_as_interrupted(fall: Path, tmp_path: Path) -> None:
+    # 10,000 steps each: still running when interrupted
     cases = [Case(str(fall), None, "fake", (("params.z0", z), ("world.duration", 100.0)), str(tmp_path / f"c{z}"))
-             for z in (1e4, 2e4)]  # fmt: skip  (10,000 steps each: still running when interrupted)
+             for z in (1e4, 2e4)]  # fmt: skip
     seen: dict[int, Any] = {}
 
     def interrupt(index: int, done: int, total: int) -> None:
