@@ -1,13 +1,14 @@
 """Batched sweeps (`scenario sweep --batch`, docs/batch.md): the cases of one backend as the worlds of one batch.
 
-:class:`BatchedExecutor` groups the cases by backend (and scenario file) and runs each group as one job in
+:class:`BatchedExecutor` groups the cases by backend (scenario file, variant) and runs each group as one job in
 one worker process (:func:`run_batch_job`: :func:`runner.sim.lockstep.run_batch`), through the same pool
 as every case (runner.exec.pool): its memory ceiling is the worker's, its time limit the longest budget of
 its cases (in a batch each variant's budget counts from the batch's start), an interruption finishes every
 variant's trace. A group the backend cannot batch (it has no batch, the worlds differ in what its batch
 holds per world, or a case cannot even be set up) runs through the ordinary executor, case by case, and
-``on_fallback(backend, reason)`` says why. Either way each case gets the :class:`~runner.exec.cases.CaseResult`
-a separate run would give: a batch's variant is the same variant run alone on the same backend.
+``on_fallback(cases, reason)`` says why (``cases``: the group's, e.g. "the 256 cases on pybullet"). Either
+way each case gets the :class:`~runner.exec.cases.CaseResult` a separate run would give: a batch's variant is
+the same variant run alone on the same backend.
 """
 
 from __future__ import annotations
@@ -28,7 +29,7 @@ from runner.exec.transport import encode_error, result_to_json
 
 __all__ = ["BatchedExecutor", "OnFallback", "run_batch_job"]
 
-OnFallback = Callable[[str, str], None]  # (backend, why its cases run separately)
+OnFallback = Callable[[str, str], None]  # (which cases, in words; why they run separately)
 REFUSED, BATCHED = "refused", "batched"
 
 
@@ -81,11 +82,17 @@ def _load(case: Case, k: int) -> Any:
     return loaded
 
 
+def _described(case: Case, count: int) -> str:
+    variant = f" (variant {case.variant})" if case.variant is not None else ""
+    return f"the {count} cases on {case.backend}{variant}" if count != 1 else f"the case on {case.backend}{variant}"
+
+
 def groups(cases: Sequence[Case]) -> list[list[int]]:
-    """Case indices by (backend, scenario file, trace sampling), in the order first seen."""
-    found: dict[tuple[str, str, int], list[int]] = {}
+    """Case indices by (backend, scenario file, variant, trace sampling), in the order first seen: a variant may
+    add bodies, so each variant's parameter grid is a batch of its own."""
+    found: dict[tuple[str, str, str | None, int], list[int]] = {}
     for i, case in enumerate(cases):
-        found.setdefault((case.backend, case.path, case.record_every), []).append(i)
+        found.setdefault((case.backend, case.path, case.variant, case.record_every), []).append(i)
     return list(found.values())
 
 
@@ -120,7 +127,7 @@ class BatchedExecutor:
             if ending.how == RETURNED and payload.get("status") == REFUSED:
                 alone.extend(members)
                 if self.on_fallback is not None:
-                    self.on_fallback(cases[members[0]].backend, str(payload.get("reason", "")))
+                    self.on_fallback(_described(cases[members[0]], len(members)), str(payload.get("reason", "")))
                 return
             own = payload.get("payloads") if ending.how == RETURNED and payload.get("status") == BATCHED else None
             for k, i in enumerate(members):

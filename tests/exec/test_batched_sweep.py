@@ -102,12 +102,18 @@ def test_the_fallback_runs_separately_and_says_why(fall: Path, tmp_path: Path,
     assert "--batch: variant 1 has 3 bodies, where variant 0 has 2; the 2 cases on fake run separately" in err
     rows = json.loads((tmp_path / "a" / "sweep.json").read_text())["rows"]
     assert [r["status"] for r in rows] == ["passed", "passed"] and not any(r["trace"] for r in rows)  # on request
+    # a variant that adds a body is a batch of its own: base and two-others each batch their 2 cases
+    variants = tmp_path / "variants.yaml"
+    variants.write_text(FALL + "variants:\n  two-others:\n    set: {params.count: 2}\n")
+    code = main(["sweep", str(variants), "--param", "z0=5,10", "-b", "fake", "--batch", "--all-variants",
+                 "--out", str(tmp_path / "b"), "-q"])  # fmt: skip
+    assert code == 0 and "--batch" not in capsys.readouterr().err
     cases = [Case(str(fall), None, "fake", (("params.z0", z),)) for z in (5.0, 10.0)]
     said: list[tuple[str, str]] = []
     results = BatchedExecutor(LocalExecutor(), on_fallback=lambda b, why: said.append((b, why))).run(
         [*cases, *(Case(c.path, None, "crash", c.overrides) for c in cases[:1])]
     )
-    assert said == [("crash", "backend crash does not batch worlds")]
+    assert said == [("the case on crash", "backend crash does not batch worlds")]
     assert [r.status for r in results[:2]] == ["passed", "passed"]
     assert results[2].status == "crashed"  # run alone, the crash backend kills its worker as it always does
 

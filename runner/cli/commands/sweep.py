@@ -176,7 +176,7 @@ def execute(args: argparse.Namespace, out: Console, err: Console) -> int:
     check_outputs(cases, args.force)
     executor: Executor = make_executor(args.executor, args.jobs, args.ray_address, force=args.force)
     if args.batch:
-        executor = batched(executor, args, labels, err)
+        executor = batched(executor, args, err)
     bar = BatchProgress(err, len(cases)) if wanted(err, args.quiet, args.json) else None
 
     def done(i: int, r: CaseResult) -> None:
@@ -210,14 +210,13 @@ def execute(args: argparse.Namespace, out: Console, err: Console) -> int:
     return status_code(results)  # the most severe case: bad input or a missing engine in some case is exit 2/3
 
 
-def batched(separate: Any, args: argparse.Namespace, labels: list[dict[str, Any]], err: Console) -> Any:
-    """The executor of ``--batch``: each backend's cases as one batch, else ``separate`` (runner.exec.batched);
-    a fallback prints its reason."""
+def batched(separate: Any, args: argparse.Namespace, err: Console) -> Any:
+    """The executor of ``--batch``: each backend's (and variant's) cases as one batch, else ``separate``
+    (runner.exec.batched); a fallback prints its reason."""
     from runner.exec.batched import BatchedExecutor
 
-    def fallback(backend: str, reason: str) -> None:
-        count = sum(label["backend"] == backend for label in labels)
-        err.print(f"--batch: {escape(reason)}; the {count} cases on {escape(backend)} run separately")
+    def fallback(which: str, reason: str) -> None:
+        err.print(f"--batch: {escape(reason)}; {escape(which)} run separately")
 
     return BatchedExecutor(separate, args.jobs, force=args.force, on_fallback=fallback)
 
