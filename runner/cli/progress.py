@@ -45,12 +45,13 @@ class BatchProgress:
         self.done = 0
         self.failed = 0
         self._progress = Progress(
-            TextColumn(f"[bold]{label}"), BarColumn(), MofNCompleteColumn(),
+            TextColumn("[bold]{task.description}"), BarColumn(), MofNCompleteColumn(),
             TextColumn("running {task.fields[running]}, [red]failed {task.fields[failed]}[/]"),
             TimeElapsedColumn(), TextColumn("ETA"), TimeRemainingColumn(),
             console=err, transient=True, refresh_per_second=4,
         )  # fmt: skip
         self._task: TaskID = self._progress.add_task(label, total=total, running=0, failed=0)
+        self._steps: TaskID | None = None  # a batched run's steps (steps())
 
     def start(self, index: int) -> None:
         self.running.add(index)
@@ -63,6 +64,12 @@ class BatchProgress:
         self._show()
         if self.then is not None:
             self.then(index, res)
+
+    def steps(self, index: int, done: int, total: int) -> None:
+        """A batch's progress (``on_progress``: a batched sweep runs many cases in one job): its steps done."""
+        if self._steps is None:
+            self._steps = self._progress.add_task("batch steps", total=total, running=len(self.running), failed=0)
+        self._progress.update(self._steps, completed=done, total=total)
 
     def _show(self) -> None:
         self._progress.update(self._task, completed=self.done, running=len(self.running), failed=self.failed)

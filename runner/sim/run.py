@@ -100,41 +100,9 @@ def run_loaded(
         interrupts.check()  # building a big world can take long: a signal meanwhile ends the run here
         if out_dir is None:
             return _run(program, loaded, backend, None, progress, record_every, watchdog, drive)
-        from runner.trace.writer import TraceMeta, TraceWriter
-
-        world = program.world
-        meta = TraceMeta(
-            scenario=loaded.model.scenario,
-            variant=loaded.variant,
-            backend=backend_name,
-            backend_version=cls.engine_version(),
-            engine_settings=backend.settings(),
-            dt=world.dt,
-            substeps=world.substeps,
-            duration=world.duration,
-            tool_version=tool_version(),
-            scenario_sha256=loaded.sha256,
-            scenario_path=loaded.path.name,
-            schema_version=loaded.model.schema_version,
-            bodies=world.bodies,
-            joints=world.joints,
-            state_names=list(loaded.model.state),
-            extra={
-                "overrides": json.dumps([[k, v] for k, v in loaded.overrides], default=str),
-                tf.KEY_ASSERTED: json.dumps(asserted_quantities(program)),
-                **({tf.KEY_SENSORS: json.dumps(program.sensors)} if program.sensors else {}),
-                **({"record_every": str(record_every)} if record_every > 1 else {}),
-                **_arrow_scale(loaded, world),
-            },
-        )
-        writer: Any = TraceWriter
-        if trace_process:
-            from runner.trace.process import BackgroundTraceWriter
-
-            writer = BackgroundTraceWriter
-        with interrupts.deferred(), writer(trace_path(out_dir, loaded, backend_name), meta) as trace:
-            _attach_sources(trace, loaded, program)
-            trace.scene(0.0, solid_visuals(program))
+        writer = open_trace(out_dir, loaded, program, backend, record_every, trace_process)
+        with interrupts.deferred(), writer as trace:
+            start_trace(trace, loaded, program)
             return _run(program, loaded, backend, trace, progress, record_every, watchdog, drive)
     finally:
         backend.close()
@@ -150,21 +118,76 @@ def _run(  # noqa: ANN001
     try:
         result = session.run() if drive is None else drive(session)
     except EngineFailure as exc:
-        result = RunResult(
-            program.name,
-            loaded.variant,
-            backend.name,
-            "engine-failure",
-            [],
-            session.snapshot.time,
-            0,
-            session.events,
-            session.sound_starts,
-            0.0,
-            failure=str(exc),
-            extra={"body": exc.body, "time": exc.time, "last_good": exc.last_good},
-            engine_messages=session.engine_messages,
-        )
+        result = failure_result(session, loaded, exc)
+    return finish_trace(trace, result)
+
+
+def open_trace(out_dir: Path, loaded: LoadedScenario, program: Any, backend: Any, record_every: int = 1,
+               trace_process: bool = False) -> Any:  # fmt: skip
+    """The trace writer of a case (not yet entered): its metadata from the scenario, the world and the engine."""
+    from runner.trace.writer import TraceMeta, TraceWriter
+
+    world = program.world
+    cls = type(backend)
+    meta = TraceMeta(
+        scenario=loaded.model.scenario,
+        variant=loaded.variant,
+        backend=backend.name,
+        backend_version=cls.engine_version(),
+        engine_settings=backend.settings(),
+        dt=world.dt,
+        substeps=world.substeps,
+        duration=world.duration,
+        tool_version=tool_version(),
+        scenario_sha256=loaded.sha256,
+        scenario_path=loaded.path.name,
+        schema_version=loaded.model.schema_version,
+        bodies=world.bodies,
+        joints=world.joints,
+        state_names=list(loaded.model.state),
+        extra={
+            "overrides": json.dumps([[k, v] for k, v in loaded.overrides], default=str),
+            tf.KEY_ASSERTED: json.dumps(asserted_quantities(program)),
+            **({tf.KEY_SENSORS: json.dumps(program.sensors)} if program.sensors else {}),
+            **({"record_every": str(record_every)} if record_every > 1 else {}),
+            **_arrow_scale(loaded, world),
+        },
+    )
+    writer: Any = TraceWriter
+    if trace_process:
+        from runner.trace.process import BackgroundTraceWriter
+
+        writer = BackgroundTraceWriter
+    return writer(trace_path(out_dir, loaded, backend.name), meta)
+
+
+def start_trace(trace: Any, loaded: LoadedScenario, program: Any) -> None:
+    """What a trace holds before the first step: the scenario's files and the collision solids."""
+    _attach_sources(trace, loaded, program)
+    trace.scene(0.0, solid_visuals(program))
+
+
+def failure_result(session: Session, loaded: LoadedScenario, exc: EngineFailure) -> RunResult:
+    """The result of a run an engine failure stopped (status engine-failure, no verdicts)."""
+    return RunResult(
+        session.program.name,
+        loaded.variant,
+        session.backend.name,
+        "engine-failure",
+        [],
+        session.snapshot.time,
+        0,
+        session.events,
+        session.sound_starts,
+        0.0,
+        failure=str(exc),
+        extra={"body": exc.body, "time": exc.time, "last_good": exc.last_good},
+        engine_messages=session.engine_messages,
+    )
+
+
+def finish_trace(trace: Any, result: RunResult) -> RunResult:
+    """Close a run's trace (None: no trace) with its verdicts and summary, and write its cost beside it."""
     if trace is not None:
         trace.verdicts(result.end_time, [v.as_dict() for v in result.verdicts])
         if result.failure:

@@ -21,7 +21,7 @@ import time as wallclock
 from collections import deque
 from collections.abc import Callable, Generator, Sequence
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, overload
 
 import numpy as np
 
@@ -53,6 +53,10 @@ from runner.sim.servo import Servos, servo_specs
 #: themselves beyond what their engine calls fatal (backends/base.py).
 MAX_SPEED = 1.0e4
 
+
+#: what ``Session.advance(pause=True)`` yields right before each engine step: the inputs of the step are set,
+#: and a lockstep driver (runner.sim.lockstep) steps every world of a batch before the session goes on
+BEFORE_STEP = "before-step"
 
 _MAX_SPEED_SQUARED = MAX_SPEED * MAX_SPEED  # 1e8, exact: |v|^2 <= it  <=>  |v| <= MAX_SPEED (sqrt is monotone)
 _FAST_LIMIT = _MAX_SPEED_SQUARED * (1.0 - 1e-9)  # the sums' fast test: far more than any rounding below the limit
@@ -498,9 +502,16 @@ class Session:
         "input", after the timed inputs of that step): how a live run (scenario view) gets keys and clicks."""
         self.injected.append(event)
 
-    def advance(self) -> Generator[float, None, RunResult]:
+    @overload
+    def advance(self) -> Generator[float, None, RunResult]: ...
+
+    @overload
+    def advance(self, pause: bool) -> Generator[float | str, None, RunResult]: ...
+
+    def advance(self, pause: bool = False) -> Generator[float | str, None, RunResult]:
         """The step loop, one step at a time: yields the simulated time reached (0 before the first step,
-        then after each step), returns the result. ``run()`` drains it; a live run paces it."""
+        then after each step), returns the result. ``run()`` drains it; a live run paces it. ``pause``: also
+        yields :data:`BEFORE_STEP` right before each engine step (the lockstep of a world batch)."""
         start = wallclock.perf_counter()
         steps = self.program.steps
         inputs = deque(self.program.inputs)
@@ -544,6 +555,8 @@ class Session:
                 self.servos.drive(self.backend, self.snapshot.joints.position.tolist(), self.resolver)
             if self.joint_friction:
                 self.joint_friction.drive(self.backend, self.snapshot.joints.velocity.tolist())
+            if pause:
+                yield BEFORE_STEP
             self._step(t_next)
             recorded = self.trace is not None and ((k + 1) % self.record_every == 0 or k == steps - 1)
             self._read(t_next, contacts=recorded)

@@ -53,6 +53,12 @@ def configure(p: argparse.ArgumentParser) -> None:
                    help="stop a run after S seconds of wall time (default: the scenario's world.budget, else 3600)")
     p.add_argument("--force", action="store_true",
                    help="also overwrite files under the traces' names that scenario did not write")  # fmt: skip
+    p.add_argument("--batch", action="store_true",
+                   help="run each backend's cases as the worlds of one batched engine where it can (docs/batch.md); "
+                        "elsewhere they run separately and the reason is printed")  # fmt: skip
+    p.add_argument("--traces", action="store_true",
+                   help="with --batch: also write each case's trace (always written without --batch, and with "
+                        "--metric, which reads them)")  # fmt: skip
     out = p.add_mutually_exclusive_group()
     out.add_argument("--quiet", "-q", action="store_true", help="print only the summary")
     out.add_argument("--json", action="store_true", help="print the table as JSON")
@@ -125,11 +131,21 @@ def _slug(values: dict[str, Any]) -> str:
 def execute(args: argparse.Namespace, out: Console, err: Console) -> int:
     from runner.cli.outcomes import print_problem
     from runner.cli.progress import BatchProgress, wanted
-    from runner.exec.executors import Case, CaseResult, check_outputs, estimate_cost, make_executor, status_code
+    from runner.exec.executors import (
+        Case,
+        CaseResult,
+        Executor,
+        check_outputs,
+        estimate_cost,
+        make_executor,
+        status_code,
+    )
     from runner.language.load import load_all, load_scenario, parse_overrides
     from runner.sim.budget import DEFAULT_BUDGET
     from runner.sim.run import trace_path
 
+    if args.batch and args.executor != "local":
+        raise UsageError("`--batch` runs its batches on this machine; it cannot be combined with `--executor ray`")
     if args.timeout is not None and not (args.timeout > 0 and math.isfinite(args.timeout)):
         raise UsageError(f"Invalid `--timeout`. Expected a positive number of seconds. Received: {args.timeout}")
     fixed = parse_overrides(args.set)
@@ -143,6 +159,7 @@ def execute(args: argparse.Namespace, out: Console, err: Console) -> int:
     cases: list[Case] = []
     labels: list[dict[str, Any]] = []
     loads: list[Any] = []
+    traced = not args.batch or args.traces or bool(args.metric)  # a batched sweep writes traces on request
     for k, combo in enumerate(combos):
         overrides = fixed + tuple(combo.items())
         for loaded in load_all(args.file, args.variant, args.all_variants, overrides):  # bad values: exit 2 here
@@ -150,13 +167,16 @@ def execute(args: argparse.Namespace, out: Console, err: Console) -> int:
             for b in backends:
                 folder = args.out / "traces" / f"{len(cases):03d}_{_slug(combo)}"
                 budget = args.timeout if args.timeout is not None else (loaded.model.world.budget or DEFAULT_BUDGET)
-                cases.append(Case(str(args.file), variant, b, overrides, str(folder), cost=estimate_cost(loaded),
-                                  budget=budget, sha256=loaded.sha256, trace=str(trace_path(folder, loaded, b)),
+                cases.append(Case(str(args.file), variant, b, overrides, str(folder) if traced else None,
+                                  cost=estimate_cost(loaded), budget=budget, sha256=loaded.sha256,
+                                  trace=str(trace_path(folder, loaded, b)) if traced else None,
                                   scenario=loaded.model.scenario, loaded=loaded))  # fmt: skip
                 labels.append({"combo": k, "params": combo, "variant": loaded.variant, "backend": b})
                 loads.append(loaded)
     check_outputs(cases, args.force)
-    executor = make_executor(args.executor, args.jobs, args.ray_address, force=args.force)
+    executor: Executor = make_executor(args.executor, args.jobs, args.ray_address, force=args.force)
+    if args.batch:
+        executor = batched(executor, args, err)
     bar = BatchProgress(err, len(cases)) if wanted(err, args.quiet, args.json) else None
 
     def done(i: int, r: CaseResult) -> None:
@@ -167,7 +187,7 @@ def execute(args: argparse.Namespace, out: Console, err: Console) -> int:
 
     try:
         with bar if bar is not None else contextlib.nullcontext():
-            results = executor.run(cases, done, None, None if bar is None else bar.start)
+            results = executor.run(cases, done, None if bar is None else bar.steps, None if bar is None else bar.start)
     finally:
         executor.close()
     metrics = [
@@ -188,6 +208,17 @@ def execute(args: argparse.Namespace, out: Console, err: Console) -> int:
     else:
         _print(out, table, args.out, bool(svg), args.quiet)
     return status_code(results)  # the most severe case: bad input or a missing engine in some case is exit 2/3
+
+
+def batched(separate: Any, args: argparse.Namespace, err: Console) -> Any:
+    """The executor of ``--batch``: each backend's (and variant's) cases as one batch, else ``separate``
+    (runner.exec.batched); a fallback prints its reason."""
+    from runner.exec.batched import BatchedExecutor
+
+    def fallback(which: str, reason: str) -> None:
+        err.print(f"--batch: {escape(reason)}; {escape(which)} run separately")
+
+    return BatchedExecutor(separate, args.jobs, force=args.force, on_fallback=fallback)
 
 
 def final_values(loaded: Any, trace_path: Path, expressions: Sequence[str], backend: str) -> dict[str, Any]:
