@@ -183,6 +183,25 @@ def test_a_loop_of_joints_is_refused_before_the_build() -> None:
         create_backend(NAME, w.world("loop", [bob], joints=joints))
 
 
+@pytest.mark.parametrize("jointed", [False, True], ids=["free", "jointed"])
+def test_only_a_free_column_over_seven_bodies_is_refused(jointed: bool) -> None:
+    """8 boxes of 0.1 m one above the other: free, they are a column Drake is measured not to hold (MAX_STACK 7,
+    refused up front); hinged each to the one below (a robot's links, e.g. the franka panda's 8), the joints
+    carry them and the world is accepted."""
+    boxes = [w.box(f"b{k}", (0.1, 0.1, 0.1), (0.0, 0.0, 0.05 + 0.1 * k)) for k in range(8)]
+    joints = tuple(
+        JointSpec(f"h{k}", JointKind.HINGE, f"b{k}", f"b{k - 1}" if k else None, axis=(0.0, 0.0, 1.0),
+                  anchor=(0.0, 0.0, 0.1 * k))
+        for k in range(8)
+    ) if jointed else ()  # fmt: skip
+    world = w.world("column", [w.ground(), *boxes], joints=joints)
+    if jointed:
+        create_backend(NAME, world).close()
+    else:
+        with pytest.raises(UnsupportedFeature, match="column of 8 bodies"):
+            create_backend(NAME, world)
+
+
 def test_options_are_checked_without_the_engine() -> None:
     with pytest.raises(UnsupportedFeature, match="contact_model"):
         check_options(NAME, {"contact_model": "hydroelastic_everywhere"})
