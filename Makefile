@@ -52,7 +52,7 @@ conformance: $(STAMP)
 	$(BIN)/scenario conformance --out traces/conformance --markdown docs/conformance.md
 
 baselines: $(STAMP)
-	$(BIN)/scenario baseline scenarios/*.yaml --backend pybullet,mujoco,dart,ode --baseline baselines
+	$(BIN)/scenario baseline scenarios/*.yaml --backend all --baseline baselines
 
 fuzz: $(STAMP)
 	FUZZ_CASES=20000 FUZZ_STRUCTURED=20000 FUZZ_FILES=5000 FUZZ_FAULTS=200 FUZZ_CONCURRENT=20 $(BIN)/python -m pytest -q -p no:cacheprovider tests/reliability

@@ -11,6 +11,7 @@ stepping) and the motors' net actuation. docs/backends/drake.md has the mapping 
 
 from __future__ import annotations
 
+import dataclasses
 import logging
 import math
 from typing import Any, ClassVar
@@ -39,7 +40,7 @@ from ..types import (
     Quat,
     Vec3,
 )
-from ._build import JointHandle, _transform, build, vec
+from ._build import JointHandle, _transform, build, check_hulls, vec
 from ._build import check as check_build
 from ._imported import read_imported
 from ._options import DrakeOptions, check_stack
@@ -69,10 +70,11 @@ class DrakeBackend(Backend):
     engine_distribution: ClassVar[str] = "drake"
     precision: ClassVar[Precision] = Precision.FLOAT64  # Eigen doubles
     #: no contact:bounce (Drake has no restitution coefficient, only dissipation: refused up front); no
-    #: shape:convex nor shape:trimesh: measured, a 0.3 x 0.2 x 0.1 hull box rests 45.6 mm deep on a plane with
-    #: point contact and is thrown 6.7 m up as a compliant hydroelastic hull (docs/backends/drake.md).
+    #: shape:trimesh. Convex hulls are compliant hydroelastic ``Convex`` geometries (a 0.3 x 0.2 x 0.1 hull box
+    #: rests 0.25 mm deep, the elastic foundation's m g c / (E A)); with ``contact_model: point`` they are
+    #: refused (``check_world``: one contact point per hull pair, docs/backends/drake.md).
     capabilities: ClassVar[frozenset[Capability]] = (
-        RIGID_BODY_CAPABILITIES | (ROBOT_CAPABILITIES - {Capability.SHAPE_TRIMESH, Capability.SHAPE_CONVEX})
+        RIGID_BODY_CAPABILITIES | (ROBOT_CAPABILITIES - {Capability.SHAPE_TRIMESH})
     ) - {Capability.CONTACT_BOUNCE} | {Capability.JOINT_REACTION, Capability.CONTACT_POINTS}
     Options: ClassVar[type[BackendOptions]] = DrakeOptions
     #: pybind11 turns Drake's C++ exceptions (std::exception, DRAKE_THROW_UNLESS) into RuntimeError.
@@ -82,7 +84,8 @@ class DrakeBackend(Backend):
     @classmethod
     def check_world(cls, world: CompiledWorld, options: BackendOptions) -> None:
         check_build(world)  # a loop of joints, a pair's mu the geometries cannot combine to, ... (no engine)
-        check_stack(stack_height(world))
+        check_hulls(world, options)
+        check_stack(stack_height(_free_bodies(world)))
 
     def _build(self) -> None:
         world = self.world
@@ -341,6 +344,13 @@ class DrakeBackend(Backend):
 
     def _close(self) -> None:
         self._context = None
+
+
+def _free_bodies(world: CompiledWorld) -> CompiledWorld:
+    """The world without the bodies a joint holds, for the stacking limit: a robot's links are carried by their
+    joints, not by contacts with the link below (a franka panda's 8 links start one above the other)."""
+    held = {name for j in world.joints for name in (j.body, j.other) if name is not None}
+    return dataclasses.replace(world, bodies=tuple(b for b in world.bodies if b.name not in held), joints=())
 
 
 def _mean_normal(surface: Any) -> np.ndarray:

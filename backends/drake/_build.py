@@ -11,6 +11,9 @@
   -> ``WeldJoint``; stops are the joint's position limits (SAP limit constraints). Every slider and hinge
   gets a PD actuator (Kp 0, Kd ``motor_gain``) whose effort limit is ``fmax``: Drake clamps the PD force
   inside the discrete solve, ODE's velocity motor.
+* Convex hulls: ``Convex`` from the hull's vertices (an in-memory OBJ; Drake takes their hull), compliant
+  hydroelastic like every moving shape (Drake tessellates a convex hull itself: tetrahedra from its faces to
+  its centroid, pressure 0 on the surface and E at the centroid; the resolution hint is not used).
 * Friction: one ``CoulombFriction`` per geometry from ``_friction.solve`` (static = dynamic = mu).
 * Collision filters: Drake's own filter of joined bodies is off; the adapter excludes the pairs of
   ``touching_pairs``' complement (joined bodies, excluded pairs, static or kinematic with each other).
@@ -159,6 +162,21 @@ def check(world: CompiledWorld) -> None:
                 raise UnsupportedFeature(f"Backend `drake`: plane `{body.name}` must be static.")
 
 
+def check_hulls(world: CompiledWorld, options: Any) -> None:
+    """Refuse convex hulls under point contact: Drake's point query gives one point per hull pair (a hull box
+    on a plane touches at one corner, tips onto it and rests 45.6 mm deep; a ``Box`` gets its face's centre)."""
+    if getattr(options, "contact_model", "") != "point":
+        return
+    for body in world.bodies:
+        for placed in body.placed_shapes():
+            if placed.shape.kind is ShapeKind.CONVEX:
+                raise UnsupportedFeature(
+                    f"Backend `drake` with `contact_model: point` does not run shape:convex (body `{body.name}`): "
+                    "Drake's point contact touches a hull at one vertex (a hull box on a plane rests 45.6 mm deep); "
+                    "use the default contact_model hydroelastic_with_fallback"
+                )
+
+
 def vec(values: Any) -> Any:
     """A float64 array typed Any (pydrake's stubs accept no numpy annotation)."""
     return np.asarray(values, dtype=float)
@@ -209,7 +227,7 @@ def _properties(shape: Shape, mu: float, options: DrakeOptions, static: bool) ->
     compliant-compliant half space contact; a rigid-rigid pair falls back to point contact)."""
     props = ProximityProperties()
     AddContactMaterial(friction=CoulombFriction(mu, mu), properties=props)
-    if options.contact_model != "point" and shape.kind is not ShapeKind.CONVEX:  # hulls: point contact (fallback)
+    if options.contact_model != "point":
         modulus = options.hydroelastic_modulus
         if shape.kind is ShapeKind.PLANE:
             AddRigidHydroelasticProperties(props)
@@ -340,4 +358,4 @@ def _filters(world: CompiledWorld, scene_graph: Any, geometries: list[list[Any]]
             manager.Apply(CollisionFilterDeclaration().ExcludeWithin(GeometrySet(geometries[a])))
 
 
-__all__ = ["KINEMATIC_MASS_RATIO", "Built", "JointHandle", "build", "check", "tree", "vec"]
+__all__ = ["KINEMATIC_MASS_RATIO", "Built", "JointHandle", "build", "check", "check_hulls", "tree", "vec"]

@@ -18,6 +18,7 @@ from backends.types import (
     CompiledWorld,
     JointKind,
     JointSpec,
+    Mesh,
     Motion,
     Motor,
     PairSurface,
@@ -126,6 +127,22 @@ def box(name: str, size: Vec3, pos: Vec3, **kw: object) -> BodySpec:
 
 def sphere(name: str, radius: float, pos: Vec3, **kw: object) -> BodySpec:
     return body(name, Shape(ShapeKind.SPHERE, radius=radius), pos, **kw)  # type: ignore[arg-type]
+
+
+def box_hull(size: Vec3) -> Mesh:
+    """A box's 8 corners and 12 outward triangles (counter-clockwise seen from outside), for shape:convex."""
+    hx, hy, hz = (s / 2.0 for s in size)
+    vertices = tuple((sx * hx, sy * hy, sz * hz) for sx in (-1, 1) for sy in (-1, 1) for sz in (-1, 1))
+    # corner index = 4*(x>0) + 2*(y>0) + (z>0)
+    faces = (
+        (0, 1, 3), (0, 3, 2),  # -x
+        (4, 6, 7), (4, 7, 5),  # +x
+        (0, 4, 5), (0, 5, 1),  # -y
+        (2, 3, 7), (2, 7, 6),  # +y
+        (0, 2, 6), (0, 6, 4),  # -z
+        (1, 5, 7), (1, 7, 3),  # +z
+    )  # fmt: skip
+    return Mesh(vertices=vertices, faces=faces, source="box")
 
 
 def ground(name: str = "ground") -> BodySpec:

@@ -27,6 +27,7 @@ __all__ = [
     "add_overrides",
     "add_scenario_files",
     "add_variant_choice",
+    "asks_every_engine",
     "backend_names",
     "scenario_files",
 ]
@@ -101,6 +102,11 @@ def add_judgement(parser: argparse.ArgumentParser) -> None:
 def _names(values: list[str] | None, default: str) -> Iterator[str]:
     for value in values or [default]:
         yield from (n.strip() for n in value.split(","))
+
+
+def asks_every_engine(args: argparse.Namespace) -> bool:
+    """Whether ``--backend`` (or its default) says ``all``: every installed engine, each for the cases it runs."""
+    return any(name in (ALL, "installed") for name in _names(args.backend, args.backend_default))
 
 
 def backend_names(args: argparse.Namespace) -> list[str]:

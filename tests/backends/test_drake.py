@@ -2,8 +2,9 @@
 
 The shared suite (test_backend_contract.py, test_robot_contract.py) checks the contract on drake too; this
 module checks the mapping itself: per-pair mu solved into per-geometry coefficients under Drake's harmonic
-mean (and refused where no solution exists), the refusals made before any engine call (bounce, convex
-hulls, loops of joints), the contact model option, a motor that is off, and byte-identical traces.
+mean (and refused where no solution exists), the refusals made before any engine call (bounce, hulls
+under point contact, loops of joints), a hull's rest depth, the contact model option, a motor that is off,
+and byte-identical traces.
 Worlds are small and short: CI runs on two cores.
 """
 
@@ -22,7 +23,18 @@ from backends.registry import check_options, create_backend, get_backend, is_ins
 from backends.testing import worlds as w
 from backends.testing.tolerances import tol
 from backends.testing.worlds import G, coulomb_stop
-from backends.types import Capability, JointKind, JointSpec, Motor, PairSurface, Shape, ShapeKind, Surface
+from backends.types import (
+    BodySpec,
+    Capability,
+    JointKind,
+    JointSpec,
+    Motion,
+    Motor,
+    PairSurface,
+    Shape,
+    ShapeKind,
+    Surface,
+)
 from tests.paths import ROOT
 
 if not is_installed("drake"):
@@ -116,9 +128,48 @@ def test_a_scenario_with_bounce_exits_2_naming_bounce(tmp_path: Path) -> None:
     assert "contact:bounce" in done.stdout + done.stderr
 
 
-def test_convex_hulls_are_refused_by_capability() -> None:
-    assert Capability.SHAPE_CONVEX not in get_backend(NAME).capabilities
+def test_triangle_meshes_are_refused_by_capability() -> None:
+    assert Capability.SHAPE_CONVEX in get_backend(NAME).capabilities
     assert Capability.SHAPE_TRIMESH not in get_backend(NAME).capabilities
+
+
+def _box_world(kind: ShapeKind, z: float, options: dict[str, object] | None = None, **kw: float) -> w.CompiledWorld:
+    """A 0.3 x 0.2 x 0.1 box (density 500: 3 kg) on the ground, given as a hull or as a ``Box``."""
+    size = (0.3, 0.2, 0.1)
+    shape = Shape(kind, mesh=w.box_hull(size)) if kind is ShapeKind.CONVEX else Shape(kind, size=size)
+    mass, inertia = w.box_mass(size, 500.0)
+    body = BodySpec("hull", Motion.DYNAMIC, shape, mass, inertia, (0.0, 0.0, z), w.IDENTITY)
+    world = w.world("hull", [w.ground(), body], **kw)  # type: ignore[arg-type]
+    return dataclasses.replace(world, backend_options={NAME: options or {}})
+
+
+def test_hulls_are_refused_with_point_contact() -> None:
+    """Drake's point query touches a hull at one vertex (a hull box on a plane tips onto a corner and rests
+    45.6 mm deep): with ``contact_model: point`` a world with a hull is refused before the build."""
+    world = _box_world(ShapeKind.CONVEX, 0.06, {"contact_model": "point"})
+    with pytest.raises(UnsupportedFeature, match=r"contact_model: point.*shape:convex.*`hull`"):
+        create_backend(NAME, world)
+
+
+@pytest.mark.parametrize("kind", [ShapeKind.CONVEX, ShapeKind.BOX], ids=["hull", "box"])
+def test_a_hull_box_sinks_as_deep_as_the_elastic_foundation_says(kind: ShapeKind) -> None:
+    """A 0.3 x 0.2 x 0.1 box (3 kg) given as a hull rests as deep as the same ``Box``: both are compliant
+    hydroelastic bodies whose pressure rises linearly from 0 on the face to E at depth c = 0.05 m (the hull's
+    tetrahedra run from its faces to one interior vertex, the box's to its medial axis), so the weight sinks the
+    face by d = m g c / (E A) = 24.5 um (A = 0.06 m^2, E 1e6 Pa). At dt 0.001 (at the default 0.01 SAP's
+    near-rigid regularisation softens a contact this stiff: the hull then rests 0.24 mm deep, the box 0.15 mm,
+    both within the contract's 2 mm). Placed touching, it settles over a relaxation time of about 0.2 s: after
+    1.5 s, 6e-4 of d is left. Bound 1 % of d: the pressure plane's section shrinks by 2 d / c = 0.1 %, the side
+    tetrahedra's slivers along the bottom edges carry at most perimeter * d / A = 0.4 %."""
+    world = _box_world(kind, 0.05, dt=0.001, steps=1500)
+    mass = world.bodies[1].mass
+    depth = mass * G * 0.05 / (1e6 * 0.3 * 0.2)
+    with create_backend(NAME, world) as sim:
+        for _ in range(1500):
+            sim.step()
+        s, (contact,) = sim.body_states(), sim.contacts()
+    assert 0.05 - s.pos[1, 2] == pytest.approx(depth, rel=0.01)
+    assert contact.normal_force == pytest.approx(mass * G, rel=1e-3)
 
 
 def test_a_loop_of_joints_is_refused_before_the_build() -> None:
@@ -130,6 +181,25 @@ def test_a_loop_of_joints_is_refused_before_the_build() -> None:
     )
     with pytest.raises(UnsupportedFeature, match="closes a loop"):
         create_backend(NAME, w.world("loop", [bob], joints=joints))
+
+
+@pytest.mark.parametrize("jointed", [False, True], ids=["free", "jointed"])
+def test_only_a_free_column_over_seven_bodies_is_refused(jointed: bool) -> None:
+    """8 boxes of 0.1 m one above the other: free, they are a column Drake is measured not to hold (MAX_STACK 7,
+    refused up front); hinged each to the one below (a robot's links, e.g. the franka panda's 8), the joints
+    carry them and the world is accepted."""
+    boxes = [w.box(f"b{k}", (0.1, 0.1, 0.1), (0.0, 0.0, 0.05 + 0.1 * k)) for k in range(8)]
+    joints = tuple(
+        JointSpec(f"h{k}", JointKind.HINGE, f"b{k}", f"b{k - 1}" if k else None, axis=(0.0, 0.0, 1.0),
+                  anchor=(0.0, 0.0, 0.1 * k))
+        for k in range(8)
+    ) if jointed else ()  # fmt: skip
+    world = w.world("column", [w.ground(), *boxes], joints=joints)
+    if jointed:
+        create_backend(NAME, world).close()
+    else:
+        with pytest.raises(UnsupportedFeature, match="column of 8 bodies"):
+            create_backend(NAME, world)
 
 
 def test_options_are_checked_without_the_engine() -> None:

@@ -57,22 +57,6 @@ def _compound(name: str, shapes: tuple[PlacedShape, ...], pos: Vec3, mass: float
                     shapes=shapes, **kw)  # type: ignore[arg-type]  # fmt: skip
 
 
-def _box_hull(size: Vec3) -> Mesh:
-    """A box's 8 corners and 12 outward triangles (counter-clockwise seen from outside)."""
-    hx, hy, hz = (s / 2.0 for s in size)
-    vertices = tuple((sx * hx, sy * hy, sz * hz) for sx in (-1, 1) for sy in (-1, 1) for sz in (-1, 1))
-    # corner index = 4*(x>0) + 2*(y>0) + (z>0)
-    faces = (
-        (0, 1, 3), (0, 3, 2),  # -x
-        (4, 6, 7), (4, 7, 5),  # +x
-        (0, 4, 5), (0, 5, 1),  # -y
-        (2, 3, 7), (2, 7, 6),  # +y
-        (0, 2, 6), (0, 6, 4),  # -z
-        (1, 5, 7), (1, 7, 3),  # +z
-    )  # fmt: skip
-    return Mesh(vertices=vertices, faces=faces, source="box")
-
-
 # --- shape:compound -------------------------------------------------------------------------------
 
 
@@ -233,7 +217,7 @@ def test_convex_hull_box_rests_at_half_height(backend_name: str, backend_cls: ty
     quat = quat_from_axis_angle((1.0, 0.0, 0.0), math.pi / 2) if turned else w.IDENTITY
     height = 0.1 if turned else 0.05
     mass, inertia = w.box_mass(size, 500.0)
-    hull = Shape(ShapeKind.CONVEX, mesh=_box_hull(size))
+    hull = Shape(ShapeKind.CONVEX, mesh=w.box_hull(size))
     body = BodySpec("hull", Motion.DYNAMIC, hull, mass, inertia, (0.0, 0.0, height + 0.01), quat)
     with make_backend(backend_name, _robot_world("hull", [w.ground(), body])) as sim:
         for _ in range(100):
@@ -248,7 +232,7 @@ def test_thin_convex_plate_holds_a_box(backend_name: str, backend_cls: type[Back
     top face: the box's centre at 0.001 + 0.05 m. No ground: only the plate holds it."""
     require(backend_cls, Capability.SHAPE_CONVEX)
     require(backend_cls, Capability.SHAPE_COMPOUND)
-    plate = Shape(ShapeKind.CONVEX, mesh=_box_hull((1.0, 1.0, 0.001)))
+    plate = Shape(ShapeKind.CONVEX, mesh=w.box_hull((1.0, 1.0, 0.001)))
     static = BodySpec("plate", Motion.STATIC, Shape(ShapeKind.COMPOUND), 0.0, ZERO, ZERO, w.IDENTITY,
                       shapes=(PlacedShape(plate, pos=(0.0, 0.0, 0.0005)),))  # fmt: skip
     box = w.box("box", (0.1, 0.1, 0.1), (0.0, 0.0, 0.061), density=500.0)

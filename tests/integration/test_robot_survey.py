@@ -55,10 +55,9 @@ def survey(request: pytest.FixtureRequest, tmp_path_factory: pytest.TempPathFact
 #: reads it"). Each engine is an expected miss here until it reaches the target; reaching it fails the test, so
 #: that this list goes.
 MJCF_BELOW_TARGET = frozenset(ENGINES)
-#: Issue 32's Drake adapter refuses convex hulls (a hull box rests 45.6 mm deep with point contact and is thrown
-#: 6.7 m up with hydroelastic contact: docs/backends/drake.md), which most URDF links are: measured 51 of 95 URDF
-#: models run, 40 of the 44 others refused for `shape:convex`. An expected miss until the mapping exists.
-URDF_BELOW_TARGET = frozenset({"drake"}) & frozenset(ENGINES)
+#: Engines known to run under 90 % of the URDF corpus: none. Drake was (51 of 95, 40 refused for `shape:convex`)
+#: until issue 32 mapped convex hulls: measured 91 of 95 since (docs/robots.md, "The survey").
+URDF_BELOW_TARGET: frozenset[str] = frozenset()
 
 
 @pytest.mark.parametrize("engine", ENGINES)
@@ -72,7 +71,7 @@ def test_at_least_90_percent_run_on_each_engine(survey: Survey, engine: str, req
     if request.node.callspec.params["survey"] == "urdf" and engine in URDF_BELOW_TARGET:
         ran = f"{engine} runs {counts[RAN]} of {sum(counts.values())} URDF models"
         assert not met, f"{ran}: drop it from URDF_BELOW_TARGET"
-        pytest.xfail(f"issue 32 open: {ran} (URDF_BELOW_TARGET: shape:convex)")
+        pytest.xfail(f"{ran} (URDF_BELOW_TARGET)")
     assert met, f"{engine}: {counts}\n{markdown(survey)}"
 
 

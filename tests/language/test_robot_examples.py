@@ -1,5 +1,5 @@
 """The example robot scenarios (scenarios/robots/): they load and compile, every engine declares what they
-need (they run on all four: tests/backends/test_robot_contract.py, `pytest scenarios/robots`), and the expected
+need (they run on every engine: tests/backends/test_robot_contract.py, `pytest scenarios/robots`), and the expected
 numbers written in their files are re-derived here from the model files with tools we did not write
 (yourdfpy's forward kinematics, trimesh's stable poses, the URDF's inertials)."""
 
@@ -23,8 +23,8 @@ ROBOTS = sorted((ROOT / "scenarios" / "robots").glob("*.yaml"))
 DATA = data_root("@pybullet_data")[0]  # type: ignore[index]
 ENGINES = [n for n, e in KNOWN_BACKENDS.items() if not e.hidden]
 #: What an engine is documented not to declare, so that it refuses the examples needing it up front
-#: (docs/robots.md): drake has no convex hulls (docs/backends/drake.md).
-NOT_DECLARED = {"drake": frozenset({Capability.SHAPE_CONVEX})}
+#: (docs/robots.md): none at present (drake declares convex hulls since issue 32, docs/backends/drake.md).
+NOT_DECLARED: dict[str, frozenset[Capability]] = {}
 
 
 def _assertion(path: Path, name: str) -> dict[str, object]:

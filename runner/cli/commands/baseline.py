@@ -3,7 +3,9 @@
 from __future__ import annotations
 
 import argparse
+from collections.abc import Callable
 from pathlib import Path
+from typing import Any
 
 from rich.console import Console
 from rich.markup import escape
@@ -54,6 +56,32 @@ def load_cases(files: list[Path], variant: str | None, sets: list[str] | None = 
     return cases
 
 
+def sit_out_refused(pairs: list, out: Console, what: str, keep: Callable[[Any, str], bool] | None = None) -> list:
+    """With ``--backend all``: the (case, engine) pairs whose engine refuses the case up front (what `scenario
+    validate --backend` checks: a capability it lacks, a limit it states) sit out, each named with the reason, as
+    in `scenario compare`; ``keep(case, engine)`` keeps one anyway. A named engine that refuses a case is an
+    error, as in `scenario run`."""
+    from backends.errors import UnsupportedFeature
+    from backends.registry import check_capabilities, get_backend
+    from runner.compile.program import build_program
+
+    kept = []
+    worlds: dict[int, Any] = {}
+    for case, backend in pairs:
+        world = worlds.setdefault(id(case), build_program(case).world)
+        try:
+            check_capabilities(get_backend(backend), world)
+        except UnsupportedFeature as refusal:
+            if keep is None or not keep(case, backend):
+                needs = ", ".join(sorted(str(getattr(c, "value", c)) for c in refusal.missing)) or str(refusal)
+                out.print(f"not {what}: {case.model.scenario} · {case.variant} on {backend}, which refuses it up front "
+                          f"({needs}; name the engines with --backend to see the refusal as an error)",
+                          markup=False, highlight=False)  # fmt: skip
+                continue
+        kept.append((case, backend))
+    return kept
+
+
 def execute(args: argparse.Namespace, out: Console, err: Console) -> int:
     """Each case runs through runner.exec as `scenario run` runs it; one that does not complete records
     nothing and the command exits as `run` would (the most severe code)."""
@@ -67,6 +95,8 @@ def execute(args: argparse.Namespace, out: Console, err: Console) -> int:
     backends = options.backend_names(args)
     cases = load_cases(args.files, args.variant, args.set)
     pairs = [(case, backend) for backend in backends for case in cases]
+    if options.asks_every_engine(args):  # an engine that refuses a case has no baseline for it
+        pairs = sit_out_refused(pairs, out, "recorded")
     recorded = record_cases(pairs, args.baseline, args.out, args.period)
     failed, written, codes = 0, 0, []
     for (case, backend), (res, path, rec) in zip(pairs, recorded, strict=True):

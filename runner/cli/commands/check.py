@@ -15,7 +15,7 @@ from rich.console import Console
 from rich.markup import escape
 
 from runner.cli import options
-from runner.cli.commands.baseline import add_case_options, load_cases
+from runner.cli.commands.baseline import add_case_options, load_cases, sit_out_refused
 
 if TYPE_CHECKING:
     from runner.ci.regression import CaseOutcome
@@ -48,7 +48,7 @@ def configure(parser: argparse.ArgumentParser) -> None:
 
 
 def execute(args: argparse.Namespace, out: Console, err: Console) -> int:
-    from runner.ci.regression import PASSED, check_cases, parse_tolerance_options
+    from runner.ci.regression import PASSED, check_cases, golden_path, parse_tolerance_options
     from runner.cli.outcomes import case_line
     from runner.errors import ScenarioError
     from runner.exec.executors import make_executor
@@ -64,6 +64,9 @@ def execute(args: argparse.Namespace, out: Console, err: Console) -> int:
     executor = make_executor(args.executor, args.jobs, args.ray_address)
     try:
         pairs = [(case, backend) for backend in backends for case in cases]
+        if options.asks_every_engine(args):  # `scenario baseline --backend all` records none for a refused case;
+            # a refused case that has a golden file is a regression and runs (its refusal is the error)
+            pairs = sit_out_refused(pairs, out, "checked", lambda case, b: golden_path(args.baseline, case, b).exists())
         outcomes = check_cases(pairs, args.baseline, args.out, overrides, executor,
                                lambda o: _print(out, err, o, args.quiet))  # fmt: skip
     finally:
