@@ -73,7 +73,7 @@ class DrakeBackend(Backend):
     #: point contact and is thrown 6.7 m up as a compliant hydroelastic hull (docs/backends/drake.md).
     capabilities: ClassVar[frozenset[Capability]] = (
         RIGID_BODY_CAPABILITIES | (ROBOT_CAPABILITIES - {Capability.SHAPE_TRIMESH, Capability.SHAPE_CONVEX})
-    ) - {Capability.CONTACT_BOUNCE} | {Capability.JOINT_REACTION, Capability.CONTACT_POINTS}
+    ) - {Capability.CONTACT_BOUNCE} | {Capability.JOINT_REACTION, Capability.CONTACT_POINTS, Capability.JOINT_MIMIC}
     Options: ClassVar[type[BackendOptions]] = DrakeOptions
     #: pybind11 turns Drake's C++ exceptions (std::exception, DRAKE_THROW_UNLESS) into RuntimeError.
     engine_errors: ClassVar[tuple[type[BaseException], ...]] = (RuntimeError,)
