@@ -145,3 +145,34 @@ def test_a_torque_on_a_joint_with_armature_accelerates_it_at_tau_over_i_plus_arm
     steps = len(times)
     assert np.all(np.abs(q - truth) <= 1e-9 + steps * get_backend(engine).precision.eps * (np.abs(truth) + 1.0))
     assert q[-1] > 0.0
+
+
+@pytest.mark.parametrize("engine", ENGINES)
+def test_a_bounded_motor_on_a_joint_with_armature_accelerates_it_at_fmax_over_i_plus_armature(
+    tmp_path: Path, engine: str
+) -> None:
+    """The same wheel (I = 0.04 kg m^2, a = 0.06) on a velocity motor far from its target (100 rad/s) with
+    fmax = 0.5 N m: the motor pushes at its bound all the time, so the rate is fmax t / (I + a), 2.5 rad/s at
+    0.5 s (rounding only). DART's servo constraint computes its impulse without the armature (fmax / I: 6.25
+    rad/s), so DART refuses a motor on a joint with armature before the run, naming the armature."""
+    path = tmp_path / "s.yaml"
+    path.write_text(
+        "schema_version: 1\nscenario: motor\n"
+        f"world: {{gravity: [0, 0, {-G}], dt: {H}, duration: 0.5}}\n"
+        "bodies:\n  ground: {plane: {}, motion: static, pos: [0, 0, -1]}\n"
+        "  wheel: {cylinder: {radius: 0.2, length: 0.05}, mass: 2.0, pos: [0, 0, 1]}\n"
+        "joints:\n  axle: {type: hinge, bodies: [wheel, environment], axis: [0, 0, 1], "
+        "motor: {vel: 100, fmax: 0.5}, dynamics: {armature: 0.06}}\n"
+    )
+    if engine == "dart":
+        with pytest.raises(UnsupportedFeature, match="armature with a motor"):
+            run_loaded(load_scenario(path), engine, tmp_path / engine)
+        return
+    ran = _run(tmp_path, engine, path.read_text().split("\n", 2)[2], "joint:armature")
+    if ran is None:
+        return
+    times, _ = ran
+    trace = read_trace(next((tmp_path / engine).glob("*.mcap")))
+    rate = np.asarray(trace.joints["axle"].velocity, float)
+    steps = len(times)
+    assert np.all(np.abs(rate - 0.5 * times / 0.1) <= 1e-9 + steps * get_backend(engine).precision.eps * 10)
