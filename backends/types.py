@@ -137,6 +137,7 @@ class Capability(str, enum.Enum):
     # adapter's: the base class builds them as a chain of light bodies (backends/_kit/chains.py).
     JOINT_SEVERAL_PER_BODY = "joint:several-per-body"  # CompiledWorld.joint_chains: one body moved by several joints
     JOINT_ARMATURE = "joint:armature"  # JointDynamics.armature: rotor inertia added to the joint's coordinate
+    JOINT_MIMIC = "joint:mimic"  # CompiledWorld.couplings: a joint held at multiplier x its leader + offset
     JOINT_STIFFNESS = "joint:stiffness"  # JointDynamics.stiffness: a spring on the coordinate towards springref
     JOINT_BALL_RANGE = "joint:ball-range"  # a ball joint's cone limit
     JOINT_BALL_DYNAMICS = "joint:ball-dynamics"  # damping, friction loss, armature or stiffness of a ball/free joint
@@ -197,7 +198,7 @@ SENSING_CAPABILITIES: frozenset[Capability] = frozenset({Capability.JOINT_REACTI
 RIGID_BODY_CAPABILITIES: frozenset[Capability] = (
     frozenset(Capability)
     - OUTPUT_CAPABILITIES
-    - {Capability.JOINT_UNIVERSAL, Capability.JOINT_ARMATURE}
+    - {Capability.JOINT_UNIVERSAL, Capability.JOINT_ARMATURE, Capability.JOINT_MIMIC}
     - SENSING_CAPABILITIES
     - UNMAPPED_CAPABILITIES
     - ROBOT_CAPABILITIES
@@ -330,6 +331,23 @@ class JointSpec:
 
 
 @dataclass(frozen=True)
+class JointCoupling:
+    """A joint whose position is its leader's, scaled and shifted (URDF `<mimic>`): ``joint`` = ``multiplier`` x
+    ``leader`` + ``offset``, both positions counted from the start as every JointSpec's (so ``offset`` is 0
+    when the start already satisfies it). Both are sliders or hinges; capability ``joint:mimic``."""
+
+    joint: str  # the follower's CompiledWorld joint name
+    leader: str
+    multiplier: float
+    offset: float = 0.0  # m or rad
+
+    def engine_terms(self, follower_sign: float, leader_sign: float) -> tuple[float, float]:
+        """(ratio, offset) of the coupling in an engine's coordinates ``e = sign * q`` of each joint:
+        e_joint = ratio * e_leader + offset."""
+        return self.multiplier * follower_sign * leader_sign, follower_sign * self.offset
+
+
+@dataclass(frozen=True)
 class PairSurface:
     a: str
     b: str
@@ -384,6 +402,8 @@ class CompiledWorld:
     #: the joints whose reaction the scenario reads (``Backend.joint_reactions()`` gives them in this order);
     #: an engine computes and keeps nothing for the others (capability ``joint:reaction``)
     reaction_joints: tuple[str, ...] = ()
+    #: joints held at a multiple of another's position (URDF `<mimic>`; capability ``joint:mimic``)
+    couplings: tuple[JointCoupling, ...] = ()
 
     def body_index(self, name: str) -> int:
         for i, body in enumerate(self.bodies):
@@ -436,6 +456,8 @@ class CompiledWorld:
             need.add(Capability.JOINT_REACTION)
         if self.joint_chains:
             need.add(Capability.JOINT_SEVERAL_PER_BODY)
+        if self.couplings:
+            need.add(Capability.JOINT_MIMIC)
         for model in self.models:
             need.update(model.needs)
         if self.contact_points:

@@ -37,6 +37,7 @@ from ..types import (
     Vec3,
 )
 from . import _contacts, _surfaces
+from ._armature import add_armature, check_armature, hold_armature
 from ._build import BodyHandle, JointHandle, build, place_free
 from ._build import check as check_build
 from ._gate import BounceGate
@@ -60,6 +61,7 @@ class DartBackend(Backend):
         RIGID_BODY_CAPABILITIES
         | ROBOT_CAPABILITIES
         | {Capability.CONTACT_POINTS, Capability.JOINT_STIFFNESS}
+        | {Capability.JOINT_ARMATURE}  # in DART's implicit joint inertia (_armature)
         | {Capability.JOINT_REACTION}  # getWrenchToChildBodyNode
     )
     Options: ClassVar[type[BackendOptions]] = DartOptions
@@ -81,6 +83,7 @@ class DartBackend(Backend):
         if isinstance(options, DartOptions):
             _friction_model(world, options.friction)  # `friction: cone` above the solver's mu is refused
         check_build(world)  # the joint trees: loops, joint kinds, planes (no engine call)
+        check_armature(world)  # armature with a motor or friction loss (DART's servo does not see it)
 
     def _build(self) -> None:
         world = self.world
@@ -95,6 +98,7 @@ class DartBackend(Backend):
         self._dart: Any = built.world
         self._bodies: list[BodyHandle] = built.bodies
         self._joints: list[JointHandle] = built.joints
+        self._armature = add_armature(built.joints, world.dt / self._engine_steps)
         self._coefficients = built.coefficients
         self._free = [i for i, h in enumerate(self._bodies) if h.free]
         self._free_at = _rows(self._free)
@@ -126,7 +130,8 @@ class DartBackend(Backend):
                 self._set_motor(j, handle.spec.motor.vel, handle.spec.motor.fmax)
 
     def _imported_model(self) -> ImportedModel:
-        return read_imported(self.world, self._bodies, self._joints)
+        armature = {joint.getName(): extra for joint, extra, _ in self._armature}
+        return read_imported(self.world, self._bodies, self._joints, armature)
 
     def _settings(self) -> dict[str, Any]:
         names = [b.name for b in self.world.bodies]
@@ -190,6 +195,7 @@ class DartBackend(Backend):
                 else:  # at the centre of mass (an offset in the body frame), the force in the world frame
                     body.node.addExtForce(acc[:3], body.com, False, True)
                 body.node.addExtTorque(acc[3:])
+            hold_armature(self._armature)
             if self._surface_conflict or self._thresholds:
                 self._match_touching_pairs(quiet=not self._surface_conflict and self._quiet(h))
             self._dart.step()

@@ -21,8 +21,13 @@ _KINDS = {"RevoluteJoint": JointKind.HINGE, "PrismaticJoint": JointKind.SLIDER, 
           "WeldJoint": JointKind.FIXED, "UniversalJoint": JointKind.UNIVERSAL}  # fmt: skip
 
 
-def read_imported(world: CompiledWorld, bodies: list[Any], joints: list[Any]) -> ImportedModel:
-    """``bodies``/``joints``: the adapter's handles (``.node``; ``.joint`` and ``.sign``), in world order."""
+def read_imported(
+    world: CompiledWorld, bodies: list[Any], joints: list[Any], armature: dict[str, float] | None = None
+) -> ImportedModel:
+    """``bodies``/``joints``: the adapter's handles (``.node``; ``.joint`` and ``.sign``), in world order;
+    ``armature``: by DART joint name, the damping the armature adds (backends/dart/_armature.py), not the
+    joint's own."""
+    armature = armature or {}
     out: list[ImportedBody] = []
     for spec, handle in zip(world.bodies, bodies, strict=True):
         if spec.motion is not Motion.DYNAMIC:
@@ -45,7 +50,8 @@ def read_imported(world: CompiledWorld, bodies: list[Any], joints: list[Any]) ->
         enforced = joint.areLimitsEnforced()
         lo, hi = stops(joint.getPositionLowerLimit(0) if enforced else None,
                        joint.getPositionUpperLimit(0) if enforced else None, handle.sign)  # fmt: skip
-        read.append(ImportedJoint(joint_spec.name, kind, axis, lo, hi, float(joint.getDampingCoefficient(0)),
+        damping = float(joint.getDampingCoefficient(0)) - armature.get(joint.getName(), 0.0)
+        read.append(ImportedJoint(joint_spec.name, kind, axis, lo, hi, damping,
                                   float(joint.getCoulombFriction(0)), None,
                                   finite_or_none(joint.getVelocityUpperLimit(0))))  # fmt: skip
     return ImportedModel("dart", tuple(out), tuple(read))

@@ -75,7 +75,7 @@ class DrakeBackend(Backend):
     #: refused (``check_world``: one contact point per hull pair, docs/backends/drake.md).
     capabilities: ClassVar[frozenset[Capability]] = (
         RIGID_BODY_CAPABILITIES | (ROBOT_CAPABILITIES - {Capability.SHAPE_TRIMESH})
-    ) - {Capability.CONTACT_BOUNCE} | {Capability.JOINT_REACTION, Capability.CONTACT_POINTS}
+    ) - {Capability.CONTACT_BOUNCE} | {Capability.JOINT_REACTION, Capability.CONTACT_POINTS, Capability.JOINT_MIMIC}
     Options: ClassVar[type[BackendOptions]] = DrakeOptions
     #: pybind11 turns Drake's C++ exceptions (std::exception, DRAKE_THROW_UNLESS) into RuntimeError.
     engine_errors: ClassVar[tuple[type[BaseException], ...]] = (RuntimeError,)

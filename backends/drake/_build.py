@@ -287,12 +287,24 @@ def build(world: CompiledWorld, options: DrakeOptions, h: float) -> Built:
             ids.append(gid)
         geometries.append(ids)
     joints = _joints(world, plant, bodies, options)
+    _couple(world, plant, joints)
     plant.Finalize()
     _filters(world, scene_graph, geometries)
     actuated = [j for j, h in sorted(((j, h) for j, h in enumerate(joints) if h.actuator is not None),
                                      key=lambda item: int(item[1].actuator.index()))]  # fmt: skip
     diagram = builder.Build()
     return Built(diagram, plant, scene_graph, bodies, joints, geometry_body, friction, actuated)
+
+
+def _couple(world: CompiledWorld, plant: Any, joints: list[JointHandle]) -> None:
+    """Each coupling (URDF `<mimic>`, ``joint:mimic``) as Drake's own coupler constraint (what its URDF parser
+    makes of `<mimic>`): q0 = gear_ratio q1 + offset in Drake's coordinates (``sign`` x the world's), solved
+    by SAP with the contacts and limits."""
+    index = {spec.name: k for k, spec in enumerate(world.joints)}
+    for coupling in world.couplings:
+        follower, leader = joints[index[coupling.joint]], joints[index[coupling.leader]]
+        ratio, offset = coupling.engine_terms(follower.sign, leader.sign)
+        plant.AddCouplerConstraint(joint0=follower.joint, joint1=leader.joint, gear_ratio=ratio, offset=offset)
 
 
 def _joint_frames(plant: Any, spec: JointSpec, parent: str | None, child: str,

@@ -81,6 +81,7 @@ class MujocoBackend(Backend):
         | MODEL_FILE_CAPABILITIES
         | {Capability.JOINT_ARMATURE, Capability.CONTACT_POINTS}  # dof_armature
         | {Capability.JOINT_REACTION}  # cfrc_int (mj_rnePostConstraint)
+        | {Capability.JOINT_MIMIC}  # a joint equality (_model._add_mimics)
     )
     Options: ClassVar[type[BackendOptions]] = MujocoOptions
     #: mju_error and the bindings' own failures; MjSpec.compile's ValueError is translated where it is called.

@@ -91,7 +91,8 @@ class OdeBackend(Backend):
     engine_distribution = "panda3d"
     #: everything but what only an engine building a robot from its model file runs (MJCF on MuJoCo), and
     #: armature (ODE has no inertia on a joint coordinate; adding it to a body would change its other axes)
-    capabilities = frozenset(Capability) - MODEL_FILE_CAPABILITIES - {Capability.JOINT_ARMATURE}
+    #: no armature, no mimic: ODE has no inertia on a joint coordinate and no gear joint (docs/backends/ode.md)
+    capabilities = frozenset(Capability) - MODEL_FILE_CAPABILITIES - {Capability.JOINT_ARMATURE, Capability.JOINT_MIMIC}
     #: panda3d builds ODE with dSINGLE: every state is a float32 (dGetConfiguration says "ODE_single_precision")
     precision = Precision.FLOAT32
     Options: ClassVar[type[BackendOptions]] = OdeOptions

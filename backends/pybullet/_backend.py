@@ -43,7 +43,7 @@ from ._impacts import ImpactErp
 from ._imported import read_imported
 from ._options import PyBulletOptions, check_stack, solver_iterations
 from ._reads import ROW, ContactReader, base_rows
-from ._rotors import add_rotors
+from ._rotors import add_mimics, add_rotors
 from ._springs import Springs
 from ._surfaces import FRICTION_CLAMP, SurfaceFit, fit_surfaces
 
@@ -78,6 +78,7 @@ class PyBulletBackend(Backend):
     capabilities: ClassVar[frozenset[Capability]] = RIGID_BODY_CAPABILITIES | {
         Capability.CONTACT_POINTS,
         Capability.JOINT_ARMATURE,  # a rotor geared to the joint (_rotors)
+        Capability.JOINT_MIMIC,  # a gear constraint between the two joints (_rotors)
         Capability.JOINT_STIFFNESS,  # the spring's torque each engine step (_springs)
         Capability.SHAPE_COMPOUND,
         Capability.SHAPE_CONVEX,
@@ -199,6 +200,7 @@ class PyBulletBackend(Backend):
             if rate:  # a link's initial velocity is its joint rate (ball and fixed children inherit)
                 p.resetJointState(handle.uid, handle.link, 0.0, handle.sign * rate, physicsClientId=c)
         add_rotors(p, c, world, layout, rates)  # joint armature: a rotor geared to the joint (_rotors)
+        add_mimics(p, c, world, layout)  # URDF <mimic>: a gear between the two joints (_rotors)
         self._springs = Springs(world, layout)  # joint stiffness: the spring's torque each engine step (_springs)
         bases = [i for i in range(len(world.bodies)) if layout.link[i] < 0]
         self._base_uids = [layout.uid[i] for i in bases]

@@ -76,3 +76,28 @@ def add_rotors(p: Any, c: int, world: CompiledWorld, layout: Layout, rates: dict
         p.changeConstraint(gear, gearRatio=-1.0, maxForce=_GEAR_FORCE, physicsClientId=c)
         rotors.append(uid)
     return rotors
+
+
+#: ERP of a mimic's gear (Bullet multiplies it by the solver's own, 0.2 for multibodies): the position error
+#: left by the velocity-level solve is removed at the rate of a joint's own stops
+_MIMIC_ERP = 1.0
+
+
+def add_mimics(p: Any, c: int, world: CompiledWorld, layout: Layout) -> list[int]:
+    """One gear constraint per coupling (URDF `<mimic>`, ``joint:mimic``), as pybullet's own mimic examples
+    couple two joints: btMultiBodyGearConstraint holds ``rate_a + ratio * rate_b = 0``, and with an ERP (both
+    joints in one multibody: Bullet reads the second joint's position from the first body) drives ``pos_a +
+    ratio * pos_b`` to ``relativePositionTarget``. With a = the follower and b = the leader in PyBullet's
+    coordinates (``sign`` x the world's), ratio = -multiplier x sign_a x sign_b and target = sign_a x offset."""
+    index = {spec.name: k for k, spec in enumerate(world.joints)}
+    gears = []
+    for coupling in world.couplings:
+        follower, leader = layout.joints[index[coupling.joint]], layout.joints[index[coupling.leader]]
+        ratio, target = coupling.engine_terms(follower.sign, leader.sign)
+        gear = p.createConstraint(follower.uid, follower.link, leader.uid, leader.link, p.JOINT_GEAR, [0.0, 1.0, 0.0],
+                                  [0.0, 0.0, 0.0], [0.0, 0.0, 0.0], physicsClientId=c)  # fmt: skip
+        one_body = follower.uid == leader.uid
+        p.changeConstraint(gear, gearRatio=-ratio, maxForce=_GEAR_FORCE, erp=_MIMIC_ERP if one_body else 0.0,
+                           relativePositionTarget=target, physicsClientId=c)  # fmt: skip
+        gears.append(int(gear))
+    return gears

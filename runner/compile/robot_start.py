@@ -41,6 +41,22 @@ def start_values(robot: Robot, desc: ModelDesc, as_file: bool = False) -> dict[s
     return out
 
 
+def mimic_starts(desc: ModelDesc, values: Mapping[str, tuple[float, float]]) -> dict[str, tuple[float, float]]:
+    """``values`` with every `<mimic>` joint the scenario does not start itself placed where its leader puts it
+    (multiplier x the leader's position + offset, rate multiplier x the leader's), leaders first: a
+    scenario's `initial` on a leader moves its followers with it."""
+    out = dict(values)
+    given = set(values)
+    pending = [(j.name, j.mimic) for j in desc.joints if j.mimic is not None and j.name not in given]
+    for _ in range(len(pending)):  # a chain of mimics settles in at most as many passes as it is long
+        for name, mimic in pending:
+            q, qd = out.get(mimic.leader, (0.0, 0.0))
+            start = (mimic.multiplier * q + mimic.offset, mimic.multiplier * qd)
+            if start != (0.0, 0.0) or name in out:
+                out[name] = start
+    return out
+
+
 @dataclass(frozen=True)
 class LinkMotion:
     """A link's displacement from its zero pose (x -> rot x + shift, model frame) and its velocity as a

@@ -17,6 +17,7 @@ from backends.geometry import IDENTITY, quat_mul, quat_rotate
 from backends.types import (
     BodySpec,
     Capability,
+    JointCoupling,
     JointDynamics,
     JointKind,
     JointSpec,
@@ -29,7 +30,14 @@ from backends.types import (
     Surface,
 )
 from runner.compile.joints import drive_motor, dynamics, initial_motor
-from runner.compile.robot_start import LinkMotion, joint_motions, link_motions, root_motion, start_values
+from runner.compile.robot_start import (
+    LinkMotion,
+    joint_motions,
+    link_motions,
+    mimic_starts,
+    root_motion,
+    start_values,
+)
 from runner.compile.surfaces import compiled_surface
 from runner.language.hpr import hpr_to_quat
 from runner.language.model import Scenario
@@ -52,6 +60,7 @@ class RobotParts:
     groups: dict[str, list[str]]  # robot -> its links' body names
     models: tuple[ModelFile, ...] = ()  # the MJCF robots, for an engine that builds them from the file
     chains: tuple[tuple[str, ...], ...] = ()  # joints moving one body together, in order (MJCF)
+    couplings: tuple[JointCoupling, ...] = ()  # URDF <mimic> joints
 
 
 def _placement(robot: Robot) -> tuple[tuple[float, float, float], tuple[float, float, float, float]]:
@@ -200,9 +209,10 @@ def compile_robots(
     group: dict[str, list[str]] = {}
     models: list[ModelFile] = []
     chains: list[tuple[str, ...]] = []
+    couplings: list[JointCoupling] = []
     for name, robot in model.robots.items():
         desc = robots[name]
-        values = start_values(robot, desc, as_file=model.world.options == "model")
+        values = mimic_starts(desc, start_values(robot, desc, as_file=model.world.options == "model"))
         root = root_motion(robot, desc)
         moved = values or root is not None
         motions = link_motions(desc, values, root) if moved else {}
@@ -228,6 +238,7 @@ def compile_robots(
         if robot.format == "mjcf":
             models.append(model_file(name, robot, desc, values, commanded_actuators(model, name)))
         chains.extend(joint_chains(name, desc))
+        couplings.extend(joint_couplings(name, desc, values))
     members = {**arrays, **group}
     for a, b in model.exclude_contacts:
         for x in members.get(a, [a]):
@@ -235,7 +246,23 @@ def compile_robots(
     everyone = list(others) + [b.name for b in bodies]
     surfaces = tuple(PairSurface(link, other, s) for link, s in link_surfaces for other in everyone if other != link)
     unique = tuple(dict.fromkeys((a, b) if a <= b else (b, a) for a, b in excluded))
-    return RobotParts(tuple(bodies), tuple(joints), unique, surfaces, group, tuple(models), tuple(chains))
+    return RobotParts(
+        tuple(bodies), tuple(joints), unique, surfaces, group, tuple(models), tuple(chains), tuple(couplings)
+    )
+
+
+def joint_couplings(name: str, desc: ModelDesc, values: Mapping[str, tuple[float, float]]) -> list[JointCoupling]:
+    """The model's `<mimic>` joints in the world's coordinates (each joint counted from its start ``values``):
+    q + s = m (q_leader + s_leader) + offset gives the world offset m s_leader + offset - s."""
+    out = []
+    for joint in desc.joints:
+        if joint.mimic is None:
+            continue
+        m, leader = joint.mimic.multiplier, joint.mimic.leader
+        start, lead = values.get(joint.name, (0.0, 0.0))[0], values.get(leader, (0.0, 0.0))[0]
+        offset = m * lead + joint.mimic.offset - start
+        out.append(JointCoupling(f"{name}.{joint.name}", f"{name}.{leader}", m, offset))
+    return out
 
 
 def joint_chains(name: str, desc: ModelDesc) -> list[tuple[str, ...]]:

@@ -23,7 +23,7 @@ from backends.types import (
     ShapeKind,
 )
 from runner.compile.joints import drive_motor, dynamics, initial_motor, stops, zero_offset
-from runner.compile.robot_start import start_values
+from runner.compile.robot_start import mimic_starts, start_values
 from runner.compile.robots import compile_robots
 from runner.compile.sensed import reaction_joints
 from runner.compile.surfaces import compiled_surface
@@ -163,7 +163,8 @@ def joint_zeros(
     }
     for rname, robot in model.robots.items():
         if robots is not None and rname in robots:
-            values = start_values(robot, robots[rname], as_file=model.world.options == "model")
+            desc = robots[rname]
+            values = mimic_starts(desc, start_values(robot, desc, as_file=model.world.options == "model"))
             zeros.update({f"{rname}.{j}": q for j, (q, _) in values.items() if q != 0.0})
     return zeros
 
@@ -237,6 +238,7 @@ def compile_world(model: Scenario, name: str, robots: Mapping[str, ModelDesc] | 
         excluded_pairs=parts.excluded,
         models=parts.models,
         joint_chains=parts.chains,
+        couplings=parts.couplings,
         model_options=model.world.options == "model",
         contact_points=model.trace.contact_points,
         reaction_joints=reaction_joints(model, [j.name for j in (*joints, *parts.joints)]),

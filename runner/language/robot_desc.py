@@ -78,6 +78,16 @@ class LinkDesc:
 
 
 @dataclass(frozen=True)
+class MimicDesc:
+    """URDF `<mimic>`: the joint's position is ``multiplier`` x ``leader``'s + ``offset``, both read as the
+    description reads them (from each joint's zero in the description: the file's, or its start clamp)."""
+
+    leader: str
+    multiplier: float
+    offset: float
+
+
+@dataclass(frozen=True)
 class JointDesc:
     name: str
     kind: str  # hinge | slider | fixed | ball | free (MJCF: a free body)
@@ -91,6 +101,7 @@ class JointDesc:
     #: damping, friction loss, armature, stiffness, effort and velocity limits (URDF `<dynamics>`/`<limit>`,
     #: MJCF's compiled joint), in the joint's coordinate as ``lo``/``hi``
     dynamics: JointDynamics = NO_DYNAMICS
+    mimic: MimicDesc | None = None  # URDF <mimic>: held at a multiple of another joint's position
 
 
 @dataclass(frozen=True)

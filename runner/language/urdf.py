@@ -26,6 +26,7 @@ from runner.language.model_numbers import check_urdf_numbers, check_vertices
 from runner.language.robot_desc import (
     JointDesc,
     LinkDesc,
+    MimicDesc,
     ModelDesc,
     ModelFileError,
     quat_from_matrix,
@@ -259,6 +260,53 @@ def _start(lo: float | None, hi: float | None) -> float:
     return float(min(max(0.0, lo), hi))
 
 
+def _limits(joint: Any) -> tuple[float | None, float | None]:
+    """A revolute or prismatic joint's limits as the file gives them; lower > upper is no limit (pybullet's
+    convention: cube_no_rotation.urdf)."""
+    lo = hi = None
+    if joint.type in ("revolute", "prismatic") and joint.limit is not None:
+        lo, hi = joint.limit.lower, joint.limit.upper
+    if lo is not None and hi is not None and lo > hi:
+        return None, None
+    return lo, hi
+
+
+def _starts(joints: list[Any], file: Path, lines: dict[str, int]) -> tuple[dict[str, float], dict[str, MimicDesc]]:
+    """Each joint's start (:func:`_start`; 0 for a `<mimic>` joint, which the compiler starts where its
+    leader puts it: runner.compile.robot_start.mimic_starts) and each `<mimic>` in the description's
+    coordinates (a leader started inside its limits counts from there, so the offset takes in multiplier x
+    that start). A mimic naming a joint the model lacks, itself, a joint that is not revolute, continuous or
+    prismatic, or a loop of mimics is refused at its line (``lines``: the <mimic> element's, by joint)."""
+    by_name = {j.name: j for j in joints}
+    followed = {j.name: j for j in joints if j.mimic is not None}
+    starts = {j.name: 0.0 if j.name in followed else _start(*_limits(j)) for j in joints}
+    scalar = ("revolute", "continuous", "prismatic")
+    mimics = {}
+    for name, joint in followed.items():
+        line, leader = lines.get(name, 0), joint.mimic.joint
+        what = f"joint `{name}`: <mimic joint={leader!r}>"
+        if leader not in by_name or leader == name:
+            why = "names itself" if leader == name else "names a joint the model does not define"
+            raise ModelFileError(file, line, f"{what} {why}", near="<mimic")
+        if joint.type not in scalar or by_name[leader].type not in scalar:
+            raise ModelFileError(file, line, f"{what}: both joints must be revolute, continuous or prismatic "
+                                 f"(they are {joint.type} and {by_name[leader].type})", near="<mimic")  # fmt: skip
+        m = 1.0 if joint.mimic.multiplier is None else float(joint.mimic.multiplier)
+        c = 0.0 if joint.mimic.offset is None else float(joint.mimic.offset)
+        if not (math.isfinite(m) and math.isfinite(c)):
+            raise ModelFileError(file, line, f"{what}: multiplier {m} and offset {c} must be finite", near="<mimic")
+        chain, at = [name], leader
+        while at in followed:  # a loop of mimics has no joint to start from
+            if at in chain:
+                loop = " -> ".join([*chain, at])
+                raise ModelFileError(file, line, f"joint `{name}`: its <mimic> joints form a loop ({loop})",
+                                     near="<mimic")  # fmt: skip
+            chain.append(at)
+            at = followed[at].mimic.joint
+        mimics[name] = MimicDesc(leader, m, m * starts[leader] + c)
+    return starts, mimics
+
+
 def _motion(kind: str, axis: np.ndarray, q: float) -> np.ndarray:
     """The joint's own motion by ``q`` (rad or m) along its unit ``axis``, as a 4x4 matrix."""
     out = np.eye(4)
@@ -353,6 +401,9 @@ def load_urdf(file: Path, package_root: Path | None, static_root: bool, static_t
     frames = {root: np.eye(4)}
     descs: list[JointDesc] = []
     notes: list[str] = []
+    mimic_lines = {j.get("name"): j.find("mimic").sourceline or 0 for j in tree.getroot().iterfind("joint")
+                   if j.find("mimic") is not None}  # fmt: skip
+    starts, mimics = _starts(list(robot.joints), file, {**joint_lines, **mimic_lines})
     for joint in _walk(root, list(robot.joints)):
         at_joint = frames[joint.parent] @ np.asarray(joint.origin if joint.origin is not None else np.eye(4))
         kind = _KINDS[joint.type]
@@ -361,16 +412,13 @@ def load_urdf(file: Path, package_root: Path | None, static_root: bool, static_t
             raise ModelFileError(file, joint_lines.get(joint.name, 0), f"joint `{joint.name}` has a zero axis")
         unit = axis / max(float(np.linalg.norm(axis)), 1e-300)
         world_axis = at_joint[:3, :3] @ unit
-        lo = hi = None
-        if joint.type in ("revolute", "prismatic") and joint.limit is not None:
-            lo, hi = joint.limit.lower, joint.limit.upper
-        if lo is not None and hi is not None and lo > hi:
-            lo = hi = None  # pybullet's convention: lower > upper is no limit (cube_no_rotation.urdf)
-        start = _start(lo, hi)
+        lo, hi = _limits(joint)
+        start = starts[joint.name]
         if start != 0.0:
             notes.append(f"joint `{joint.name}`: 0 is outside its limits [{lo:g}, {hi:g}]; it starts at {start:g}, "
                          "and its position counts from there")  # fmt: skip
-            lo, hi = float(lo) - start, float(hi) - start  # type: ignore[arg-type]
+            lo = None if lo is None else float(lo) - start
+            hi = None if hi is None else float(hi) - start
         frame = at_joint @ _motion(joint.type, unit, start)
         frames[joint.child] = frame
         descs.append(
@@ -385,6 +433,7 @@ def load_urdf(file: Path, package_root: Path | None, static_root: bool, static_t
                 None if hi is None else float(hi),
                 joint_lines.get(joint.name, 0),
                 _dynamics(joint, kind, file, joint_lines.get(joint.name, 0)),
+                mimics.get(joint.name),
             )
         )
     links: list[LinkDesc] = []

@@ -99,6 +99,49 @@ def test_joint_naming_a_missing_link_is_refused_at_its_line(tmp_path: Path) -> N
     assert "names child link `hand`, which the model does not define" in message
 
 
+FINGER_URDF = GOOD_URDF.replace(
+    "</robot>",
+    """  <link name="finger">
+    <inertial><mass value="0.1"/><inertia ixx="0.001" ixy="0" ixz="0" iyy="0.001" iyz="0" izz="0.001"/></inertial>
+  </link>
+  <joint name="grip" type="prismatic">
+    <parent link="arm"/><child link="finger"/><origin xyz="0 0 0.5"/><axis xyz="1 0 0"/>
+    <limit lower="-1" upper="1" effort="10" velocity="1"/>
+    <mimic joint="shoulder" multiplier="0.1" offset="0.02"/>
+  </joint>
+</robot>""",
+)
+
+
+@pytest.mark.parametrize(
+    ("mimic", "kind", "found"),
+    [
+        ('<mimic joint="elbow"/>', "revolute", "names a joint the model does not define"),
+        ('<mimic joint="shoulder"/>', "revolute", "names itself"),
+        ("", "fixed", "must be revolute, continuous or prismatic"),
+    ],
+)
+def test_a_bad_mimic_is_refused_at_its_line(tmp_path: Path, mimic: str, kind: str, found: str) -> None:
+    text = GOOD_URDF.replace("<limit ", f"{mimic}\n    <limit ") if mimic else FINGER_URDF
+    text = text.replace('name="grip" type="prismatic"', f'name="grip" type="{kind}"')
+    file, line, message = _issue(_scenario(tmp_path, text))
+    assert file.endswith("robot.urdf") and line == _line_of(text, "<mimic")
+    assert _column(tmp_path / "s.yaml") == _column_of(text, "<mimic")
+    assert "<mimic joint=" in message and found in message
+
+
+def test_a_mimic_starts_where_its_leader_puts_it(tmp_path: Path) -> None:
+    """`initial` on the leader moves its follower: multiplier x the leader's start + offset, and the follower
+    reads in the file's coordinate from the start; the compiled coupling is then already satisfied."""
+    path = _scenario(tmp_path, FINGER_URDF, extra=", initial: {joints: {shoulder: 0.5}}")
+    program = build_program(load_scenario(path))
+    (coupling,) = program.world.couplings
+    assert (coupling.joint, coupling.leader, coupling.multiplier) == ("bot.grip", "bot.shoulder", 0.1)
+    assert coupling.offset == pytest.approx(0.0, abs=1e-15)  # started in place
+    assert program.joint_zeros["bot.grip"] == pytest.approx(0.1 * 0.5 + 0.02, abs=1e-15)
+    assert Capability.JOINT_MIMIC in program.world.required_capabilities()
+
+
 def test_malformed_xml_is_refused_at_its_line(tmp_path: Path) -> None:
     text = GOOD_URDF.replace("</joint>", "</joint", 1)
     file, line, message = _issue(_scenario(tmp_path, text))

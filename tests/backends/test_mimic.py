@@ -1,0 +1,167 @@
+"""URDF `<mimic>` (capability `joint:mimic`) on every engine that declares it, refused up front elsewhere.
+
+The model (tests/backends/models/mimic_pair.urdf): two arms on parallel hinges (axis y) from one fixed base,
+horizontal at the zero configuration; `follow` mimics `lead` with multiplier m = -0.5 and offset c = 0.2 rad.
+Released at rest under gravity, dt = h = 2 ms, T = 1 s. With the coupling rigid, the pair is one pendulum in
+q = lead: J q'' = m_a g r_a cos q + m m_b g r_b cos(m q + c), J = I_a + m^2 I_b (I about each hinge). Every
+engine here steps joint coordinates by semi-implicit Euler (PyBullet's Featherstone, MuJoCo's implicitfast
+with no velocity-dependent force), so the reference is that method on the one-coordinate equation, same h.
+
+Tolerances:
+
+* the trace rounds positions to 1e-9 (docs/trace-format.md): 1e-9 on a difference of two readings;
+* PyBullet: the gear is the solver's only row (no contact, no limit, the motors at fmax 0), which one
+  Gauss-Seidel sweep solves exactly, and positions integrate the constrained rates: tracking within
+  rounding, n eps |q| for n steps;
+* MuJoCo: a joint equality is soft. With solref (-K, -B) = (-erp/h^2, -1/h) and impedance d, the constraint
+  coordinate r obeys r'' = (1 - d) a0 - d B r' - d^2 K r, a0 its acceleration were it released (each arm a
+  free pendulum: |a0| <= g (m_b r_b / I_b + |m| m_a r_a / I_a)): statically |r| = (1 - d) |a0| / (d^2 K), and
+  at most twice that as it follows a0 (damping ratio d B / (2 d sqrt(K)) = 1.1, the discrete step at
+  w h = sqrt(erp) = 0.45);
+* Drake: its coupler constraint is SAP's near-rigid holonomic constraint (SapDriver: stiffness infinite,
+  relaxation time h, beta 0.1): regularisation R = eps w with eps = beta^2 / (4 pi^2), and the impulse aims at
+  removing the error g over h + relaxation time = 2h, so g' = g / 2 + eps (a0 h^2 + ...) per step settles below
+  2 eps a0 h^2 / (1 - eps), monotonically from 0 (each joint is its own tree here: w is exact);
+* the leader: a follower off its place by r changes the torque on the leader by at most |m| m_b g r_b |r|,
+  so q drifts by at most that / J x T^2 / 2 from the reference.
+
+The coupling's own size: the leader released alone falls to 0.593 rad at 0.2 s, coupled to 0.438 (the
+reference); so a run ignoring the mimic fails both checks by orders of magnitude.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from backends.errors import UnsupportedFeature
+from backends.registry import get_backend, is_installed
+from reports.trace_reader import Trace, read_trace
+from runner.language.load import load_scenario
+from runner.sim.run import run_loaded
+from tests.engines import INSTALLED
+
+pytestmark = pytest.mark.slow
+MODEL = Path(__file__).parent / "models" / "mimic_pair.urdf"
+G, H, T = 9.81, 0.002, 1.0
+M, C = -0.5, 0.2  # the file's multiplier and offset
+MA, RA, IA = 1.0, 0.25, 0.02 + 1.0 * 0.25**2  # leader: mass, COM from the hinge, inertia about the hinge
+MB, RB, IB = 0.5, 0.2, 0.01 + 0.5 * 0.2**2
+J = IA + M * M * IB
+ROUNDING = 1e-9
+SCENARIO = f"""schema_version: 1
+scenario: mimic-pair
+world: {{gravity: [0, 0, {-G}], dt: {H}, duration: {T}}}
+bodies:
+  ground: {{plane: {{}}, motion: static, pos: [0, 0, -1]}}
+robots:
+  r:
+    urdf: mimic_pair.urdf
+    pos: [0, 0, 1]
+    fixed: true
+"""
+
+
+def _reference() -> np.ndarray:
+    """The leader at every step: semi-implicit Euler on the one-coordinate equation (module docstring)."""
+    q, v, out = 0.0, 0.0, [0.0]
+    for _ in range(round(T / H)):
+        v += H * (MA * G * RA * math.cos(q) + M * MB * G * RB * math.cos(M * q + C)) / J
+        q += H * v
+        out.append(q)
+    return np.array(out)
+
+
+def _declares(engine: str) -> bool:
+    from backends.types import Capability
+
+    return Capability.JOINT_MIMIC in get_backend(engine).capabilities
+
+
+def _run(tmp_path: Path, engine: str) -> Trace:
+    (tmp_path / "mimic_pair.urdf").write_bytes(MODEL.read_bytes())
+    (tmp_path / "pair.yaml").write_text(SCENARIO)
+    result = run_loaded(load_scenario(tmp_path / "pair.yaml"), engine, tmp_path / engine)
+    assert result.status == "passed", result.failure
+    assert result.trace is not None
+    return read_trace(result.trace)
+
+
+def _tracking_bound(engine: str) -> float:
+    steps = round(T / H)
+    bound = ROUNDING + steps * get_backend(engine).precision.eps * 4.0  # |q| < 4 rad over the run
+    if engine == "mujoco":
+        from backends.mujoco._model import IMPEDANCE
+        from backends.mujoco._options import MujocoOptions
+
+        d, stiffness = IMPEDANCE, MujocoOptions().erp / H**2
+        bound += 2.0 * (1.0 - d) * _free_acceleration() / (d * d * stiffness)
+    if engine == "drake":
+        eps = 0.1**2 / (4 * math.pi**2)
+        bound += 2.0 * eps / (1.0 - eps) * _free_acceleration() * H**2
+    return bound
+
+
+def _free_acceleration() -> float:
+    """|a0|: the coupling coordinate's acceleration were it released (each arm a free pendulum)."""
+    return G * (MB * RB / IB + abs(M) * MA * RA / IA)
+
+
+@pytest.mark.parametrize("engine", [e for e in INSTALLED if _declares(e)])
+def test_a_mimic_joint_follows_its_leader(tmp_path: Path, engine: str) -> None:
+    trace = _run(tmp_path, engine)
+    lead, follow = trace.joints["r.lead"].position, trace.joints["r.follow"].position
+    assert lead[0] == 0.0 and follow[0] == pytest.approx(C, abs=ROUNDING)  # started where its leader puts it
+    track = _tracking_bound(engine)
+    gap = float(np.max(np.abs(follow - (M * lead + C))))
+    assert gap <= track, (engine, gap, track)
+    reference = _reference()
+    drift = abs(M) * MB * G * RB * (track - ROUNDING) / J * T * T / 2 + 2 * ROUNDING
+    off = float(np.max(np.abs(lead - reference[: len(lead)])))
+    assert off <= drift, (engine, off, drift)
+    assert float(np.ptp(lead)) > 2.0  # it swung through most of a half turn: not a still comparison
+
+
+@pytest.mark.parametrize("engine", [e for e in INSTALLED if not _declares(e)])
+def test_an_engine_without_mimic_refuses_it_up_front(tmp_path: Path, engine: str) -> None:
+    (tmp_path / "mimic_pair.urdf").write_bytes(MODEL.read_bytes())
+    (tmp_path / "pair.yaml").write_text(SCENARIO)
+    with pytest.raises(UnsupportedFeature, match=rf"joint:mimic.*`{engine}`"):
+        run_loaded(load_scenario(tmp_path / "pair.yaml"), engine, tmp_path / engine)
+
+
+@pytest.mark.skipif(not is_installed("pybullet"), reason="pybullet_data ships with pybullet")
+def test_franka_pandas_second_finger_mimics_the_first(tmp_path: Path) -> None:
+    """pybullet_data's Franka Panda: `panda_finger_joint2` mimics `panda_finger_joint1` (multiplier 1, no
+    offset). A servo opens finger 1 to 0.03 m; finger 2 follows it. Here the gear shares Bullet's solve with
+    the servos' and the stops' rows, which Gauss-Seidel does not solve exactly: if a step leaves at most the
+    step's own relative motion uncorrected (no worse than no gear), and the gear's ERP removes the fraction
+    E = 1 x 0.2 (its erp times Bullet's multibody erp, 0.2 by default) of the error each step, the error
+    stays below max|dq1| / E. Ignoring the mimic leaves finger 2 at 0, 0.03 m off."""
+    (tmp_path / "panda.yaml").write_text(
+        """schema_version: 1
+scenario: panda-fingers
+world: {gravity: [0, 0, -9.81], dt: 0.002, duration: 0.5}
+bodies:
+  ground: {plane: {}, motion: static}
+robots:
+  arm:
+    urdf: "@pybullet_data/franka_panda/panda.urdf"
+    fixed: true
+    joints:
+      panda_finger_joint1: {servo: {target: 0.03, gain: 20, fmax: 20}}
+"""
+    )
+    held = "".join(f"      panda_joint{k}: {{servo: {{target: 0, gain: 20, fmax: 300}}}}\n" for k in range(1, 8))
+    (tmp_path / "panda.yaml").write_text((tmp_path / "panda.yaml").read_text() + held)  # only the fingers move
+    result = run_loaded(load_scenario(tmp_path / "panda.yaml"), "pybullet", tmp_path / "out")
+    assert result.status == "passed", result.failure
+    assert result.trace is not None
+    trace = read_trace(result.trace)
+    one, two = trace.joints["arm.panda_finger_joint1"].position, trace.joints["arm.panda_finger_joint2"].position
+    assert one[-1] == pytest.approx(0.03, abs=1e-3)  # the servo opened it (its own tolerance: not this test's)
+    bound = float(np.max(np.abs(np.diff(one)))) / (1.0 * 0.2) + ROUNDING
+    assert float(np.max(np.abs(two - one))) <= bound
