@@ -77,17 +77,27 @@ class StartupFigures:
         return self.median("run") / self.median("import")
 
 
+#: the command whose time is taken in the environment as it is (bytecode as the environment allows)
+AS_IS = "run, as the environment is"
+
+
 def commands(out: Path) -> dict[str, list[str]]:
     py = sys.executable
+    run_ = [py, "-m", "runner", "run", str(ONE_STEP), "--backend", ENGINE, "--quiet", "--out", str(out)]
     return {
         "import": [py, "-c", f"import {MODULE}"],
         "validate": [py, "-m", "runner", "validate", str(ONE_STEP)],
-        "run": [py, "-m", "runner", "run", str(ONE_STEP), "--backend", ENGINE, "--quiet", "--out", str(out)],
+        "run": run_,
+        AS_IS: run_,
     }
 
 
-def _env() -> dict[str, str]:
-    return {**os.environ, "PYTHONPATH": str(ROOT)}
+def _env(name: str = "", pycache: Path | None = None) -> dict[str, str]:
+    env = {**os.environ, "PYTHONPATH": str(ROOT)}
+    if name != AS_IS and pycache is not None:
+        env.pop("PYTHONDONTWRITEBYTECODE", None)
+        env["PYTHONPYCACHEPREFIX"] = str(pycache)
+    return env
 
 
 def group_of(module: str) -> str:
@@ -109,7 +119,8 @@ def import_groups(stderr: str) -> dict[str, float]:
 
 def run(reps: int = 7, log: Callable[[str], None] = print) -> StartupFigures:
     fig = StartupFigures()
-    with tempfile.TemporaryDirectory(prefix="bench-startup-") as tmp:
+    with tempfile.TemporaryDirectory(prefix="bench-startup-") as tmp, \
+            tempfile.TemporaryDirectory(prefix="bench-startup-pyc-") as pyc:  # fmt: skip
         cmds = commands(Path(tmp))
         names = list(cmds)
         for rep in range(reps + 1):  # the first round warms the file cache and is not counted
@@ -117,7 +128,8 @@ def run(reps: int = 7, log: Callable[[str], None] = print) -> StartupFigures:
             for name in names[turn:] + names[:turn]:
                 before = resource.getrusage(resource.RUSAGE_CHILDREN)
                 start = time.perf_counter()
-                done = subprocess.run(cmds[name], capture_output=True, text=True, env=_env(), cwd=ROOT, check=False)
+                done = subprocess.run(cmds[name], capture_output=True, text=True, env=_env(name, Path(pyc)), cwd=ROOT,
+                                      check=False)  # fmt: skip
                 seconds = time.perf_counter() - start
                 after = resource.getrusage(resource.RUSAGE_CHILDREN)
                 cpu = after.ru_utime - before.ru_utime + after.ru_stime - before.ru_stime
@@ -126,8 +138,10 @@ def run(reps: int = 7, log: Callable[[str], None] = print) -> StartupFigures:
                     fig.seconds.setdefault(name, []).append(seconds)
                     fig.cpu.setdefault(name, []).append(cpu)
         for name, cmd in cmds.items():
+            if name == AS_IS:
+                continue
             done = subprocess.run([cmd[0], "-X", "importtime", *cmd[1:]], capture_output=True, text=True,
-                                  env=_env(), cwd=ROOT, check=False)  # fmt: skip
+                                  env=_env(name, Path(pyc)), cwd=ROOT, check=False)  # fmt: skip
             fig.imports[name] = import_groups(done.stderr)
     fig.seconds = {n: fig.seconds[n] for n in names}
     fig.cpu = {n: fig.cpu[n] for n in names}
@@ -142,33 +156,46 @@ def target_rows(fig: StartupFigures | None) -> list[tuple[str, str, bool, str]]:
     run_imports = fig.imports.get("run", {})
     top = sorted(((v, k) for k, v in run_imports.items() if not k.startswith(MODULE)), reverse=True)[:3]
     where = "; ".join(f"{k} {v * 1e3:.0f} ms" for v, k in top)
+    as_is = (f"; bytecode as the environment allows: {fig.cpu_median(AS_IS) / fig.cpu_median('import'):.2f}"
+             if AS_IS in fig.cpu else "")  # fmt: skip
     return [(f"start-up: one-step `scenario run` on {ENGINE} / `python -c 'import {ENGINE}'` <= {TARGET_RATIO:g}",
              f"{fig.ratio:.2f} (CPU {fig.cpu_median('run'):.2f} s vs {fig.cpu_median('import'):.2f} s; wall "
-             f"{fig.wall_ratio:.2f})",
+             f"{fig.wall_ratio:.2f}{as_is})",
              fig.ratio <= TARGET_RATIO, f"imports beyond {MODULE}'s (-X importtime, section 11): {where}")]  # fmt: skip
+
+
+def _bytecode_note() -> str:
+    if os.environ.get("PYTHONDONTWRITEBYTECODE"):
+        return "set: this checkout compiled from source at every start"
+    return "not set"
 
 
 def render(fig: StartupFigures | None) -> list[str]:
     if fig is None:
         return []
-    names = [n for n in ("import", "validate", "run") if n in fig.seconds]
+    names = [n for n in ("import", "validate", "run", AS_IS) if n in fig.seconds]
     out = [
         "## 11. Start-up: a one-step `scenario run` against importing the engine",
         "",
         f"bench/startup.py: `bench/scenarios/one_step.yaml` (one 10 ms step of a box), each command a fresh "
         f"process, {len(fig.seconds['run'])} interleaved rounds after one uncounted, medians of the CPU time of "
-        f"the process and its children (user + system) and of the wall time; "
+        f"the process and its children (user + system) and of the wall time; bytecode cached in the benchmark's "
+        f"own folder (`PYTHONPYCACHEPREFIX`, written in the uncounted round) except for the last row, which runs "
+        f"with the environment as it is (`PYTHONDONTWRITEBYTECODE` "
+        f"{_bytecode_note()}); "
         f"exit codes seen: " + ", ".join(f"{n} {sorted(fig.statuses[n])}" for n in names) + ".",
         "",
         "| command | CPU (s) | / import | wall (s) | / import | wall, each round (s) |",
         "|---|---|---|---|---|---|",
     ]
     label = {"import": f"`python -c 'import {ENGINE}'`", "validate": "`scenario validate one_step.yaml`",
-             "run": f"`scenario run one_step.yaml --backend {ENGINE} --quiet`"}  # fmt: skip
+             "run": f"`scenario run one_step.yaml --backend {ENGINE} --quiet`",
+             AS_IS: "the same run, bytecode as the environment allows"}  # fmt: skip
     for n in names:
         runs = ", ".join(f"{s:.2f}" for s in fig.seconds[n])
         out.append(f"| {label[n]} | {fig.cpu_median(n):.3f} | {fig.cpu_median(n) / fig.cpu_median('import'):.2f} "
                    f"| {fig.median(n):.3f} | {fig.median(n) / fig.median('import'):.2f} | {runs} |")  # fmt: skip
+    names = [n for n in names if n in fig.imports]
     groups = sorted({g for d in fig.imports.values() for g in d}, key=lambda g: -fig.imports.get("run", {}).get(g, 0))
     out += ["", "Where the time goes: the modules' own import time by group (ms, `-X importtime`, one run each):", "",
             "| group | " + " | ".join(names) + " |", "|---|" + "---|" * len(names)]  # fmt: skip

@@ -11,19 +11,14 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from types import TracebackType
+from typing import TYPE_CHECKING
 
 from rich.console import Console
-from rich.progress import (
-    BarColumn,
-    MofNCompleteColumn,
-    Progress,
-    TaskID,
-    TextColumn,
-    TimeElapsedColumn,
-    TimeRemainingColumn,
-)
 
 from runner.exec.cases import CaseResult
+
+if TYPE_CHECKING:
+    from rich.progress import TaskID
 
 __all__ = ["BatchProgress", "wanted"]
 
@@ -39,6 +34,16 @@ class BatchProgress:
 
     def __init__(self, err: Console, total: int, label: str = "cases",
                  then: Callable[[int, CaseResult], None] | None = None) -> None:  # fmt: skip
+        # imported here: a command that shows no bar (--quiet, --json, no terminal) does not import it
+        from rich.progress import (
+            BarColumn,
+            MofNCompleteColumn,
+            Progress,
+            TextColumn,
+            TimeElapsedColumn,
+            TimeRemainingColumn,
+        )
+
         self.total = total
         self.then = then
         self.running: set[int] = set()

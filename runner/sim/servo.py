@@ -50,6 +50,10 @@ class Servos:
         self.specs = [(joint_index[s.joint], s) for s in specs]
         # each joint's effort and velocity limits cap the commands (docs/semantics.md, "Joint dynamics")
         self.dynamics = {j: world.joints[j].dynamics if world else NO_DYNAMICS for j, _ in self.specs}
+        #: per servo, what does not change between steps: (joint, gain, vmax, the joint's velocity limit, fmax
+        #: within its effort limit): the same operations as ``capped``, in its order, without its per-step calls
+        self._fixed = [(j, s.gain, s.vmax, self.dynamics[j].velocity, capped(0.0, s.fmax, self.dynamics[j])[1])
+                       for j, s in self.specs]  # fmt: skip
 
     def __bool__(self) -> bool:
         return bool(self.specs)
@@ -59,9 +63,12 @@ class Servos:
         return [s.target if isinstance(s.target, float) else float(s.target.number(resolver)) for _, s in self.specs]
 
     def drive(self, backend: Backend, positions: list[float], resolver: Resolver) -> None:
-        for (j, spec), target in zip(self.specs, self.targets(resolver), strict=True):
-            vel = spec.gain * (target - positions[j])
-            if spec.vmax is not None:
-                vel = max(-spec.vmax, min(spec.vmax, vel))
+        set_motor = backend.set_motor
+        for (j, gain, vmax, limit, fmax), target in zip(self._fixed, self.targets(resolver), strict=True):
+            vel = gain * (target - positions[j])
+            if vmax is not None:
+                vel = max(-vmax, min(vmax, vel))
             if math.isfinite(vel):  # a NaN reading is the engine's failure, which the runner reports itself
-                backend.set_motor(j, *capped(vel, spec.fmax, self.dynamics[j]))
+                if limit is not None:
+                    vel = max(-limit, min(limit, vel))
+                set_motor(j, vel, fmax)

@@ -38,10 +38,6 @@ from collections.abc import Iterable
 from pathlib import Path
 from types import TracebackType
 
-from mcap.exceptions import McapError
-from mcap.records import Header, Metadata
-from mcap.stream_reader import StreamReader
-
 from reports import outcome as oc
 from reports import trace_format as tf
 from runner.errors import OutputError, OutputInUse, TraceError
@@ -77,6 +73,10 @@ def lock_path(trace: Path) -> Path:
 
 
 def _own_trace(path: Path) -> bool:
+    from mcap.exceptions import McapError  # mcap's reader (with its decompressors) only where a file is read
+    from mcap.records import Header, Metadata
+    from mcap.stream_reader import StreamReader
+
     try:
         with open(path, "rb") as f:
             head = f.read(len(_MAGIC))
@@ -237,6 +237,9 @@ def refusal(paths: list[Path]) -> str:
 
 def _record_ends(data: bytes) -> list[int]:
     """Offsets in ``data`` (an MCAP file) at which a whole record ends, read by mcap's own stream reader."""
+    from mcap.exceptions import McapError
+    from mcap.stream_reader import StreamReader
+
     stream = io.BytesIO(data)
     ends = [len(_MAGIC)] if data.startswith(_MAGIC) else []
     records = iter(StreamReader(stream, skip_magic=False).records)

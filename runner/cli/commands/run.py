@@ -7,11 +7,10 @@ import importlib.util
 import json
 import math
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from rich.console import Console
 from rich.markup import escape
-from rich.progress import BarColumn, Progress, TaskID, TextColumn, TimeRemainingColumn
 
 from backends.errors import BackendError, BackendNotInstalled, EngineFailure
 from backends.registry import DEFAULT_BACKEND
@@ -21,6 +20,9 @@ from runner.errors import OutputError, ScenarioError, ScenarioValidationError, T
 from runner.exec.cases import Case, CaseResult
 from runner.language.load import BASE_CASE, LoadedScenario, load_files, parse_overrides
 from runner.trace.output import OUTPUT_ERRNOS
+
+if TYPE_CHECKING:
+    from rich.progress import Progress, TaskID
 
 NAME = "run"
 HELP = "run scenarios and print verdicts"
@@ -248,6 +250,9 @@ class _Shown:
 
 
 def _progress(err: Console) -> Progress:
+    # imported here: a run that shows no bar (--quiet, --json, no terminal) does not import it
+    from rich.progress import BarColumn, Progress, TextColumn, TimeRemainingColumn
+
     return Progress(TextColumn("{task.description}", markup=False), BarColumn(), TextColumn("{task.percentage:>3.0f}%"),
                     TimeRemainingColumn(), console=err, transient=True, auto_refresh=False)  # fmt: skip
 
