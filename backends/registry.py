@@ -68,6 +68,11 @@ _KNOWN: dict[str, BackendEntry] = {
         "mujoco", "backends.mujoco:MujocoBackend", "mujoco", "mujoco", "mujoco", "MuJoCo, built through MjSpec",
         options="backends.mujoco._options:MujocoOptions",
     ),
+    "mujoco_warp": BackendEntry(
+        "mujoco_warp", "backends.mujoco_warp:MujocoWarpBackend", "mujoco_warp", "mujoco-warp", "mujoco-warp",
+        "MuJoCo Warp (MJWarp): the MuJoCo backend's model stepped on a Warp device (CPU by default)",
+        options="backends.mujoco_warp._options:MujocoWarpOptions", precision=Precision.FLOAT32,
+    ),
     "ode": BackendEntry(
         "ode",
         "backends.ode:OdeBackend",
