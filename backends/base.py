@@ -4,6 +4,7 @@ A backend is built from a :class:`~backends.types.CompiledWorld` and then driven
 per scenario step, in this order (docs/semantics.md, "Step order")::
 
     set_kinematic(...) / set_motor(...) / apply_force(...) / reset_body(...)   # inputs for this step
+    set_control(...)                                                           # (model-file engines)
     step()                                                                     # advance by world.dt
     body_states(), joint_states(), contacts(), drain_messages()                # read the result
 
@@ -22,14 +23,31 @@ Semantics every backend must honour (ODE's):
   ``ang_vel*dt``. A kinematic body not set again keeps its last velocity for the next step (the runner
   always sets it, to zero when it stops).
 * ``reset_body`` teleports a dynamic body that no joint holds and sets its velocities (the lab's reset).
+* ``set_control`` sets the control input of a model file's actuator (MJCF `<actuator>`, by its index in the
+  file), held until changed; only an engine running model files' actuators itself (``actuator:native``).
 * ``contacts()`` lists the body pairs whose contacts the engine **used during the last step**: found at
   the start of each engine step (at the poses before it), touching (distance <= 0), in any of the step's
   substeps. Per pair: the most points and the deepest penetration of any substep, and the mean normal
   force over the substeps (the transmitted impulse / dt). Static and kinematic bodies never touch each
   other. ``JointStates.motor_force`` is likewise the mean over the step's substeps.
+* ``contact_points()`` (only an adapter that declares ``contacts:points``; the runner calls it only when a
+  scenario asks, as reading points costs time): every touching point (distance <= 0) of the step's **last**
+  engine step, sorted by (a, b) and in the engine's order within a pair, each with its world position, its
+  unit normal pointing from body ``a`` to body ``b`` (the force on ``b`` is ``+force * normal``), its depth
+  and its normal force in that engine step. With one engine step per scenario step a pair's point forces
+  sum to its ``contacts()`` normal force; with several, ``contacts()`` is the mean over them and the points
+  are the last one's (docs/semantics.md, "Contact points").
 * States are read fresh after the step (never a stale cache), positions in metres, quaternions
   (w, x, y, z; a quaternion and its negation are the same orientation), velocities in the world frame.
 * ``drain_messages()`` returns what the engine printed about itself since the last call (lines).
+* ``imported_model()`` (optional hook ``_imported_model``) reads back, before any step, how the engine holds the
+  world it was built from: per dynamic body its mass, principal inertia about the COM, COM in the body frame
+  and collision shapes counted; per joint its kind, world axis, stops, and the damping, friction loss, effort
+  and velocity limits the engine itself holds (``backends.types.ImportedModel``). The values come FROM THE
+  ENGINE (pybullet getDynamicsInfo/getJointInfo, MuJoCo's mjModel arrays, DART's BodyNode/Joint getters,
+  ODE's OdeMass and joint params), never from ``self.world``: they show what the engine will simulate, which
+  is what ``scenario compare`` compares across engines. An adapter that cannot read them back returns None
+  (the default) and the comparison says "not reported".
 
 Robots (the capabilities in ``backends.types.ROBOT_CAPABILITIES``; the full text is in backends/types.py and
 docs/robots.md). An adapter declares one only when it honours all of it:
@@ -46,6 +64,16 @@ docs/robots.md). An adapter declares one only when it honours all of it:
   ``contacts()``); every other pair, links of one robot included, collides.
 * Joints of a model are ordinary ``JointSpec`` entries (world-frame axis and anchor at the start; positions
   from the start pose); the position servo is the runner's (``set_motor`` every step), never the adapter's.
+
+Sensing (``joint:reaction``, declared by an adapter that implements ``_joint_reactions``):
+
+* ``joint_reactions()`` gives, for each joint of ``CompiledWorld.reaction_joints`` in that order, the wrench
+  the joint applied to its first body (``JointSpec.body``) during the last step: its constraint rows, its
+  motor and its stops together (everything the joint transmits; contacts, gravity and applied forces are not
+  the joint's), as the mean over the step's substeps (as ``motor_force``). One row of six numbers: the force
+  (N, world frame), then the torque (N m, world frame) **about that body's centre of mass** (the runner moves
+  it to the joint's anchor). Zeros before the first step. An engine computes it only for those joints (it
+  may cost a sensor or a pass over the tree); the runner calls it only when the list is not empty.
 
 Edge cases, the same on every backend (checked here, before any engine call):
 
@@ -72,18 +100,22 @@ from __future__ import annotations
 import abc
 import math
 from types import TracebackType
-from typing import Any, ClassVar, NoReturn
+from typing import TYPE_CHECKING, Any, ClassVar, NoReturn
 
 import numpy as np
 
+from ._kit.chains import chained
 from ._kit.motion import KinematicPose, KinematicTrack, OneStepForces
 from ._kit.options import BackendOptions
 from .errors import ContractViolation, engine_failure
 from .types import (
+    MODEL_FILE_CAPABILITIES,
     BodyStates,
     Capability,
     CompiledWorld,
     Contact,
+    ContactPoint,
+    ImportedModel,
     JointKind,
     JointSpec,
     JointStates,
@@ -92,6 +124,9 @@ from .types import (
     Quat,
     Vec3,
 )
+
+if TYPE_CHECKING:
+    from .batch import WorldBatch
 
 #: Joint kinds that have a coordinate and so a velocity motor (a universal joint's first axis).
 MOTORISED = frozenset({JointKind.SLIDER, JointKind.HINGE, JointKind.UNIVERSAL})
@@ -107,7 +142,7 @@ class Backend(abc.ABC):
     #: What this backend can simulate; checked before a run starts.
     capabilities: ClassVar[frozenset[Capability]]
     #: The format the engine keeps its state in (its rounding: docs/semantics.md, "Rounding"); the same
-    #: as the registry entry's ``precision`` (tests/backends/test_backend_contract.py).
+    #: as the registry entry's ``precision`` (the contract suite, backends/testing).
     precision: ClassVar[Precision]
     #: The scenario's ``backend_options.<name>`` block, typed (backends._kit.options).
     Options: ClassVar[type[BackendOptions]] = BackendOptions
@@ -118,7 +153,8 @@ class Backend(abc.ABC):
     native_damping: ClassVar[bool] = False
 
     def __init__(self, world: CompiledWorld) -> None:
-        self.world = world
+        self.world = self.engine_world(world)
+        self._shown = len(world.bodies)  # the world's bodies; the chains' light bodies come after them
         self.options = self.Options.parse(world.options_for(self.name), self.name)
         self.kinematic = KinematicTrack(world)
         self.forces = OneStepForces()
@@ -148,6 +184,21 @@ class Backend(abc.ABC):
     def engine_label(cls) -> str:
         """The engine's own name and version, and its wrapper's where they differ (``scenario backends``)."""
         return f"{cls.engine_distribution} {cls.engine_version()}"
+
+    @classmethod
+    def engine_world(cls, world: CompiledWorld) -> CompiledWorld:
+        """The world the adapter builds: several joints moving one body (``joint_chains``) become a chain
+        through light bodies (backends/_kit/chains.py), except on an engine that builds model files itself
+        (MuJoCo runs a body's joints natively)."""
+        if not world.joint_chains or MODEL_FILE_CAPABILITIES <= cls.capabilities:
+            return world
+        return chained(world)
+
+    @classmethod
+    def world_batch(cls) -> type[WorldBatch] | None:
+        """The class that runs many worlds of this backend in one engine call (backends.batch), or None: a
+        batched sweep (`scenario sweep --batch`) then runs each variant on its own."""
+        return None
 
     @classmethod
     def check_world(cls, world: CompiledWorld, options: BackendOptions) -> None:
@@ -182,9 +233,13 @@ class Backend(abc.ABC):
         """Fresh states of all bodies, in ``world.bodies`` order."""
         self._open("body_states")
         try:
-            return self._body_states()
+            states = self._body_states()
         except self.engine_errors as exc:
             raise engine_failure(self.name, "reading body states", exc) from exc
+        if len(states.pos) == self._shown:
+            return states
+        n = self._shown
+        return BodyStates(states.pos[:n], states.quat[:n], states.lin_vel[:n], states.ang_vel[:n])
 
     def joint_states(self) -> JointStates:
         """Fresh states of all joints, in ``world.joints`` order."""
@@ -194,6 +249,17 @@ class Backend(abc.ABC):
         except self.engine_errors as exc:
             raise engine_failure(self.name, "reading joint states", exc) from exc
 
+    def joint_reactions(self) -> np.ndarray:
+        """(len(world.reaction_joints), 6): force, then torque about the first body's COM, world frame, that
+        each watched joint applied to its first body during the last step (see the module docstring)."""
+        self._open("joint_reactions")
+        if Capability.JOINT_REACTION not in self.capabilities:
+            self._refuse("joint_reactions: this backend does not declare joint:reaction")
+        try:
+            return self._joint_reactions()
+        except self.engine_errors as exc:
+            raise engine_failure(self.name, "reading joint reactions", exc) from exc
+
     def contacts(self) -> list[Contact]:
         """The pairs in contact during the last step, sorted by (a, b)."""
         self._open("contacts")
@@ -201,6 +267,16 @@ class Backend(abc.ABC):
             return self._contacts()
         except self.engine_errors as exc:
             raise engine_failure(self.name, "reading contacts", exc) from exc
+
+    def contact_points(self) -> list[ContactPoint]:
+        """The touching points of the last step's last engine step, sorted by (a, b) (``contacts:points``)."""
+        self._open("contact_points")
+        if Capability.CONTACT_POINTS not in self.capabilities:
+            self._refuse("contact_points(): this backend does not declare contacts:points")
+        try:
+            return self._contact_points()
+        except self.engine_errors as exc:
+            raise engine_failure(self.name, "reading contact points", exc) from exc
 
     def set_kinematic(self, body: int, pos: Vec3, quat: Quat, lin_vel: Vec3, ang_vel: Vec3) -> None:
         """Place kinematic body ``body`` now and set the velocity it moves with during the next step."""
@@ -235,6 +311,19 @@ class Backend(abc.ABC):
         if self._motion_of(body, "apply_force") is Motion.DYNAMIC:
             self.forces.add(body, force, torque)
 
+    def set_control(self, actuator: int, ctrl: float) -> None:
+        """Set the control input of the model file's actuator ``actuator`` (MJCF `<actuator>`, in the file's
+        order) on an engine that builds the file itself (``Capability.ACTUATOR_NATIVE``); held until changed."""
+        self._open("set_control")
+        if Capability.ACTUATOR_NATIVE not in self.capabilities:
+            self._refuse(f"set_control: {self.name} does not run a model file's actuators")
+        if not math.isfinite(ctrl):
+            self._refuse(f"set_control: actuator {actuator} needs a finite ctrl; got {ctrl!r}")
+        try:
+            self._set_control(int(actuator), float(ctrl))
+        except self.engine_errors as exc:
+            raise engine_failure(self.name, f"setting the control of actuator {actuator}", exc) from exc
+
     def reset_body(self, body: int, pos: Vec3, quat: Quat, lin_vel: Vec3, ang_vel: Vec3) -> None:
         """Teleport a dynamic body that no joint holds and set its velocities."""
         self._open("reset_body")
@@ -249,6 +338,17 @@ class Backend(abc.ABC):
             self._reset_body(body, pos, quat, lin_vel, ang_vel)
         except self.engine_errors as exc:
             raise engine_failure(self.name, f"resetting `{name}`", exc) from exc
+
+    def imported_model(self) -> ImportedModel | None:
+        """How the engine holds the world, read back from it (module docstring); None: the adapter cannot say.
+        Only before the first step: afterwards the bodies have moved and the read would not be the import."""
+        self._open("imported_model")
+        if self.steps:
+            self._refuse(f"imported_model() after {self.steps} step(s); it reads the world as built")
+        try:
+            return self._imported_model()
+        except self.engine_errors as exc:
+            raise engine_failure(self.name, "reading the imported model back", exc) from exc
 
     def drain_messages(self) -> list[str]:
         """What the engine printed about itself since the last call, one line each (default: nothing)."""
@@ -307,14 +407,28 @@ class Backend(abc.ABC):
     @abc.abstractmethod
     def _reset_body(self, body: int, pos: Vec3, quat: Quat, lin_vel: Vec3, ang_vel: Vec3) -> None: ...
 
+    def _contact_points(self) -> list[ContactPoint]:
+        """The last engine step's touching points (an adapter that declares ``contacts:points``)."""
+        self._refuse("contact_points() is declared but not implemented")
+    def _joint_reactions(self) -> np.ndarray:
+        """``joint:reaction``: the rows of :meth:`joint_reactions` (only adapters that declare it)."""
+        self._refuse("joint_reactions: not implemented by this adapter")
+
     def _place_kinematic(self, body: int, pose: KinematicPose) -> None:  # noqa: B027 - optional hook
         """A kinematic body was given a new pose and velocity (``self.kinematic[body]``): impose it now."""
 
     def _settings(self) -> dict[str, Any]:
         return {"options": self.options.as_dict()} if self.Options.keys() else {}
 
+    def _set_control(self, actuator: int, ctrl: float) -> None:  # an engine running model files overrides it
+        self._refuse(f"set_control: {self.name} does not run a model file's actuators")
+
     def _drain_messages(self) -> list[str]:
         return []
+
+    def _imported_model(self) -> ImportedModel | None:
+        """Read the built world back from the engine (``imported_model``); None: this adapter cannot."""
+        return None
 
     def _close(self) -> None:  # noqa: B027 - optional hook
         """Release the engine's resources (called once)."""

@@ -7,7 +7,10 @@ Options (``backend_options.crash``):
 * ``after_steps`` (default 30): the fault happens right after this many steps;
 * ``fault``: ``signal`` (default) sends ``signal`` to the process itself; ``hang`` sleeps forever (a
   SIGTERM still interrupts it); ``hang-ignoring-sigterm`` ignores SIGTERM first, so only SIGKILL ends it;
-* ``signal`` (default ``SIGSEGV``): a name such as ``SIGKILL`` or a number.
+* ``signal`` (default ``SIGSEGV``): a name such as ``SIGKILL`` or a number;
+* ``fault: allocate`` takes ``megabytes`` (default 1024) more memory, 64 MiB at a time with every page
+  written (resident, as an engine building a huge world would), then hangs: the worker's memory ceiling
+  (``SCENARIO_MEMORY_LIMIT``, docs/reliability.md) is what stops it.
 
 A fault by signal disables core dumps first, so a test leaves no core file behind.
 """
@@ -23,7 +26,8 @@ from typing import Any, ClassVar
 from ._kit import BackendOptions, option
 from .fake import FakeBackend
 
-FAULTS = ("signal", "hang", "hang-ignoring-sigterm")
+FAULTS = ("signal", "hang", "hang-ignoring-sigterm", "allocate")
+_CHUNK = 64 * 1024 * 1024
 
 
 def signal_number(value: Any) -> int:
@@ -47,9 +51,10 @@ def signal_number(value: Any) -> int:
 @dataclass(frozen=True)
 class CrashOptions(BackendOptions):
     after_steps: int = option(30, "steps before the fault (default 30)", minimum=0)
-    fault: str = option("signal", "signal (default) | hang | hang-ignoring-sigterm", choices=FAULTS)
+    fault: str = option("signal", "signal (default) | hang | hang-ignoring-sigterm | allocate", choices=FAULTS)
     signal: int = option(int(signal.SIGSEGV), "the signal sent by fault `signal`, a name or a number (default SIGSEGV)",
                          convert=signal_number)  # fmt: skip
+    megabytes: int = option(1024, "MiB held by fault `allocate` (default 1024)", minimum=1)
 
 
 class CrashBackend(FakeBackend):
@@ -59,7 +64,8 @@ class CrashBackend(FakeBackend):
 
     def _settings(self) -> dict[str, Any]:
         o = self.options
-        return {"after_steps": o.after_steps, "fault": o.fault, "signal": signal.Signals(o.signal).name}
+        return {"after_steps": o.after_steps, "fault": o.fault, "signal": signal.Signals(o.signal).name,
+                "megabytes": o.megabytes}  # fmt: skip
 
     def _step(self) -> None:
         super()._step()
@@ -76,6 +82,11 @@ class CrashBackend(FakeBackend):
                 pass
             os.kill(os.getpid(), self.options.signal)
             time.sleep(5.0)  # a signal that does not end the process (SIGCHLD...) falls through to a hang
+        if self.options.fault == "allocate":
+            held = [bytearray(b"\x01") * min(_CHUNK, self.options.megabytes * 1024 * 1024 - i * _CHUNK)
+                    for i in range(-(-self.options.megabytes * 1024 * 1024 // _CHUNK))]  # fmt: skip
+            while held:  # held until the process ends
+                time.sleep(3600.0)
         if self.options.fault == "hang-ignoring-sigterm":
             signal.signal(signal.SIGTERM, signal.SIG_IGN)
         while True:

@@ -38,6 +38,7 @@ class FakeBackend(Backend):
         Capability.JOINT_MOTOR,
         Capability.JOINT_LIMITS,
         Capability.SUBSTEPS,
+        Capability.CONTACT_BOUNCE,  # vacuous: the fake backend has no contacts, so no surface changes anything
     }
 
     def _build(self) -> None:

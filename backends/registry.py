@@ -1,5 +1,8 @@
 """The backend registry: names -> adapter classes, imported lazily, with install hints.
 
+Two sources: the built-in table below and the entry points of the group ``physics_scenarios.backends``
+(engines installed from outside this repository, ``backends.entry_points``), the built-in ones first.
+
 ``list_backends()`` never imports an engine; ``get_backend(name)`` imports the adapter on first use and
 turns a missing engine into :class:`BackendNotInstalled` with the pip command that fixes it;
 ``check_options(name, raw)`` checks a ``backend_options`` block without the engine. Engine names are written
@@ -11,35 +14,16 @@ from __future__ import annotations
 import difflib
 import importlib
 import importlib.util
-from collections.abc import Mapping
-from dataclasses import dataclass
+from collections.abc import Iterator, Mapping
 from importlib.metadata import PackageNotFoundError, version
-from types import MappingProxyType
 from typing import Any
 
 from ._kit.options import BackendOptions
 from .base import Backend
+from .entry import BackendEntry
+from .entry_points import BrokenBackend, registered
 from .errors import BackendNotInstalled, UnknownBackend, UnsupportedFeature
 from .types import Capability, CompiledWorld, Precision
-
-
-@dataclass(frozen=True)
-class BackendEntry:
-    name: str
-    target: str  # "module:Class"
-    module: str  # the engine's import name, checked without importing it
-    distribution: str  # the engine's distribution, for its version
-    extra: str  # the extra of physics-scenarios that installs it
-    description: str
-    hidden: bool = False  # test-only backends are not listed by `scenario backends`
-    options: str = "backends._kit.options:BackendOptions"  # "module:Class" of its backend_options, engine-free
-    #: the format of the engine's state, as its adapter declares it (Backend.precision), engine-free
-    precision: Precision = Precision.FLOAT64
-
-    @property
-    def hint(self) -> str:
-        return f"pip install 'physics-scenarios[{self.extra}]'" if self.extra else "it ships with the runner"
-
 
 # Kept sorted by name.
 _KNOWN: dict[str, BackendEntry] = {
@@ -54,6 +38,15 @@ _KNOWN: dict[str, BackendEntry] = {
         "dart",
         "DART (dartpy), ODE collision detector by default",
         options="backends.dart._options:DartOptions",
+    ),
+    "drake": BackendEntry(
+        "drake",
+        "backends.drake:DrakeBackend",
+        "pydrake",
+        "drake",
+        "drake",
+        "Drake (pydrake MultibodyPlant + SceneGraph), point contact and the SAP solver by default",
+        options="backends.drake._options:DrakeOptions",
     ),
     "fake": BackendEntry(
         "fake",
@@ -96,19 +89,50 @@ _KNOWN: dict[str, BackendEntry] = {
 if list(_KNOWN) != sorted(_KNOWN):  # pragma: no cover - a guard for whoever edits the table
     raise RuntimeError("backends.registry._KNOWN must stay sorted")
 
-KNOWN_BACKENDS = MappingProxyType(_KNOWN)
+
+
+def _table() -> dict[str, BackendEntry]:
+    """The built-in table, then the engines registered through entry points (read once per process)."""
+    return {**_KNOWN, **registered(frozenset(_KNOWN)).entries}
+
+
+def broken_backends() -> dict[str, str]:
+    """Engines registered through an entry point that cannot describe themselves: name -> the reason."""
+    return dict(registered(frozenset(_KNOWN)).broken)
+
+
+class _Known(Mapping[str, BackendEntry]):
+    """Every registered backend by name (read-only), entry points included."""
+
+    def __getitem__(self, name: str) -> BackendEntry:
+        return _table()[name]
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(_table())
+
+    def __len__(self) -> int:
+        return len(_table())
+
+
+KNOWN_BACKENDS: Mapping[str, BackendEntry] = _Known()
 DEFAULT_BACKEND = "pybullet"
 #: The backend every other one is compared with where no analytic truth exists: real ODE.
 REFERENCE_BACKEND = "ode"
 
 
 def entry(name: str) -> BackendEntry:
-    try:
+    if name in _KNOWN:  # a built-in name: no need to read the entry points
         return _KNOWN[name]
+    table = _table()
+    try:
+        return table[name]
     except KeyError:
-        close = difflib.get_close_matches(name, [n for n, e in _KNOWN.items() if not e.hidden], n=1)
+        broken = broken_backends()
+        if name in broken:
+            raise BrokenBackend(broken[name]) from None
+        close = difflib.get_close_matches(name, [n for n, e in table.items() if not e.hidden], n=1)
         hint = f" Did you mean `{close[0]}`?" if close else ""
-        listed = ", ".join(n for n, e in _KNOWN.items() if not e.hidden)
+        listed = ", ".join(n for n, e in table.items() if not e.hidden)
         raise UnknownBackend(f"Unknown backend `{name}`.{hint} Known backends: {listed}.") from None
 
 
@@ -123,13 +147,18 @@ def engine_version(name: str) -> str:
         return "not installed"
 
 
+def distribution_installed(name: str) -> bool:
+    """Whether the engine's distribution is installed (its adapter may still fail to import: a bug, not a skip)."""
+    return engine_version(name) != "not installed"
+
+
 def list_backends(include_hidden: bool = False) -> list[BackendEntry]:
-    return [e for e in _KNOWN.values() if include_hidden or not e.hidden]
+    return [e for e in _table().values() if include_hidden or not e.hidden]
 
 
 def engine_modules() -> frozenset[str]:
     """The import names of every engine (to tell whether one is loaded in this process)."""
-    return frozenset(e.module for e in _KNOWN.values() if e.extra or e.name == DEFAULT_BACKEND)
+    return frozenset(e.module for e in _table().values() if e.extra or e.package or e.name == DEFAULT_BACKEND)
 
 
 def installed_backends() -> list[str]:
@@ -152,6 +181,12 @@ def get_backend(name: str) -> type[Backend]:
         ) from exc
     cls: type[Backend] = getattr(module, class_name)
     return cls
+
+
+def import_adapter(name: str) -> None:
+    """Import backend ``name``'s adapter module, letting its ImportError through as it is (the shipped suite:
+    an adapter that cannot be imported fails its tests with the reason; get_backend turns it into a hint)."""
+    importlib.import_module(entry(name).target.partition(":")[0])
 
 
 def options_of(name: str) -> type[BackendOptions]:
@@ -181,7 +216,7 @@ def check_capabilities(cls: type[Backend], world: CompiledWorld) -> None:
         refusal.missing = frozenset(lacking)
         raise refusal
     options = cls.Options.parse(world.options_for(cls.name), cls.name)  # unknown keys and bad values
-    cls.check_world(world, options)  # the engine's limits (Backend.check_world)
+    cls.check_world(cls.engine_world(world), options)  # the engine's limits (Backend.check_world)
 
 
 def _alternatives(refusing: type[Backend], lacking: frozenset[Capability] | set[Capability]) -> str:

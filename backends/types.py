@@ -125,11 +125,17 @@ class Capability(str, enum.Enum):
     JOINT_STOP_BOUNCE = "joint:stop-bounce"  # stops with restitution (JointSpec.stop_bounce > 0)
     JOINT_STOP_SOFTNESS = "joint:stop-softness"  # spring-damper stops (JointSpec.stop_stiffness)
     JOINT_MOTOR = "joint:motor"
+    CONTACT_BOUNCE = "contact:bounce"  # a contact surface with restitution (Surface.bounce > 0)
     KINEMATIC = "motion:kinematic"
     SUBSTEPS = "world:substeps"
+    #: Bodies collide: contact points, normal forces, friction and restitution. Every engine declares it; the
+    #: contract suite's contact tests require it. It is not among a world's needs (required_capabilities):
+    #: the runner's fake backend, and the minimal engine of tests/outside_engine, run floors without it.
+    CONTACTS = "world:contacts"
     # What a model file may hold that only an engine building the robot from the file itself runs
-    # (MuJoCo for MJCF, CompiledWorld.models): MODEL_FILE_CAPABILITIES.
-    JOINT_SEVERAL_PER_BODY = "joint:several-per-body"  # an MJCF body moved by several joints, in order
+    # (MuJoCo for MJCF, CompiledWorld.models): MODEL_FILE_CAPABILITIES. Several joints per body are every
+    # adapter's: the base class builds them as a chain of light bodies (backends/_kit/chains.py).
+    JOINT_SEVERAL_PER_BODY = "joint:several-per-body"  # CompiledWorld.joint_chains: one body moved by several joints
     JOINT_ARMATURE = "joint:armature"  # JointDynamics.armature: rotor inertia added to the joint's coordinate
     JOINT_STIFFNESS = "joint:stiffness"  # JointDynamics.stiffness: a spring on the coordinate towards springref
     JOINT_BALL_RANGE = "joint:ball-range"  # a ball joint's cone limit
@@ -139,14 +145,19 @@ class Capability(str, enum.Enum):
     CONSTRAINT_TENDON = "constraint:tendon"  # MJCF <tendon>
     COLLISION_EXPLICIT_PAIRS = "collision:explicit-pairs"  # MJCF <contact><pair>
     WORLD_FLUID = "world:fluid"  # MJCF <option density viscosity wind>
+    #: an MJCF actuator the scenario drives that the runner's force law cannot reproduce (a site, body or tendon
+    #: transmission, activation dynamics): the engine must run the file's actuator itself (Backend.set_control)
+    ACTUATOR_NATIVE = "actuator:native"
+    # What a run reads beyond states and contact pairs (OUTPUT_CAPABILITIES).
+    CONTACT_POINTS = "contacts:points"  # Backend.contact_points(): each touching point, its normal and force
+    # Sensing: what a scenario may read that only the engine knows (CompiledWorld.reaction_joints)
+    JOINT_REACTION = "joint:reaction"  # Backend.joint_reactions(): the wrench a joint applies to its body
 
 
 #: Capabilities that no adapter maps to its engine yet (the stop bounce and softness of the language): no
 #: backend may declare them until its mapping exists and is tested, so a scenario using them is refused up
 #: front with the capability message.
-UNMAPPED_CAPABILITIES: frozenset[Capability] = frozenset(
-    {Capability.JOINT_STOP_BOUNCE, Capability.JOINT_STOP_SOFTNESS}
-)
+UNMAPPED_CAPABILITIES: frozenset[Capability] = frozenset({Capability.JOINT_STOP_BOUNCE, Capability.JOINT_STOP_SOFTNESS})
 #: What robot models (URDF, MJCF) need beyond hand-written bodies (docs/robots.md). Every adapter declares
 #: all but ``shape:trimesh``, which ODE and DART declare too; a scenario needing one its backend lacks is
 #: refused up front with the capability message.
@@ -162,7 +173,6 @@ ROBOT_CAPABILITIES: frozenset[Capability] = frozenset(
 #: What only an engine that builds a robot from its model file runs (MuJoCo, for MJCF; docs/robots.md).
 MODEL_FILE_CAPABILITIES: frozenset[Capability] = frozenset(
     {
-        Capability.JOINT_SEVERAL_PER_BODY,
         Capability.JOINT_STIFFNESS,
         Capability.JOINT_BALL_RANGE,
         Capability.JOINT_BALL_DYNAMICS,
@@ -171,6 +181,7 @@ MODEL_FILE_CAPABILITIES: frozenset[Capability] = frozenset(
         Capability.CONSTRAINT_TENDON,
         Capability.COLLISION_EXPLICIT_PAIRS,
         Capability.WORLD_FLUID,
+        Capability.ACTUATOR_NATIVE,
     }
 )
 #: Every primitive shape; and everything but universal joints and the robot capabilities (what the pybullet,
@@ -178,9 +189,16 @@ MODEL_FILE_CAPABILITIES: frozenset[Capability] = frozenset(
 ALL_SHAPES: frozenset[Capability] = frozenset(
     c for c in Capability if c.value.startswith("shape:") and c not in ROBOT_CAPABILITIES
 )
+#: Reads an adapter implements beyond the contract's mandatory ones; each adapter names those it has, so a
+#: new adapter (built from ``RIGID_BODY_CAPABILITIES``) refuses them up front until it implements them.
+OUTPUT_CAPABILITIES: frozenset[Capability] = frozenset({Capability.CONTACT_POINTS})
+#: Sensing capabilities: each adapter adds the ones it implements by name (a new adapter has none until it does).
+SENSING_CAPABILITIES: frozenset[Capability] = frozenset({Capability.JOINT_REACTION})
 RIGID_BODY_CAPABILITIES: frozenset[Capability] = (
     frozenset(Capability)
+    - OUTPUT_CAPABILITIES
     - {Capability.JOINT_UNIVERSAL, Capability.JOINT_ARMATURE}
+    - SENSING_CAPABILITIES
     - UNMAPPED_CAPABILITIES
     - ROBOT_CAPABILITIES
     - MODEL_FILE_CAPABILITIES
@@ -219,9 +237,10 @@ class PlacedShape:
     color: Rgba | None = None  # None: the body's colour
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class Surface:
-    """ODE contact surface: restitution ``bounce`` above approach speed ``bounce_vel``; Coulomb ``mu``."""
+    """ODE contact surface: restitution ``bounce`` above approach speed ``bounce_vel``; Coulomb ``mu``.
+    Keyword-only: ``bounce`` and ``mu`` are both floats, and swapped by position they would pass unnoticed."""
 
     bounce: float = 0.0
     bounce_vel: float = 0.0
@@ -353,9 +372,18 @@ class CompiledWorld:
     excluded_pairs: tuple[tuple[str, str], ...] = ()
     #: robots an engine may build from their model file (MJCF on MuJoCo)
     models: tuple[ModelFile, ...] = ()
+    #: joints that move one body together, each group in the file's order (MJCF: several joints in one body):
+    #: the same ``body`` and ``other``; joint k+1 turns or slides about its axis as joints 1..k left it
+    joint_chains: tuple[tuple[str, ...], ...] = ()
     #: True: the model file's own options rule (MJCF `<option>`, its geoms' contact parameters, MuJoCo's own
     #: mj_step); the scenario's dt and gravity equal the model's (`world.options: model`, docs/robots.md)
     model_options: bool = False
+    #: True: the run reads ``Backend.contact_points()`` (the scenario's ``trace: {contact_points: true}``);
+    #: it needs ``contacts:points``
+    contact_points: bool = False
+    #: the joints whose reaction the scenario reads (``Backend.joint_reactions()`` gives them in this order);
+    #: an engine computes and keeps nothing for the others (capability ``joint:reaction``)
+    reaction_joints: tuple[str, ...] = ()
 
     def body_index(self, name: str) -> int:
         for i, body in enumerate(self.bodies):
@@ -400,11 +428,62 @@ class CompiledWorld:
                 need.add(Capability.JOINT_ARMATURE)
             if joint.dynamics.stiffness > 0:
                 need.add(Capability.JOINT_STIFFNESS)
+        if self.default_surface.bounce > 0 or any(p.surface.bounce > 0 for p in self.pair_surfaces):
+            need.add(Capability.CONTACT_BOUNCE)
         if self.substeps > 1:
             need.add(Capability.SUBSTEPS)
+        if self.reaction_joints:
+            need.add(Capability.JOINT_REACTION)
+        if self.joint_chains:
+            need.add(Capability.JOINT_SEVERAL_PER_BODY)
         for model in self.models:
             need.update(model.needs)
+        if self.contact_points:
+            need.add(Capability.CONTACT_POINTS)
         return frozenset(need)
+
+
+@dataclass(frozen=True)
+class ImportedBody:
+    """A body as the engine holds it once built (:meth:`backends.base.Backend.imported_model`), read back from
+    the engine: what it will simulate, whatever the world asked for."""
+
+    name: str  # the CompiledWorld body's name
+    mass: float  # kg
+    inertia: Vec3  # principal moments about the COM (kg m^2), ascending (the axes are not compared)
+    com: Vec3  # the centre of mass in the body frame (m)
+    shapes: int  # collision shapes the engine built for the body
+
+
+@dataclass(frozen=True)
+class ImportedJoint:
+    """A joint as the engine holds it once built, in the world joint's coordinate (counted from the start, its
+    sign), read back from the engine. ``None``: the engine holds no such value (no stop on that side, no own
+    damping or friction parameter, no limit it enforces by itself); what the runner realises instead (its
+    motor's damping and friction loss, its caps on effort and velocity) is not the engine's and is not here."""
+
+    name: str  # the CompiledWorld joint's name
+    kind: JointKind  # the engine's joint type, mapped to ours
+    axis: Vec3 | None  # world frame, unit, at the start (slider, hinge; universal: first axis); None: no axis
+    lo: float | None  # stops: metres or radians from the start
+    hi: float | None
+    damping: float | None  # the engine's own joint damping (N m s/rad or N s/m)
+    frictionloss: float | None  # the engine's own dry joint friction (N m or N)
+    effort: float | None  # a force limit the engine enforces by itself (N m or N)
+    velocity: float | None  # a rate limit the engine enforces by itself (rad/s or m/s)
+
+
+@dataclass(frozen=True)
+class ImportedModel:
+    """What an engine built, read back before any step: every dynamic body and every joint, in
+    ``CompiledWorld`` order (static bodies carry no mass in any engine and are left out)."""
+
+    backend: str
+    bodies: tuple[ImportedBody, ...]
+    joints: tuple[ImportedJoint, ...]
+    #: where a value is the adapter's rather than the engine's (e.g. ODE keeps the COM at the body's origin,
+    #: so the COM offset is the adapter's frame), one line each
+    notes: tuple[str, ...] = ()
 
 
 @dataclass
@@ -447,6 +526,19 @@ class Contact(NamedTuple):
     points: int  # number of contact points with distance <= 0
     depth: float  # largest penetration depth, >= 0
     normal_force: float  # summed normal force in N; NaN if the engine cannot say
+
+
+class ContactPoint(NamedTuple):
+    """One contact point of a touching pair (``a < b``, indices into ``CompiledWorld.bodies``) in the last
+    engine step of the last scenario step (``Backend.contact_points()``; docs/semantics.md, "Contact points").
+    """
+
+    a: int
+    b: int
+    pos: Vec3  # world frame, m: where the engine places the point (between the two surfaces)
+    normal: Vec3  # unit, world frame, pointing from body a to body b: a pushes b along +normal
+    depth: float  # penetration, m (>= 0 when touching)
+    force: float  # normal force, N, >= 0: the impulse along the normal in that engine step / its length
 
 
 #: ``Contact`` from a (a, b, points, depth, normal_force) tuple without ``NamedTuple.__new__``'s Python

@@ -9,14 +9,28 @@ import sys
 import time
 from pathlib import Path
 
-from backends.registry import DEFAULT_BACKEND, is_installed, list_backends
+from backends.errors import UnsupportedFeature
+from backends.registry import DEFAULT_BACKEND, check_capabilities, get_backend, is_installed, list_backends
 
-from . import batch, build, encoding, memory, overhead, ray_cluster, robot, scaling, seed_loop, startup
+from . import batch, build, encoding, measure, memory, overhead, ray_cluster, robot, scaling, seed_loop, startup
 from .instrument import wrapper_cost
 from .report import Results, append_notes, render
 
 #: Every engine the registry lists (a fifth engine joins the benchmarks by its registry line).
 ENGINES = tuple(e.name for e in list_backends())
+
+
+def runs_the_pile(name: str) -> bool:
+    """Whether engine ``name`` runs the benchmarks' pile (bench/scenarios/pile.yaml bounces: an engine without
+    restitution refuses it up front and is left out of the sections that run the pile unless named)."""
+    world, _ = measure.world_of(measure.pile((1, 1, 1), 0.1))
+    try:
+        check_capabilities(get_backend(name), world)
+    except UnsupportedFeature:
+        return False
+    return True
+
+
 SECTIONS = ("overhead", "scaling", "memory", "batch", "encoding", "build", "robot", "seed", "startup", "ray")
 
 
@@ -84,9 +98,10 @@ def main(argv: list[str] | None = None) -> int:
         print(f"[{time.perf_counter() - started:7.1f}s] {text}", flush=True)
 
     installed = [b for b in ENGINES if is_installed(b)]
-    backends = [b for b in (args.backends or installed) if b in installed]
-    args.scaling_backends = args.scaling_backends or installed
-    args.memory_backends = args.memory_backends or installed
+    piled = [b for b in installed if runs_the_pile(b)]  # the pile's sections: engines that run it
+    backends = [b for b in (args.backends or piled) if b in installed]
+    args.scaling_backends = args.scaling_backends or piled
+    args.memory_backends = args.memory_backends or piled
     sizes = {
         "overhead": f"{'x'.join(map(str, args.pile))} boxes, {args.duration:g} s at dt 0.004, {args.reps} reps, "
         f"{','.join(backends)}",
@@ -125,7 +140,7 @@ def main(argv: list[str] | None = None) -> int:
         log(f"batch: {sizes['batch']}, {len(files)} files")
         results.batch = batch.run(files, args.batch_backend, args.batch_jobs, args.batch_reps, log)
     if "encoding" in args.sections:
-        chosen = [b for b in (args.encoding_backends or installed) if b in installed]
+        chosen = [b for b in (args.encoding_backends or piled) if b in installed]
         log(f"encoding: {sizes['encoding']}, {','.join(chosen)}")
         results.encoding = encoding.run(chosen, tuple(args.pile), args.encoding_duration,
                                         args.encoding_reps, log)  # fmt: skip

@@ -22,6 +22,8 @@ from urllib.parse import quote
 
 from reports.compare_data import build_document
 from reports.html import LAYOUT_NAME, render_html
+from reports.imports import sections_beside
+from reports.imports_render import html_section, markdown_section
 from reports.markdown import markdown_images, render_markdown
 from reports.report_files import (
     HTML_NAME,
@@ -103,7 +105,9 @@ def write_report(
     force: bool = False,
 ) -> ReportFiles:
     """Read the runs named by ``paths`` (trace, partial trace, outcome or cost files, or folders) and
-    write the reports into ``out_dir``; ``references`` are analytic truths (reports.truth.Reference). Files
+    write the reports into ``out_dir``; ``references`` are analytic truths (reports.truth.Reference). How each
+    engine imported the robots (``imports.json`` beside the traces, written by `scenario compare`) is added
+    to the Markdown and the HTML. Files
     in ``out_dir`` that this tool did not write are refused (:mod:`reports.report_files`) unless ``force``."""
     runs = load_runs(paths)
     doc = build_document(runs, reference=reference, max_divergence=max_divergence, references=references,
@@ -130,8 +134,10 @@ def write_report(
             write_file(folder / name, data)
         remove_stale_images(folder, images)
         write_file(files.json, dumps(doc))
-        write_file(files.markdown, render_markdown(doc, images, links, layout))
-        write_file(files.html, render_html(doc, runs, pictures, links, layout))
+        imported = sections_beside([Path(p) for p in paths], {(c["scenario"], c["variant"]) for c in doc["cases"]})
+        markdown = render_markdown(doc, images, links, layout) + "".join("\n" + markdown_section(s) for s in imported)
+        write_file(files.markdown, markdown)
+        write_file(files.html, render_html(doc, runs, pictures, links, layout, "".join(map(html_section, imported))))
     except OSError as exc:
         raise ReportError(f"cannot write the report into {out_dir}: {exc.strerror or exc}") from exc
     return files

@@ -203,9 +203,10 @@ def _dt_text(dt: float | None) -> str:
 
 
 def render_html(doc: dict[str, Any], runs: list[Run], pictures: list[CasePictures],
-                links: list[dict[str, str | None]], layout: str | None) -> str:  # fmt: skip
+                links: list[dict[str, str | None]], layout: str | None, extra: str = "") -> str:  # fmt: skip
     """The page for ``doc``; ``pictures`` and ``links`` (backend -> relative trace path) per case, ``layout``
-    the relative path of the Foxglove layout beside the traces (None if there is none)."""
+    the relative path of the Foxglove layout beside the traces (None if there is none); ``extra``: sections
+    after the cases' (how each engine imported the robots, reports.imports_render)."""
     by_key = {r.key: r for r in runs}
     title = "Backend comparison: " + ", ".join(dict.fromkeys(c["scenario"] for c in doc["cases"]))
     charts: dict[str, Any] = {}
@@ -237,7 +238,7 @@ def render_html(doc: dict[str, Any], runs: list[Run], pictures: list[CasePicture
         f"{truth} · {_thresholds(doc)}{layout_link} · "
         f'<span class="muted">{escape(doc["generator"])}, report format {doc["report_format"]}, '
         f"charts by Vega {escape(render.versions()['vega'])}</span></p>"
-        f"{_overview(doc)}{''.join(sections)}"
+        f"{_overview(doc)}{''.join(sections)}{extra}"
         f'<script type="application/octet-stream" id="vega-runtime">{render.runtime_gzip_base64()}</script>'
         f'<script type="application/octet-stream" id="chart-specs">{_gz(specs)}</script>'
         f"<script>{_asset('report.js')}</script></body></html>\n"

@@ -27,6 +27,7 @@ __all__ = [
     "EXITED",
     "INTERRUPTED",
     "OUTCOMES",
+    "OVER_MEMORY",
     "OUTCOME_SUFFIX",
     "TIMED_OUT",
     "RunOutcome",
@@ -44,13 +45,15 @@ OUTCOME_FORMAT: Final = 1
 CRASHED: Final = "crashed"
 #: still running at the time limit; stopped with SIGTERM, then SIGKILL after a grace period
 TIMED_OUT: Final = "timed-out"
+#: its resident memory went over the worker's ceiling (SCENARIO_MEMORY_LIMIT); stopped with SIGKILL at once
+OVER_MEMORY: Final = "over-memory"
 #: exited with a non-zero code without reporting a result
 EXITED: Final = "exited"
 #: refused or failed before or while running, with a message (bad input, missing engine, unsupported feature)
 ERROR: Final = "error"
 #: stopped by SIGINT or SIGTERM from outside (the trace is finished and marked interrupted)
 INTERRUPTED: Final = "interrupted"
-OUTCOMES: Final = frozenset({CRASHED, TIMED_OUT, EXITED, ERROR, INTERRUPTED})
+OUTCOMES: Final = frozenset({CRASHED, TIMED_OUT, OVER_MEMORY, EXITED, ERROR, INTERRUPTED})
 
 
 @dataclass(frozen=True)
@@ -73,6 +76,8 @@ class RunOutcome:
             return f"crashed (signal {self.signal})"
         if self.outcome == TIMED_OUT:
             return "timed out"
+        if self.outcome == OVER_MEMORY:
+            return "over memory"
         if self.outcome == EXITED:
             return f"exited with code {self.returncode}"
         if self.outcome == INTERRUPTED:

@@ -10,6 +10,8 @@ seconds):
   ``contact(box, door)``), grouped by unit;
 * ``/forces/joints/<joint>`` (motor force or torque) and ``/forces/contacts/<a> - <b>`` (normal force, 0 while
   apart) for every joint and every pair that touched;
+* ``/world/contact_points``: a trace's contact points (``trace: {contact_points: true}``) as ``Arrows3D`` at
+  every recorded step (:mod:`reports.rerun_contacts`);
 * ``/log/<logger>``: the trace's /log as ``TextLog`` (events, handler logs, sounds, each verdict when it was
   decided, the summary);
 * a blueprint: the 3D view (collision solids hidden), one time-series view per unit of the asserted
@@ -34,6 +36,7 @@ from typing import Any
 import numpy as np
 
 from reports import trace_format as tf
+from reports.rerun_contacts import read_arrows, send_arrows
 from reports.rerun_scene import WORLD, body_path, scene_entities
 from reports.scene3d.framing import frame_camera, moving_bodies
 from reports.scene3d.model import SceneModel, scene_model
@@ -47,7 +50,7 @@ TIMELINE = "sim_time"
 ASSERTED, FORCES, LOG = "asserted", "forces", "log"
 #: a unit's entity path part (a path part cannot hold "/" unescaped)
 UNIT_PARTS = {"m": "m", "m/s": "m_per_s", "rad": "rad", "rad/s": "rad_per_s", "N": "N", "N·m": "N_m", "J": "J",
-              "1": "1", "m or rad": "m_or_rad"}  # fmt: skip
+              "1": "1", "m or rad": "m_or_rad", "N·s": "N_s", "N·m·s": "N_m_s"}  # fmt: skip
 _BODY_UNITS = {"pos": "m", "vel": "m/s", "angvel": "rad/s", "quat": "1"}
 _LEVELS = {"debug": "DEBUG", "info": "INFO", "warning": "WARN", "warn": "WARN", "error": "ERROR", "fatal": "CRITICAL"}
 
@@ -105,6 +108,8 @@ def _one(trace: Trace, name: str, kinds: dict[str, str]) -> Series | None:
     if name.startswith("contact(") and name.endswith(")"):
         a, _, b = name[len("contact(") : -1].partition(", ")
         return Series(name, "N", trace.times, _contact_force(trace, a, b))
+    if name in trace.sensors:  # a sensor quantity, from /sensors
+        return Series(name, tf.sensor_unit(name), trace.sensor_times, trace.sensors[name])
     head, _, field = name.rpartition(".")
     if head in trace.joints:
         times, values = trace.series(f"{head}.{'motor_force' if field == 'force' else field}")
@@ -269,6 +274,9 @@ def export_rerun(trace_path: Path, out: Path, trace: Trace | None = None) -> tup
     for s in forces:
         _send_series(rec, _unit_path(FORCES, s.unit, s.name), s)
     _send_logs(rec, trace)
+    arrows = read_arrows(trace_path) if tf.TOPIC_CONTACT_POINTS in trace.channels else None
+    if arrows is not None:
+        send_arrows(rec, arrows, _duration, TIMELINE)
     rec.flush()
     rec.disconnect()
     if not out.exists():

@@ -47,6 +47,8 @@ class Decoded:
     joint_rows: list[list[float]] = field(default_factory=list)
     state_times: list[float] = field(default_factory=list)
     state: dict[str, list[Any]] = field(default_factory=dict)
+    sensor_times: list[float] = field(default_factory=list)
+    sensors: dict[str, list[float]] = field(default_factory=dict)  # by field (tf.sensor_field)
     contacts: list[tuple[float, list[dict[str, Any]]]] = field(default_factory=list)
     events: list[tuple[float, str, str, dict[str, Any]]] = field(default_factory=list)
     logs: list[tuple[float, str, str, str]] = field(default_factory=list)
@@ -139,6 +141,12 @@ class MessageDecoder:
         for values in out.state.values():
             values.extend([None] * (n + 1 - len(values)))
 
+    def _sensors(self, t: float, msg: Any) -> None:
+        out = self.out
+        out.sensor_times.append(t)
+        for f in msg.DESCRIPTOR.fields:
+            out.sensors.setdefault(f.name, []).append(float(getattr(msg, f.name)))
+
     def _contacts(self, t: float, msg: Any) -> None:
         if msg.pairs:
             pairs = [{"a": p.a, "b": p.b, "points": p.points, "depth": p.depth, "normal_force": p.normal_force}
@@ -177,6 +185,7 @@ class MessageDecoder:
     _handlers: dict[str, Callable[[MessageDecoder, float, Any], None]] = {
         tf.TOPIC_TF: _tf,
         tf.TOPIC_STATE: _state,
+        tf.TOPIC_SENSORS: _sensors,
         tf.TOPIC_CONTACTS: _contacts,
         tf.TOPIC_EVENTS: _event,
         tf.TOPIC_LOG: _log,

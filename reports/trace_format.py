@@ -73,7 +73,11 @@ TOPIC_LOG: Final = "/log"  # foxglove.Log: events, handler logs, sounds, verdict
 TOPIC_BODIES: Final = "/bodies"  # physics_scenarios.Bodies: box.vel.{x,y,z}, box.angvel.{x,y,z} per step
 TOPIC_JOINTS: Final = "/joints"  # physics_scenarios.Joints: slider.{position,velocity,motor_force} per step
 TOPIC_CONTACTS: Final = "/contacts"  # physics_scenarios.Contacts: count, pairs[{a,b,points,depth,normal_force}]
+#: foxglove.SceneUpdate: each recorded step's contact points as arrows (only with `trace: {contact_points: true}`)
+TOPIC_CONTACT_POINTS: Final = "/contact_points"
 TOPIC_STATE: Final = "/state"  # physics_scenarios.State: one field per state variable, per step
+#: physics_scenarios.Sensors: one double per sensor quantity the scenario reads (KEY_SENSORS), per step
+TOPIC_SENSORS: Final = "/sensors"
 TOPIC_EVENTS: Final = "/events"  # physics_scenarios.Event: time, name, source, detail
 TOPIC_SOUNDS: Final = "/sounds"  # physics_scenarios.Sound: time, name, action, offset, volume
 TOPIC_AUDIO: Final = "/audio"  # foxglove.RawAudio: each sound's samples from where it starts playing
@@ -113,6 +117,26 @@ def field_name(name: str) -> str:
     (runner.language.model_names, the same rule), so readers map names to fields without a table."""
     safe = _UNSAFE_FIELD_CHARACTER.sub("_", name)
     return f"_{safe}" if safe[:1].isdigit() else safe
+
+
+def sensor_field(name: str) -> str:
+    """The field of a sensor quantity on /sensors: its dotted parts, each a :func:`field_name`, joined by
+    ``__`` (``shoulder.reaction.torque.y`` -> ``shoulder__reaction__torque__y``, ``hand.pinch site.pos.z`` ->
+    ``hand__pinch_site__pos__z``); the writer lists the names in field order (KEY_SENSORS)."""
+    return "__".join(field_name(part) for part in name.split("."))
+
+
+_SENSOR_UNITS = {"kinetic_energy": "J", "momentum": "N·s", "angmom": "N·m·s", "angmom_origin": "N·m·s",
+                 "angvel_body": "rad/s", "pos": "m", "vel": "m/s", "angvel": "rad/s", "quat": "1"}  # fmt: skip
+
+
+def sensor_unit(name: str) -> str:
+    """The unit of a sensor quantity (docs/language.md "Sensors"), for plots: N or N·m for a reaction, J, N·s,
+    N·m·s, rad/s, m, m/s for a body's or a frame's."""
+    parts = name.split(".")
+    if "reaction" in parts[1:]:
+        return "N" if parts[-2].startswith("force") else "N·m"
+    return _SENSOR_UNITS.get(parts[-1], _SENSOR_UNITS.get(parts[-2], "1") if len(parts) > 1 else "1")
 
 
 def field_path(name: str) -> str:
@@ -197,6 +221,8 @@ KEY_STATE: Final = "state"  # JSON list of state variable names
 #: JSON list of the quantities the assertions read (runner.compile.asserted): `box.pos.z`, `crate_4.speed`,
 #: `slider.position`, `state.door_open`, `contact(box, door)`; absent from traces written before it
 KEY_ASSERTED: Final = "asserted"
+#: JSON list of the sensor quantities on /sensors, in field order (docs/language.md "Sensors"); absent: none
+KEY_SENSORS: Final = "sensors"
 SCENARIO_KEYS: Final = (
     KEY_NAME,
     KEY_VARIANT,

@@ -156,6 +156,9 @@ class Trace:
     verdicts: list[Verdict]
     attachments: list[AttachmentInfo]
     stop_reason: str = ""  # why reading stopped early (recover=True)
+    sensor_times: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    #: /sensors: each sensor quantity the scenario read (``box.kinetic_energy``, ``shoulder.reaction.torque.y``)
+    sensors: dict[str, np.ndarray] = field(default_factory=dict)
 
     @property
     def scenario(self) -> dict[str, str]:
@@ -187,6 +190,8 @@ class Trace:
             if owner in self.bodies or owner in self.joints:
                 parts = [owner, *parts[k:]]
                 break
+        if path in self.sensors:
+            return self.sensor_times, self.sensors[path]
         if parts[0] == "state" and len(parts) == 2 and parts[1] in self.state:
             values = [np.nan if v is None else v for v in self.state[parts[1]]]
             return self.state_times, np.asarray(values)
@@ -467,4 +472,16 @@ def read_trace(path: str | Path, recover: bool = False) -> Trace:
         verdicts=[Verdict(t, data) for t, data in decoded.verdicts],
         attachments=attachments,
         stop_reason=stop_reason,
+        sensor_times=np.array(decoded.sensor_times),
+        sensors=_sensors(metadata, decoded.sensors),
     )
+
+
+def _sensors(metadata: dict[str, dict[str, str]], by_field: dict[str, list[float]]) -> dict[str, np.ndarray]:
+    """/sensors by quantity name: the trace's list of them (KEY_SENSORS) in field order."""
+    try:
+        names = json.loads(metadata.get(tf.METADATA_SCENARIO, {}).get(tf.KEY_SENSORS, "[]"))
+    except json.JSONDecodeError:
+        names = []
+    fields = {tf.sensor_field(str(n)): str(n) for n in names}
+    return {fields[f]: np.asarray(v, dtype=float) for f, v in by_field.items() if f in fields}

@@ -19,7 +19,7 @@ from typing import Any
 
 import numpy as np
 
-from ..types import Contact, new_contact
+from ..types import Contact, ContactPoint, new_contact
 
 #: Up to this many points the grouping is a Python loop; beyond it numpy's sort and columns are faster
 #: (both give the same numbers: the same sums in the same order, the same depth fold).
@@ -135,3 +135,22 @@ class SubstepContacts:
         """The step's contacts; ``last``: the final engine step's, when the adapter groups it only now."""
         steps = self._steps if last is None else [*self._steps, last]
         return merge_substeps(steps, self.engine_steps) if steps else []
+
+
+def contact_point(i: int, j: int, pos: Any, normal: Any, depth: float, force: float) -> ContactPoint:
+    """A point between bodies ``i`` and ``j`` whose ``normal`` points from ``i`` to ``j``, as the contract
+    lists it: ``a < b``, the normal turned round when ``i > j``; plain floats."""
+    x, y, z = (float(v) for v in normal)
+    if i > j:
+        i, j, x, y, z = j, i, -x, -y, -z
+    px, py, pz = (float(v) for v in pos)
+    return ContactPoint(int(i), int(j), (px, py, pz), (x, y, z), float(depth), float(force))
+
+
+def sorted_points(points: list[ContactPoint]) -> list[ContactPoint]:
+    """Sorted by (a, b), a pair's points kept in the engine's order."""
+    return sorted(points, key=_pair_key)
+
+
+def _pair_key(point: ContactPoint) -> tuple[int, int]:
+    return point.a, point.b

@@ -5,7 +5,8 @@ bottom contact of a column of H bodies carries H weights, and the column's overt
 grows as H^2 (H weights times a lever of H/2 body heights). Backends size their solver from :func:`stack_height`:
 the longest chain of dynamic bodies, each above the previous one along gravity with overlapping
 footprints, so that it will rest on it (docs/backends/*.md, "Stacking"). A column dropped with gaps counts
-as stacked. Nothing here imports an engine.
+as stacked. :func:`refuse_column` is the one refusal of a column taller than an engine holds. Nothing here
+imports an engine.
 """
 
 from __future__ import annotations
@@ -14,6 +15,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..errors import UnsupportedFeature
 from ..geometry import quat_matrices
 from ..types import BodySpec, CompiledWorld, Motion, Shape, ShapeKind
 
@@ -126,3 +128,16 @@ def stack_height(world: CompiledWorld) -> int:
 
 
 __all__ = ["LANDING_GAP", "Stacks", "stack_height", "stacks"]
+
+
+def refuse_column(
+    backend: str, height: int, limit: int, *, holds: str, why: str, column: str = "a column", detail: str = ""
+) -> None:
+    """The engines' stacking limit, one refusal for all (UnsupportedFeature, before anything is built): a world
+    starting with ``column`` of ``height`` bodies (``detail``: how they stand) when the engine holds at most
+    ``limit``. ``holds`` names the engine and its verb ("MuJoCo holds"), ``why`` the measured cause and what
+    to use instead."""
+    if height > limit:
+        raise UnsupportedFeature(
+            f"{backend}: the world starts with {column} of {height} bodies{detail}; {holds} at most {limit}: {why}"
+        )

@@ -27,6 +27,8 @@ from ..types import (
     Capability,
     CompiledWorld,
     Contact,
+    ContactPoint,
+    ImportedModel,
     JointKind,
     JointStates,
     Motion,
@@ -38,6 +40,7 @@ from . import _contacts, _surfaces
 from ._build import BodyHandle, JointHandle, build, place_free
 from ._build import check as check_build
 from ._gate import BounceGate
+from ._imported import read_imported
 from ._options import MAX_CONE_MU, MAX_CONE_STACK, DartOptions
 from ._reads import state_readers
 
@@ -50,7 +53,15 @@ class DartBackend(Backend):
     precision: ClassVar[Precision] = Precision.FLOAT64  # Eigen doubles throughout
     #: Every robot capability: compound bodies, COM offsets, convex hulls and static triangle meshes (both as
     #: DART MeshShapes, ``_meshes``), excluded pairs (the solver's BodyNodeCollisionFilter).
-    capabilities: ClassVar[frozenset[Capability]] = RIGID_BODY_CAPABILITIES | ROBOT_CAPABILITIES
+    #: stiffness: DART's own joint spring (_build). Not armature: DART 6.20 has none, and a rotor held by its
+    #: coupler constraint does not reflect it (the constraint's impulse counts the rotor's inertia only: a
+    #: wheel at 10 rad/s coupled to an equal rotor at rest swaps rates with it each step, instead of 5 and 5)
+    capabilities: ClassVar[frozenset[Capability]] = (
+        RIGID_BODY_CAPABILITIES
+        | ROBOT_CAPABILITIES
+        | {Capability.CONTACT_POINTS, Capability.JOINT_STIFFNESS}
+        | {Capability.JOINT_REACTION}  # getWrenchToChildBodyNode
+    )
     Options: ClassVar[type[BackendOptions]] = DartOptions
     #: joint damping is DART's own (GenericJoint's damping coefficient, integrated implicitly): DART's servo
     #: constraint drops a bound as small as damping x a slow rate (docs/semantics.md, "Joint dynamics")
@@ -99,6 +110,8 @@ class DartBackend(Backend):
         self._static_quat = np.array([world.bodies[i].quat for i in self._static], dtype=float).reshape(-1, 4)
         self._prev_quat = np.array([b.quat for b in world.bodies], dtype=float).reshape(-1, 4)
         self._motor_mean = SubstepMean(len(self._joints))
+        self._watched = self._watch_reactions()
+        self._reaction_mean = SubstepMean(6 * len(self._watched))
         self._substep_contacts = SubstepContacts(self._engine_steps)
         self._relevant = set(_surfaces.touching_pairs(world))
         self._touching: list[tuple[int, int]] | None = None
@@ -111,6 +124,9 @@ class DartBackend(Backend):
         for j, handle in enumerate(self._joints):
             if handle.spec.motor is not None:
                 self._set_motor(j, handle.spec.motor.vel, handle.spec.motor.fmax)
+
+    def _imported_model(self) -> ImportedModel:
+        return read_imported(self.world, self._bodies, self._joints)
 
     def _settings(self) -> dict[str, Any]:
         names = [b.name for b in self.world.bodies]
@@ -158,6 +174,8 @@ class DartBackend(Backend):
         servos, n = self._servos, self._engine_steps
         h = self.world.dt / n
         self._motor_mean.start()
+        if self._watched:
+            self._reaction_mean.start()
         self._substep_contacts.start()
         for _ in range(n):
             # World.step() clears commands and external forces: re-issue them for every engine step.
@@ -180,13 +198,48 @@ class DartBackend(Backend):
             for j, handle in servos:
                 applied[j] = handle.sign * handle.joint.getConstraintImpulse(0) / h
             self._motor_mean.add(applied)
+            if self._watched:
+                self._reaction_mean.add(self._reactions_now())
             if n > 1:
                 self._substep_contacts.add(self._reader.contacts(self._dart.getLastCollisionResult().getContacts()))
         self._motor_mean.finish()
+        if self._watched:
+            self._reaction_mean.finish()
         dt = self.world.dt
         for i, pose in self.kinematic.items():
             pos, quat = pose.at(dt)
             place_free(self._bodies[i].root, pos, quat, pose.lin_vel, pose.ang_vel)
+
+    def _watch_reactions(self) -> list[tuple[Any, Any, float, Any]]:
+        """Per joint of ``world.reaction_joints``: (the DART joint, its child node, +1 when that is the joint's
+        first body else -1, the first body's node)."""
+        index = {j.name: k for k, j in enumerate(self.world.joints)}
+        out = []
+        for name in self.world.reaction_joints:
+            handle = self._joints[index[name]]
+            first = self._bodies[self.world.body_index(handle.spec.body)].node
+            child = handle.joint.getChildBodyNode()
+            out.append((handle.joint, child, 1.0 if child.getName() == first.getName() else -1.0, first))
+        return out
+
+    def _reactions_now(self) -> list[float]:
+        """The watched joints' wrenches on their first bodies after this engine step: DART's body force of the
+        child (``getWrenchToChildBodyNode`` in the child's own frame: torque and force at its origin, the
+        constraint impulses / h included), turned to world axes, moved to the first body's centre of mass.
+        DART's body force is the wrench the child transmits to the joint, the opposite of the one it gets
+        (a body held at rest reads F = m g down, docs/conformance.md case 19): hence the minus."""
+        out: list[float] = []
+        for joint, child, sign, first in self._watched:
+            wrench = np.asarray(joint.getWrenchToChildBodyNode(child))
+            pose = child.getWorldTransform()
+            turn, origin = np.asarray(pose.rotation()), np.asarray(pose.translation())
+            force = -sign * (turn @ wrench[3:])
+            torque = -sign * (turn @ wrench[:3]) + np.cross(origin - np.asarray(first.getCOM()), force)
+            out.extend((*force, *torque))
+        return out
+
+    def _joint_reactions(self) -> np.ndarray:
+        return self._reaction_mean.mean.reshape(-1, 6).copy()
 
     # --- outputs --------------------------------------------------------------------------------------
 
@@ -226,6 +279,9 @@ class DartBackend(Backend):
         if self._engine_steps > 1:
             return self._substep_contacts.merged() if self.steps else []
         return self._reader.contacts(self._dart.getLastCollisionResult().getContacts())
+
+    def _contact_points(self) -> list[ContactPoint]:
+        return self._reader.points(self._dart.getLastCollisionResult().getContacts()) if self.steps else []
 
     def _quiet(self, h: float) -> bool:
         """Whether no contact of the coming engine step (``h`` long) can bounce, so that the bounce_vel pass

@@ -254,6 +254,8 @@ def _joint_pair(
         joint.setLimitEnforcement(spec.lo is not None or spec.hi is not None)
         joint.setActuatorType(dart.dynamics.ActuatorType.PASSIVE)
         joint.setDampingCoefficient(0, spec.dynamics.damping)  # DART's own, implicit (DartBackend.native_damping)
+        joint.setSpringStiffness(0, spec.dynamics.stiffness)  # DART's own spring, implicit like its damping
+        joint.setRestPosition(0, sign * spec.dynamics.springref)  # in DART's coordinate (sign: _trees)
     return joint, node
 
 

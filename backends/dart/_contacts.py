@@ -17,8 +17,8 @@ from typing import Any
 
 import numpy as np
 
-from .._kit import group_by_pair
-from ..types import Contact
+from .._kit import contact_point, group_by_pair, sorted_points
+from ..types import Contact, ContactPoint
 
 _FIRST, _SECOND = attrgetter("collisionObject1"), attrgetter("collisionObject2")
 _DEPTH, _FORCE, _NORMAL = attrgetter("penetrationDepth"), attrgetter("force"), attrgetter("normal")
@@ -67,6 +67,21 @@ class ContactReader:
             lo, hi, depths, vectors = lo[kept], hi[kept], depths[kept], vectors[:, kept]
         normal_force = np.abs(np.einsum("ij,ij->i", vectors[0], vectors[1]))
         return group_by_pair(self._n, lo, hi, depths, normal_force)
+
+    def points(self, points: Sequence[Any]) -> list[ContactPoint]:
+        """The contract's ``contact_points``: each point's position, its normal turned to point from object 1
+        to object 2 (DART's points from object 2 to object 1), depth and |force . normal|."""
+        if not points:
+            return []
+        first, second, depth, force, normal = self._fields(points)
+        a, b = self._bodies(tuple(map(first, points))), self._bodies(tuple(map(second, points)))
+        out = []
+        for i, j, point in zip(a.tolist(), b.tolist(), points, strict=True):
+            if self._static[i] and self._static[j]:
+                continue
+            n = np.asarray(normal(point), dtype=np.float64)
+            out.append(contact_point(i, j, _POINT(point), -n, depth(point), abs(float(np.dot(force(point), n)))))
+        return sorted_points(out)
 
     def pairs(self, points: Sequence[Any]) -> set[tuple[int, int]]:
         """The (a < b) body pairs of ``points``, static pairs included."""

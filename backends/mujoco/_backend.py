@@ -8,10 +8,19 @@ from typing import Any, ClassVar
 import mujoco
 import numpy as np
 
-from .._kit import BackendOptions, KinematicPose, SubstepContacts, SubstepMean, group_by_pair, substep_times
+from .._kit import (
+    BackendOptions,
+    KinematicPose,
+    SubstepContacts,
+    SubstepMean,
+    contact_point,
+    group_by_pair,
+    sorted_points,
+    substep_times,
+)
 from .._kit.stacks import stack_height
 from ..base import Backend
-from ..errors import EngineFailure
+from ..errors import EngineFailure, UnsupportedFeature
 from ..geometry import quat_conj, quat_rotate
 from ..types import (
     MODEL_FILE_CAPABILITIES,
@@ -21,6 +30,8 @@ from ..types import (
     Capability,
     CompiledWorld,
     Contact,
+    ContactPoint,
+    ImportedModel,
     JointKind,
     JointStates,
     Motion,
@@ -30,7 +41,8 @@ from ..types import (
 )
 from . import _coulomb, _native
 from ._bounce import Impacts
-from ._model import IMPEDANCE, KINEMATIC_MASS_RATIO, MU_MAX, build, plan_tree
+from ._imported import read_imported
+from ._model import IMPEDANCE, KINEMATIC_MASS_RATIO, MU_MAX, Layout, build, plan_tree
 from ._native import set_start
 from ._options import MujocoOptions, check_stack, engine_substeps
 
@@ -67,7 +79,8 @@ class MujocoBackend(Backend):
         RIGID_BODY_CAPABILITIES
         | (ROBOT_CAPABILITIES - {Capability.SHAPE_TRIMESH})
         | MODEL_FILE_CAPABILITIES
-        | {Capability.JOINT_ARMATURE}  # dof_armature
+        | {Capability.JOINT_ARMATURE, Capability.CONTACT_POINTS}  # dof_armature
+        | {Capability.JOINT_REACTION}  # cfrc_int (mj_rnePostConstraint)
     )
     Options: ClassVar[type[BackendOptions]] = MujocoOptions
     #: mju_error and the bindings' own failures; MjSpec.compile's ValueError is translated where it is called.
@@ -84,6 +97,7 @@ class MujocoBackend(Backend):
         if isinstance(options, MujocoOptions) and options.engine_substeps is None:
             check_stack(stack_height(world))  # set by hand, the column is the scenario's to judge
         plan_tree(world, _native.load(world))  # a kinematic loop, one MJCF robot at most, ... (no model built)
+        _check_reactions(world)
 
     def _build(self) -> None:
         world = self.world
@@ -118,6 +132,8 @@ class MujocoBackend(Backend):
         self._helper_dof = lay.helper_dof[motors][order]
         self._target = np.zeros(motors.size)  # per slot, in the MuJoCo joint's coordinate
         self._motor_mean = SubstepMean(motors.size)
+        self._reaction = _reaction_rows(world, m, lay)  # (child body, sign, first body) per watched joint
+        self._reaction_mean = SubstepMean(6 * len(world.reaction_joints))
         self._substep_contacts = SubstepContacts(self._nsteps)  # the step's engine steps but the last
         self._listed: list[Contact] | None = []  # None: the last engine step's contacts are still in MjData
         self._warnings = self._d.warning.number  # live views into MjData
@@ -154,6 +170,13 @@ class MujocoBackend(Backend):
         self._m.tendon_frictionloss[self._motor_tendon[slot]] = fmax  # 0: no row, the motor is off
         self._target[slot] = self._sign[joint] * vel
 
+    def _set_control(self, actuator: int, ctrl: float) -> None:
+        """The MJCF file's actuator, in the file's order (the scenario's own parts add no actuator): MuJoCo
+        clamps ``ctrl`` to its ctrlrange and computes the force itself, as the file runs."""
+        if not 0 <= actuator < self._m.nu:
+            self._refuse(f"set_control: the model has {self._m.nu} actuators, not {actuator + 1}")
+        self._d.ctrl[actuator] = ctrl
+
     def _reset_body(self, body: int, pos: Vec3, quat: Quat, lin_vel: Vec3, ang_vel: Vec3) -> None:
         qadr, _ = self._free[body]
         self._d.qpos[qadr : qadr + 3] = pos
@@ -173,6 +196,9 @@ class MujocoBackend(Backend):
                 d.xfrc_applied[self._layout.body_id[i]] = acc
         if motors:
             self._motor_mean.start()
+        watched = bool(self.world.reaction_joints)
+        if watched:
+            self._reaction_mean.start()
         self._substep_contacts.start()
         for k in range(nsteps):
             if k:
@@ -183,10 +209,14 @@ class MujocoBackend(Backend):
             self._engine_step(native, friction)
             if motors:
                 self._motor_mean.add(-self._constraint_forces()[self._helper_dof])  # the helper feels -(motor force)
+            if watched:
+                self._reaction_mean.add(self._reactions_now())
             if k + 1 < nsteps:  # the last engine step's contacts stay in MjData until contacts() asks
                 self._substep_contacts.add(self._touching())
         if motors:
             self._motor_mean.finish()
+        if watched:
+            self._reaction_mean.finish()
         if forced:
             d.xfrc_applied[:] = 0.0
         dt = self.world.dt
@@ -207,6 +237,26 @@ class MujocoBackend(Backend):
     def _constraint_forces(self) -> np.ndarray:
         """The last engine step's constraint forces per dof (``qfrc_constraint``)."""
         return self._d.qfrc_constraint
+
+    def _reactions_now(self) -> np.ndarray:
+        """The watched joints' wrenches on their first bodies in the engine step just taken, flattened.
+
+        ``mj_rnePostConstraint`` gives ``cfrc_int``: the wrench (torque, force) a body's parent applies to it
+        through its joint, at the subtree centre of mass of its tree's root, world axes, from the step's
+        accelerations and the kinematics the step was computed with (still in MjData after it). Moved to the
+        world origin, turned to the first body (the opposite wrench where the tree hangs the joint from the
+        other end) and moved to that body's centre of mass."""
+        m, d = self._m, self._d
+        mujoco.mj_rnePostConstraint(m, d)
+        child, sign, first = self._reaction
+        wrench = d.cfrc_int[child]
+        force = sign[:, None] * wrench[:, 3:]
+        origin = sign[:, None] * (wrench[:, :3] + np.cross(d.subtree_com[m.body_rootid[child]], wrench[:, 3:]))
+        torque = origin - np.cross(d.xipos[first], force)
+        return np.hstack((force, torque)).ravel()
+
+    def _joint_reactions(self) -> np.ndarray:
+        return self._reaction_mean.mean.reshape(-1, 6).copy()
 
     def _put(self, body: int, pose: KinematicPose, t: float) -> None:
         """Impose a kinematic body's pose ``t`` into the step, and its velocity."""
@@ -282,6 +332,32 @@ class MujocoBackend(Backend):
         owner = self._geom_body
         return group_by_pair(len(self.world.bodies), owner[geom[:, 0]], owner[geom[:, 1]], -dist, force)
 
+    def _contact_points(self) -> list[ContactPoint]:
+        """MjData's contacts of the last engine step (distance <= 0), read as columns: ``pos`` (midway between
+        the surfaces), ``frame[:3]`` (the normal, from geom1 to geom2) and the normal force: on the elliptic
+        cone the contact's first constraint row (as ``_touching``), on a model's pyramidal cone
+        ``mj_contactForce`` (its rows are the pyramid's edges)."""
+        m, d = self._m, self._d
+        n = d.ncon if self.steps else 0
+        if n == 0:
+            return []
+        c = d.contact
+        keep = np.flatnonzero(c.dist[:n] <= 0.0)
+        rows = c.efc_address[keep]
+        if m.opt.cone == mujoco.mjtCone.mjCONE_ELLIPTIC:
+            force = np.where(rows >= 0, d.efc_force[rows] if d.nefc else 0.0, 0.0)
+        else:
+            force, wrench = np.zeros(len(keep)), np.zeros(6)
+            for i, k in enumerate(keep.tolist()):
+                if rows[i] >= 0:
+                    mujoco.mj_contactForce(m, d, k, wrench)
+                    force[i] = wrench[0]
+        owner = self._geom_body
+        geom = c.geom[keep]
+        columns = zip(owner[geom[:, 0]].tolist(), owner[geom[:, 1]].tolist(), c.pos[keep].tolist(),
+                      c.frame[keep, :3].tolist(), (-c.dist[keep]).tolist(), force.tolist(), strict=True)  # fmt: skip
+        return sorted_points([contact_point(*column) for column in columns])
+
     def _contacts(self) -> list[Contact]:
         if self._listed is None:  # first call since the step: group the last engine step's contacts now
             self._listed = self._substep_contacts.merged(self._touching())
@@ -316,6 +392,11 @@ class MujocoBackend(Backend):
         if motored.size:
             force[motored] = self._motored_sign * self._motor_mean.mean[self._motored_slot]
         return JointStates(position=position, velocity=velocity, motor_force=force)
+
+    def _imported_model(self) -> ImportedModel:
+        starts = np.zeros(len(self.world.joints))
+        starts[self._rated] = self._starts
+        return read_imported(self._m, self._d, self.world, self._layout, self._sign, starts)
 
     def _settings(self) -> dict[str, Any]:
         o = self.options
@@ -369,3 +450,46 @@ def _impacts(world: CompiledWorld, m: mujoco.MjModel, h: float, o: MujocoOptions
         pairs[(min(a, b), max(a, b))] = pair.surface.bounce_vel
     rest = (1.0 - IMPEDANCE) * math.hypot(*world.gravity) * h * h / o.bounce_erp
     return Impacts(h, o.erp, o.max_correcting_vel, rest, world.default_surface.bounce_vel, pairs)
+
+
+def _reaction_rows(world: CompiledWorld, m: mujoco.MjModel, lay: Layout) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """For each joint of ``world.reaction_joints``: the MuJoCo body it hangs (its child in the tree), +1 when
+    that is the joint's first body and -1 when it is the other, and the first body's MuJoCo id."""
+    index = {j.name: k for k, j in enumerate(world.joints)}
+    hung = {edge.joint: name for name, edge in lay.edges.items() if edge.joint is not None}
+    child, sign, first = [], [], []
+    for name in world.reaction_joints:
+        k = index[name]
+        spec = world.joints[k]
+        body = int(lay.body_id[world.body_index(spec.body)])
+        if k in hung:
+            below = int(lay.body_id[world.body_index(hung[k])])
+        elif lay.joint_id[k] >= 0:  # a joint of a model built from its file
+            below = int(m.jnt_bodyid[lay.joint_id[k]])
+        else:
+            below = -1
+        other = int(lay.body_id[world.body_index(spec.other)]) if spec.other is not None else 0
+        if below < 0 or below not in (body, other) or body == other or m.body_jntnum[below] > 1:
+            raise UnsupportedFeature(
+                f"mujoco: the reaction of joint `{name}` (its body is moved by several joints in one MuJoCo body, "
+                f"or merged with the other: MuJoCo gives a body's wrench from its parent, not one joint's)"
+            )
+        child.append(below)
+        sign.append(1.0 if below == body else -1.0)
+        first.append(body)
+    return np.array(child, dtype=np.intp), np.array(sign), np.array(first, dtype=np.intp)
+
+
+def _check_reactions(world: CompiledWorld) -> None:
+    """Refuse, before anything is built, reading the reaction of a joint that shares its body with another joint
+    of a model file (MJCF's several joints in one body, ``CompiledWorld.joint_chains``): MuJoCo's ``cfrc_int``
+    is one wrench per body."""
+    chained = {j: chain for chain in world.joint_chains for j in chain}
+    by_name = {j.name: j for j in world.joints}
+    for name in world.reaction_joints:
+        if name in chained:
+            body = by_name[name].body
+            raise UnsupportedFeature(
+                f"mujoco: the reaction of joint `{name}`: its body `{body}` is moved by several joints of the model "
+                f"file, and MuJoCo gives one wrench per body (cfrc_int), not one per joint"
+            )

@@ -143,7 +143,8 @@ def scale_total_mass(model: mujoco.MjModel, native: NativeModel) -> None:
 
 def apply_limits(model: mujoco.MjModel, world: CompiledWorld, native: NativeModel) -> None:
     """A scenario's `limits`/`free` on a file's hinge or slide: its range set on the compiled model (the
-    world's stops count from the joint's start, ``ModelFile.start``; MuJoCo's from the model's zero)."""
+    world's stops count from the joint's start, ``ModelFile.start``, itself from the file's zero, qpos0 (a
+    joint's `ref`); MuJoCo's range is on qpos)."""
     start = {name: q for file in world.models for name, q, _ in file.start}
     for joint in world.joints:
         name = native.joints.get(joint.name)
@@ -152,7 +153,7 @@ def apply_limits(model: mujoco.MjModel, world: CompiledWorld, native: NativeMode
         j = model.joint(name).id
         limited = bool(model.jnt_limited[j])
         file = (float(model.jnt_range[j][0]), float(model.jnt_range[j][1])) if limited else (None, None)
-        q0 = start.get(joint.name, 0.0)
+        q0 = start.get(joint.name, 0.0) + float(model.qpos0[int(model.jnt_qposadr[j])])  # the file's zero: its `ref`
         stops = tuple(None if x is None else x + q0 for x in (joint.lo, joint.hi))
         if stops == file:  # (a start's round trip may move a stop by an ulp: then it is set, as good)
             continue

@@ -6,7 +6,7 @@ import math
 from dataclasses import dataclass
 
 from .._kit import BackendOptions, option
-from ..errors import UnsupportedFeature
+from .._kit.stacks import refuse_column
 
 #: Longest engine step times the height of the tallest column (s x bodies). MuJoCo's contact here is a
 #: spring of K = erp/h^2 per unit mass (the direct solref of docs/backends/mujoco.md), so the moment a
@@ -53,10 +53,9 @@ def engine_substeps(options: MujocoOptions, step: float, stack: int) -> int:
 
 def check_stack(stack: int) -> None:
     """Refuse (when the backend picks the solver) a column taller than MuJoCo can hold standing (:data:`MAX_STACK`)."""
-    if stack > MAX_STACK:
-        raise UnsupportedFeature(
-            f"mujoco: the world starts with a column of {stack} bodies; MuJoCo holds at most {MAX_STACK}: its soft "
-            "contacts let a taller column lean and sway however short the step (100 boxes measured at 1 to 20 "
-            "engine steps per 10 ms, docs/backends/mujoco.md, Stacking); use dart, or set "
-            "backend_options.mujoco.engine_substeps to run it anyway"
-        )
+    refuse_column(
+        "mujoco", stack, MAX_STACK, holds="MuJoCo holds",
+        why="its soft contacts let a taller column lean and sway however short the step (100 boxes measured at 1 "
+        "to 20 engine steps per 10 ms, docs/backends/mujoco.md, Stacking); use dart, or set "
+        "backend_options.mujoco.engine_substeps to run it anyway",
+    )  # fmt: skip

@@ -16,6 +16,7 @@ from typing import Any, ClassVar
 import numpy as np
 from panda3d.core import Datagram
 from panda3d.core import Quat as PandaQuat
+from panda3d.ode import OdeJointFeedback
 
 from .._kit import BackendOptions, KinematicPose, SubstepContacts, SubstepMean, substep_times
 from .._kit.stacks import Stacks, stacks
@@ -26,6 +27,8 @@ from ..types import (
     Capability,
     CompiledWorld,
     Contact,
+    ContactPoint,
+    ImportedModel,
     JointKind,
     JointStates,
     Motion,
@@ -36,6 +39,7 @@ from ..types import (
 from . import _native
 from ._build import JointHandle, axis_arg, build_scene, destroy_scene, panda_quat, set_motor
 from ._contacts import Collider
+from ._imported import read_imported
 from ._options import OdeOptions, check_resting_stack, check_stack
 
 _ROTATIONAL = (JointKind.HINGE, JointKind.UNIVERSAL)
@@ -121,8 +125,12 @@ class OdeBackend(Backend):
         self._stacks = stacks(world)  # the registry refused columns too tall first (check_world)
         self._scene = build_scene(world, self.options)
         self._collider = Collider(
-            self._scene, self.options.collide, self.options.contact_forces, f"ode-contacts-{id(self):x}",
-            follow_slip=self.options.friction_pyramid == "slip", step=world.dt / world.substeps,
+            self._scene,
+            self.options.collide,
+            self.options.contact_forces,
+            f"ode-contacts-{id(self):x}",
+            follow_slip=self.options.friction_pyramid == "slip",
+            step=world.dt / world.substeps,
             impact_cfm=self.options.impact_cfm,
         )
         self._fudge = [j.joint.getParamFudgeFactor(*axis_arg(j)) if j.feedback else 1.0 for j in self._scene.joints]
@@ -137,8 +145,13 @@ class OdeBackend(Backend):
         self._stepper = self._scene.world.step if self.options.stepper == "step" else self._scene.world.quickStep
         self._times = substep_times(world.dt, world.substeps)
         self._motor_mean = SubstepMean(len(world.joints))
+        self._reactions = _watched(self._scene.joints, world.reaction_joints)
+        self._reaction_mean = SubstepMean(6 * len(self._reactions))
         self._substep_contacts = SubstepContacts(world.substeps)
         self._states: BodyStates | None = None  # fresh states, dropped by anything that moves a body
+
+    def _imported_model(self) -> ImportedModel:
+        return read_imported(self.world, self._scene)
 
     def _settings(self) -> dict[str, Any]:
         o = self.options
@@ -172,6 +185,9 @@ class OdeBackend(Backend):
         every = n > 1  # with substeps, every substep's contacts are kept (the kit merges them)
         if joints:
             self._motor_mean.start()
+        reactions = self._reactions
+        if reactions:
+            self._reaction_mean.start()
         if every:
             self._substep_contacts.start()
         for sub, t in enumerate(self._times):
@@ -191,6 +207,8 @@ class OdeBackend(Backend):
                 frames = [self._frame(j) for j in joints]
                 stepper(h)
                 self._motor_mean.add([self._motor(k, j, limits[k], frames[k]) for k, j in enumerate(joints)])
+            if reactions:  # dJointFeedback: the force on body 1 and the torque about its centre of mass
+                self._reaction_mean.add([v for fb in reactions for a in (fb.getForce1(), fb.getTorque1()) for v in a])
             collider.after_step(report=report)
             if every:
                 self._substep_contacts.add(collider.contacts())
@@ -198,6 +216,8 @@ class OdeBackend(Backend):
                 self._follow_track(t)
         if joints:
             self._motor_mean.finish()
+        if reactions:
+            self._reaction_mean.finish()
         self._states = None
         self._messages.extend(_native.take())
 
@@ -335,10 +355,16 @@ class OdeBackend(Backend):
         vel = np.array([r[1] for r in read], dtype=float).reshape(m)
         return JointStates(pos, vel, self._motor_mean.mean.copy())
 
+    def _joint_reactions(self) -> np.ndarray:
+        return self._reaction_mean.mean.reshape(-1, 6).copy()
+
     def _contacts(self) -> list[Contact]:
         if self.world.substeps > 1:
             return self._substep_contacts.merged() if self.steps else []
         return self._collider.contacts()
+
+    def _contact_points(self) -> list[ContactPoint]:
+        return self._collider.points() if self.steps else []
 
     def _drain_messages(self) -> list[str]:
         self._messages.extend(_native.take())
@@ -373,3 +399,18 @@ class OdeBackend(Backend):
     def _close(self) -> None:
         _native.detach()
         destroy_scene(self._scene)
+
+
+def _watched(handles: list[JointHandle], names: tuple[str, ...]) -> list[OdeJointFeedback]:
+    """The feedback structures of the joints ``names`` (in that order), set on those that had none (ODE
+    fills a joint's feedback at every step once set: the cost is only the watched joints')."""
+    by_name = {h.spec.name: h for h in handles}
+    out = []
+    for name in names:
+        handle = by_name[name]
+        feedback = handle.feedback
+        if feedback is None:  # a ball or fixed joint: its own, kept here (the handle's means "has a motor")
+            feedback = OdeJointFeedback()  # Python owns it: ODE never frees feedback structs
+            handle.joint.setFeedback(feedback)
+        out.append(feedback)
+    return out

@@ -52,8 +52,8 @@ from panda3d.ode import (
     OdeUtil,
 )
 
-from .._kit import group_by_pair
-from ..types import Contact, Surface
+from .._kit import contact_point, group_by_pair, sorted_points
+from ..types import Contact, ContactPoint, Surface
 from ._build import MAX_SURFACE_CLASSES, Scene
 
 CALLBACK_MAX_CONTACTS = 150  # PyODE's ode.collide() default, as the lab calls it
@@ -175,6 +175,19 @@ class Collider:
         if self._report is None:
             self._report = _summaries(self._reported, self._pool, len(self._bodies))
         return list(self._report)
+
+    def points(self) -> list[ContactPoint]:
+        """The reported substep's contact points (the contract's ``contact_points``): ODE's normal points
+        into geom 1 (moving geom 1 along it by the depth separates them), so the point's normal from geom 1
+        to geom 2 is its negation; the force is |F1 . n| of the joint's feedback (NaN when not armed)."""
+        index, pool, out = self._index, self._pool, []
+        for _, _, entry, slot in self._reported:
+            i, j = index[hash(entry.getGeom1().getId())], index[hash(entry.getGeom2().getId())]
+            for k, geom in enumerate(entry.getContactGeoms()):
+                n = geom.getNormal()
+                force = math.nan if slot < 0 else abs(pool[slot + k].getForce1().dot(n))
+                out.append(contact_point(i, j, geom.getPos(), -n, geom.getDepth(), force))
+        return sorted_points(out)
 
     # --- auto ----------------------------------------------------------------------------------------
 

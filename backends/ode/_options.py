@@ -11,7 +11,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from .._kit import BackendOptions, option
-from ..errors import UnsupportedFeature
+from .._kit.stacks import refuse_column
 
 #: The tallest column dropped onto itself (bodies starting apart, docs/backends/ode.md, Stacking) the
 #: backend accepts. Measured on ``box_pile.yaml`` (0.3 m boxes of 13.5 kg, dt 0.01, bounce 0.2, mu 5000;
@@ -82,14 +82,12 @@ class OdeOptions(BackendOptions):
 
 def check_stack(landing: int) -> None:
     """Refuse a column dropped onto itself that is taller than ODE can settle (:data:`MAX_LANDING_STACK`)."""
-    if landing > MAX_LANDING_STACK:
-        raise UnsupportedFeature(
-            f"ode: the world starts with a column of {landing} bodies dropped onto each other; ODE (single "
-            f"precision) settles at most {MAX_LANDING_STACK}: its soft contacts (CFM 1e-5) let a taller landed "
-            "column bend and creep, and a stiffer CFM makes its LCP fail and kick the column (measured at 25 "
-            "and 30 boxes, docs/backends/ode.md, Stacking); use mujoco (up to 50), pybullet (up to 30), dart, "
-            "or start the column resting"
-        )
+    refuse_column(
+        "ode", landing, MAX_LANDING_STACK, detail=" dropped onto each other", holds="ODE (single precision) settles",
+        why="its soft contacts (CFM 1e-5) let a taller landed column bend and creep, and a stiffer CFM makes its "
+        "LCP fail and kick the column (measured at 25 and 30 boxes, docs/backends/ode.md, Stacking); use mujoco "
+        "(up to 50), pybullet (up to 30), dart, or start the column resting",
+    )  # fmt: skip
 
 
 def check_resting_stack(tallest: int, landing: int, friction: bool) -> None:
@@ -97,11 +95,11 @@ def check_resting_stack(tallest: int, landing: int, friction: bool) -> None:
 
     ``tallest > landing`` means the tallest column has no dropped link (a dropped link makes it landing).
     """
-    if friction and tallest > landing and tallest > MAX_RESTING_STACK:
-        raise UnsupportedFeature(
-            f"ode: the world starts with a resting column of {tallest} bodies with friction; ODE (single "
-            f"precision) holds at most {MAX_RESTING_STACK}: the redundant friction rows of stacked faces make "
-            "dWorldStep's LCP fail (LCP internal error, s <= 0) and kick the column (measured: 5 to 30 boxes of "
-            "13.5 kg move 1.7-8.4 mm, 20 boxes of 1 kg fall; docs/backends/ode.md, Stacking); use mujoco, "
-            "pybullet or dart, or mu 0"
-        )
+    if friction and tallest > landing:
+        refuse_column(
+            "ode", tallest, MAX_RESTING_STACK, column="a resting column", detail=" with friction",
+            holds="ODE (single precision) holds",
+            why="the redundant friction rows of stacked faces make dWorldStep's LCP fail (LCP internal error, "
+            "s <= 0) and kick the column (measured: 5 to 30 boxes of 13.5 kg move 1.7-8.4 mm, 20 boxes of 1 kg "
+            "fall; docs/backends/ode.md, Stacking); use mujoco, pybullet or dart, or mu 0",
+        )  # fmt: skip

@@ -26,6 +26,8 @@ from ..types import (
     Capability,
     CompiledWorld,
     Contact,
+    ContactPoint,
+    ImportedModel,
     JointKind,
     JointStates,
     Motion,
@@ -38,8 +40,11 @@ from ._build import PLANE_HALF_SIZE, Layout, build, initial_rate, xyzw
 from ._build import check as check_build
 from ._frames import InertialFrames
 from ._impacts import ImpactErp
+from ._imported import read_imported
 from ._options import PyBulletOptions, check_stack, solver_iterations
 from ._reads import ROW, ContactReader, base_rows
+from ._rotors import add_rotors
+from ._springs import Springs
 from ._surfaces import FRICTION_CLAMP, SurfaceFit, fit_surfaces
 
 _flat = chain.from_iterable
@@ -71,10 +76,14 @@ class PyBulletBackend(Backend):
     #: Bullet's btScalar is double in pybullet's build (BT_USE_DOUBLE_PRECISION)
     precision: ClassVar[Precision] = Precision.FLOAT64
     capabilities: ClassVar[frozenset[Capability]] = RIGID_BODY_CAPABILITIES | {
+        Capability.CONTACT_POINTS,
+        Capability.JOINT_ARMATURE,  # a rotor geared to the joint (_rotors)
+        Capability.JOINT_STIFFNESS,  # the spring's torque each engine step (_springs)
         Capability.SHAPE_COMPOUND,
         Capability.SHAPE_CONVEX,
         Capability.COM_OFFSET,
         Capability.COLLISION_FILTER,
+        Capability.JOINT_REACTION,  # enableJointForceTorqueSensor
     }
     Options: ClassVar[type[BackendOptions]] = PyBulletOptions
     #: pybullet raises only ``pybullet.error`` (a failed command, a lost client).
@@ -108,7 +117,7 @@ class PyBulletBackend(Backend):
         p.setTimeStep(self._h, physicsClientId=c)
         self._layout: Layout = build(p, c, world)
         self._frames = InertialFrames(world)
-        self._fit: SurfaceFit = fit_surfaces(world, self._layout.excluded)
+        self._fit: SurfaceFit = fit_surfaces(world)
         # ODE bounces when the approach speed *before* the step exceeds bounce_vel; Bullet compares the
         # speed after this substep's gravity, so a resting body approaches at about g*h and bounces every
         # step [checked: the lab's box on the door, dt 0.04, bounce 0.2, threshold 0: vz -0.32..+0.33
@@ -158,12 +167,17 @@ class PyBulletBackend(Backend):
             if link < 0:  # the COM's velocity (the body's origin's, given, plus omega x arm)
                 lin = self._frames.to_inertial(i, spec.pos, spec.quat, spec.lin_vel, spec.ang_vel)[2]
                 p.resetBaseVelocity(uid, list(lin), list(spec.ang_vel), physicsClientId=c)
+        rates: dict[int, float] = {}
         for k, joint in enumerate(world.joints):
             handle = layout.joints[k]
             if joint.kind is JointKind.BALL:  # PyBullet holds spherical links with a default motor
                 p.setJointMotorControlMultiDof(
-                    handle.uid, handle.link, p.POSITION_CONTROL, targetPosition=[0.0, 0.0, 0.0, 1.0],
-                    force=[0.0, 0.0, 0.0], physicsClientId=c,
+                    handle.uid,
+                    handle.link,
+                    p.POSITION_CONTROL,
+                    targetPosition=[0.0, 0.0, 0.0, 1.0],
+                    force=[0.0, 0.0, 0.0],
+                    physicsClientId=c,
                 )
             if handle.dofs != 1:
                 continue
@@ -174,12 +188,18 @@ class PyBulletBackend(Backend):
                 hi = joint.hi if joint.hi is not None else math.inf
                 lo, hi = (lo, hi) if handle.sign > 0 else (-hi, -lo)
                 p.changeDynamics(
-                    handle.uid, handle.link, jointLowerLimit=max(lo, -1e30), jointUpperLimit=min(hi, 1e30),
+                    handle.uid,
+                    handle.link,
+                    jointLowerLimit=max(lo, -1e30),
+                    jointUpperLimit=min(hi, 1e30),
                     physicsClientId=c,
                 )
             rate = initial_rate(world, joint)
+            rates[k] = handle.sign * rate
             if rate:  # a link's initial velocity is its joint rate (ball and fixed children inherit)
                 p.resetJointState(handle.uid, handle.link, 0.0, handle.sign * rate, physicsClientId=c)
+        add_rotors(p, c, world, layout, rates)  # joint armature: a rotor geared to the joint (_rotors)
+        self._springs = Springs(world, layout)  # joint stiffness: the spring's torque each engine step (_springs)
         bases = [i for i in range(len(world.bodies)) if layout.link[i] < 0]
         self._base_uids = [layout.uid[i] for i in bases]
         self._base_rows = None if bases == list(range(len(world.bodies))) else bases  # None: every body, in order
@@ -193,6 +213,8 @@ class PyBulletBackend(Backend):
         self._joint_order = np.array(order, dtype=np.int64)
         self._joint_sign = np.array([layout.joints[k].sign for k in order], dtype=float)
         self._motor_mean = SubstepMean(len(world.joints))
+        self._watched = self._watch_reactions()
+        self._reaction_mean = SubstepMean(6 * len(self._watched))
         self._times = substep_times(world.dt, world.substeps)
         self._substep_contacts = SubstepContacts(world.substeps)
         lut = np.full((max(layout.uid) + 1, max(layout.link) + 2), -1, dtype=np.int64)
@@ -209,7 +231,7 @@ class PyBulletBackend(Backend):
     def _step(self) -> None:
         c, n = self._c, self.world.substeps
         motors = n > 1 and bool(self._motor_joints)  # the substeps' motor torques, for their mean
-        if n == 1 and not (self.forces or self.kinematic or self._impacts.active):  # nothing around the step
+        if n == 1 and not (self.forces or self.kinematic or self._impacts.active or self._watched or self._springs):
             p.stepSimulation(c)
         else:
             self._step_with_inputs(c, n, motors)
@@ -220,6 +242,8 @@ class PyBulletBackend(Backend):
         """The substeps with one-step forces, kinematic bodies, motor torques or contacts to collect."""
         if motors:
             self._motor_mean.start()
+        if self._watched:
+            self._reaction_mean.start()
         if n > 1:
             self._substep_contacts.start()
         for t in self._times:
@@ -227,15 +251,72 @@ class PyBulletBackend(Backend):
                 self._apply_forces()
             if self._impacts.active:
                 self._impacts.before_substep(self._fresh_rows)
+            if self._springs:
+                self._springs.apply(p, c)
             p.stepSimulation(physicsClientId=c)
             if self.kinematic:
                 self._follow_track(t)
             if motors:
                 self._motor_mean.add(self._motor_torques())
+            if self._watched:
+                self._reaction_mean.add(self._reactions_now())
             if n > 1:
                 self._substep_contacts.add(self._contact_reader(p.getContactPoints(physicsClientId=c)))
         if motors:
             self._motor_mean.finish()
+        if self._watched:
+            self._reaction_mean.finish()
+
+    def _watch_reactions(self) -> list[tuple[int, int, float, int, int, tuple[float, ...], bool]]:
+        """A force/torque sensor on each joint of ``world.reaction_joints``, reporting in world axes about the
+        joint's pivot (the child link's frame origin: jointFeedbackMode world space | joint frame); per joint
+        (multibody, link, +1 when the link is the joint's first body else -1, the first body's multibody and
+        link, the joint's axis in the link frame for a motor's torque (empty without one), whether it is a
+        slider). The sensor leaves out what a joint's motor applies along its axis: added from its applied
+        torque (getJointState's fourth value, the coordinate's force). Only when the scenario reads a
+        reaction: the mode is the client's, the sensors cost a pass."""
+        names = self.world.reaction_joints
+        if not names:
+            return []
+        c, layout = self._c, self._layout
+        p.setPhysicsEngineParameter(
+            jointFeedbackMode=p.JOINT_FEEDBACK_IN_WORLD_SPACE | p.JOINT_FEEDBACK_IN_JOINT_FRAME, physicsClientId=c
+        )
+        index = {j.name: k for k, j in enumerate(self.world.joints)}
+        out = []
+        for name in names:
+            k = index[name]
+            handle = layout.joints[k]
+            first = self.world.body_index(self.world.joints[k].body)
+            p.enableJointForceTorqueSensor(handle.uid, handle.link, True, physicsClientId=c)
+            axis = tuple(p.getJointInfo(handle.uid, handle.link, physicsClientId=c)[13]) if handle.dofs == 1 else ()
+            slider = self.world.joints[k].kind is JointKind.SLIDER
+            out.append((handle.uid, handle.link, handle.sign, layout.uid[first], layout.link[first], axis, slider))
+        return out
+
+    def _reactions_now(self) -> list[float]:
+        """The watched joints' wrenches on their first bodies after this engine step: force, and torque about
+        the first body's centre of mass (moved from the pivot: tau_c = tau_p + (pivot - c) x F)."""
+        c, out = self._c, []  # type: tuple[int, list[float]]
+        for uid, link, sign, body_uid, body_link, axis, slider in self._watched:
+            state = p.getJointState(uid, link, physicsClientId=c)
+            frame = p.getLinkState(uid, link, physicsClientId=c)
+            pivot, wrench = np.asarray(frame[4]), np.array(state[2])
+            if axis:  # the motor's force or torque along the axis (the link frame's orientation: frame[5])
+                turn = np.asarray(p.getMatrixFromQuaternion(frame[5], physicsClientId=c)).reshape(3, 3)
+                along = state[3] * (turn @ np.asarray(axis))
+                wrench[0:3] += along if slider else 0.0
+                wrench[3:6] += 0.0 if slider else along
+            if body_link < 0:
+                com = np.asarray(p.getBasePositionAndOrientation(body_uid, physicsClientId=c)[0])
+            else:
+                com = np.asarray(p.getLinkState(body_uid, body_link, physicsClientId=c)[0])
+            force, torque = sign * np.asarray(wrench[:3]), sign * np.asarray(wrench[3:])
+            out.extend((*force, *(torque + np.cross(pivot - com, force))))
+        return out
+
+    def _joint_reactions(self) -> np.ndarray:
+        return self._reaction_mean.mean.reshape(-1, 6).copy()
 
     def _follow_track(self, t: float) -> None:
         """PyBullet does not move mass-0 bases: put each kinematic body where its velocity says at ``t``."""
@@ -322,6 +403,9 @@ class PyBulletBackend(Backend):
                 self._listed = self._contact_reader(p.getContactPoints(physicsClientId=self._c))
         return list(self._listed)
 
+    def _contact_points(self) -> list[ContactPoint]:
+        return self._contact_reader.points(p.getContactPoints(physicsClientId=self._c)) if self.steps else []
+
     # --- inputs ---------------------------------------------------------------------------------
 
     def _place_kinematic(self, body: int, pose: KinematicPose) -> None:
@@ -345,6 +429,9 @@ class PyBulletBackend(Backend):
         self._cache = None
 
     # --- metadata and teardown --------------------------------------------------------------------
+
+    def _imported_model(self) -> ImportedModel:
+        return read_imported(p, self._c, self.world, self._layout)
 
     def _settings(self) -> dict[str, Any]:
         engine = dict(p.getPhysicsEngineParameters(physicsClientId=self._c))

@@ -358,12 +358,26 @@ def _build_tree(
         raise UnsupportedFeature(f"Backend `pybullet` refused the jointed group of `{bodies[links[0][0]].name}`.")
     if root is not None:
         layout.uid[root] = uid
+    placed = _link_indices(p, c, uid, len(links))
     for child, li in link_of.items():
-        layout.uid[child], layout.link[child] = uid, li
+        layout.uid[child], layout.link[child] = uid, placed[li]
     for k, (li, sign, dofs) in handles.items():
-        layout.joints[k] = JointHandle(uid, li, sign, dofs)
-    order = sorted(link_of.items(), key=lambda item: item[1])
+        layout.joints[k] = JointHandle(uid, placed[li], sign, dofs)
+    order = sorted(((body, placed[li]) for body, li in link_of.items()), key=lambda item: item[1])
     layout.link_groups.append((uid, [li for _, li in order], [b for b, _ in order]))
+
+
+def _link_indices(p: Any, c: int, uid: int, count: int) -> list[int]:
+    """Where each link given to createMultiBody (in the order given) ended up. PyBullet renumbers the links of a
+    branching tree depth first (ours are breadth first) and names link ``i`` of the arguments ``link{i+1}``
+    [checked: biped2d_pybullet's legs, where reading by the given index mixed up the legs' states, masses and
+    joints; found by `scenario compare`'s import table]."""
+    placed = list(range(count))
+    for k in range(p.getNumJoints(uid, physicsClientId=c)):
+        name = p.getJointInfo(uid, k, physicsClientId=c)[12].decode()
+        if name.startswith("link") and name[4:].isdigit() and 0 < int(name[4:]) <= count:
+            placed[int(name[4:]) - 1] = k
+    return placed
 
 
 def initial_rate(world: CompiledWorld, joint: JointSpec) -> float:

@@ -5,7 +5,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from .._kit import BackendOptions, option
-from ..errors import UnsupportedFeature
+from .._kit.stacks import refuse_column
 
 #: PyBullet's own numSolverIterations, kept for every scene without a tall stack.
 DEFAULT_ITERATIONS = 50
@@ -52,11 +52,10 @@ def solver_iterations(options: PyBulletOptions, stack: int) -> int:
 
 def check_stack(stack: int) -> None:
     """Refuse (when the backend picks the solver) a column taller than PyBullet holds (:data:`MAX_STACK`)."""
-    if stack > MAX_STACK:
-        raise UnsupportedFeature(
-            f"pybullet: the world starts with a column of {stack} bodies; PyBullet holds at most {MAX_STACK}: "
-            f"its iterative contact solver needs about {SWEEPS_PER_BODY_SQUARED} x height^2 sweeps per step to keep "
-            "a column standing, a column of 40 still swayed at 6400 and one of 50 fell at every setting tried "
-            "(measured, docs/backends/pybullet.md, Stacking); use mujoco (up to 50) or dart, or set "
-            "backend_options.pybullet.solver_iterations to run it anyway"
-        )
+    refuse_column(
+        "pybullet", stack, MAX_STACK, holds="PyBullet holds",
+        why=f"its iterative contact solver needs about {SWEEPS_PER_BODY_SQUARED} x height^2 sweeps per step to "
+        "keep a column standing, a column of 40 still swayed at 6400 and one of 50 fell at every setting tried "
+        "(measured, docs/backends/pybullet.md, Stacking); use mujoco (up to 50) or dart, or set "
+        "backend_options.pybullet.solver_iterations to run it anyway",
+    )  # fmt: skip

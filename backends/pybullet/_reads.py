@@ -20,8 +20,8 @@ from typing import Any
 import numpy as np
 import pybullet as p
 
-from .._kit.contacts import NUMPY_FROM, group_by_pair
-from ..types import Contact
+from .._kit.contacts import NUMPY_FROM, contact_point, group_by_pair, sorted_points
+from ..types import Contact, ContactPoint
 
 #: One base's row: position (3), orientation x y z w (4), linear (3) and angular (3) velocity.
 ROW = 13
@@ -71,3 +71,16 @@ class ContactReader:
         first = [lut[cp[1]][cp[3] + 1] for cp in kept]
         second = [lut[cp[2]][cp[4] + 1] for cp in kept]
         return group_by_pair(self._n, first, second, [-cp[8] for cp in kept], [cp[9] for cp in kept])
+
+    def points(self, points: Sequence[Any]) -> list[ContactPoint]:
+        """The touching points (the contract's ``contact_points``): at the middle of positionOnA and
+        positionOnB, the normal from A to B (PyBullet's contactNormalOnB points from B to A)."""
+        lut = self._lut
+        out = []
+        for cp in points:
+            if cp[8] <= 0.0:
+                pa, pb, n = cp[5], cp[6], cp[7]
+                mid = ((pa[0] + pb[0]) * 0.5, (pa[1] + pb[1]) * 0.5, (pa[2] + pb[2]) * 0.5)
+                out.append(contact_point(lut[cp[1]][cp[3] + 1], lut[cp[2]][cp[4] + 1], mid, (-n[0], -n[1], -n[2]),
+                                         -cp[8], cp[9]))  # fmt: skip
+        return sorted_points(out)

@@ -26,6 +26,7 @@ from reports import trace_format as tf
 __all__ = ["SCENE_SCHEMA", "read_scene_updates"]
 
 SCENE_SCHEMA = "foxglove.SceneUpdate"
+_TOPICS = [tf.TOPIC_SCENE, tf.TOPIC_SCENE_COLLISION, tf.TOPIC_CONTACT_POINTS]
 
 Decoder = Callable[[bytes], Mapping[str, Any]]
 
@@ -75,15 +76,15 @@ def _decoder(schema: Schema | None, message_encoding: str) -> Decoder | None:
 
 
 def read_scene_updates(path: Path) -> list[tuple[float, Mapping[str, Any]]]:
-    """(simulated time, SceneUpdate as a dict) of every scene message in the trace (/scene and
-    /scene/collision), in time order;
+    """(simulated time, SceneUpdate as a dict) of every scene message in the trace (/scene,
+    /scene/collision and the contact arrows of /contact_points), in time order;
     empty when the file has no scene channel in an encoding this module decodes."""
     out: list[tuple[float, Mapping[str, Any]]] = []
     decoders: dict[int, Decoder | None] = {}
     try:
         with open(path, "rb") as f:
             reader = make_reader(f, validate_crcs=True)
-            for schema, channel, message in reader.iter_messages(topics=[tf.TOPIC_SCENE, tf.TOPIC_SCENE_COLLISION]):
+            for schema, channel, message in reader.iter_messages(topics=_TOPICS):
                 if channel.id not in decoders:
                     decoders[channel.id] = _decoder(schema, channel.message_encoding)
                 decode = decoders[channel.id]

@@ -100,7 +100,7 @@ class CaseOutcome:
         output-error | internal-error."""
         if self.problem_kind and self.exit.code == ExitCode.BAD_INPUT and self.exit.message == self.problem:
             return self.problem_kind
-        if self.run.status in ("crashed", "timed-out", "exited"):
+        if self.run.status in ("crashed", "timed-out", "over-memory", "exited"):
             return "engine-crash"
         return {ExitCode.BAD_INPUT: "bad-input", ExitCode.INTERNAL_ERROR: "internal-error",
                 ExitCode.OUTPUT_ERROR: "output-error"}.get(self.exit.code, "engine-failure")  # fmt: skip

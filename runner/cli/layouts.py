@@ -19,7 +19,17 @@ from rich.console import Console
 from rich.markup import escape
 
 from backends.types import JointKind, Motion, Shape, ShapeKind
-from reports.trace_format import LAYOUT_FILE, TOPIC_BODIES, TOPIC_JOINTS, TOPIC_TF, parts_by_topic, scenario_layout_file
+from reports.trace_format import (
+    LAYOUT_FILE,
+    TOPIC_BODIES,
+    TOPIC_JOINTS,
+    TOPIC_SENSORS,
+    TOPIC_TF,
+    parts_by_topic,
+    scenario_layout_file,
+    sensor_field,
+    sensor_unit,
+)
 from runner.compile.asserted import asserted_quantities
 from runner.compile.program import Program, build_program
 from runner.errors import TraceError
@@ -42,6 +52,7 @@ class _Names:
     bodies: dict[str, str]
     joints: dict[str, str]
     kinds: dict[str, JointKind]
+    sensors: frozenset[str] = frozenset()  # the quantities on /sensors
 
     @classmethod
     def of(cls, program: Program) -> _Names:
@@ -50,7 +61,7 @@ class _Names:
 
         return cls(topics(TOPIC_BODIES, [b.name for b in program.world.bodies]),
                    topics(TOPIC_JOINTS, [j.name for j in program.world.joints]),
-                   {j.name: j.kind for j in program.world.joints})  # fmt: skip
+                   {j.name: j.kind for j in program.world.joints}, frozenset(program.sensors))  # fmt: skip
 
 
 def _joint_unit(kind: JointKind | None, field: str) -> str:
@@ -69,6 +80,8 @@ def _paths(quantity: str, names: _Names) -> list[lt.PlotPath]:
         a, _, b = quantity[len("contact(") : -1].partition(", ")
         return [lt.PlotPath(f'/contacts.pairs[:]{{a=="{x}"}}{{b=="{y}"}}.normal_force', f"contact {x}-{y} force", "N")
                 for x, y in ((a, b), (b, a))]  # fmt: skip
+    if quantity in names.sensors:
+        return [lt.PlotPath(f"{TOPIC_SENSORS}.{sensor_field(quantity)}", written(quantity), sensor_unit(quantity))]
     head, _, field = quantity.rpartition(".")
     if head == "state":
         return [lt.PlotPath(lt.state_path(field), quantity, "1")]

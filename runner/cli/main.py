@@ -103,22 +103,22 @@ def _report(exc: BaseException, err: Console) -> int:
     """Print ``exc`` as its first message line (runner.exec.exits) and give its exit code. A bug is
     "internal error, please report" (exit 70), with its traceback when SCENARIO_DEBUG=1; in the test
     suite it is raised."""
-    from runner.cli.outcomes import debug, in_tests  # with the verdict tables: not every command prints them
-
     if isinstance(exc, SystemExit | GeneratorExit):
         raise exc
     exit = classify(exc)
     if exit.code in (ExitCode.INTERRUPTED, ExitCode.TERMINATED):
         exc = Terminated() if exit.code is ExitCode.TERMINATED else KeyboardInterrupt()  # whatever wrapped it
+    if isinstance(exc, KeyboardInterrupt):  # before importing anything: the signal may have cut an import short,
+        signal = "SIGTERM" if isinstance(exc, Terminated) else "Ctrl-C"  # leaving that module half made
+        err.print(f"{exit.label} ({signal}); {exit.message}", markup=False)
+        return exit.code
+    from runner.cli.outcomes import debug, in_tests  # with the verdict tables: not every command prints them
+
     remote = getattr(exc, "remote_traceback", "")
     if exit.code is ExitCode.INTERNAL_ERROR and in_tests():  # a bug fails the test that met it, with its traceback
         if remote:
             exc.add_note(f"raised in a worker process:\n{remote}")
         raise exc
-    if isinstance(exc, KeyboardInterrupt):
-        signal = "SIGTERM" if isinstance(exc, Terminated) else "Ctrl-C"
-        err.print(f"{exit.label} ({signal}); {exit.message}", markup=False)
-        return exit.code
     issues = getattr(exc, "issues", None)
     if isinstance(exc, ScenarioValidationError) and issues:
         for issue in issues:

@@ -129,7 +129,8 @@ def junit_case(res: CaseResult, loaded: LoadedScenario | None) -> JUnitCase:
     if res.result is not None:
         return from_result(res.result, loaded)
     exit = res.exit
-    kind = "engine-crash" if res.status in ("crashed", "timed-out", "exited") else _KINDS.get(exit.code, "error")
+    stopped = res.status in ("crashed", "timed-out", "over-memory", "exited")
+    kind = "engine-crash" if stopped else _KINDS.get(exit.code, "error")
     scenario = loaded.model.scenario if loaded is not None else res.case.scenario
     variant = loaded.variant if loaded is not None else (res.case.variant or "base")
     text = exit.message + (f"\n{res.output.strip()[-2000:]}" if res.output.strip() else "")

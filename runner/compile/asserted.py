@@ -8,7 +8,9 @@ each name becomes one or more *quantities*, in the forms the trace's series are 
 * ``<body>.pos.z``, ``<body>.vel.x``, ``<body>.angvel.y``, ``<body>.quat.w``: a component;
 * ``<body>.speed`` (norm of the velocity) and ``<body>.energy`` (J, docs/language.md);
 * ``<joint>.position``, ``<joint>.velocity``, ``<joint>.force``; ``state.<variable>``;
-* ``contact(<a>, <b>)``: the normal force between two bodies (a ``contact`` assertion or call).
+* ``contact(<a>, <b>)``: the normal force between two bodies (a ``contact`` assertion or call);
+* a sensor quantity (``shoulder.reaction.torque.y``, ``box.kinetic_energy``, ``hand.pinch site.pos.z``):
+  as the trace's /sensors names it (``Program.sensors``).
 
 An array's name stands for every copy (``max(crate.pos.z)`` reads ``crate_0.pos.z`` ... ``crate_4.pos.z``).
 Time, constants and parameters are not quantities. The list is written into each trace's ``scenario``
@@ -42,9 +44,15 @@ def _texts(assertion: Any) -> list[str]:
     return out
 
 
-def _resolve(name: str, bodies: set[str], joints: set[str], groups: dict[str, list[str]], state: set[str]) -> list[str]:
+def _resolve(
+    name: str, bodies: set[str], joints: set[str], groups: dict[str, list[str]], state: set[str], sensors: set[str]
+) -> list[str]:
     """The quantities one dotted name reads (nothing for time, constants, parameters and unknown names)."""
+    if name in sensors:  # a sensor quantity (docs/language.md "Sensors"): on the trace's /sensors
+        return [name]
     head, rest = split_owner(name, bodies | joints)  # a robot's link or joint: `arm.link_7.pos.z`
+    if head in groups and all(f"{b}.{rest}" in sensors for b in groups[head]):
+        return [f"{b}.{rest}" for b in groups[head]]
     if head == "state":
         return [name] if rest in state else []
     if head in joints:
@@ -67,6 +75,7 @@ def asserted_quantities(program: Program, assertions: Iterable[Any] | None = Non
     bodies = {b.name for b in program.world.bodies}
     joints = {j.name for j in program.world.joints}
     state = set(program.loaded.model.state)
+    sensors = set(program.sensors)
     out: dict[str, None] = {}
     for assertion in program.loaded.model.assertions if assertions is None else assertions:
         if isinstance(assertion, A.ContactAssertion):
@@ -78,7 +87,7 @@ def asserted_quantities(program: Program, assertions: Iterable[Any] | None = Non
             except ExpressionError:
                 continue  # refused when the scenario was checked; nothing to plot
             for name in sorted(expression.names):
-                out.update(dict.fromkeys(_resolve(name, bodies, joints, program.groups, state)))
+                out.update(dict.fromkeys(_resolve(name, bodies, joints, program.groups, state, sensors)))
             for function, args in sorted(expression.call_args):
                 if function == "contact" and len(args) == 2:
                     out[contact_quantity(args[0], args[1])] = None

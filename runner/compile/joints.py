@@ -21,7 +21,7 @@ from dataclasses import replace
 
 from backends.geometry import IDENTITY, quat_conj, quat_mul, quat_rotate
 from backends.types import BodySpec, JointDynamics, Motor, Vec3
-from runner.language.model_physics import Dynamics, Joint, Limits
+from runner.language.model_physics import Drive, Dynamics, Joint, Limits
 
 
 def _dot(a: Vec3, b: Vec3) -> float:
@@ -79,6 +79,13 @@ def initial_motor(motor: Motor | None, dyn: JointDynamics, driven: bool) -> Moto
     if motor is not None:
         return Motor(*capped(motor.vel, motor.fmax, dyn))
     return Motor(0.0, 0.0) if driven else None
+
+
+def drive_motor(drive: Drive | None) -> Motor | None:
+    """The velocity motor a drive in velocity mode starts with (the other modes leave the motor off)."""
+    if drive is None or drive.vel is None or drive.fmax is None:
+        return None
+    return Motor(drive.vel, drive.fmax)
 
 
 def capped(vel: float, fmax: float, dyn: JointDynamics) -> tuple[float, float]:

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -11,13 +11,14 @@ import numpy as np
 
 from backends.types import CompiledWorld, Motion
 from runner.compile.interval_specs import FuncSpec, LerpSpec, ParallelSpec, SequenceSpec, SoundSpec, WaitSpec
+from runner.compile.sensed import sensor_quantities
 from runner.compile.solids import NodeDef, SolidDef
 from runner.compile.world import compile_world, joint_zeros
 from runner.errors import ScenarioValidationError
 from runner.language import model_behaviour as B
 from runner.language.expressions import Expression, compile_expression
 from runner.language.load import LoadedScenario
-from runner.language.names import expand_bodies, groups, robot_groups
+from runner.language.names import expand_bodies, groups, robot_frames, robot_groups
 from runner.language.refs import expressions_in
 from runner.language.sounds import SoundInfo, read_info
 
@@ -68,6 +69,12 @@ class Program:
     start_scale: dict[str, float]
     #: joint -> what to add to the backend's reading to read it from the joint's stated zero (nonzero only)
     joint_zeros: dict[str, float]
+    #: `<robot>.<frame>` -> (its body, position and orientation in the body frame): runner.sim.frames
+    frames: dict[str, tuple[str, tuple[float, float, float], tuple[float, float, float, float]]] = field(
+        default_factory=dict
+    )
+    #: the sensor quantities the expressions read, one body, joint or frame each (runner.compile.sensed)
+    sensors: list[str] = field(default_factory=list)
 
     @property
     def name(self) -> str:
@@ -213,6 +220,9 @@ def build_program(loaded: LoadedScenario) -> Program:
         start_hpr=start_hpr,
         start_scale=start_scale,
         joint_zeros=joint_zeros(model, world, loaded.robots),
+        frames=robot_frames(loaded.robots),
+        sensors=sensor_quantities(model, world, {**groups(model), **robot_groups(loaded.robots)},
+                                  set(robot_frames(loaded.robots))),
     )
 
 

@@ -25,12 +25,14 @@ from runner.language.model_robots import Robot
 from runner.language.robot_desc import ModelDesc
 
 
-def start_values(robot: Robot, desc: ModelDesc) -> dict[str, tuple[float, float]]:
-    """Joint -> (position from the model's zero, rate): the keyframe's, then the scenario's own."""
+def start_values(robot: Robot, desc: ModelDesc, as_file: bool = False) -> dict[str, tuple[float, float]]:
+    """Joint -> (position from the model's zero, rate): the model's own start (a joint whose zero is outside its
+    range starts at its nearest end: ``ModelDesc.start``; not ``as_file``, with `world.options: model`, where
+    the file starts as MuJoCo starts it), the keyframe's, then the scenario's own."""
+    out: dict[str, tuple[float, float]] = {} if as_file else {j: (q, 0.0) for j, q in desc.start}
     start = robot.initial
     if start is None:
-        return {}
-    out: dict[str, tuple[float, float]] = {}
+        return out
     if start.keyframe is not None:
         key = desc.keyframe(start.keyframe)
         if key is not None:  # refused when loaded otherwise (runner.language.refs)
@@ -82,11 +84,28 @@ def link_motions(
     desc: ModelDesc, values: Mapping[str, tuple[float, float]], root: LinkMotion | None = None
 ) -> dict[str, LinkMotion]:
     """Every link's displacement and velocity for the joints' start ``values``, the root link moving as
-    ``root`` (default: at rest). The description lists a parent's joint before its children's (both loaders
-    walk from the root)."""
+    ``root`` (default: at rest)."""
+    return _walk(desc, values, root)[0]
+
+
+def joint_motions(
+    desc: ModelDesc, values: Mapping[str, tuple[float, float]], root: LinkMotion | None = None
+) -> dict[str, tuple[LinkMotion, LinkMotion]]:
+    """Per joint, the motion of the frame that carries it and of the frame it moves (its child, or for one of
+    several joints of an MJCF body, the body's frame as the joints up to it leave it)."""
+    return _walk(desc, values, root)[1]
+
+
+def _walk(
+    desc: ModelDesc, values: Mapping[str, tuple[float, float]], root: LinkMotion | None
+) -> tuple[dict[str, LinkMotion], dict[str, tuple[LinkMotion, LinkMotion]]]:
+    """The description lists a parent's joint before its children's (both loaders walk from the root), and
+    the joints of one MJCF body in order: each turns or slides about its axis as the ones before left the
+    body (MuJoCo's kinematics), so a joint whose child already moved is carried by that motion."""
     out: dict[str, LinkMotion] = {} if root is None else {desc.root: root}
+    joints: dict[str, tuple[LinkMotion, LinkMotion]] = {}
     for joint in desc.joints:
-        parent = out.get(joint.parent, _REST)
+        parent = out.get(joint.child) or out.get(joint.parent, _REST)
         q, qd = values.get(joint.name, (0.0, 0.0))
         axis = parent.rot @ np.asarray(joint.axis, dtype=float)
         anchor0 = np.asarray(joint.anchor, dtype=float)
@@ -102,4 +121,5 @@ def link_motions(
         else:  # fixed, ball, free: no start of their own
             rot, quat, shift, omega, v_origin = parent.rot, parent.quat, parent.shift, parent.omega, parent.v_origin
         out[joint.child] = LinkMotion(rot, quat, shift, omega, v_origin)
-    return out
+        joints[joint.name] = (parent, out[joint.child])
+    return out, joints

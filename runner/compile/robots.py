@@ -17,6 +17,7 @@ from backends.geometry import IDENTITY, quat_mul, quat_rotate
 from backends.types import (
     BodySpec,
     Capability,
+    JointDynamics,
     JointKind,
     JointSpec,
     ModelFile,
@@ -27,12 +28,15 @@ from backends.types import (
     ShapeKind,
     Surface,
 )
-from runner.compile.joints import dynamics, initial_motor
-from runner.compile.robot_start import LinkMotion, link_motions, root_motion, start_values
+from runner.compile.joints import drive_motor, dynamics, initial_motor
+from runner.compile.robot_start import LinkMotion, joint_motions, link_motions, root_motion, start_values
+from runner.compile.surfaces import compiled_surface
 from runner.language.hpr import hpr_to_quat
 from runner.language.model import Scenario
+from runner.language.model_behaviour import ControlAction
 from runner.language.model_physics import Limits
 from runner.language.model_robots import Robot
+from runner.language.model_walk import all_actions
 from runner.language.robot_desc import JointDesc, LinkDesc, ModelDesc, principal_axes, vec
 
 PALETTE = [(0.80, 0.45, 0.20, 1.0), (0.30, 0.50, 0.80, 1.0), (0.40, 0.70, 0.35, 1.0), (0.75, 0.30, 0.40, 1.0)]
@@ -47,6 +51,7 @@ class RobotParts:
     surfaces: tuple[PairSurface, ...]  # link overrides: (link, other body) for every other body
     groups: dict[str, list[str]]  # robot -> its links' body names
     models: tuple[ModelFile, ...] = ()  # the MJCF robots, for an engine that builds them from the file
+    chains: tuple[tuple[str, ...], ...] = ()  # joints moving one body together, in order (MJCF)
 
 
 def _placement(robot: Robot) -> tuple[tuple[float, float, float], tuple[float, float, float, float]]:
@@ -106,9 +111,31 @@ def link_body(
     )
 
 
+def actuator_effort(desc: ModelDesc, joint: JointDesc) -> JointDynamics:
+    """The joint's dynamics with, where the model gives it no effort limit, its actuators' largest force
+    limit as one: |gear| x max(|lo|, |hi|) of a `forcerange` (docs/robots.md, "MJCF actuators")."""
+    limits = [abs(a.gear) * max(abs(a.forcerange[0]), abs(a.forcerange[1]))
+              for a in desc.actuators if a.joint == joint.name and a.forcerange is not None]  # fmt: skip
+    if not limits or joint.dynamics.effort is not None:
+        return joint.dynamics
+    return replace(joint.dynamics, effort=max(limits))
+
+
+def commanded_actuators(model: Scenario, name: str) -> frozenset[str]:
+    """The actuators of robot ``name`` the scenario drives: given a `ctrl`, or named by a `control` action."""
+    robot = model.robots[name]
+    named = {a.control.actuator for a, _ in all_actions(model) if isinstance(a, ControlAction)}
+    return frozenset(robot.actuators) | frozenset(n[len(name) + 1 :] for n in named if n.startswith(f"{name}."))
+
+
 def _joint(
-    robot_name: str, robot: Robot, desc: ModelDesc, joint: JointDesc, motions: Mapping[str, LinkMotion],
-    start: float, driven: bool,
+    robot_name: str,
+    robot: Robot,
+    desc: ModelDesc,
+    joint: JointDesc,
+    motions: Mapping[str, tuple[LinkMotion, LinkMotion]],
+    start: float,
+    driven: bool,
 ) -> JointSpec:
     """The joint at the start pose (its axis turned with the parent, its anchor with the child), its stops
     from there (``start``: the position from the model's zero); ``driven``: a motor action drives it."""
@@ -118,7 +145,9 @@ def _joint(
     override = robot.joints.get(joint.name)
     lo, hi = joint.lo, joint.hi
     motor = None
-    dyn = dynamics(joint.dynamics, override.dynamics if override is not None else None)
+    dyn = dynamics(actuator_effort(desc, joint), override.dynamics if override is not None else None)
+    if dyn.stiffness > 0:  # the model's spring rest counts from its zero; a JointSpec's from the start
+        dyn = replace(dyn, springref=dyn.springref - start)
     if override is not None:
         if override.free:
             lo = hi = None
@@ -128,16 +157,16 @@ def _joint(
             lo, hi = override.limits
         if override.motor is not None:
             motor = Motor(override.motor.vel, override.motor.fmax)
+        motor = drive_motor(override.drive) or motor
     servo = override is not None and override.servo is not None  # the servo sets it every step (runner.sim.servo)
     motor = initial_motor(motor, dyn, servo or driven)  # a motor action: off until the action sets it
     limits = override.limits if override is not None and isinstance(override.limits, Limits) else None
     other = None if is_static(robot, desc, joint.parent) else f"{robot_name}.{joint.parent}"
     axis, anchor = joint.axis, joint.anchor
-    parent, child = motions.get(joint.parent), motions.get(joint.child)
-    if parent is not None:
-        axis = vec(parent.rot @ np.asarray(joint.axis, dtype=float))
-    if child is not None:
-        anchor = vec(child.apply(np.asarray(joint.anchor, dtype=float)))
+    carried = motions.get(joint.name)  # (the frame carrying the joint, the frame it moves): runner.compile.robot_start
+    if carried is not None:
+        axis = vec(carried[0].rot @ np.asarray(joint.axis, dtype=float))
+        anchor = vec(carried[1].apply(np.asarray(joint.anchor, dtype=float)))
     return JointSpec(
         name=f"{robot_name}.{joint.name}",
         kind=JointKind(joint.kind),
@@ -170,16 +199,19 @@ def compile_robots(
     link_surfaces: list[tuple[str, Surface]] = []
     group: dict[str, list[str]] = {}
     models: list[ModelFile] = []
+    chains: list[tuple[str, ...]] = []
     for name, robot in model.robots.items():
         desc = robots[name]
-        values, root = start_values(robot, desc), root_motion(robot, desc)
-        motions = link_motions(desc, values, root) if values or root is not None else {}
+        values = start_values(robot, desc, as_file=model.world.options == "model")
+        root = root_motion(robot, desc)
+        moved = values or root is not None
+        motions = link_motions(desc, values, root) if moved else {}
+        carriers = joint_motions(desc, values, root) if moved else {}
         for link in desc.links:
             bodies.append(link_body(name, robot, desc, link, len(bodies), motions.get(link.name)))
             override = robot.links.get(link.name)
             if override is not None and override.surface is not None:
-                s = override.surface
-                link_surfaces.append((f"{name}.{link.name}", Surface(s.bounce, s.bounce_vel, s.mu)))
+                link_surfaces.append((f"{name}.{link.name}", compiled_surface(override.surface)))
         group[name] = [f"{name}.{link.name}" for link in desc.links]
         for joint in desc.joints:
             if joint.kind == "free":  # no joint: the body touches its parent (MuJoCo: the world) as any other
@@ -187,14 +219,15 @@ def compile_robots(
             if not (robot.format == "mjcf" and joint.parent == desc.root):  # MuJoCo: the world is no parent
                 excluded.append((f"{name}.{joint.parent}", f"{name}.{joint.child}"))
             start = values.get(joint.name, (0.0, 0.0))[0]
-            joints.append(_joint(name, robot, desc, joint, motions, start, f"{name}.{joint.name}" in driven))
+            joints.append(_joint(name, robot, desc, joint, carriers, start, f"{name}.{joint.name}" in driven))
         excluded.extend((f"{name}.{a}", f"{name}.{b}") for a, b in robot.exclude)
         if not robot.collides_with_itself:  # pybullet's default for URDF: no two links of the model touch
             links = group[name]
             excluded.extend((a, b) for i, a in enumerate(links) for b in links[i + 1 :])
         excluded.extend((f"{name}.{a}", f"{name}.{b}") for a, b in desc.excluded)
         if robot.format == "mjcf":
-            models.append(model_file(name, robot, desc, values))
+            models.append(model_file(name, robot, desc, values, commanded_actuators(model, name)))
+        chains.extend(joint_chains(name, desc))
     members = {**arrays, **group}
     for a, b in model.exclude_contacts:
         for x in members.get(a, [a]):
@@ -202,15 +235,27 @@ def compile_robots(
     everyone = list(others) + [b.name for b in bodies]
     surfaces = tuple(PairSurface(link, other, s) for link, s in link_surfaces for other in everyone if other != link)
     unique = tuple(dict.fromkeys((a, b) if a <= b else (b, a) for a, b in excluded))
-    return RobotParts(tuple(bodies), tuple(joints), unique, surfaces, group, tuple(models))
+    return RobotParts(tuple(bodies), tuple(joints), unique, surfaces, group, tuple(models), tuple(chains))
+
+
+def joint_chains(name: str, desc: ModelDesc) -> list[tuple[str, ...]]:
+    """The joints of each link moved by several (MJCF), in the file's order: `CompiledWorld.joint_chains`."""
+    moving: dict[str, list[str]] = {}
+    for joint in desc.joints:
+        if joint.kind not in ("fixed", "free"):
+            moving.setdefault(joint.child, []).append(f"{name}.{joint.name}")
+    return [tuple(names) for names in moving.values() if len(names) > 1]
 
 
 def model_file(
-    name: str, robot: Robot, desc: ModelDesc, values: Mapping[str, tuple[float, float]] | None = None
+    name: str, robot: Robot, desc: ModelDesc, values: Mapping[str, tuple[float, float]] | None = None,
+    commanded: frozenset[str] = frozenset(),
 ) -> ModelFile:
     """An MJCF robot as its file: the description's links and joints are in MuJoCo's compiled order, welds
     (a body without a joint, `<body>_weld`, the description's only fixed joints) aside; ``values``: the
-    joints' start (position from the model's zero, rate)."""
+    joints' start (position from the model's zero, rate); ``commanded``: the actuators the scenario drives
+    (one the runner's force law cannot reproduce needs the engine's own, ``actuator:native``)."""
+    native = any(a.unmapped is not None for a in desc.actuators if a.name in commanded)
     pos, quat = _placement(robot)
     joints = tuple(f"{name}.{j.name}" for j in desc.joints if j.kind != "fixed")  # MJCF has no fixed joints
     return ModelFile(
@@ -221,6 +266,8 @@ def model_file(
         quat=quat,
         bodies=tuple(f"{name}.{link.name}" for link in desc.links),
         joints=joints,
-        needs=frozenset(Capability(n.capability) for n in desc.needs),
+        needs=frozenset(Capability(n.capability) for n in desc.needs) | (
+            frozenset({Capability.ACTUATOR_NATIVE}) if native else frozenset()
+        ),
         start=tuple((f"{name}.{j}", q, v) for j, (q, v) in (values or {}).items()),
     )

@@ -21,14 +21,16 @@ from backends.types import (
     PairSurface,
     Shape,
     ShapeKind,
-    Surface,
 )
-from runner.compile.joints import dynamics, initial_motor, stops, zero_offset
+from runner.compile.joints import drive_motor, dynamics, initial_motor, stops, zero_offset
 from runner.compile.robot_start import start_values
 from runner.compile.robots import compile_robots
+from runner.compile.sensed import reaction_joints
+from runner.compile.surfaces import compiled_surface
 from runner.language import model_behaviour as B
 from runner.language.hpr import hpr_to_quat
 from runner.language.model import Scenario
+from runner.language.model_inertia import principal_inertia
 from runner.language.model_physics import Body, Limits
 from runner.language.model_walk import all_actions
 from runner.language.names import BodyInstance, expand_bodies, groups
@@ -124,6 +126,9 @@ def compile_body(inst: BodyInstance, number: int) -> BodySpec:
     else:
         mass = (body.density or KINEMATIC_DENSITY) * volume(shape)
     inertia = mass_properties(shape, mass) if mass > 0 else (0.0, 0.0, 0.0)
+    axes = IDENTITY
+    if body.inertia is not None:  # the body's own (runner.language.model_inertia)
+        inertia, axes = principal_inertia(body.inertia)
     given = (
         tuple(body.color)
         if body.color is not None
@@ -141,6 +146,7 @@ def compile_body(inst: BodyInstance, number: int) -> BodySpec:
         lin_vel=body.vel,
         ang_vel=body.angvel,
         color=color,
+        inertia_quat=axes,
     )
 
 
@@ -157,14 +163,17 @@ def joint_zeros(
     }
     for rname, robot in model.robots.items():
         if robots is not None and rname in robots:
-            values = start_values(robot, robots[rname])
+            values = start_values(robot, robots[rname], as_file=model.world.options == "model")
             zeros.update({f"{rname}.{j}": q for j, (q, _) in values.items() if q != 0.0})
     return zeros
 
 
 def motor_targets(model: Scenario) -> frozenset[str]:
-    """The joints a `motor` action drives."""
-    return frozenset(a.motor.joint for a, _ in all_actions(model) if isinstance(a, B.MotorAction))
+    """The joints a `motor` action, or a `drive` action in velocity mode, drives."""
+    actions = [a for a, _ in all_actions(model)]
+    return frozenset(a.motor.joint for a in actions if isinstance(a, B.MotorAction)) | frozenset(
+        a.drive.joint for a in actions if isinstance(a, B.DriveAction) and a.drive.mode == "velocity"
+    )
 
 
 def _unit(v: Sequence[float]) -> tuple[float, float, float]:
@@ -199,7 +208,7 @@ def compile_world(model: Scenario, name: str, robots: Mapping[str, ModelDesc] | 
                 stop_stiffness=limits.stiffness if limits is not None else None,
                 stop_damping=limits.damping if limits is not None else None,
                 motor=initial_motor(
-                    Motor(joint.motor.vel, joint.motor.fmax) if joint.motor is not None else None,
+                    Motor(joint.motor.vel, joint.motor.fmax) if joint.motor is not None else drive_motor(joint.drive),
                     dynamics(NO_DYNAMICS, joint.dynamics),
                     driven=False,
                 ),
@@ -209,12 +218,11 @@ def compile_world(model: Scenario, name: str, robots: Mapping[str, ModelDesc] | 
     members = {**groups(model), **parts.groups}
     pairs: list[PairSurface] = []
     for override in model.surfaces:
-        surface = Surface(override.bounce, override.bounce_vel, override.mu)
+        surface = compiled_surface(override)
         side_a = members.get(override.bodies[0], [override.bodies[0]])
         side_b = members.get(override.bodies[1], [override.bodies[1]])
         pairs.extend(PairSurface(a, b, surface) for a in side_a for b in side_b if a != b)
     pairs.extend(parts.surfaces)  # after the scenario's pairs, which win (CompiledWorld.surface: the first)
-    d = model.surface
     return CompiledWorld(
         name=name,
         gravity=model.world.gravity,
@@ -223,10 +231,13 @@ def compile_world(model: Scenario, name: str, robots: Mapping[str, ModelDesc] | 
         duration=model.world.duration,
         bodies=bodies + parts.bodies,
         joints=tuple(joints) + parts.joints,
-        default_surface=Surface(d.bounce, d.bounce_vel, d.mu),
+        default_surface=compiled_surface(model.surface),
         pair_surfaces=tuple(pairs),
         backend_options={k: dict(v) for k, v in model.backend_options.items()},
         excluded_pairs=parts.excluded,
         models=parts.models,
+        joint_chains=parts.chains,
         model_options=model.world.options == "model",
+        contact_points=model.trace.contact_points,
+        reaction_joints=reaction_joints(model, [j.name for j in (*joints, *parts.joints)]),
     )

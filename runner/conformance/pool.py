@@ -20,7 +20,8 @@ from typing import Any
 from backends.registry import engine_version
 from runner.conformance.cases import Case
 from runner.conformance.worker import job
-from runner.exec.pool import CRASHED, EXITED, RETURNED, TIMED_OUT, Ending, Job, Pool
+from runner.exec.memory import ENV, MIB
+from runner.exec.pool import CRASHED, EXITED, OVER_MEMORY, RETURNED, TIMED_OUT, Ending, Job, Pool
 
 __all__ = ["BackendRun", "run_backend", "run_suite"]
 
@@ -49,6 +50,8 @@ def _result(ending: Ending) -> dict[str, Any]:
         return ending.payload
     if ending.how == TIMED_OUT:
         return _failure(f"timed out after {ending.timeout:g} s", tail)
+    if ending.how == OVER_MEMORY:
+        return _failure(f"over its memory ceiling of {(ending.memory or 0) // MIB} MiB ({ENV})", tail)
     if ending.how == CRASHED:
         return _failure(f"crashed (signal {ending.signal})", tail)
     if ending.how == EXITED:

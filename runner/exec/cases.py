@@ -18,7 +18,7 @@ from __future__ import annotations
 import math
 import signal
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
@@ -26,8 +26,9 @@ from reports import outcome as oc
 from reports import trace_format as tf
 from runner import interrupts
 from runner.errors import ExitCode, OutputError, ScenarioError, TraceError
+from runner.exec import memory as mem
 from runner.exec.exits import Exit, classify
-from runner.exec.pool import CRASHED, EXITED, INTERRUPTED, RETURNED, TIMED_OUT, Ending
+from runner.exec.pool import CRASHED, EXITED, INTERRUPTED, OVER_MEMORY, RETURNED, TIMED_OUT, Ending
 from runner.exec.transport import decode_error, encode_error, result_from_json, result_to_json
 from runner.sim.session import RunResult
 from runner.trace.output import Claim
@@ -54,6 +55,9 @@ class Case:
     force: bool = False  # also replace files under the output names that this tool did not write
     scenario: str = ""  # the scenario's name (for the outcome file), when the parent loaded it
     loaded: Any = field(default=None, compare=False, repr=False)  # the LoadedScenario, when the parent has it
+    #: the worker's memory ceiling in bytes (0: none), SCENARIO_MEMORY_LIMIT's where the case is made (the command,
+    #: not a Ray worker)
+    memory: int = field(default_factory=lambda: mem.ceiling() or 0)
 
     @property
     def label(self) -> str:
@@ -68,9 +72,7 @@ class Case:
         files = [(path.name, path.read_bytes())]
         files += [(str(rel), (path.parent / rel).read_bytes()) for rel in loaded.model.sounds.values()]
         # without `loaded`: the remote worker loads its own copy of the files
-        return Case(self.path, self.variant, self.backend, self.overrides, self.out_dir, tuple(files), self.cost,
-                    self.record_every, self.trace_process, self.budget, self.sha256, self.trace, self.force,
-                    self.scenario)  # fmt: skip
+        return replace(self, files=tuple(files), loaded=None)
 
 
 def named(case: Case) -> Case:
@@ -78,8 +80,6 @@ def named(case: Case) -> Case:
     caller did not name them), so that this process can own its output names."""
     if case.out_dir is None or case.trace is not None:
         return case
-    from dataclasses import replace
-
     from runner.language.load import load_scenario
     from runner.sim.run import trace_path
 
@@ -157,7 +157,7 @@ OUTCOME_TAIL = 2000  # characters of a crashed engine's output kept in its outco
 @dataclass
 class CaseResult:
     case: Case
-    status: str  # passed | failed | engine-failure | error | crashed | timed-out | exited | interrupted
+    status: str  # passed | failed | engine-failure | error | crashed | timed-out | over-memory | exited | interrupted
     result: RunResult | None = None  # when the run completed (passed, failed, engine-failure)
     error: BaseException | None = None  # for "error": the exception, rebuilt with its class
     signal: int | None = None  # the signal that ended the worker, if one did
@@ -168,6 +168,9 @@ class CaseResult:
     timeout: float | None = None
     written: dict[str, bytes] = field(default_factory=dict)  # files a remote run wrote, by name
     wall_seconds: float = 0.0  # never in tables or traces
+    memory: int | None = None  # over-memory: the ceiling (bytes)
+    peak: int | None = None  # over-memory: the worker's resident memory at its last reading (bytes)
+    progress: tuple[int, int] | None = None  # over-memory: the last (steps done, steps in all) it reported
 
     @property
     def passed(self) -> bool:
@@ -197,6 +200,8 @@ class CaseResult:
             stopped = f"; stopped by signal {self.signal}" if self.signal is not None else ""
             return Exit(ExitCode.ENGINE_FAILURE, "timed out",
                         f"no result after {self.timeout:g} s (world.budget, or --timeout){stopped}")  # fmt: skip
+        if self.status == OVER_MEMORY:
+            return Exit(ExitCode.ENGINE_FAILURE, "over memory", _over_memory(self))
         if self.status == INTERRUPTED:
             code = ExitCode.TERMINATED if self.signal == signal.SIGTERM else ExitCode.INTERRUPTED
             return Exit(code, "terminated" if code is ExitCode.TERMINATED else "interrupted", "")
@@ -229,6 +234,17 @@ class CaseResult:
             raise self.error
 
 
+def _over_memory(res: CaseResult) -> str:
+    """The first line names the ceiling and where it comes from (the same on every path); the second what was
+    measured, which varies with the moment of the reading."""
+    limit = f"{(res.memory or 0) / mem.MIB:g} MiB"
+    held = f"{(res.peak or 0) / mem.MIB:.0f} MiB" if res.peak else "more"
+    when = (f"after step {res.progress[0]} of {res.progress[1]} (as last reported)" if res.progress
+            else "before its first step (loading the scenario or building the world)")  # fmt: skip
+    return (f"the worker went over its memory ceiling of {limit} ({mem.ENV}; docs/reliability.md); "
+            f"stopped by signal 9\nit held {held} {when}")  # fmt: skip
+
+
 def _last_line(text: str) -> str:
     lines = [line.strip() for line in text.strip().splitlines() if line.strip()]
     return lines[-1] if lines else ""
@@ -259,6 +275,8 @@ def case_result(case: Case, ending: Ending) -> CaseResult:
         res.signal = int(payload.get("signal", ending.signal or signal.SIGINT))
     elif ending.how == TIMED_OUT:
         res.status = TIMED_OUT_STATUS
+    elif ending.how == OVER_MEMORY:
+        res.status, res.memory, res.peak, res.progress = OVER_MEMORY, ending.memory, ending.peak, ending.progress
     elif ending.how == CRASHED:
         res.status = CRASHED
     elif ending.how == EXITED or ending.how == RETURNED:
@@ -276,7 +294,7 @@ def _wants_outcome(res: CaseResult) -> bool:
     """The case's trace cannot tell how it ended (there is none, or only a ``.partial``)."""
     finished = res.trace is not None and not res.trace.endswith(tf.PARTIAL_SUFFIX)
     refused = isinstance(res.error, TraceError) and not isinstance(res.error, OutputError)
-    wanted = res.status in (CRASHED, TIMED_OUT_STATUS, EXITED) or (res.status == ERROR and not finished)
+    wanted = res.status in (CRASHED, TIMED_OUT_STATUS, OVER_MEMORY, EXITED) or (res.status == ERROR and not finished)
     return res.case.trace is not None and wanted and not refused  # refused for its outputs: write nothing there
 
 
@@ -300,7 +318,8 @@ def _write_outcome_file(res: CaseResult, trace: Path) -> None:
     from backends.registry import engine_version
 
     exit = res.exit
-    outcome = {CRASHED: oc.CRASHED, TIMED_OUT_STATUS: oc.TIMED_OUT, EXITED: oc.EXITED}.get(res.status, oc.ERROR)
+    outcome = {CRASHED: oc.CRASHED, TIMED_OUT_STATUS: oc.TIMED_OUT, OVER_MEMORY: oc.OVER_MEMORY,
+               EXITED: oc.EXITED}.get(res.status, oc.ERROR)  # fmt: skip
     record = oc.RunOutcome(
         scenario=res.result.scenario if res.result is not None else case.scenario,
         variant=case.variant or "base",
@@ -310,7 +329,7 @@ def _write_outcome_file(res: CaseResult, trace: Path) -> None:
         signal=res.signal,
         returncode=res.returncode,
         timeout=res.timeout if res.status == TIMED_OUT_STATUS else None,
-        message=exit.message if res.status == ERROR else res.output.strip()[-OUTCOME_TAIL:],
+        message=exit.message if res.status in (ERROR, OVER_MEMORY) else res.output.strip()[-OUTCOME_TAIL:],
         trace=Path(res.trace).name if res.trace is not None else None,
     )
     try:

@@ -101,7 +101,7 @@ class LocalExecutor:
             if on_result is not None:
                 on_result(index, results[index])
 
-        jobs = [Job(run_case, (c,), c.backend, c.budget, self.isolate, c.cost) for c in cases]
+        jobs = [Job(run_case, (c,), c.backend, c.budget, self.isolate, c.cost, c.memory) for c in cases]
         with Pool(min(self.jobs, max(1, len(cases))), timeout_grace=self.grace) as pool:
             pool.run(jobs, end, on_progress, None if on_start is None else lambda i: on_start(i))
         return [results[i] for i in range(len(cases))]

@@ -9,9 +9,11 @@ the workers' pipes and process sentinels at once.
 How a job ended is an :class:`Ending`: ``returned`` (the job's payload), ``crashed`` (its process was
 killed by a signal it did not get from us: a segfault, an abort, the OOM killer), ``exited`` (the process
 ended without a result), ``timed-out`` (over its ``timeout``: the worker gets SIGTERM, finishes its trace
-at the next step and returns, or gets SIGKILL ``TIMEOUT_GRACE`` seconds later) or ``interrupted`` (the
-caller was interrupted). ``output`` is what the worker printed during the job (engines print there; an
-abort's message is in it).
+at the next step and returns, or gets SIGKILL ``TIMEOUT_GRACE`` seconds later), ``over-memory`` (its
+resident memory went over its ``memory`` ceiling, read every ``POLL_SECONDS`` (runner.exec.memory): it
+gets SIGKILL at once, since memory that grows cannot wait for a grace period; its trace is kept as
+``.partial`` up to its last chunk) or ``interrupted`` (the caller was interrupted). ``output`` is what
+the worker printed during the job (engines print there; an abort's message is in it).
 
 Interruptions: when the caller gets SIGINT or SIGTERM (raised as KeyboardInterrupt by
 :mod:`runner.interrupts`) the pool sends the same signal to each busy worker, waits up to
@@ -41,12 +43,14 @@ from pathlib import Path
 from typing import Any
 
 from runner import interrupts
+from runner.exec import memory as mem
 from runner.exec.child import serve
 
 __all__ = [
     "CRASHED",
     "EXITED",
     "INTERRUPTED",
+    "OVER_MEMORY",
     "RETURNED",
     "STOP_GRACE",
     "TIMED_OUT",
@@ -58,6 +62,7 @@ __all__ = [
 ]
 
 RETURNED, CRASHED, EXITED, TIMED_OUT, INTERRUPTED = "returned", "crashed", "exited", "timed-out", "interrupted"
+OVER_MEMORY = "over-memory"
 #: seconds a worker has to finish its trace after its time limit's SIGTERM, before SIGKILL
 TIMEOUT_GRACE = 5.0
 #: seconds busy workers have to finish their traces after the caller is interrupted, before SIGKILL
@@ -76,6 +81,7 @@ class Job:
     timeout: float | None = None  # wall-clock seconds from the job's start
     fresh: bool = False  # a process that ran nothing before and runs nothing after
     cost: float = 0.0  # costlier jobs start first
+    memory: int | None = None  # the worker's memory ceiling (bytes; 0: none); None: SCENARIO_MEMORY_LIMIT's
 
 
 @dataclass(frozen=True)
@@ -87,6 +93,9 @@ class Ending:
     output: str = ""
     timeout: float | None = None
     wall_seconds: float = 0.0
+    memory: int | None = None  # the ceiling the job ran under (bytes), when it had one
+    peak: int | None = None  # the most resident memory read from the worker during the job (bytes)
+    progress: tuple[int, int] | None = None  # the last (steps done, steps in all) the job reported
 
 
 def context() -> Any:
@@ -124,6 +133,9 @@ class _Worker:
     stopping: str | None = None  # TIMED_OUT or INTERRUPTED: we signalled it
     offset: int = 0  # where the current job's output starts in the log
     reusable: bool = True
+    memory: int | None = None  # the current job's ceiling
+    peak: int = 0
+    progress: tuple[int, int] | None = None
     messages: list[tuple[Any, ...]] = field(default_factory=list)
 
     def output(self) -> str:
@@ -157,6 +169,7 @@ class Pool:
         self._folder = tempfile.TemporaryDirectory(prefix="scenario-workers-")
         self._started = 0
         self.started: Counter[str] = Counter()  # worker processes started, by the affinity of their first job
+        self.memory = mem.ceiling()  # for jobs that name none
 
     # ---- workers ---------------------------------------------------------------------------------
 
@@ -264,6 +277,8 @@ class Pool:
         now = time.monotonic()
         worker.index, worker.started, worker.stopping, worker.kill_at = index, now, None, None
         worker.deadline = None if job.timeout is None else now + job.timeout
+        worker.memory = self.memory if job.memory is None else job.memory or None
+        worker.peak, worker.progress = 0, None
         worker.affinity = job.affinity
         worker.jobs_run += 1
         worker.reusable = not job.fresh
@@ -281,10 +296,12 @@ class Pool:
             return
         now = time.monotonic()
         marks = [t for w in busy for t in (w.deadline if w.stopping is None else None, w.kill_at) if t is not None]
-        timeout = max(0.0, min([1.0, *(t - now for t in marks)]))
+        watched = any(w.memory is not None and w.stopping is None for w in busy)
+        timeout = max(0.0, min([1.0, *(t - now for t in marks), *([mem.POLL_SECONDS] if watched else [])]))
         wait([x for w in busy for x in (w.conn, w.process.sentinel)], timeout)
         now = time.monotonic()
         for worker in busy:
+            self._watch_memory(worker)
             ending = self._poll(worker, jobs[worker.index or 0], on_progress)
             if ending is not None:
                 index = worker.index
@@ -302,14 +319,29 @@ class Pool:
                 worker.signal(signal.SIGKILL)
                 worker.kill_at = None
 
+    @staticmethod
+    def _watch_memory(worker: _Worker) -> None:
+        """Kill a worker over its memory ceiling (SIGKILL at once: see the module docstring)."""
+        if worker.memory is None or worker.stopping is not None or worker.process.pid is None:
+            return
+        held = mem.resident(worker.process.pid)
+        if held is None:
+            return
+        worker.peak = max(worker.peak, held)
+        if held > worker.memory:
+            worker.stopping, worker.kill_at = OVER_MEMORY, None
+            worker.signal(signal.SIGKILL)
+
     def _poll(self, worker: _Worker, job: Job, on_progress: Callable[[int, int, int], None] | None) -> Ending | None:
         """Read the worker's messages; its job's ending if it has one."""
         dead = False
         try:
             while worker.conn.poll():
                 message = worker.conn.recv()
-                if message[0] == "progress" and on_progress is not None:
-                    on_progress(message[1], message[2], message[3])
+                if message[0] == "progress":
+                    worker.progress = (message[2], message[3])
+                    if on_progress is not None:
+                        on_progress(message[1], message[2], message[3])
                 elif message[0] == "done":
                     return self._ending(worker, job, message[2])
         except (EOFError, OSError):
@@ -326,11 +358,13 @@ class Pool:
             how = RETURNED
             if worker.stopping is not None and payload.get("status") == "interrupted":
                 how = worker.stopping
-            return Ending(how, payload, output=output, timeout=job.timeout, wall_seconds=wall)
+            return Ending(how, payload, output=output, timeout=job.timeout, wall_seconds=wall, memory=worker.memory,
+                          peak=worker.peak or None, progress=worker.progress)  # fmt: skip
         code = worker.process.exitcode
         sig = -code if code is not None and code < 0 else None
         how = worker.stopping or (CRASHED if sig is not None else EXITED)
-        return Ending(how, None, sig, code, output, job.timeout, wall)
+        return Ending(how, None, sig, code, output, job.timeout, wall, worker.memory, worker.peak or None,
+                      worker.progress)  # fmt: skip
 
     def _stop(self, exc: BaseException, jobs: Sequence[Job], end: Callable[[int, Ending], None],
               on_progress: Callable[[int, int, int], None] | None) -> None:  # fmt: skip

@@ -86,9 +86,9 @@ def ray_task(case: Case) -> dict[str, Any]:
         out = Path(tmp, "out")
         local = Case(str(src / case.files[0][0]), case.variant, case.backend, case.overrides,
                      None if case.out_dir is None else str(out), (), case.cost, case.record_every,
-                     case.trace_process, case.budget, case.sha256)  # fmt: skip
-        with Pool(1) as pool:
-            (ending,) = pool.run([Job(run_case, (local,), case.backend, case.budget, True, case.cost)])
+                     case.trace_process, case.budget, case.sha256, memory=case.memory)  # fmt: skip
+        with Pool(1) as pool:  # the ceiling is the command's (case.memory), not the Ray worker's environment
+            (ending,) = pool.run([Job(run_case, (local,), case.backend, case.budget, True, case.cost, case.memory)])
         written = {f.name: f.read_bytes() for f in sorted(out.iterdir()) if f.is_file()} if out.is_dir() else {}
     return {"ending": ending, "written": written}
 

@@ -12,13 +12,16 @@ message and line), and the compiled model is mapped into the engine-neutral desc
 - body pairs MuJoCo never lets touch (contype/conaffinity of all their geoms, `<exclude>`) are excluded;
 - actuators are listed (the robot's controllable joints);
 - every hinge's and slide's damping, friction loss, armature and stiffness (:class:`JointDynamics`);
-- what only an engine that reads the file itself can run (several joints in one body, `<equality>`,
+- several joints in one body, in order (every engine: a chain of light bodies where MuJoCo is not the engine,
+  backends/_kit/chains.py);
+- what only an engine that reads the file itself can run (`<equality>`,
   `<tendon>`, a ball joint's dynamics, explicit contact pairs, a massless moving body, fluid forces) is
   recorded in :attr:`ModelDesc.needs` as capabilities: MuJoCo, which builds the robot from the file
   (backends/mujoco), runs it; another engine refuses it before the run. Armature and stiffness are named
   there too (`joint:armature`, `joint:stiffness`), so that an engine without them refuses at their line.
 
-Sites, cameras, lights, `<custom>`, `<sensor>`, `<visual>`, `<statistic>` do not change the dynamics of a step
+Named sites become frames on their bodies (``ModelDesc.frames``: readable, never simulated); cameras, lights,
+`<custom>`, `<sensor>`, `<visual>`, `<statistic>` do not change the dynamics of a step
 and are not read; `<keyframe>`s are read as start states a scenario may pick (`initial: {keyframe: NAME}`).
 """
 
@@ -36,6 +39,7 @@ from runner.language.model_names import check_names
 from runner.language.model_numbers import check_mjcf_numbers, check_number, check_vertices
 from runner.language.robot_desc import (
     ActuatorDesc,
+    FrameDesc,
     JointDesc,
     KeyframeDesc,
     LinkDesc,
@@ -183,13 +187,7 @@ def _needs(
     def need(capability: str, what: str, line: int) -> None:
         out.setdefault(capability, ModelNeed(capability, what, line))
 
-    for b in range(1, model.nbody):
-        if int(model.body_jntnum[b]) > 1:
-            need(
-                "joint:several-per-body",
-                f"body `{bodies[b]}` moves on several joints",
-                lines.get(("body", bodies[b]), 0),
-            )
+    for b in range(1, model.nbody):  # several joints in one body are every engine's (CompiledWorld.joint_chains)
         if model.body_mass[b] <= 0 and int(model.body_jntnum[b]) > 0:
             need("body:massless", f"body `{bodies[b]}` moves but has no mass", lines.get(("body", bodies[b]), 0))
     for j in range(model.njnt):  # damping and friction loss of hinges and slides are every engine's (the runner's)
@@ -214,9 +212,24 @@ def _needs(
     return list(out.values())
 
 
+def _welded(model: Any, a: int, b: int) -> bool:
+    """MuJoCo's parent filter (mj_collision), unless the file disables it (`<flag filterparent="disable"/>`)."""
+    import mujoco  # loaded: the model is MuJoCo's
+
+    wa, wb = int(model.body_weldid[a]), int(model.body_weldid[b])
+    if wa == wb:
+        return True
+    if int(model.opt.disableflags) & int(mujoco.mjtDisableBit.mjDSBL_FILTERPARENT) or not (wa and wb):
+        return False
+    pa, pb = int(model.body_weldid[model.body_parentid[wa]]), int(model.body_weldid[model.body_parentid[wb]])
+    return wa == pb or wb == pa
+
+
 def _excluded(model: Any, bodies: list[str]) -> list[tuple[str, str]]:
     """Body pairs (both with collision shapes) that MuJoCo never lets touch: no geom pair passes the
-    contype/conaffinity test, or an `<exclude>` names them."""
+    contype/conaffinity test, MuJoCo's parent filter (on the bodies' weld roots, ``body_weldid``: two bodies
+    welded together, or one welded group the parent of the other, neither the world's: humanoid_CMU's neck
+    and head overlap across a weld), or an `<exclude>` names them."""
     masks: dict[int, list[tuple[int, int]]] = {}
     for g in range(model.ngeom):
         t, a = int(model.geom_contype[g]), int(model.geom_conaffinity[g])
@@ -226,7 +239,7 @@ def _excluded(model: Any, bodies: list[str]) -> list[tuple[str, str]]:
     ids = sorted(masks)
     for i, a in enumerate(ids):
         for b in ids[i + 1 :]:
-            if not any(ta & ab or tb & aa for ta, aa in masks[a] for tb, ab in masks[b]):
+            if not any(ta & ab or tb & aa for ta, aa in masks[a] for tb, ab in masks[b]) or _welded(model, a, b):
                 out.append((bodies[a], bodies[b]))
     for signature in model.exclude_signature:
         a, b = int(signature) >> 16, int(signature) & 0xFFFF
@@ -244,8 +257,32 @@ def _actuators(model: Any, joints: list[str], lines: dict[tuple[str, str], int],
             kind = "velocity"  # bias (0, 0, -kv)
         on_joint = int(model.actuator_trntype[a]) in (mujoco.mjtTrn.mjTRN_JOINT, mujoco.mjtTrn.mjTRN_JOINTINPARENT)
         joint = joints[int(model.actuator_trnid[a][0])] if on_joint else None
+        if joint is not None and int(model.jnt_type[int(model.actuator_trnid[a][0])]) not in (2, 3):
+            joint = None  # a ball or free joint's actuator: several coordinates, MuJoCo's alone
         line = next((v for (tag, n), v in lines.items() if n == name and tag != "joint" and tag != "body"), 0)
-        out.append(ActuatorDesc(name, kind, joint, line))
+        trn = mujoco.mjtTrn(int(model.actuator_trntype[a])).name.removeprefix("mjTRN_").lower()
+        unmapped = None
+        if joint is None:
+            unmapped = f"a {trn} transmission"
+        elif key[2] != 0:
+            unmapped = "activation dynamics (`dyntype`)"
+        elif key[0] != 0 or key[1] not in (0, 1):
+            unmapped = "a gain or bias that is not fixed or affine"
+        limited = bool(model.actuator_ctrllimited[a]), bool(model.actuator_forcelimited[a])
+        out.append(
+            ActuatorDesc(
+                name, kind, joint, line,
+                gear=float(model.actuator_gear[a][0]),
+                gain=float(model.actuator_gainprm[a][0]),
+                bias=(float(model.actuator_biasprm[a][0]), float(model.actuator_biasprm[a][1]),
+                      float(model.actuator_biasprm[a][2])),
+                ctrlrange=(float(model.actuator_ctrlrange[a][0]), float(model.actuator_ctrlrange[a][1]))
+                if limited[0] else None,
+                forcerange=(float(model.actuator_forcerange[a][0]), float(model.actuator_forcerange[a][1]))
+                if limited[1] else None,
+                unmapped=unmapped,
+            )
+        )  # fmt: skip
     return out
 
 
@@ -364,6 +401,8 @@ def load_mjcf(file: Path) -> ModelDesc:
             )
         )
     joints = []
+    start: list[tuple[str, float]] = []
+    notes: list[str] = []
     for b in range(1, model.nbody):
         parent = bodies[int(model.body_parentid[b])]
         line = lines.get(("body", bodies[b]), 0)
@@ -374,7 +413,15 @@ def load_mjcf(file: Path) -> ModelDesc:
         for j in range(first, first + int(model.body_jntnum[b])):
             kind = _JOINTS[int(model.jnt_type[j])]
             limited = bool(model.jnt_limited[j]) and kind in ("hinge", "slider")
-            lo, hi = (float(model.jnt_range[j][0]), float(model.jnt_range[j][1])) if limited else (None, None)
+            zero = float(model.qpos0[int(model.jnt_qposadr[j])]) if limited else 0.0  # `ref`: the file's pose
+            lo, hi = (None, None) if not limited else (float(model.jnt_range[j][0]) - zero,
+                                                       float(model.jnt_range[j][1]) - zero)  # fmt: skip
+            if lo is not None and hi is not None and not lo <= 0.0 <= hi:  # ant's ankles: range="30 100"
+                begin = lo if lo > 0.0 else hi
+                start.append((joint_names[j], begin))
+                notes.append(f"joint `{joint_names[j]}`: its zero (the file's pose) is outside its range [{lo:g}, "
+                             f"{hi:g}]; it starts at {begin:g}, the nearest end (MuJoCo would start it outside "
+                             f"and the limit would throw it)")  # fmt: skip
             anchor = vec(data.xanchor[j]) if kind != "free" else vec(data.xpos[b])
             joints.append(JointDesc(joint_names[j], kind, parent, bodies[b], vec(data.xaxis[j]), anchor, lo, hi,
                                     lines.get(("joint", joint_names[j]), line), _dynamics(model, j)))  # fmt: skip
@@ -383,10 +430,27 @@ def load_mjcf(file: Path) -> ModelDesc:
         "worldbody",
         tuple(within_budget(links)),
         tuple(joints),
+        notes=tuple(notes),
         needs=tuple(_needs(model, tree, bodies, joint_names, lines)),
         actuators=tuple(_actuators(model, joint_names, lines, mujoco)),
         excluded=tuple(_excluded(model, bodies)),
         timestep=float(model.opt.timestep),
         gravity=vec(model.opt.gravity),
         keyframes=tuple(_keyframes(model, joint_names, tree)),
+        frames=tuple(_sites(model, bodies, set(joint_names))),
+        start=tuple(start),
     )
+
+
+def _sites(model: Any, bodies: list[str], joints: set[str]) -> list[FrameDesc]:
+    """Every named site as a frame on its body (as MuJoCo compiled its pose in the body frame); a site named as
+    a body or joint is left out (the body or joint keeps the name)."""
+    taken = set(bodies) | joints
+    out = []
+    for i in range(model.nsite):
+        name = model.site(i).name
+        if name and name not in taken:
+            out.append(
+                FrameDesc(name, bodies[int(model.site_bodyid[i])], vec(model.site_pos[i]), quat4(model.site_quat[i]))
+            )
+    return out

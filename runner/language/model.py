@@ -40,6 +40,21 @@ MAX_VARIANT_NAME = 64
 VariantName = Annotated[str, Field(pattern=r"^[A-Za-z0-9_.-]+$", max_length=MAX_VARIANT_NAME)]
 
 
+class TraceOptions(Strict):
+    """What the trace records beyond every body, joint and contact pair (docs/trace-format.md)."""
+
+    contact_points: bool = Field(
+        False,
+        description="Record each step's contact points on /contact_points: one arrow per point, at the point, "
+        "along the force on the second body, as long as its normal force times `contact_arrow_scale` (needs "
+        "a backend with `contacts:points`; reading points costs time).",
+    )
+    contact_arrow_scale: Annotated[float, Field(gt=0.0, allow_inf_nan=False)] | None = Field(
+        None,
+        description="Metres of arrow per newton (default: the heaviest moving body's weight is 0.25 m long).",
+    )
+
+
 class Variant(Strict):
     """A named case: overrides applied to the base scenario."""
 
@@ -95,3 +110,4 @@ class Scenario(Strict):
     backend_options: dict[Name, dict[str, Any]] = Field(
         default_factory=dict, description="Per-backend engine options (see `scenario backends`)."
     )
+    trace: TraceOptions = Field(default_factory=TraceOptions, description="What the trace records (optional).")

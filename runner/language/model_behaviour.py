@@ -22,6 +22,7 @@ from runner.language.model_base import (
     Vec3,
     finite_vec,
 )
+from runner.language.model_physics import Drive
 
 IntervalId = Annotated[str, Field(pattern=r"^[A-Za-z_][A-Za-z0-9_-]*$", max_length=64)]
 Blend = Literal["noBlend", "easeIn", "easeOut", "easeInOut"]
@@ -89,6 +90,19 @@ class MotorCommand(Strict):
     joint: PartName
     vel: FiniteFloat
     fmax: NonNegFloat | None = Field(None, description="Unchanged when omitted.")
+
+
+class DriveCommand(Drive):
+    """A joint's command from now on (docs/language.md#joint-commands): position, velocity or torque mode."""
+
+    joint: PartName
+
+
+class ControlCommand(Strict):
+    """An MJCF actuator's control input from now on (docs/robots.md, "MJCF actuators")."""
+
+    actuator: PartName = Field(description="`<robot>.<actuator>`, the actuator's name in the MJCF file.")
+    ctrl: FiniteFloat | Expr = Field(description="A number or an expression read before every step.")
 
 
 class ForceCommand(Strict):
@@ -184,6 +198,14 @@ class MotorAction(Strict):
     motor: MotorCommand
 
 
+class DriveAction(Strict):
+    drive: DriveCommand
+
+
+class ControlAction(Strict):
+    control: ControlCommand
+
+
 class ForceAction(Strict):
     force: ForceCommand
 
@@ -229,6 +251,8 @@ ACTION_TAGS: dict[str, type[Strict]] = {
     "play_sound": PlaySoundAction,
     "stop_sound": StopSoundAction,
     "motor": MotorAction,
+    "drive": DriveAction,
+    "control": ControlAction,
     "force": ForceAction,
     "impulse": ImpulseAction,
     "apply": ApplyAction,
@@ -250,8 +274,8 @@ def tag_of(value: Any, tags: dict[str, type[Strict]]) -> str | None:
 if TYPE_CHECKING:  # the static view of the tagged union built below from ACTION_TAGS
     Action = (
         StartAction | PauseAction | ResumeAction | FinishAction | LoopAction | SetAction | CalcAction |
-        PlaySoundAction | StopSoundAction | MotorAction | ForceAction | ImpulseAction | ApplyAction | ResetAction |
-        LogAction | SendAction | EndAction | IfAction
+        PlaySoundAction | StopSoundAction | MotorAction | DriveAction | ControlAction | ForceAction | ImpulseAction |
+        ApplyAction | ResetAction | LogAction | SendAction | EndAction | IfAction
     )
 else:
     Action = Annotated[

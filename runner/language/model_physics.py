@@ -8,6 +8,7 @@ from typing import Annotated, Literal
 from pydantic import Field, field_validator, model_validator
 
 from runner.language.model_base import (
+    Expr,
     FiniteFloat,
     Name,
     NonNegFloat,
@@ -18,6 +19,7 @@ from runner.language.model_base import (
     Vec3,
     finite_vec,
 )
+from runner.language.model_inertia import Inertia, moments_list_schema
 
 
 class World(Strict):
@@ -84,6 +86,14 @@ class Body(Strict):
     )
     mass: PositiveFloat | None = Field(None, description="kg; inertia from the shape (ODE dMassSet*Total).")
     density: PositiveFloat | None = Field(None, description="kg/m^3; mass = density x volume (ODE dMassSet*).")
+    inertia: Inertia | None = Field(
+        None,
+        description="kg m^2 about the centre of mass, instead of the shape's: principal moments along the body's "
+        "axes `[Ixx, Iyy, Izz]`, `{moments: [I1, I2, I3], quat | hpr}` along turned axes, or the full tensor "
+        "`{ixx, iyy, izz, ixy, ixz, iyz}` in the body frame; positive definite, with each principal moment at most "
+        "the sum of the other two. Dynamic bodies only.",
+        json_schema_extra=moments_list_schema,
+    )
     pos: Vec3 = (0.0, 0.0, 0.0)
     hpr: Vec3 | None = Field(None, description="Heading, pitch, roll in degrees, Panda3D's convention.")
     quat: Quat | None = Field(None, description="Orientation as (w, x, y, z).")
@@ -113,6 +123,8 @@ class Body(Strict):
             raise ValueError(f"a plane must be static, found motion: {self.motion}")
         if self.motion == "dynamic" and self.mass is None and self.density is None:
             raise ValueError("a dynamic body needs mass or density, found neither")
+        if self.inertia is not None and self.motion != "dynamic":
+            raise ValueError(f"`inertia` is for dynamic bodies, found motion: {self.motion}")
         if self.color is not None and not all(0.0 <= c <= 1.0 for c in self.color):
             raise ValueError(f"expected colour components in 0..1, found {list(self.color)}")
         return self
@@ -123,6 +135,54 @@ class Motor(Strict):
     fmax: NonNegFloat = Field(
         description="Largest force (N) or torque (N m) the motor may use; 0 = off (ODE dParamFMax)."
     )
+
+
+class Drive(Strict):
+    """A joint command in one of three modes (docs/semantics.md, "Joint commands"): exactly one of `position`
+    (a PD law applied as a torque), `vel` (the velocity motor, ODE's dParamVel/dParamFMax) or `torque`."""
+
+    position: FiniteFloat | Expr | None = Field(
+        None,
+        description="Position mode: the target, radians (hinge) or metres (slider) from the joint's zero; a "
+        "number or an expression read before every step (e.g. `0.5*sin(time)`). The joint gets the torque "
+        "kp (position - q) + kd (rate - qdot), capped by its effort limit.",
+    )
+    rate: FiniteFloat | Expr = Field(
+        0.0, description="Position mode: the target rate (rad/s or m/s), a number or an expression; default 0."
+    )
+    kp: NonNegFloat | None = Field(None, description="Position mode: stiffness, N m/rad (hinge) or N/m (slider).")
+    kd: NonNegFloat = Field(0.0, description="Position mode: damping, N m s/rad (hinge) or N s/m (slider).")
+    vel: FiniteFloat | None = Field(None, description="Velocity mode: the motor's target rate (ODE dParamVel).")
+    fmax: NonNegFloat | None = Field(
+        None, description="Velocity mode: the largest force or torque the motor may use (ODE dParamFMax)."
+    )
+    torque: FiniteFloat | Expr | None = Field(
+        None,
+        description="Torque mode: the torque (N m, hinge) or force (N, slider), held until changed; a number or "
+        "an expression read before every step. Equal and opposite on the joint's two bodies.",
+    )
+
+    @property
+    def mode(self) -> Literal["position", "velocity", "torque"]:
+        if self.position is not None:
+            return "position"
+        return "velocity" if self.vel is not None else "torque"
+
+    @model_validator(mode="after")
+    def _one_mode(self) -> Drive:
+        modes = [k for k in ("position", "vel", "torque") if getattr(self, k) is not None]
+        if len(modes) != 1:
+            raise ValueError(f"expected exactly one of position, vel, torque; found {', '.join(modes) or 'none'}")
+        if self.position is not None and self.kp is None:
+            raise ValueError("position mode needs `kp` (N m/rad or N/m)")
+        if self.position is None and ("kp" in self.model_fields_set or "kd" in self.model_fields_set
+                                      or "rate" in self.model_fields_set):  # fmt: skip
+            raise ValueError("`kp`, `kd` and `rate` belong to position mode (`position: TARGET`)")
+        if self.vel is not None and self.fmax is None:
+            raise ValueError("velocity mode needs `fmax` (N or N m; 0 = off)")
+        if self.vel is None and self.fmax is not None:
+            raise ValueError("`fmax` belongs to velocity mode (`vel: RATE`)")
+        return self
 
 
 class Limits(Strict):
@@ -171,10 +231,12 @@ class Dynamics(Strict):
     armature: NonNegFloat | None = Field(
         None,
         description="Inertia added to the coordinate (a rotor's reflected inertia), kg (slider) or kg m^2 "
-        "(hinge): MuJoCo only (`joint:armature`).",
+        "(hinge): MuJoCo and PyBullet (`joint:armature`).",
     )
     effort: PositiveFloat | None = Field(
-        None, description="The largest force (N) or torque (N m) a motor or servo may apply: caps its fmax."
+        None,
+        description="The largest force (N) or torque (N m) a motor, servo, drive or MJCF actuator may apply: caps "
+        "fmax and the commanded torque.",
     )
     velocity: PositiveFloat | None = Field(
         None, description="The largest rate (m/s or rad/s) a motor or servo may command: caps its vel."
@@ -193,6 +255,9 @@ class Joint(Strict):
         "{lo, hi, zero, bounce, stiffness, damping}.",
     )
     motor: Motor | None = None
+    drive: Drive | None = Field(
+        None, description="A command: position (PD), velocity (motor) or torque mode (docs/language.md#joint-commands)."
+    )
     dynamics: Dynamics | None = Field(None, description="Damping, dry friction, armature, effort and rate limits.")
 
     _v = field_validator("axis", "axis2", "anchor", mode="before")(finite_vec)
@@ -207,6 +272,10 @@ class Joint(Strict):
             raise ValueError(f"`zero: absolute` is defined for sliders and hinges, not a {self.type} joint")
         if self.type in ("ball", "fixed") and (self.limits is not None or self.motor is not None):
             raise ValueError(f"a {self.type} joint takes no limits or motor")
+        if self.drive is not None and self.type not in ("slider", "hinge"):
+            raise ValueError(f"`drive` commands sliders and hinges, not a {self.type} joint")
+        if self.drive is not None and self.motor is not None:
+            raise ValueError("a joint takes a motor or a drive, not both (`drive: {vel, fmax}` is the motor)")
         if self.type not in ("slider", "hinge") and self.dynamics is not None:
             raise ValueError(f"`dynamics` is defined for sliders and hinges, not a {self.type} joint")
         if self.type == "universal" and self.axis2 is None:
@@ -226,6 +295,6 @@ class PairSurface(Surface):
 
 
 __all__ = [
-    "Body", "BodyArray", "Cylinder", "Dynamics", "Joint", "Limits", "Motor", "NonNegFloat", "PairSurface", "Plane",
-    "World",
+    "Body", "BodyArray", "Cylinder", "Drive", "Dynamics", "Joint", "Limits", "Motor", "NonNegFloat", "PairSurface",
+    "Plane", "World",
 ]  # fmt: skip

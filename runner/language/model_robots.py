@@ -16,7 +16,7 @@ from runner.language.model_base import (
     Vec3,
     finite_vec,
 )
-from runner.language.model_physics import Dynamics, Limits, Motor, Rgba
+from runner.language.model_physics import Drive, Dynamics, Limits, Motor, Rgba
 
 #: A link's or joint's name as the model file spells it (runner.language.model_names): any text without
 #: control characters, `"8"` and `pinch site` included.
@@ -52,6 +52,9 @@ class RobotJoint(Strict):
     )
     free: bool = Field(False, description="Drop the model's limits (a `continuous` joint).")
     servo: Servo | None = None
+    drive: Drive | None = Field(
+        None, description="A command: position (PD), velocity (motor) or torque mode (docs/language.md#joint-commands)."
+    )
     dynamics: Dynamics | None = Field(
         None, description="Replace the model's damping, friction, armature, effort or velocity limit (each given)."
     )
@@ -60,6 +63,8 @@ class RobotJoint(Strict):
     def _check(self) -> RobotJoint:
         if self.servo is not None and self.motor is not None:
             raise ValueError("a joint takes a motor or a servo, not both (the servo drives the motor)")
+        if self.drive is not None and (self.servo is not None or self.motor is not None):
+            raise ValueError("a joint takes one of motor, servo or drive")
         if self.free and self.limits is not None:
             raise ValueError("`free: true` drops the limits; found limits too")
         if isinstance(self.limits, tuple) and self.limits[0] > self.limits[1]:
@@ -67,6 +72,15 @@ class RobotJoint(Strict):
         if isinstance(self.limits, Limits) and self.limits.zero != "start":
             raise ValueError("a model joint's limits are measured from the model's zero; `zero` is not taken here")
         return self
+
+
+class ActuatorControl(Strict):
+    """The control input of an MJCF `<actuator>` (docs/robots.md, "MJCF actuators")."""
+
+    ctrl: FiniteFloat | Expr = Field(
+        description="MuJoCo's `ctrl`: a number or an expression read before every step (clamped to the "
+        "actuator's ctrlrange when it has one)."
+    )
 
 
 class RobotLink(Strict):
@@ -143,6 +157,10 @@ class Robot(Strict):
     )
     joints: dict[PartName, RobotJoint] = Field(default_factory=dict, description="Overrides per joint of the model.")
     links: dict[PartName, RobotLink] = Field(default_factory=dict, description="Overrides per link of the model.")
+    actuators: dict[PartName, ActuatorControl] = Field(
+        default_factory=dict,
+        description="An MJCF model's actuators driven by name: each one's `ctrl` from the start (docs/robots.md).",
+    )
     self_collision: bool | None = Field(
         None,
         description="Whether the model's links touch each other (a joint's two links never do): default off "
@@ -181,4 +199,4 @@ class Robot(Strict):
         return "urdf" if self.urdf is not None else "mjcf"
 
 
-__all__ = ["JointStart", "Robot", "RobotJoint", "RobotLink", "RobotStart", "Servo"]
+__all__ = ["ActuatorControl", "JointStart", "Robot", "RobotJoint", "RobotLink", "RobotStart", "Servo"]

@@ -16,9 +16,18 @@ BODY_FIELDS = {
     "vel": ("x", "y", "z"),
     "angvel": ("x", "y", "z"),
     "quat": ("w", "x", "y", "z"),
+    # runner.sim.body_quantities: from the state and the mass properties
+    "momentum": ("x", "y", "z"),
+    "angmom": ("x", "y", "z"),
+    "angmom_origin": ("x", "y", "z"),
+    "angvel_body": ("x", "y", "z"),
 }
-BODY_SCALARS = ("speed", "energy")
+BODY_SCALARS = ("speed", "energy", "kinetic_energy")
 JOINT_FIELDS = ("position", "velocity", "force")
+#: the wrench a joint applies to its first body, measured by the engine (runner.sim.reactions): force and
+#: torque about the joint's anchor in world axes, and the same in the body's axes
+REACTION_FIELDS = ("reaction",)
+REACTION_VECTORS = ("force", "torque", "force_body", "torque_body")
 GLOBALS = ("time", "dt", "duration", "g", "gravity.x", "gravity.y", "gravity.z", "eps")
 RESERVED = frozenset(
     {
@@ -96,6 +105,24 @@ def robot_joints(robots: Mapping[str, ModelDesc]) -> list[str]:
     return [f"{name}.{j.name}" for name, desc in robots.items() for j in desc.joints if j.kind != "free"]
 
 
+#: what a named frame on a link gives (runner.sim.frames): its pose, its origin's velocity, its angular velocity
+FRAME_FIELDS = ("pos", "quat", "vel", "angvel")
+
+
+def robot_frames(
+    robots: Mapping[str, ModelDesc],
+) -> dict[str, tuple[str, tuple[float, float, float], tuple[float, float, float, float]]]:
+    """`<robot>.<frame>` -> (the body that carries it, its position and orientation in that body's frame): the
+    models' named frames (MJCF sites, merged URDF links) that are not a link's or joint's name."""
+    out = {}
+    for name, desc in robots.items():
+        taken = {link.name for link in desc.links} | {j.name for j in desc.joints}
+        for frame in desc.frames:
+            if frame.name not in taken:
+                out[f"{name}.{frame.name}"] = (f"{name}.{frame.link}", frame.pos, frame.quat)
+    return out
+
+
 def split_owner(name: str, members: Container[str]) -> tuple[str, str]:
     """(owner, rest) of a dotted name: the owner is the longest leading part that is a robot's link or joint in
     ``members`` (a model's name may hold dots: `arm.a.b.pos.z` reads link `a.b`), else the first part."""
@@ -116,8 +143,11 @@ def readable_names(model: Scenario, robots: Mapping[str, ModelDesc] | None = Non
     for owner in owners:
         names += [f"{owner}.{f}.{c}" for f, comps in BODY_FIELDS.items() for c in comps]
         names += [f"{owner}.{s}" for s in BODY_SCALARS]
+    for frame in robot_frames(robots):
+        names += [f"{frame}.{f}.{c}" for f in FRAME_FIELDS for c in BODY_FIELDS[f]]
     for joint in [*model.joints, *robot_joints(robots)]:
         names += [f"{joint}.{f}" for f in JOINT_FIELDS]
+        names += [f"{joint}.reaction.{v}.{c}" for v in REACTION_VECTORS for c in "xyz"]
     return names
 
 

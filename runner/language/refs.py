@@ -14,6 +14,7 @@ from runner.language import model_assertions as A
 from runner.language import model_behaviour as B
 from runner.language.expressions import ExpressionError, compile_expression
 from runner.language.model import Scenario
+from runner.language.model_physics import Drive
 from runner.language.model_walk import all_actions, walk_steps
 from runner.language.names import (
     RESERVED,
@@ -231,6 +232,13 @@ def _check_actions(
                 bad(path + (field,), _unknown("sound", ref, model.sounds))
         if isinstance(action, B.MotorAction):
             check_motor(model, bad, path, action.motor.joint, robots)
+        if isinstance(action, B.DriveAction):
+            check_motor(model, bad, path, action.drive.joint, robots, "drive")
+        if isinstance(action, B.ControlAction):
+            names = [f"{r}.{a.name}" for r, desc in robots.items() for a in desc.actuators]
+            if action.control.actuator not in names:
+                bad(path + ("control", "actuator"), _unknown("actuator (MJCF <actuator>)", action.control.actuator,
+                                                             names))  # fmt: skip
         if isinstance(action, B.ForceAction | B.ImpulseAction | B.ApplyAction):
             field = "force" if isinstance(action, B.ForceAction) else "impulse"
             field = "apply" if isinstance(action, B.ApplyAction) else field
@@ -256,6 +264,20 @@ def expressions_in(model: Scenario) -> Iterator[tuple[str, Path]]:
                 yield text, path + ("calc", var)
         if isinstance(action, B.ApplyAction) and action.apply.until is not None:
             yield action.apply.until, path + ("apply", "until")
+        if isinstance(action, B.DriveAction):
+            yield from drive_expressions(action.drive, path + ("drive",))
+        if isinstance(action, B.ControlAction) and isinstance(action.control.ctrl, str):
+            yield action.control.ctrl, path + ("control", "ctrl")
+    for jname, joint in model.joints.items():
+        if joint.drive is not None:
+            yield from drive_expressions(joint.drive, ("joints", jname, "drive"))
+    for rname, robot in model.robots.items():
+        for jname, rjoint in robot.joints.items():
+            if rjoint.drive is not None:
+                yield from drive_expressions(rjoint.drive, ("robots", rname, "joints", jname, "drive"))
+        for aname, control in robot.actuators.items():
+            if isinstance(control.ctrl, str):
+                yield control.ctrl, ("robots", rname, "actuators", aname, "ctrl")
     for name, trigger in model.triggers.items():
         yield trigger.when, ("triggers", name, "when")
     for i, a in enumerate(model.assertions):
@@ -280,6 +302,14 @@ def expressions_in(model: Scenario) -> Iterator[tuple[str, Path]]:
                 yield from ((t, ("assertions", i, alias, k)) for k, t in value.items() if isinstance(t, str))
             elif isinstance(value, str):
                 yield value, ("assertions", i, alias)
+
+
+def drive_expressions(drive: Drive, path: Path) -> Iterator[tuple[str, Path]]:
+    """The expressions of a joint command (its targets and torque written as text)."""
+    for field in ("position", "rate", "torque"):
+        value = getattr(drive, field)
+        if isinstance(value, str):
+            yield value, path + (field,)
 
 
 def _check_expressions(model: Scenario, bad: Any, owners: set[str], robots: Mapping[str, ModelDesc]) -> None:

@@ -52,6 +52,17 @@ def line_column(file: str, line: int, near: str = "") -> int:
 
 
 @dataclass(frozen=True)
+class FrameDesc:
+    """A named frame fixed on a link (an MJCF site; a URDF link without mass on a fixed joint, merged into its
+    parent): readable as `<robot>.<name>.pos|quat|vel|angvel` (docs/language.md, "Sensors")."""
+
+    name: str
+    link: str  # the link that carries it
+    pos: Vec3  # in the link frame
+    quat: Quat
+
+
+@dataclass(frozen=True)
 class LinkDesc:
     name: str
     mass: float  # kg; 0: the model says none (only a fixed root may have none)
@@ -100,6 +111,16 @@ class ActuatorDesc:
     kind: str  # motor | position | velocity | general
     joint: str | None  # the joint it drives (None: a tendon, site or body transmission)
     line: int
+    #: MuJoCo's force law, as compiled: force = gain ctrl + bias[0] + bias[1] length + bias[2] velocity with
+    #: length = gear q and velocity = gear qdot, clamped to ``forcerange``; the joint gets gear x force
+    gear: float = 1.0
+    gain: float = 1.0
+    bias: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    ctrlrange: tuple[float, float] | None = None  # None: ctrl not limited
+    forcerange: tuple[float, float] | None = None  # None: force not limited
+    #: why the runner's law cannot reproduce it off MuJoCo (a site or body transmission, activation
+    #: dynamics, a non-fixed gain or non-affine bias); None: it can
+    unmapped: str | None = None
 
 
 @dataclass(frozen=True)
@@ -128,8 +149,13 @@ class ModelDesc:
     #: the model's own step and gravity (MJCF `<option>`), for `world.options: model`
     timestep: float | None = None
     gravity: Vec3 | None = None
+    #: named frames on links (MJCF sites, merged URDF links), never a link's or joint's name
+    frames: tuple[FrameDesc, ...] = ()
     #: MJCF `<keyframe>`s, in the file's order
     keyframes: tuple[KeyframeDesc, ...] = ()
+    #: (joint, position from the zero) where the model starts a joint whose zero is outside its range (MJCF:
+    #: the nearest end, noted; a keyframe or the scenario's `initial` overrides it)
+    start: tuple[tuple[str, float], ...] = ()
 
     def keyframe(self, name: str) -> KeyframeDesc | None:
         return next((key for key in self.keyframes if key.name == name), None)

@@ -21,18 +21,21 @@ def jointed_links(robots: Mapping[str, ModelDesc]) -> Iterator[str]:
                 yield f"{name}.{j.child}"
 
 
-def check_motor(model: Scenario, bad: Any, path: Path, ref: str, robots: Mapping[str, ModelDesc]) -> None:
-    """A motor drives a slider or hinge: a hand-written one, or a robot's without a servo."""
+def check_motor(
+    model: Scenario, bad: Any, path: Path, ref: str, robots: Mapping[str, ModelDesc], field: str = "motor"
+) -> None:
+    """A motor (or a drive: ``field``) drives a slider or hinge: a hand-written one, or a robot's without a
+    servo."""
     kinds: dict[str, str] = {name: j.type for name, j in model.joints.items()}
     kinds.update({f"{r}.{j.name}": j.kind for r, desc in robots.items() for j in desc.joints if j.kind != "free"})
     kind = kinds.get(ref)
     robot, _, joint = ref.partition(".")
     if kind is None:
-        bad(path + ("motor", "joint"), unknown("joint", ref, kinds))
+        bad(path + (field, "joint"), unknown("joint", ref, kinds))
     elif kind not in ("slider", "hinge"):
-        bad(path + ("motor", "joint"), f"joint `{ref}` is a {kind}; motors drive sliders and hinges")
+        bad(path + (field, "joint"), f"joint `{ref}` is a {kind}; {field}s drive sliders and hinges")
     elif robot in model.robots and joint in model.robots[robot].joints and model.robots[robot].joints[joint].servo:
-        bad(path + ("motor", "joint"), f"joint `{ref}` has a servo, which sets its motor every step")
+        bad(path + (field, "joint"), f"joint `{ref}` has a servo, which sets its motor every step")
 
 
 def _joint_limits(robot: Any, joint: Any) -> tuple[float | None, float | None]:

@@ -90,9 +90,19 @@ def load_robots(model: Scenario, positions: Positions, base_dir: FsPath) -> dict
             joint = next((j for j in desc.joints if j.name == jname), None)
             if joint is None:
                 issues.append(positions.issue(("robots", name, "joints", jname), unknown("joint", jname, joints), True))
-            elif joint.kind == "fixed" and (override.motor or override.servo or override.limits or override.free):
-                message = f"joint `{jname}` is fixed in the model; it takes no motor, servo or limits"
+            elif joint.kind not in ("hinge", "slider") and (
+                override.motor or override.servo or override.drive or override.limits or override.free
+            ):
+                message = (
+                    f"joint `{jname}` is a {joint.kind} joint in the model; it takes no motor, servo, drive or limits"
+                )
                 issues.append(positions.issue(("robots", name, "joints", jname), message, True))
+        actuators = [a.name for a in desc.actuators]
+        for aname in robot.actuators:
+            if aname not in actuators:
+                what = "actuator (MJCF <actuator>)" if robot.format == "mjcf" else "actuator (a URDF has none)"
+                issues.append(positions.issue(("robots", name, "actuators", aname), unknown(what, aname, actuators),
+                                              True))  # fmt: skip
         for lname in robot.links:
             if lname not in links:
                 issues.append(positions.issue(("robots", name, "links", lname), unknown("link", lname, links), True))

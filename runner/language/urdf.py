@@ -429,7 +429,7 @@ def load_urdf(file: Path, package_root: Path | None, static_root: bool, static_t
                              mesh_scale),
             )
         )
-    links, descs = merge_massless_fixed(root, links, descs)
+    links, descs, tools = merge_massless_fixed(root, links, descs)
     links = [_default_mass(link) if link.name in no_inertial else link for link in links]
     links = within_budget([usable_inertia(link) for link in links])
-    return ModelDesc(str(file), root, tuple(links), tuple(descs), tuple(notes))
+    return ModelDesc(str(file), root, tuple(links), tuple(descs), tuple(notes), frames=tuple(tools))

@@ -25,8 +25,8 @@ from dataclasses import replace
 import numpy as np
 
 from backends.geometry import quat_conj, quat_mul, quat_rotate
-from backends.types import PlacedShape, ShapeKind
-from runner.language.robot_desc import JointDesc, LinkDesc, vec
+from backends.types import PlacedShape, Shape, ShapeKind
+from runner.language.robot_desc import FrameDesc, JointDesc, LinkDesc, vec
 
 #: a principal moment at most this fraction of the largest is none (cube_no_rotation.urdf: 5.6e-17 of 0.215)
 DEGENERATE = 1e-12
@@ -38,10 +38,12 @@ FALLBACK_RADIUS = 0.01
 
 def merge_massless_fixed(
     root: str, links: list[LinkDesc], joints: list[JointDesc]
-) -> tuple[list[LinkDesc], list[JointDesc]]:
-    """``links`` and ``joints`` (parents first) with every massless link on a fixed joint merged into its parent."""
+) -> tuple[list[LinkDesc], list[JointDesc], list[FrameDesc]]:
+    """``links`` and ``joints`` (parents first) with every massless link on a fixed joint merged into its parent,
+    and the merged links as frames on the links that hold them (a tool frame stays readable)."""
     by_name = {link.name: link for link in links}
     into: dict[str, str] = {}  # merged link -> the link that holds it now
+    frames: list[FrameDesc] = []
     kept_joints: list[JointDesc] = []
     for joint in joints:
         parent = into.get(joint.parent, joint.parent)
@@ -52,10 +54,12 @@ def merge_massless_fixed(
             drawn = tuple(_into_frame(holder, child, placed) for placed in child.visuals)
             by_name[parent] = replace(holder, shapes=holder.shapes + moved, visuals=holder.visuals + drawn)
             into[joint.child] = parent
+            frame = _into_frame(holder, child, PlacedShape(Shape(ShapeKind.SPHERE)))
+            frames.append(FrameDesc(child.name, parent, frame.pos, frame.quat))
             continue
         kept_joints.append(joint if parent == joint.parent else replace(joint, parent=parent))
     kept_links = [by_name[link.name] for link in links if link.name not in into]
-    return kept_links, kept_joints
+    return kept_links, kept_joints, frames
 
 
 def _into_frame(holder: LinkDesc, link: LinkDesc, placed: PlacedShape) -> PlacedShape:

@@ -123,7 +123,9 @@ def body_energies(
 class EnergyWatch:
     """Checks one run's energy after each step (see the module docstring)."""
 
-    def __init__(self, world: CompiledWorld, backend: str) -> None:
+    def __init__(self, world: CompiledWorld, backend: str, zeros: dict[str, float] | None = None) -> None:
+        """``zeros``: what the runner adds to a joint's reading (from the start) to read it from its stated zero
+        (program.joint_zeros): the readings checked are those, so each spring's rest moves with them."""
         self.backend = backend
         self.names = [b.name for b in world.bodies]
         self.index = np.array([i for i, b in enumerate(world.bodies) if b.motion is Motion.DYNAMIC], dtype=int)
@@ -149,7 +151,8 @@ class EnergyWatch:
         self.stored = np.array([k for k, _ in stored], dtype=int)
         self.armature = np.array([d.armature for _, d in stored], float)
         self.stiffness = np.array([d.stiffness for _, d in stored], float)
-        self.springref = np.array([d.springref for _, d in stored], float)
+        moved = zeros or {}
+        self.springref = np.array([d.springref + moved.get(world.joints[k].name, 0.0) for k, d in stored], float)
         self.dt = world.dt
         g2 = float(self.gravity @ self.gravity)
         self.floor = float(self.mass.sum()) * g2 * world.dt * (WINDOW_STEPS * world.dt)

@@ -20,6 +20,7 @@ MJCF file keeps MuJoCo's own damping and friction loss for the file's joints, an
 from __future__ import annotations
 
 import math
+from typing import Any
 
 from backends.base import Backend
 from backends.types import MODEL_FILE_CAPABILITIES, CompiledWorld
@@ -27,10 +28,14 @@ from runner.language.model import Scenario
 
 
 def driven_joints(model: Scenario) -> set[str]:
-    """The joints the scenario drives itself: a `motor` (hand-written or on a robot's joint) or a servo."""
-    out = {name for name, joint in model.joints.items() if joint.motor is not None}
+    """The joints the scenario drives itself: a `motor` or a drive in velocity mode (hand-written or on a
+    robot's joint) or a servo."""
+    def motorised(o: Any) -> bool:
+        return o.motor is not None or (o.drive is not None and o.drive.mode == "velocity")
+
+    out = {name for name, joint in model.joints.items() if motorised(joint)}
     for rname, robot in model.robots.items():
-        out.update(f"{rname}.{j}" for j, o in robot.joints.items() if o.motor is not None or o.servo is not None)
+        out.update(f"{rname}.{j}" for j, o in robot.joints.items() if motorised(o) or o.servo is not None)
     return out
 
 

@@ -14,9 +14,12 @@ from typing import Any
 
 import numpy as np
 
-from backends.types import BodyStates, CompiledWorld, JointStates
+from backends.types import BodyStates, CompiledWorld, JointStates, Quat, Vec3
 from runner.language.names import split_owner
+from runner.sim.body_quantities import BODY_VECTORS, body_quantity
 from runner.sim.collisions import quat_matrices
+from runner.sim.frames import frame_getter
+from runner.sim.reactions import reaction_getter
 
 _COMPONENT = {"x": 0, "y": 1, "z": 2}
 _QUAT = {"w": 0, "x": 1, "y": 2, "z": 3}
@@ -31,6 +34,7 @@ class Snapshot:
         self.time = 0.0
         self.bodies = BodyStates.from_rows(np.zeros((0, 13)))  # until the first read
         self.joints = JointStates(np.zeros(0), np.zeros(0), np.zeros(0))
+        self.reactions = np.zeros((0, 6))  # CompiledWorld.reaction_joints' wrenches (Backend.joint_reactions)
 
 
 class StateResolver:
@@ -46,11 +50,13 @@ class StateResolver:
         functions: dict[str, Callable[[Sequence[Any]], Any]],
         *,
         eps: float,
+        frames: dict[str, tuple[str, Vec3, Quat]] | None = None,
     ):
         self.world = world
         self.body_index = {b.name: i for i, b in enumerate(world.bodies)}
         self.joint_index = {j.name: i for i, j in enumerate(world.joints)}
-        self._members = frozenset(n for n in [*self.body_index, *self.joint_index] if "." in n)  # robots' parts
+        self.frames = frames or {}  # named frames on bodies (runner.sim.frames)
+        self._members = frozenset(n for n in [*self.body_index, *self.joint_index, *self.frames] if "." in n)
         self.groups = {g: [self.body_index[n] for n in names] for g, names in groups.items()}
         self.members = {g: list(names) for g, names in groups.items()}
         self.state = state
@@ -95,6 +101,13 @@ class StateResolver:
         if head == "param":
             value = self.params[rest]
             return lambda: value
+        if head in self.frames:
+            body, pos, quat = self.frames[head]
+            field, _, comp = rest.partition(".")
+            return frame_getter(self.body_index[body], pos, quat, field, comp, lambda: snap.bodies)
+        if head in self.joint_index and rest.startswith("reaction."):
+            _, vector, comp = rest.split(".")
+            return reaction_getter(self.world, head, vector, comp, lambda: (snap.bodies, snap.reactions))
         if head in self.joint_index and rest in _JOINT_ARRAYS:
             j, attr = self.joint_index[head], _JOINT_ARRAYS[rest]
             return lambda: float(getattr(snap.joints, attr)[j])
@@ -108,18 +121,31 @@ class StateResolver:
             if isinstance(rows, int):
                 return lambda: float(energy()[0])
             return lambda: energy().tolist()
+        field, _, comp = rest.partition(".")
+        if rest == "kinetic_energy" or (field in BODY_VECTORS and comp in _COMPONENT):
+            return self._derived(rows, field, _COMPONENT.get(comp))
         if rest == "speed":
             if isinstance(rows, int):
                 return lambda: float(np.linalg.norm(snap.bodies.lin_vel[rows]))
             group = _index(rows)
             return lambda: _norms(snap.bodies.lin_vel[group]).tolist()
-        field, _, comp = rest.partition(".")
         attr = _BODY_ARRAYS[field]
         col = (_QUAT if field == "quat" else _COMPONENT)[comp]
         if isinstance(rows, int):
             return lambda: float(getattr(snap.bodies, attr)[rows, col])
         group = _index(rows)
         return lambda: getattr(snap.bodies, attr)[group, col].tolist()
+
+    def _derived(self, rows: list[int] | int, field: str, col: int | None) -> Callable[[], Any]:
+        """A getter of a quantity of runner.sim.body_quantities (``col``: the component of a vector)."""
+        members = [rows] if isinstance(rows, int) else rows
+        specs = [self.world.bodies[i] for i in members]
+        getter = body_quantity(field, specs, _index(members), lambda: self.snap.bodies)
+        if col is None:
+            return (lambda: float(getter()[0])) if isinstance(rows, int) else (lambda: getter().tolist())
+        if isinstance(rows, int):
+            return lambda: float(getter()[0, col])
+        return lambda: getter()[:, col].tolist()
 
     def _energy_of(self, rows: list[int]) -> Callable[[], np.ndarray]:
         """A getter of the mechanical energy (J) of the bodies ``rows`` (the module docstring's sum)."""

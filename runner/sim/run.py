@@ -11,6 +11,7 @@ from typing import Any
 
 from backends.errors import EngineFailure
 from backends.registry import check_capabilities, get_backend
+from backends.types import CompiledWorld
 from reports import trace_format as tf
 from runner import interrupts
 from runner.compile.asserted import asserted_quantities
@@ -121,7 +122,9 @@ def run_loaded(
             extra={
                 "overrides": json.dumps([[k, v] for k, v in loaded.overrides], default=str),
                 tf.KEY_ASSERTED: json.dumps(asserted_quantities(program)),
+                **({tf.KEY_SENSORS: json.dumps(program.sensors)} if program.sensors else {}),
                 **({"record_every": str(record_every)} if record_every > 1 else {}),
+                **_arrow_scale(loaded, world),
             },
         )
         writer: Any = TraceWriter
@@ -209,3 +212,13 @@ def _attach_sources(trace, loaded: LoadedScenario, program) -> None:  # noqa: AN
     trace.attach(loaded.path.name, loaded.text.encode(), "application/yaml")
     for name, info in program.sounds.items():
         trace.attach(f"sounds/{name}.wav", info.path.read_bytes(), "audio/wav")
+
+
+def _arrow_scale(loaded: LoadedScenario, world: CompiledWorld) -> dict[str, str]:
+    """The contact arrows' scale (m/N) for the scenario record, when the scenario asks for contact points."""
+    if not world.contact_points:
+        return {}
+    from runner.trace.contact_arrows import KEY_SCALE, default_scale
+
+    scale = loaded.model.trace.contact_arrow_scale
+    return {KEY_SCALE: repr(float(scale if scale is not None else default_scale(world)))}

@@ -4,8 +4,9 @@ Per step k, from t_k = k*dt to t_{k+1}:
  1. deliver events due at t_k: queued events (collisions seen at the end of the last step, in the order
     Panda3D's handler throws them) and timed inputs, to their handlers;
  2. step intervals to t_{k+1}: kinematic bodies get the pose they must have at the end of this step;
- 3. give the engine each kinematic body's pose *and* velocity over the step; apply one-step forces;
-    motor targets were set by the handlers;
+ 3. give the engine each kinematic body's pose *and* velocity over the step; apply one-step forces, held
+    forces and joint commands' torques (runner.sim.drives, runner.sim.actuators); motor targets were set by
+    the handlers;
  4. physics step (with substeps if set);
  5. read states; detect contacts and collision-solid overlaps at t_{k+1};
  6. turn them into in / again / out events, then evaluate the condition triggers (runner.sim.conditions),
@@ -26,17 +27,19 @@ import numpy as np
 
 from backends.base import Backend
 from backends.errors import EngineFailure
-from backends.types import BodyStates, Motion
+from backends.types import BodyStates, Capability, Motion
 from runner import interrupts
 from runner.compile.joints import capped
 from runner.compile.program import Program
 from runner.language import model_behaviour as B
 from runner.language.hpr import hpr_to_quat, quat_to_hpr
 from runner.sim.actions import run_actions
+from runner.sim.actuators import Actuators
 from runner.sim.assertions import AssertionTracker, Verdict
 from runner.sim.budget import Watchdog
 from runner.sim.collisions import EventHandler, SolidTraverser, quat_matrices
 from runner.sim.conditions import ConditionTriggers, HandlerGate, with_zeros
+from runner.sim.drives import Drives, initial_drives
 from runner.sim.energy import EnergyWatch
 from runner.sim.held import HeldForces
 from runner.sim.intervals import IntervalManager
@@ -179,6 +182,7 @@ class Session:
                 "count": lambda a: self.event_counts.get(str(a[0]), 0),
             },
             eps=backend.precision.eps,
+            frames=program.frames,
         )
         self.tracker = AssertionTracker(model.assertions, program.expressions, backend.name, self.dt)
         self.traverser = SolidTraverser(program.nodes, program.colliders)
@@ -188,11 +192,15 @@ class Session:
         self.handler_gate = HandlerGate()
         self._zeros = [(self.joint_index[j], offset) for j, offset in program.joint_zeros.items()]
         self.servos = Servos(servo_specs(model), self.joint_index, self.world)  # position servos (sim.servo)
+        self.drives = Drives(self.world, initial_drives(model))  # position and torque commands (sim.drives)
+        self.actuators = Actuators(model, program.loaded.robots, self.joint_index)  # MJCF actuators (sim.actuators)
+        self.native_actuators = Capability.ACTUATOR_NATIVE in backend.capabilities  # the engine runs the file's
         # damping and friction loss as each joint's motor (runner.sim.joint_dynamics)
         self.joint_friction = JointFriction(
             self.world, driven_joints(model) | native_joints(self.world, backend), backend.native_damping
         )
-        self.energy = EnergyWatch(self.world, backend.name)  # energy from nowhere: exit 3 (runner.sim.energy)
+        # energy from nowhere: exit 3 (runner.sim.energy)
+        self.energy = EnergyWatch(self.world, backend.name, program.joint_zeros)
 
     # --- services used by actions and intervals (runner.sim.intervals.IntervalHost) --------------------
     def evaluate(self, text: str) -> Any:
@@ -259,8 +267,42 @@ class Session:
         fmax = self.motors[joint][1] if fmax is None else fmax
         self.motors[joint] = (vel, fmax)
         self.joint_friction.release(joint)  # the scenario's motor is the joint's from now on
+        self.drives.release(joint)  # velocity mode: no position or torque command any more
         k = self.joint_index[joint]
         self.backend.set_motor(k, *capped(vel, fmax, self.world.joints[k].dynamics))
+
+    def set_drive(self, command: B.DriveCommand) -> None:
+        """A joint's command from now on: velocity mode is its motor; position and torque mode turn the motor
+        off and hand the engine a torque before every step (runner.sim.drives)."""
+        if command.vel is not None:
+            self.set_motor(command.joint, command.vel, command.fmax)
+            return
+        self.drives.set(command.joint, command)
+        if self.motors[command.joint][1] > 0:
+            self.motors[command.joint] = (0.0, 0.0)
+            self.backend.set_motor(self.joint_index[command.joint], 0.0, 0.0)
+
+    def set_control(self, command: B.ControlCommand) -> None:
+        """An MJCF actuator's `ctrl` from now on (runner.sim.actuators)."""
+        self.actuators.set(command.actuator, command.ctrl)
+
+    def _command_joints(self) -> None:
+        """The position and torque commands, and the MJCF actuators, before the step (runner.sim.drives)."""
+        snap = self.snapshot
+        extra: dict[int, float] = {}
+        if self.actuators and self.native_actuators:
+            self.energy.driven()  # the engine's actuators do work the check does not book
+            self.actuators.drive_native(self.backend, self._number)
+        elif self.actuators:
+            extra = self.actuators.torques(snap.joints.position.tolist(), snap.joints.velocity.tolist(), self._number)
+        for i, force, torque in self.drives.wrenches(
+            snap.bodies.pos, snap.bodies.quat, snap.joints.position, snap.joints.velocity, self._number, extra
+        ):
+            self.add_force(self.names[i], force.tolist(), torque.tolist(), 1.0)
+
+    def _number(self, value: float | str) -> float:
+        """A command's number, or its expression's value now."""
+        return float(self.program.expressions[value].number(self.resolver)) if isinstance(value, str) else value
 
     def add_force(self, body: str, force: Sequence[float], torque: Sequence[float], scale: float) -> None:
         i = self.body_index[body]
@@ -365,6 +407,7 @@ class Session:
                 last_good=self._last_good(i),
             )
         joints = with_zeros(self.backend.joint_states(), self._zeros)  # stated zeros (compile.joints)
+        joints = self.drives.with_torques(joints)  # `<joint>.force` includes a drive's torque (sim.drives)
         try:
             self.energy.check(t, states, joints)
         except EngineFailure as exc:
@@ -373,6 +416,8 @@ class Session:
         self.snapshot.time = t
         self.snapshot.bodies = states
         self.snapshot.joints = joints
+        if self.world.reaction_joints:  # only the joints the scenario reads (runner.compile.sensed)
+            self.snapshot.reactions = self.backend.joint_reactions()
         if contacts or self._contacts_always:
             self._read_contacts(t)
 
@@ -433,6 +478,10 @@ class Session:
             trace.scene(t, scales={n: k.scale / start[n] for n, k in self.kinematics.by_name.items()})
             self.kinematics.scale_changed.clear()
         trace.step(t, self.snapshot.bodies, self.snapshot.joints, self.contacts, self.state)
+        if self.world.contact_points:  # the scenario's trace.contact_points: read only when asked (costly)
+            trace.contact_points(t, self.backend.contact_points())
+        if self.program.sensors:  # the sensor quantities the scenario reads (docs/trace-format.md, /sensors)
+            trace.sensors(t, [self.resolver.value(name) for name in self.program.sensors])
         self._recorded = t
 
     def run(self) -> RunResult:
@@ -484,6 +533,10 @@ class Session:
             if self.held:
                 for i, force, torque in self.held.step_inputs(self.snapshot.bodies.quat, self.truth):
                     self.add_force(self.names[i], force.tolist(), torque.tolist(), 1.0)
+            if self.drives or self.actuators:
+                self._command_joints()
+            elif self.drives.applied:
+                self.drives.applied = {}  # the last command ended: the joint's force is its motor's again
             for i, f in self.forces.items():
                 self.backend.apply_force(i, tuple(f[:3]), tuple(f[3:]))
             self.forces.clear()

@@ -6,8 +6,9 @@ scenario built in memory:
 
 * a static ground plane at z = 0, gravity -9.81 m/s^2 along z, ``dt`` = 0.002 s (MuJoCo's default
   timestep), the survey's duration, no assertions;
-* the model as robot ``model``, raised so that the lowest point of its collision shapes at the zero
-  configuration (planes left out) is ``CLEARANCE`` above the ground: a free model falls 1 cm and lands;
+* the model as robot ``model``, raised so that the lowest point of its collision shapes at its start (the
+  zero configuration, a joint whose zero is outside its range at its nearest end; planes left out) is
+  ``CLEARANCE`` above the ground: a free model falls 1 cm and lands;
 * a URDF's root is free, unless the root link has no mass: then it is fixed, as pybullet's ``loadURDF``
   makes a base of mass 0 (whether an author meant a model to be loaded with ``useFixedBase`` is not in the
   file). An MJCF model is as written (its world body is static; a body is free only with a free joint).
@@ -26,6 +27,7 @@ import numpy as np
 
 from backends.geometry import quat_matrices
 from backends.types import ShapeKind
+from runner.compile.robot_start import link_motions
 from runner.language.robot_desc import ModelDesc, data_root
 from runner.language.urdf_rules import shape_points
 
@@ -103,16 +105,21 @@ def find_models(paths: Sequence[str], exclude: Sequence[str] = ()) -> list[Model
 
 
 def lowest_point(desc: ModelDesc) -> float:
-    """The lowest z of the model's collision shapes at its zero configuration, in the model frame (0 if it has
-    none but planes)."""
+    """The lowest z of the model's collision shapes at its start (the zero configuration, with a joint whose
+    zero is outside its range at its nearest end: ``ModelDesc.start``), in the model frame (0 if it has none
+    but planes)."""
+    motions = link_motions(desc, {j: (q, 0.0) for j, q in desc.start}) if desc.start else {}
     lows = []
     for link in desc.links:
+        motion = motions.get(link.name)
+        turn = np.eye(3) if motion is None else motion.rot
+        at = np.asarray(link.pos, dtype=float) if motion is None else motion.apply(np.asarray(link.pos, dtype=float))
         for placed in link.shapes:
             if placed.shape.kind is ShapeKind.PLANE:
                 continue
             points = shape_points(placed)
             if len(points):
-                world = points @ quat_matrices(link.quat).T + np.asarray(link.pos, dtype=float)
+                world = points @ (turn @ quat_matrices(link.quat)).T + at
                 lows.append(float(world[:, 2].min()))
     return min(lows) if lows else 0.0
 

@@ -20,7 +20,7 @@ import numpy as np
 from reports import trace_format as tf
 from runner.trace import foxglove as fx
 from runner.trace import proto as pb
-from runner.trace.proto.scenario import field_of, scenario_messages, with_state
+from runner.trace.proto.scenario import field_of, scenario_messages, sensors_class, with_state
 from runner.trace.slots import PairTemplates, SlotTemplate, quantize
 
 __all__ = ["Channel", "TraceEncoder", "dumps", "plain", "verdict_text"]
@@ -122,6 +122,19 @@ class TraceEncoder:
         self.messages = with_state(self.messages, initial)
         cls = self.messages.state
         return Channel(tf.TOPIC_STATE, cls.DESCRIPTOR.full_name, pb.schema_data(cls))
+
+    def sensors_channel(self, names: Sequence[str]) -> Channel:
+        """/sensors for the sensor quantities ``names`` (the writer registers it at the first step)."""
+        self._sensor_fields = [tf.sensor_field(n) for n in names]
+        self._sensors = sensors_class(self._sensor_fields)
+        return Channel(tf.TOPIC_SENSORS, self._sensors.DESCRIPTOR.full_name, pb.schema_data(self._sensors))
+
+    def sensors_message(self, values: Sequence[float]) -> bytes:
+        """/sensors: the values in the channel's order, rounded to 1e-9 as every per-step double."""
+        msg = self._sensors()
+        for name, value in zip(self._sensor_fields, quantize(np.asarray(values, float)).tolist(), strict=True):
+            setattr(msg, name, value)
+        return bytes(msg.SerializeToString(deterministic=True))
 
     # ---- per step ---------------------------------------------------------------------------------
     @staticmethod

@@ -36,7 +36,7 @@ GRID_CELLS = 10  # the grid's divisions: its size / 10 is a round length (0.1, 0
 PLOT_ID = "Plot!asserted"  # the first plot (metres); the others are Plot!asserted_<unit>
 #: a unit's part of a panel id (ids are Foxglove's `<type>!<name>`: no "/" or "·")
 UNIT_IDS = {"m": "", "m/s": "m_per_s", "rad": "rad", "rad/s": "rad_per_s", "N": "N", "N·m": "N_m", "1": "1",
-            "m or rad": "m_or_rad"}  # fmt: skip
+            "m or rad": "m_or_rad", "J": "J", "N·s": "N_s", "N·m·s": "N_m_s"}  # fmt: skip
 
 
 @dataclass(frozen=True)
@@ -121,7 +121,8 @@ def layout(spec: LayoutSpec) -> dict[str, Any]:
         "followTf": tf.WORLD_FRAME, "followMode": "follow-pose", "cameraState": _camera(spec.spheres),
         "scene": {"transforms": {"showLabel": False, "axisScale": 0, "lineWidth": 0}},  # bodies, not axes
         "transforms": {},
-        "topics": {tf.TOPIC_SCENE: {"visible": True}, tf.TOPIC_SCENE_COLLISION: {"visible": False}},
+        "topics": {tf.TOPIC_SCENE: {"visible": True}, tf.TOPIC_SCENE_COLLISION: {"visible": False},
+                   tf.TOPIC_CONTACT_POINTS: {"visible": True}},  # only in traces that ask for contact points
         "layers": {"grid": _grid(spec.spheres)},
         "publish": {"type": "point", "poseTopic": "/move_base_simple/goal", "pointTopic": "/clicked_point",
                     "poseEstimateTopic": "/initialpose", "poseEstimateXDeviation": 0.5,

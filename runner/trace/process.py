@@ -28,7 +28,7 @@ from typing import Any
 
 import numpy as np
 
-from backends.types import BodyStates, Contact, JointStates
+from backends.types import BodyStates, Contact, ContactPoint, JointStates
 from reports import trace_format as tf
 from runner.errors import OutputError, OutputInUse, TraceError
 from runner.trace.writer import SolidVisual, TraceMeta, TraceWriter, finish_on_exit
@@ -163,6 +163,11 @@ class BackgroundTraceWriter:
     def step(self, t: float, states: BodyStates, joints: JointStates, contacts: Sequence[Contact],
              state_vars: Mapping[str, bool | float | str]) -> None:  # fmt: skip
         self._send("step", t, *_pack_step(states, joints, contacts), dict(state_vars) if state_vars else {})
+
+    def contact_points(self, t: float, points: Sequence[ContactPoint]) -> None:
+        self._send("contact_points", t, list(points))
+    def sensors(self, t: float, values: Sequence[float]) -> None:
+        self._send("sensors", t, [float(v) for v in values])
 
     def event(self, t: float, name: str, source: str, detail: Mapping[str, Any] | None = None) -> None:
         self._send("event", t, name, source, dict(detail) if detail else None)

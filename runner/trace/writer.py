@@ -16,6 +16,7 @@ every call here re-raises it, so a full disk still ends the run with its error (
 from __future__ import annotations
 
 import contextlib
+import json
 import math
 import os
 from collections.abc import Callable, Mapping, Sequence
@@ -28,11 +29,12 @@ import foxglove
 from foxglove.mcap import MCAPCompression, MCAPWriteOptions
 
 from backends.errors import EngineFailure
-from backends.types import BodySpec, BodyStates, Contact, JointSpec, JointStates, Vec3
+from backends.types import BodySpec, BodyStates, Contact, ContactPoint, JointSpec, JointStates, Vec3
 from reports import trace_format as tf
 from runner.errors import TraceError
+from runner.trace import contact_arrows, output
 from runner.trace import foxglove as fx
-from runner.trace import output
+from runner.trace import proto as pb
 from runner.trace.encoder import TraceEncoder, dumps, verdict_text
 from runner.trace.repeats import EventRuns
 from runner.trace.scene import scene_entities
@@ -350,6 +352,28 @@ class TraceWriter:
         if ns >= self._next_flush_ns:
             self._sdk(self._writer.flush)
             self._next_flush_ns = (ns // self._flush_ns + 1) * self._flush_ns
+
+    def contact_points(self, t: float, points: Sequence[ContactPoint]) -> None:
+        """The step's contact points as arrows on /contact_points (runner.trace.contact_arrows), at the scale
+        the scenario record states; the channel exists only in traces that ask for points."""
+        scale = self.meta.extra.get(contact_arrows.KEY_SCALE)
+        if scale is None:
+            raise ValueError(f"contact points need the scenario record's {contact_arrows.KEY_SCALE!r}")
+        if tf.TOPIC_CONTACT_POINTS not in self._channels:
+            update = fx.SceneUpdate
+            self._register(tf.TOPIC_CONTACT_POINTS, update.DESCRIPTOR.full_name, pb.schema_data(update))
+        ns = self._ns(t)
+        message = contact_arrows.scene_update(ns, points, float(scale))
+        self._write(tf.TOPIC_CONTACT_POINTS, ns, message.SerializeToString(deterministic=True))
+    def sensors(self, t: float, values: Sequence[float]) -> None:
+        """/sensors at a recorded step: the values of the sensor quantities ``meta.extra[KEY_SENSORS]`` lists,
+        in that order (the channel is registered with the first)."""
+        ns = self._ns(t)
+        if tf.TOPIC_SENSORS not in self._channels:
+            names = json.loads(self.meta.extra.get(tf.KEY_SENSORS, "[]"))
+            channel = self._encoder.sensors_channel(names)
+            self._register(channel.topic, channel.schema_name, channel.schema_data)
+        self._write(tf.TOPIC_SENSORS, ns, self._encoder.sensors_message(values))
 
     def event(self, t: float, name: str, source: str, detail: Mapping[str, Any] | None = None) -> None:
         """Every delivery on /events; on /log, those that start a run (runner/trace/repeats.py)."""

@@ -75,7 +75,8 @@ def view_scenario(loaded: LoadedScenario, backend: str, out_dir: Path, *, record
     from runner.view.live import LiveRun
     from runner.view.window import ViewWindow
 
-    window = ViewWindow(title, [PandaScene(model)], hud, offscreen=offscreen, camera=cam, targets=targets)
+    scene = PandaScene(model, start={b.name: (b.pos, b.quat) for b in world.bodies})
+    window = ViewWindow(title, [scene], hud, offscreen=offscreen, camera=cam, targets=targets)
     events = named_events(program.handlers, loaded.model.assertions) - set(RESERVED)
     live = LiveRun(window, model, hud, events=events, dt=world.dt, steps=program.steps, speed=speed, paused=paused,
                    script=script, sounds={n: i.path for n, i in program.sounds.items()})  # fmt: skip

@@ -15,11 +15,11 @@ from typing import Any, Protocol
 
 from google.protobuf import json_format
 
-from backends.types import BodySpec, JointSpec
+from backends.types import BodySpec, ContactPoint, JointSpec
 from reports import trace_format as tf
 from reports.scene3d.model import EntityVisual, entity_from_message
+from runner.trace import contact_arrows, scene
 from runner.trace import foxglove as fx
-from runner.trace import scene
 from runner.trace.writer import SolidVisual
 
 __all__ = ["TapListener", "TraceTap", "scene_entities"]
@@ -60,6 +60,13 @@ class TraceTap:
         self._inner.scene(t, solids, scales)
         meta = self._inner.meta
         self._listener.on_scene(t, scene_entities(meta.bodies, solids, scales, meta.joints if first else ()))
+
+    def contact_points(self, t: float, points: Sequence[ContactPoint]) -> None:
+        self._inner.contact_points(t, points)
+        scale = float(self._inner.meta.extra[contact_arrows.KEY_SCALE])
+        update = contact_arrows.scene_update(0, points, scale)
+        self._listener.on_scene(t, [entity_from_message(json_format.MessageToDict(e, preserving_proto_field_name=True))
+                                    for e in update.entities])  # fmt: skip
 
     def event(self, t: float, name: str, source: str, detail: Mapping[str, Any] | None = None) -> None:
         self._inner.event(t, name, source, detail)

@@ -17,10 +17,9 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from backends.errors import UnsupportedFeature
+from backends.testing import worlds as w
+from backends.testing.worlds import ZERO, G
 from backends.types import CompiledWorld, JointKind, JointSpec, Motion, Motor, PairSurface, Shape, ShapeKind, Surface
-
-from . import worlds as w
-from .worlds import ZERO, G
 
 pytest.importorskip("dartpy")
 

@@ -13,10 +13,9 @@ pytest.importorskip("dartpy")
 
 from backends.dart import DartBackend  # noqa: E402 - after the engine check
 from backends.dart._gate import BounceGate, body_radius  # noqa: E402
+from backends.testing import worlds as w  # noqa: E402
 from backends.types import CompiledWorld, Shape, ShapeKind, Surface  # noqa: E402
 from bench import measure  # noqa: E402
-
-from . import worlds as w  # noqa: E402
 
 
 def _pile(bounce: float, bounce_vel: float, duration: float) -> CompiledWorld:
@@ -77,7 +76,8 @@ def test_gate_covers_free_bodies_only() -> None:
     world = _balls(0.5, 0.8)
     assert BounceGate(world, [1, 2], usable=True).usable
     assert not BounceGate(world, [1, 2], usable=False).usable
-    assert not BounceGate(dataclasses.replace(world, default_surface=Surface(0.0, 0.8, 1.0)), [1, 2], True).usable
+    thresholded = dataclasses.replace(world, default_surface=Surface(bounce=0.0, bounce_vel=0.8, mu=1.0))
+    assert not BounceGate(thresholded, [1, 2], True).usable
 
 
 def test_body_radius() -> None:

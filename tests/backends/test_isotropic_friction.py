@@ -27,11 +27,10 @@ import numpy as np
 import pytest
 
 from backends.geometry import quat_mul
+from backends.testing import worlds as w
+from backends.testing.tolerances import tol
+from backends.testing.worlds import G, coulomb_stop, make_backend
 from backends.types import BodyStates, Motion, Shape, ShapeKind, Surface
-
-from . import worlds as w
-from .tolerances import tol
-from .worlds import G, coulomb_stop, make_backend
 
 V0, MU, DT = 2.0, 0.3, 0.001
 
@@ -129,6 +128,11 @@ def test_box_at_rest_on_a_tilted_plane_sticks_below_mu_and_slides_above(
         # measured: 0.11765 m/s for 0.11679 (+0.74 %, mujoco's bound 0.3 %) at 0 and 45 deg alike: not
         # the direction; the start from rest on a soft contact (cause not measured further)
         request.applymarker(pytest.mark.xfail(strict=True, reason="mujoco: +0.74 % gain from rest, any azimuth"))
+    if backend_name == "drake" and ratio > 1.0:
+        # measured: 0.1040 m/s at 0 deg (-10.9 %) and 0.1477 at 45 deg (+26 %) for 0.1168: the compliant
+        # hydroelastic box (its tessellated pressure field) starts from rest at the friction limit under SAP's
+        # regularised stiction (docs/backends/drake.md, deviation 4); launched boxes slide within 3 %
+        request.applymarker(pytest.mark.xfail(strict=True, reason="drake: -10.9 % / +26 % from rest"))
     tilt, phi, steps = math.radians(30.0), math.radians(azimuth), 500
     mu = math.tan(tilt) / ratio
     q = quat_mul((math.cos(phi / 2), 0.0, 0.0, math.sin(phi / 2)), (math.cos(tilt / 2), 0.0, math.sin(tilt / 2), 0.0))

@@ -14,10 +14,9 @@ import pytest
 
 from backends.errors import EngineFailure, UnsupportedFeature
 from backends.geometry import integrate_quat, quat_from_axis_angle, quat_rotate
+from backends.testing import worlds as w
+from backends.testing.worlds import ZERO, G, make_backend
 from backends.types import BodySpec, CompiledWorld, JointKind, JointSpec, Motion, Motor, Shape, ShapeKind, Surface
-
-from . import worlds as w
-from .worlds import ZERO, G, make_backend
 
 mujoco = pytest.importorskip("mujoco", reason="engine not installed: pip install 'physics-scenarios[mujoco]'")
 

@@ -12,10 +12,9 @@ import itertools
 import numpy as np
 import pytest
 
+from backends.testing import worlds as w
+from backends.testing.worlds import make_backend
 from backends.types import BodySpec, CompiledWorld, JointKind, JointSpec, Motion, PairSurface, Shape, ShapeKind, Surface
-
-from . import worlds as w
-from .worlds import make_backend
 
 pytest.importorskip("mujoco", reason="engine not installed: pip install 'physics-scenarios[mujoco]'")
 

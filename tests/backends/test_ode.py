@@ -21,6 +21,8 @@ from panda3d.ode import OdeMass  # noqa: E402 - after the skip guard
 from backends.errors import EngineFailure, UnsupportedFeature  # noqa: E402
 from backends.geometry import quat_from_axis_angle  # noqa: E402
 from backends.ode import OdeBackend  # noqa: E402
+from backends.testing import worlds as w  # noqa: E402
+from backends.testing.worlds import ZERO, G, make_backend  # noqa: E402
 from backends.types import (  # noqa: E402
     CompiledWorld,
     JointKind,
@@ -32,9 +34,6 @@ from backends.types import (  # noqa: E402
     ShapeKind,
     Surface,
 )
-
-from . import worlds as w  # noqa: E402
-from .worlds import ZERO, G, make_backend  # noqa: E402
 
 ERP, CFM = 0.2, 1e-5  # ODE's defaults in this build
 
@@ -161,7 +160,8 @@ def test_mu_is_a_coulomb_coefficient(push: float, slides: bool) -> None:
 
 def test_infinite_mu_is_safe_when_contacts_separate() -> None:
     """mu = inf with approx1 bounds friction by inf * normal force; a separating contact has 0 of it."""
-    with make_backend("ode", dataclasses.replace(w.bouncing_sphere(0.5, 0.3), default_surface=Surface(0.5))) as sim:
+    world = dataclasses.replace(w.bouncing_sphere(0.5, 0.3), default_surface=Surface(bounce=0.5))
+    with make_backend("ode", world) as sim:
         for _ in range(600):
             sim.step()
         s = sim.body_states()

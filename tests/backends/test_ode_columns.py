@@ -16,10 +16,9 @@ pytest.importorskip("panda3d.ode")
 
 from backends.errors import UnsupportedFeature  # noqa: E402
 from backends.ode._options import MAX_LANDING_STACK, MAX_RESTING_STACK  # noqa: E402
+from backends.testing import worlds as w  # noqa: E402
 from backends.types import BodySpec, JointKind, JointSpec, Surface  # noqa: E402
 from tests.ci.conftest import cli  # noqa: E402
-
-from . import worlds as w  # noqa: E402
 
 SIDE = 0.2
 DENSITY = 1.0 / SIDE**3  # 1 kg boxes of 0.2 m, as in the issue

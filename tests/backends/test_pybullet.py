@@ -14,6 +14,8 @@ import pytest
 
 from backends.errors import EngineFailure, UnsupportedFeature
 from backends.registry import create_backend, is_installed
+from backends.testing import worlds as w
+from backends.testing.worlds import ZERO
 from backends.types import (
     CompiledWorld,
     JointKind,
@@ -24,9 +26,6 @@ from backends.types import (
     Surface,
 )
 
-from . import worlds as w
-from .worlds import ZERO
-
 if TYPE_CHECKING:
     from backends.pybullet._surfaces import SurfaceFit
 
@@ -36,7 +35,7 @@ pytestmark = pytest.mark.skipif(not is_installed("pybullet"), reason="engine not
 def _fit(world: CompiledWorld) -> SurfaceFit:
     from backends.pybullet._surfaces import fit_surfaces  # imports pybullet: only once it is known
 
-    return fit_surfaces(world, set())
+    return fit_surfaces(world)
 
 
 def _three_on_ground(pairs: tuple[PairSurface, ...], surface: Surface) -> CompiledWorld:

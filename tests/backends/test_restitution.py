@@ -18,7 +18,8 @@ the ideal row gives e exactly, MuJoCo's constant impedance 0.999 leaks 1e-3*(1 +
 e 0.5), ODE's impact CFM 1e-4: both are far inside. For e = 0 the bound is the issue's bounce-0 hop: a
 rebound below 2 mm, i.e. a separation speed under sqrt(2 g 0.002) = 0.198 m/s. Cells an engine misses
 are strict xfails with the measured figure and cause (docs/backends/<engine>.md): they run, and fail the
-suite the day the engine meets the bound.
+suite the day the engine meets the bound. An engine that does not declare contact:bounce (drake) is checked
+to refuse every cell with bounce > 0 up front, naming the feature.
 
 Grid (issue 17): masses 0.01, 1, 100 kg; radii 0.01, 0.1, 1 m; dt 0.5, 1, 4, 10 ms; e 0, 0.5, 0.9. The
 ball's bottom starts 5 cm above the plane, so every cell hits at about 1 m/s (0.99 m/s: sqrt(2 g 0.05)
@@ -32,8 +33,10 @@ import math
 
 import pytest
 
-from backends.registry import create_backend, is_installed
-from backends.types import BodySpec, CompiledWorld, Motion, Shape, ShapeKind, Surface
+from backends.errors import UnsupportedFeature
+from backends.registry import create_backend, get_backend, is_installed
+from backends.types import BodySpec, Capability, CompiledWorld, Motion, Shape, ShapeKind, Surface
+from tests.engines import ENGINES
 
 G = 9.81
 DROP = 0.05  # m, the ball's bottom above the plane
@@ -44,7 +47,6 @@ MASSES = (0.01, 1.0, 100.0)
 RADII = (0.01, 0.1, 1.0)
 STEPS = (0.0005, 0.001, 0.004, 0.01)
 BOUNCES = (0.0, 0.5, 0.9)
-ENGINES = ("ode", "pybullet", "mujoco", "dart")
 
 #: Measured misses (e_eff at 1 m/s, every mass and radius alike) and their cause, docs/backends/*.md.
 _AFTER_GRAVITY = (
@@ -101,9 +103,18 @@ def e_eff(vs: list[float], h: float) -> tuple[float, float]:
     return v_in, 0.0
 
 
-def _require(engine: str) -> None:
+def _require(engine: str, world: CompiledWorld | None = None) -> bool:
+    """Whether ``engine`` runs ``world``: an engine without restitution (drake) must refuse a bounce > 0 up front,
+    naming the feature, and that refusal is the cell's check (False: nothing left to run)."""
     if not is_installed(engine):
         pytest.skip(f"engine not installed: {engine}")
+    if world is None or world.default_surface.bounce == 0.0:
+        return True
+    if Capability.CONTACT_BOUNCE in get_backend(engine).capabilities:
+        return True
+    with pytest.raises(UnsupportedFeature, match="contact:bounce"):
+        create_backend(engine, world)
+    return False
 
 
 def _cells() -> list[object]:
@@ -122,8 +133,10 @@ def _cells() -> list[object]:
 
 @pytest.mark.parametrize(("engine", "e", "dt", "mass", "r"), _cells())
 def test_rebound_is_e_times_the_approach_speed(engine: str, e: float, dt: float, mass: float, r: float) -> None:
-    _require(engine)
-    _, vs = trajectory(engine, ball_world(mass, r, dt, e, DROP), math.sqrt(2 * DROP / G) + 0.1)
+    world = ball_world(mass, r, dt, e, DROP)
+    if not _require(engine, world):
+        return
+    _, vs = trajectory(engine, world, math.sqrt(2 * DROP / G) + 0.1)
     v_in, got = e_eff(vs, dt)
     assert v_in == pytest.approx(math.sqrt(2 * G * DROP), abs=G * dt)  # the impact the grid intends
     if e == 0.0:
@@ -145,8 +158,10 @@ def test_bounce_zero_does_not_hop(engine: str, dt: float) -> None:
 @pytest.mark.parametrize("engine", ENGINES)
 def test_no_bounce_below_bounce_vel(engine: str) -> None:
     """An impact at 0.99 m/s with bounce_vel 1.2 does not bounce (e 0.5 would rebound at 0.495 m/s)."""
-    _require(engine)
-    _, vs = trajectory(engine, ball_world(1.0, 0.1, 0.001, 0.5, DROP, bounce_vel=1.2), math.sqrt(2 * DROP / G) + 0.1)
+    world = ball_world(1.0, 0.1, 0.001, 0.5, DROP, bounce_vel=1.2)
+    if not _require(engine, world):
+        return
+    _, vs = trajectory(engine, world, math.sqrt(2 * DROP / G) + 0.1)
     v_in, got = e_eff(vs, 0.001)
     assert got * v_in <= HOP_SPEED
 
@@ -154,7 +169,9 @@ def test_no_bounce_below_bounce_vel(engine: str) -> None:
 @pytest.mark.parametrize("engine", ENGINES)
 def test_bounce_above_bounce_vel(engine: str) -> None:
     """The same impact with bounce_vel 0.8 bounces at e (the threshold leaves faster impacts alone)."""
-    _require(engine)
-    _, vs = trajectory(engine, ball_world(1.0, 0.1, 0.001, 0.5, DROP, bounce_vel=0.8), math.sqrt(2 * DROP / G) + 0.1)
+    world = ball_world(1.0, 0.1, 0.001, 0.5, DROP, bounce_vel=0.8)
+    if not _require(engine, world):
+        return
+    _, vs = trajectory(engine, world, math.sqrt(2 * DROP / G) + 0.1)
     _, got = e_eff(vs, 0.001)
     assert abs(got - 0.5) <= REL * 0.5

@@ -20,6 +20,9 @@ from scipy.special import ellipk
 from backends.base import Backend
 from backends.errors import UnsupportedFeature
 from backends.geometry import quat_from_axis_angle, quat_rotate
+from backends.testing import worlds as w
+from backends.testing.tolerances import tol
+from backends.testing.worlds import ZERO, G, make_backend, require
 from backends.types import (
     BodySpec,
     Capability,
@@ -37,10 +40,6 @@ from runner.compile.program import build_program
 from runner.language.load import load_scenario, variant_names
 from runner.sim.run import run_loaded
 from tests.paths import ROOT
-
-from . import worlds as w
-from .tolerances import tol
-from .worlds import ZERO, G, make_backend, require
 
 # --- helpers --------------------------------------------------------------------------------------
 

@@ -8,6 +8,7 @@ import sys
 from pathlib import Path
 
 from runner.language.schema import schema_text
+from tests.engines import ENGINES
 from tests.paths import ROOT, SCENARIOS
 
 CLI = [sys.executable, "-m", "runner"]
@@ -115,7 +116,7 @@ assertions:
 def test_backends_lists_versions() -> None:
     done = scenario("backends")
     assert done.returncode == 0
-    for name in ("pybullet", "mujoco", "dart", "ode"):
+    for name in ENGINES:
         assert name in done.stdout
     text = " ".join(done.stdout.split())  # rich wraps long cells
     assert "ODE 0.13.1" in text and "MuJoCo " in text and "DART " in text  # the engines' own versions

@@ -20,9 +20,10 @@ FILES = sorted(DEFAULT_SUITE.glob("*.yaml"))
 def test_one_scenario_per_semantic_of_the_issue() -> None:
     """Issue 6 lists 12 semantics, issue 17 adds 13 (isotropic friction), 14 and 15 (energy of a tumbling
     body and of a pendulum), 16 (stacks of 5-30) and 17 (restitution over mass, size, dt and e), issue 29
-    18 (held forces); the files are numbered after them (10 has three parts: a, b, c)."""
+    18 (held forces), 19 (joint reactions), 20 (a body's energy, momentum and body-frame spin) and 21 (named
+    frames on links) and 22 (joint commands); the files are numbered after them (10 has three parts: a, b, c)."""
     numbers = {int(re.match(r"(\d+)", f.name).group(1)) for f in FILES}
-    assert numbers == set(range(1, 19))
+    assert numbers == set(range(1, 23))
 
 
 @pytest.mark.parametrize("path", FILES, ids=[f.stem for f in FILES])
@@ -73,7 +74,7 @@ def test_discover_lists_every_variant_with_its_checks() -> None:
     assert height.tolerance == {"default": "1e-9 + (round(time/dt) + 1)*eps*(param.z0 + g*time*time)"}
     assert height.known_limits == {}
     motor = next(c for c in cases if c.id == "04_slider_motor").checks[0]
-    assert motor.tolerance == {"default": "1e-9", "mujoco": "2e-6"} and set(motor.known_limits) == {"ode"}
+    assert motor.tolerance == {"default": "1e-9", "mujoco": "2e-6"} and set(motor.known_limits) == {"ode", "drake"}
 
 
 @pytest.mark.parametrize(

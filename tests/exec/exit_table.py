@@ -6,7 +6,9 @@ Rows (one scenario each): a runtime expression error, a `send` loop, an engine a
 ODE: SIGABRT inside the engine), a full disk (a 32 KiB tmpfs as the output folder; without root, a
 32 KiB RLIMIT_FSIZE, the same ENOSPC/EFBIG path), a missing engine (`ghost`: registered by
 ``tests/exec/ghost/sitecustomize.py`` in every process, found but not importable), a capability the
-engine lacks (a universal joint on PyBullet), a failed assertion, and known limits. Columns: ``run``
+engine lacks (a universal joint on PyBullet), a failed assertion, known limits, a read-only output, an
+integer overflow, an oversized mesh, and a worker over its memory ceiling (the test-only ``crash`` backend's
+``fault: allocate`` under ``SCENARIO_MEMORY_LIMIT=300``). Columns: ``run``
 serially, with ``-j 2``, ``--isolate``, ``--trace-process``, on Ray (``--executor ray`` on a cluster
 started here with ``ray start --head``, stopped after), as the row of ``compare`` (whose own exit code
 follows its rule, 0 when every run passes, else 1; the row gives the code ``run`` gives), ``check``
@@ -101,6 +103,7 @@ class Row:
     read_only: bool = False
     files: Callable[[Path], None] | None = None  # writes the files the scenario names beside it
     refused_on_load: bool = False  # refused before any case starts: `compare` itself exits 2 (bad input)
+    memory: str | None = None  # SCENARIO_MEMORY_LIMIT for the command (runner.exec.memory)
 
 
 ROWS = [
@@ -127,6 +130,8 @@ ROWS = [
     Row("oversized mesh (a 25 MB STL)", "pybullet",
         BOX.format(name="bigmesh") + "robots:\n  r: {urdf: robot.urdf, pos: [1, 0, 1]}\n", 2, files=oversized_mesh,
         refused_on_load=True),
+    Row("over memory (2000 MiB taken under SCENARIO_MEMORY_LIMIT=300)", "crash", BOX.format(name="hungry") +
+        "backend_options:\n  crash: {fault: allocate, after_steps: 3, megabytes: 2000}\n", 3, memory="300"),
 ]  # fmt: skip
 
 LANDING = """\
@@ -264,6 +269,8 @@ def run_cell(row: Row, path: str, base: Path, ray: str = "auto") -> Cell:
     source = _source(work / "src", row)
     (work / "pytest.ini").write_text("[pytest]\n")  # pytest's rootdir: nothing of this repository's config
     env = {k: v for k, v in environment().items() if not k.startswith("PYTEST_")}
+    if row.memory is not None:
+        env["SCENARIO_MEMORY_LIMIT"] = row.memory
     if path == "check":  # its golden file first, where the run completes (a failed assertion is recorded too)
         subprocess.run(command("baseline", source, row.backend, work, variant=row.variant), capture_output=True,
                        timeout=600, env=env, cwd=work)  # fmt: skip

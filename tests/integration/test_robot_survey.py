@@ -47,14 +47,18 @@ def survey(request: pytest.FixtureRequest, tmp_path_factory: pytest.TempPathFact
     return done
 
 
-#: Issue 28's target is not met for MJCF yet (measured on this corpus, 45 files, 0.5 s, -j 1): MuJoCo runs 32,
-#: and refuses 8 that MuJoCo 4's own compiler rejects (pybullet_data's hopper, walker2d, half_cheetah,
-#: humanoid_fixed, humanoid_symmetric, swimmer, ground, ground_plane); the
-#: energy watchdog stops 5. PyBullet runs 15, DART 14, ODE 11 (joint damping and friction loss run on every
-#: engine now) and refuse the rest up front by name: several joints in one body (14 files), armature (13),
-#: tendons (6), joint springs (4), which only MuJoCo runs so far. Each engine is an expected miss here until
-#: it reaches the target; reaching it fails the test, so that this list goes.
+#: Issue 28's target cannot be met for MJCF on this corpus (45 files, 0.5 s, -j 1): MuJoCo 4's own compiler
+#: rejects 8 (pybullet_data's hopper, walker2d, half_cheetah, humanoid_fixed, humanoid_symmetric, swimmer,
+#: ground, ground_plane), so 37 (82 %) is the most any engine can run. Measured: MuJoCo 37, PyBullet 25, DART 16,
+#: ODE 13; the rest are refused up front by name (armature on DART and ODE, tendons, equality, fluid, springs on
+#: ODE, a capsule against a cylinder on ODE) or stopped by the energy watchdog (docs/robots.md, "MJCF as MuJoCo
+#: reads it"). Each engine is an expected miss here until it reaches the target; reaching it fails the test, so
+#: that this list goes.
 MJCF_BELOW_TARGET = frozenset(ENGINES)
+#: Issue 32's Drake adapter refuses convex hulls (a hull box rests 45.6 mm deep with point contact and is thrown
+#: 6.7 m up with hydroelastic contact: docs/backends/drake.md), which most URDF links are: measured 51 of 95 URDF
+#: models run, 40 of the 44 others refused for `shape:convex`. An expected miss until the mapping exists.
+URDF_BELOW_TARGET = frozenset({"drake"}) & frozenset(ENGINES)
 
 
 @pytest.mark.parametrize("engine", ENGINES)
@@ -65,6 +69,10 @@ def test_at_least_90_percent_run_on_each_engine(survey: Survey, engine: str, req
         ran = f"{engine} runs {counts[RAN]} of {sum(counts.values())} MJCF models"
         assert not met, f"{ran}: drop it from MJCF_BELOW_TARGET"
         pytest.xfail(f"issue 28 open: {ran} (MJCF_BELOW_TARGET)")
+    if request.node.callspec.params["survey"] == "urdf" and engine in URDF_BELOW_TARGET:
+        ran = f"{engine} runs {counts[RAN]} of {sum(counts.values())} URDF models"
+        assert not met, f"{ran}: drop it from URDF_BELOW_TARGET"
+        pytest.xfail(f"issue 32 open: {ran} (URDF_BELOW_TARGET: shape:convex)")
     assert met, f"{engine}: {counts}\n{markdown(survey)}"
 
 

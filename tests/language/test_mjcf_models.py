@@ -115,10 +115,9 @@ def test_several_joints_per_body_ellipsoids_and_visual_geoms(tmp_path: Path) -> 
     assert shape.shape.kind is ShapeKind.CONVEX and shape.shape.mesh is not None
     radii = [max(abs(v[k]) for v in shape.shape.mesh.vertices) for k in range(3)]
     assert radii == pytest.approx([0.2, 0.1, 0.05], abs=1e-12)  # the hull's vertices lie on the ellipsoid
-    assert [n.capability for n in desc.needs] == ["joint:several-per-body"]
-    assert _run(tmp_path / "several.yaml", "mujoco").returncode == 0
-    refused = _run(tmp_path / "several.yaml", "ode")
-    assert refused.returncode == 2 and "joint:several-per-body" in refused.stderr and "`ode`" in refused.stderr
+    assert desc.needs == ()  # several joints in one body run on every engine (a chain elsewhere than MuJoCo)
+    for engine in ("mujoco", "ode"):
+        assert _run(tmp_path / "several.yaml", engine).returncode == 0, engine
 
 
 def test_a_file_mujoco_refuses_is_refused_at_mujocos_line(tmp_path: Path) -> None:
@@ -155,3 +154,85 @@ def test_a_placed_robot_starts_where_the_description_puts_it_on_mujoco(tmp_path:
         for i, body in enumerate(world.bodies):
             assert np.allclose(states.pos[i], body.pos, rtol=0, atol=1e-12), body.name
             assert np.allclose(states.quat[i], body.quat, rtol=0, atol=1e-12), body.name
+
+
+OUT_OF_RANGE = """<mujoco>
+  <compiler angle="degree"/>
+  <worldbody>
+    <body name="arm" pos="0 0 1">
+      <joint name="shoulder" type="hinge" axis="0 1 0" range="30 60"/>
+      <geom type="capsule" fromto="0 0 0 .4 0 0" size=".02" mass="1"/>
+      <body name="hand" pos=".4 0 0">
+        <joint name="wrist" type="hinge" axis="0 1 0" ref="-90" range="-110 110"/>
+        <geom type="sphere" size=".03" mass=".2"/>
+      </body>
+    </body>
+  </worldbody>
+</mujoco>
+"""
+
+
+@pytest.mark.parametrize("engine", ["mujoco", "pybullet"])
+def test_a_zero_outside_the_range_starts_at_the_nearest_end(tmp_path: Path, engine: str) -> None:
+    """pybullet_data's ant: ankles with range="30 100" at a zero of 0. The joint starts at 30 degrees (noted),
+    read from the file's zero; a `ref` (MuJoCo's qpos0) shifts the range into the joint's own coordinate."""
+    import math
+
+    from reports.trace_reader import read_trace
+    from runner.sim.run import run_loaded
+
+    loaded = load_scenario(_scenario(tmp_path, "ranged", OUT_OF_RANGE))
+    desc = loaded.robots["r"]
+    lo = math.radians(30)
+    assert desc.start == (("shoulder", pytest.approx(lo, abs=1e-12)),)
+    assert "`shoulder`" in desc.notes[0] and "nearest end" in desc.notes[0]
+    wrist = next(j for j in desc.joints if j.name == "wrist")
+    assert (wrist.lo, wrist.hi) == pytest.approx((math.radians(-20), math.radians(200)), abs=1e-12)  # -110 + 90
+    result = run_loaded(loaded, engine, tmp_path / engine)
+    assert result.status == "passed" and result.trace is not None, result.failure
+    trace = read_trace(result.trace)
+    assert float(trace.joints["r.shoulder"].position[0]) == pytest.approx(lo, abs=1e-9)
+    hand = trace.bodies["r.hand"].pos[0]  # the hinge about +y turns +x towards -z: the hand 0.4 sin(30) lower
+    assert hand[0] == pytest.approx(0.4 * math.cos(lo), abs=1e-9)
+    assert hand[2] == pytest.approx(1 - 0.4 * math.sin(lo), abs=1e-9)
+
+
+WELDED = """<mujoco>
+  <worldbody>
+    <body name="a" pos="0 0 1">
+      <joint name="ja" type="hinge" axis="0 1 0"/>
+      <geom type="sphere" size=".16"/>
+      <body name="b" pos=".1 0 0">
+        <geom type="sphere" size=".16"/>
+        <body name="c" pos=".1 0 0">
+          <joint name="jc" type="hinge" axis="0 1 0"/>
+          <geom type="sphere" size=".16"/>
+          <body name="d" pos=".1 0 0">
+            <joint name="jd" type="hinge" axis="0 1 0"/>
+            <geom type="sphere" size=".16"/>
+          </body>
+        </body>
+      </body>
+    </body>
+  </worldbody>
+</mujoco>
+"""
+
+
+def test_mujocos_parent_filter_works_on_weld_roots(tmp_path: Path) -> None:
+    """b has no joint: MuJoCo welds it into a, so a and b never touch (same weld root) and neither do a and c
+    (c's parent weld root is a); c and d are parent and child; a and d, b and d may touch. The spheres (r 0.16,
+    0.1 apart) all overlap; MuJoCo's own contacts are exactly the pairs not excluded."""
+    import mujoco
+
+    desc = load_scenario(_scenario(tmp_path, "welded", WELDED)).robots["r"]
+    pairs = {frozenset(p) for p in desc.excluded}
+    assert {frozenset(("a", "b")), frozenset(("a", "c")), frozenset(("b", "c"))} <= pairs
+    assert frozenset(("a", "d")) not in pairs
+    model = mujoco.MjModel.from_xml_path(str(tmp_path / "welded.xml"))  # MuJoCo's own: every overlapping pair
+    data = mujoco.MjData(model)
+    mujoco.mj_forward(model, data)
+    names = [model.body(int(model.geom_bodyid[g])).name for g in range(model.ngeom)]
+    touching = {frozenset((names[c.geom1], names[c.geom2])) for c in data.contact[: data.ncon]}
+    every = {frozenset((x, y)) for x in "abcd" for y in "abcd" if x < y}
+    assert touching == every - pairs == {frozenset(("a", "d")), frozenset(("b", "d"))}

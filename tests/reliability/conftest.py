@@ -3,10 +3,12 @@
 ``FUZZ_CASES`` sets how many hostile documents the loader fuzzing generates (default 200, about 5 s);
 ``FUZZ_STRUCTURED`` how many grammar-aware mutants of valid scenarios it generates (default 200);
 ``FUZZ_FAULTS`` how many signals are sent at random moments to running ``scenario run`` processes
-(default 2); ``FUZZ_SEED`` varies the generated cases (default: hypothesis's fixed derandomized seed,
-so that a run is reproducible). ``make fuzz`` sets ``FUZZ_CASES=20000 FUZZ_STRUCTURED=20000
-FUZZ_FAULTS=200``. The counts
-are printed at the end of the session.
+(default 2); ``FUZZ_FILES`` how many model files, WAVs, golden files and traces each (default 50);
+``FUZZ_COMMAND_EVERY`` which share of the fuzzed files and mutants also goes through the command in a
+subprocess (default one in 100, the first included: tests/reliability/sampled.py); ``FUZZ_SEED`` varies
+the generated cases (default: hypothesis's fixed derandomized seed, so that a run is reproducible).
+``make fuzz`` sets ``FUZZ_CASES=20000 FUZZ_STRUCTURED=20000 FUZZ_FILES=5000 FUZZ_FAULTS=200
+FUZZ_CONCURRENT=20``. The counts are printed at the end of the session.
 """
 
 from __future__ import annotations

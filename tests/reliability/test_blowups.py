@@ -26,13 +26,14 @@ import pytest
 from backends.registry import is_installed
 from reports.trace_reader import read_trace
 from runner.sim.session import MAX_SPEED
+from tests.engines import ENGINES
 
 G = 9.81
 DT = 0.01
 KICK_STEP = 50
 Z_LAST = 10.0 - G * DT * DT * KICK_STEP * (KICK_STEP + 1) / 2  # 8.749225
 V_LAST = -G * DT * KICK_STEP  # -4.905
-#: free fall, m and m/s: float64 engines integrate exactly this way (tests/backends/tolerances.py:
+#: free fall, m and m/s: float64 engines integrate exactly this way (backends/testing/tolerances.py:
 #: 1.8e-15 measured on PyBullet); ODE in single precision rounds z (ulp 9.5e-7 at 10 m) and each of the
 #: 50 velocity updates, 2.8e-7/1.4e-6 measured at 2 m over 40 steps there, so 2e-5 here.
 TOL = {"default": 1e-6, "ode": 2e-5}
@@ -49,7 +50,7 @@ on:
 assertions:
   - {{name: reaches-the-end, at: end, check: time > 1.9}}
 """
-REAL = ["pybullet", "mujoco", "dart", "ode"]
+REAL = list(ENGINES)
 
 
 @pytest.fixture(params=REAL)

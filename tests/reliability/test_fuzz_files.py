@@ -15,6 +15,12 @@ more than 500 MB to the process at its peak (VmHWM reset before each case, tests
   25 is made into a report as `report` does: refused naming the trace ("not a physics-scenarios trace",
   "damaged at byte N").
 
+One case in ``FUZZ_COMMAND_EVERY`` (default 100; the first included) of the model files, WAVs and traces is
+also given to the command in a subprocess (`validate`, `inspect` with and without `--recover`:
+tests/reliability/sampled.py): exit code, traceback, location, time, and the peak memory of the command and
+its workers under the worker's memory ceiling (runner/exec/memory.py). A golden file is only read by
+`check`, which runs a scenario first: its cases stay in this process.
+
 ``FUZZ_FILES`` cases of each kind (50 in `make test`; 5,000 in `make fuzz`: 20,000 in all).
 """
 
@@ -53,6 +59,7 @@ from .conftest import STATS, count, fuzz_settings
 from .file_mutations import Mutated, golden_text, model_text, trace_bytes, wav
 from .hostile import ROOT
 from .memory import peak_since, start_window
+from .sampled import due, through_command
 
 FUZZ_FILES = int(os.environ.get("FUZZ_FILES", "50"))
 HANG_SECONDS = 20.0
@@ -170,6 +177,8 @@ def test_a_mutated_model_file_loads_or_is_refused_at_its_line(folder: Path, data
         return "exit 0"
 
     bounded("model files", f"{seed}: {mutated.how}", work)
+    if due("model files"):
+        through_command("model files", ["validate", str(scenario)], scenario, model, how=f"{seed}: {mutated.how}")
 
 
 # ---- WAV files ------------------------------------------------------------------------------------------
@@ -194,6 +203,8 @@ def test_a_mutated_wav_is_refused_at_the_scenario_or_mixed_without_error(folder:
         return outcome + ", mixed"
 
     bounded("WAV files", mutated.how, work)
+    if due("WAV files"):
+        through_command("WAV files", ["validate", str(scenario)], scenario, how=mutated.how)
 
 
 # ---- golden files ---------------------------------------------------------------------------------------
@@ -279,6 +290,9 @@ def test_a_damaged_trace_is_read_recovered_or_refused_naming_it(folder: Path, tr
         return ", ".join(outcomes)
 
     bounded("traces", mutated.how, work)
+    if due("traces"):
+        for args in (["inspect", str(path)], ["inspect", "--recover", str(path)]):
+            through_command("traces", args, path, how=mutated.how, lines=False)
 
 
 def test_no_case_ended_in_exit_70() -> None:

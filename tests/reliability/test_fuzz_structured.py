@@ -6,6 +6,11 @@ whose trace file names are valid on every path, or raise ScenarioValidationError
 (file:line:column in the file, or the `--set` argument). Beyond it: no case may take more than 20 s (a
 reader blocked on a FIFO, a blow-up of memory or time), and no case adds more than 500 MB to the process at its
 peak (tests/reliability/memory.py: VmHWM, reset before each case).
+One loaded mutant in ``FUZZ_COMMAND_EVERY`` (default 100) and one refused mutant in as many also go through
+`scenario run --backend fake --no-trace --timeout 20` in a subprocess (tests/reliability/sampled.py): never
+exit 70 nor a traceback, an exit 2 located in the file, the command done within its budget (plus the grace
+before SIGKILL and the interpreter's start), the command's and its worker's peak memory under the worker's
+memory ceiling (runner/exec/memory.py).
 `FUZZ_STRUCTURED` sets the number of mutants (200 in `make test`, 20,000 in `make fuzz`).
 """
 
@@ -29,14 +34,17 @@ from runner.compile.program import build_program
 from runner.errors import ScenarioValidationError
 from runner.language.load import parse_overrides
 from runner.sim.run import trace_path
+from tests.engines import ENGINES
 
 from .conftest import FUZZ_STRUCTURED, STATS, count, fuzz_settings
 from .grammar import Mutant, mutants
 from .hostile import ROOT, Case
 from .memory import peak_since, start_window
+from .sampled import due, through_command
 from .test_fuzz_loader import assert_finite_model, assert_located, assert_sane, cases_for, line_count
 
 HANG_SECONDS = 20.0
+RUN_BUDGET = 20.0  # --timeout of the mutants run through the command
 PEAK_MB = 500
 NAME_MAX = 255  # bytes in a file name (Linux, macOS, Windows)
 LONGEST = ".cost.json.partial"  # the longest suffix a run's files get beside `<scenario>__<variant>__<backend>`
@@ -81,7 +89,7 @@ def check_mutant(path: Path, mutant: Mutant, pick: int) -> str:
             assert_located(exc, path, line_count(mutant.data))
             return "refused when compiled"
         assert_sane(program)
-        for backend in ("pybullet", "mujoco"):
+        for backend in ENGINES:
             name = trace_path(Path("."), one, backend).name.removesuffix(".mcap") + LONGEST
             assert len(name.encode()) <= NAME_MAX, f"a trace file name of {len(name.encode())} bytes: {name[:80]}..."
     return "loaded"
@@ -113,3 +121,8 @@ def test_every_structured_mutant_loads_or_is_refused_with_located_issues(
     summary = (f"mean {sum(TIMES) / len(TIMES) * 1000:.1f} ms, slowest {max(TIMES):.2f} s ({SLOWEST[0][:60]}), "
                f"largest peak added by a case {max(PEAKS):.0f} MB")  # fmt: skip
     STATS["structured timing"] = Counter({summary: len(TIMES)})
+    kind = "structured mutants loaded" if outcome == "loaded" else "structured mutants refused"
+    if due(kind):  # run as a user does, on the fake backend, within a budget of RUN_BUDGET s
+        path = folder / "case.yaml"
+        through_command(kind, ["run", str(path), "--backend", "fake", "--no-trace", "--timeout",
+                                               f"{RUN_BUDGET:g}"], path, how=mutant.how, budget=RUN_BUDGET)  # fmt: skip

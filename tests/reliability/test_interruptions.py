@@ -28,9 +28,9 @@ import pytest
 from mcap.reader import make_reader
 from mcap.stream_reader import StreamReader
 
-from backends.registry import is_installed
 from reports import trace_format as tf
 from reports.trace_reader import Trace, read_trace
+from tests.engines import INSTALLED
 
 from .conftest import FUZZ_FAULTS, count
 from .processes import wait_released, worker_of
@@ -45,7 +45,7 @@ bodies:
 assertions:
   - {{name: runs-to-the-end, at: end, check: time > 0}}
 """
-REAL = [b for b in ("pybullet", "mujoco", "dart", "ode") if is_installed(b)]
+REAL = list(INSTALLED)
 
 
 def _default_sigint() -> None:

@@ -106,6 +106,9 @@ CASES = [  # (scenario, --set items, backend, what the refusal says)
     ("loop", [], "pybullet", "joint `ba`: it closes a loop of joints"),
     ("loop", [], "mujoco", "joint `ba` closes a kinematic loop"),
     ("loop", [], "dart", "joint `ba` of scenario `loop` makes a closed loop of joints"),
+    ("loop", [], "drake", "joint `ba` closes a loop"),
+    ("box_pile", [], "drake", "needs contact:bounce, which backend `drake` does not support"),
+    ("resting_column", [], "drake", "column of 20 bodies; Drake is measured to hold at most 7"),
 ]
 
 
@@ -113,7 +116,7 @@ CASES = [  # (scenario, --set items, backend, what the refusal says)
 def test_validate_and_run_refuse_alike(
     tmp_path: Path, capsys: pytest.CaptureFixture[str], name: str, sets: list[str], backend: str, says: str
 ) -> None:
-    pytest.importorskip({"ode": "panda3d.ode", "dart": "dartpy"}.get(backend, backend))
+    pytest.importorskip({"ode": "panda3d.ode", "dart": "dartpy", "drake": "pydrake"}.get(backend, backend))
     scenario = _scenario(tmp_path, name)
     extra = [item for s in sets for item in ("--set", s)]
     code, validated = cli(capsys, "validate", scenario, "--backend", backend, *extra)

@@ -13,7 +13,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from reports.scene3d import SceneModel, frame_camera, scene_model
+from reports.scene3d import CameraSpec, SceneModel, frame_camera, scene_model
 from reports.scene3d.model import BodyTrack, EntityVisual, Primitive
 from reports.trace_reader import read_trace
 
@@ -178,3 +178,35 @@ def test_a_robot_is_drawn_by_its_visual_meshes_in_their_materials(renderer: Offs
     scene.show(model.end_time)
     hulls = np.asarray(renderer.render(scene, camera)).astype(float)
     assert int((np.abs(hulls - image).sum(axis=2) > 20).sum()) >= PATCH
+
+
+def test_a_body_casts_its_shadow_where_the_light_projects_it(renderer: OffscreenRenderer) -> None:
+    """A cube 1 m above the floor: where the directional light projects its centre onto the floor the picture is
+    the floor's colour lit by the ambient light alone (the shadow is drawn unlit in that colour: within 2 of 255
+    levels, 8-bit rounding and the supersampling filter); a point half as far on the other side of the cube is
+    the lit floor. A scene without a floor below its bodies has no shadows."""
+    from reports.scene3d.panda import AMBIENT
+
+    floor_rgb = (0.55, 0.6, 0.55)
+    specs = [
+        _spec("floor", {"kind": "plane"}, [0, 0, 0], list(floor_rgb), "static"),
+        _spec("cube", {"kind": "box", "size": [0.6, 0.6, 0.6]}, [0, 0, 1.0], [0.85, 0.6, 0.3]),
+    ]
+    model = _still(SceneModel.from_specs(specs), specs)
+    scene = PandaScene(model)
+    assert scene.shadows is not None
+    camera = CameraSpec((0.0, -5.0, 3.0), 0.0, -25.0, (60.0, 40.0))  # the cube, its shadow and the floor around
+    scene.show(0.0)
+    image = np.asarray(renderer.render(scene, camera)).astype(float)
+    d = np.asarray(scene.lights[1].getQuat(scene.root).getForward())
+    centre = np.array([0.0, 0.0, 1.0])
+    shadow = centre - d * centre[2] / d[2]  # along the light down to z = 0
+    lit = centre - (shadow - centre) * [0.5, 0.5, 0] - [0, 0, 1.0]  # on the floor, half as far the other way
+    px_shadow, px_lit = renderer.project(scene, camera, [shadow.tolist(), lit.tolist()])
+    assert np.isfinite(px_shadow).all() and np.isfinite(px_lit).all()
+    in_shadow = image[int(round(px_shadow[1])), int(round(px_shadow[0]))]
+    assert in_shadow == pytest.approx(np.asarray(floor_rgb) * AMBIENT * 255, abs=2)
+    on_floor = image[int(round(px_lit[1])), int(round(px_lit[0]))]
+    assert lit_like(on_floor, floor_rgb) and on_floor.mean() > in_shadow.mean() + 20  # the sun's share
+    flying = [specs[1]]
+    assert PandaScene(_still(SceneModel.from_specs(flying), flying)).shadows is None

@@ -30,8 +30,8 @@ tolerances are the step's error (dt = h; the engines integrate with semi-implici
   force on a joint limited to 2 rad/s): the commanded rate is clamped, so the wheel turns at 2 rad/s; the
   motor reaches its rate within a step (MuJoCo's motor row leaves 1e-4 of the change per step, gone after a
   few), so after 0.2 s the rate is 2 rad/s to the solver's rounding (relative 1e-5 covers float32).
-* **Armature** (MuJoCo, the only engine with it: a wheel on a hinge through its centre, damping c, spun at
-  w0): w = w0 e^(-c t / (I + armature)); the others refuse `joint:armature` before the run.
+* **Armature** (MuJoCo's dof_armature, PyBullet's geared rotor: a wheel on a hinge through its centre, damping
+  c, spun at w0): w = w0 e^(-c t / (I + armature)); DART and ODE refuse `joint:armature` before the run.
 """
 
 from __future__ import annotations
@@ -163,7 +163,7 @@ ARMATURE = (
 
 
 @pytest.mark.parametrize("engine", ENGINES)
-def test_armature_adds_to_the_inertia_on_mujoco_and_is_refused_elsewhere(tmp_path: Path, engine: str) -> None:
+def test_armature_adds_to_the_inertia_where_declared_and_is_refused_elsewhere(tmp_path: Path, engine: str) -> None:
     if "joint:armature" not in {c.value for c in get_backend(engine).capabilities}:
         path = tmp_path / "s.yaml"
         path.write_text("schema_version: 1\nscenario: dynamics\n" + ARMATURE)

@@ -28,6 +28,7 @@ _TF = re.compile(
 _BODIES = re.compile(r"/bodies(?:/\d+)?\.(?P<body>.+)\.(?P<field>vel|angvel)\.(?P<c>[xyz])")
 _JOINTS = re.compile(r"/joints(?:/\d+)?\.(?P<joint>.+)\.(?P<field>position|velocity|motor_force)")
 _STATE = re.compile(r"/state\.(?P<var>\w+)")
+_SENSORS = re.compile(r"/sensors\.(?P<field>\w+)")
 _CONTACT = re.compile(r'/contacts\.pairs\[:\]\{a=="(?P<a>[^"]+)"\}\{b=="(?P<b>[^"]+)"\}\.normal_force')
 
 
@@ -93,6 +94,9 @@ def series(trace: Trace, path: str) -> Series | None:
                   if (p["a"], p["b"]) == (m["a"], m["b"])]  # fmt: skip
         times = np.array([t for t, _ in points], dtype=float)
         return Series(f"contact({m['a']}, {m['b']})", times, np.array([f for _, f in points], dtype=float))
+    if m := _SENSORS.fullmatch(path):
+        name = next((n for n in trace.sensors if tf.sensor_field(n) == m["field"]), None)
+        return None if name is None else Series(name, trace.sensor_times, trace.sensors[name])
     if (m := _STATE.fullmatch(path)) and m["var"] in trace.state:
         values = [np.nan if v is None or isinstance(v, str) else float(v) for v in trace.state[m["var"]]]
         return Series(f"state.{m['var']}", trace.state_times, np.array(values, dtype=float))

@@ -58,13 +58,14 @@ from reports import trace_format as tf
 from reports.trace_reader import read_trace
 from runner.compile.program import build_program
 from runner.language.load import load_files
+from tests.engines import ENGINES
 from tests.paths import ROOT
 from tests.reports.cdp import find_chromium
 
 from .foxglove_plots import Series, plot_rows, seek_times, series, shows
 from .foxglove_studio import Studio, View, bundle_folder, bundle_installed
 
-BACKENDS = ("pybullet", "mujoco", "dart", "ode")
+BACKENDS = ENGINES
 FOLDERS = (ROOT / "scenarios", ROOT / "scenarios" / "conformance")
 REQUIRED = os.environ.get("SCENARIO_REQUIRE_FOXGLOVE") == "1"
 CHROMIUM = find_chromium()
@@ -86,7 +87,8 @@ pytestmark = [
 FILES = sorted({p for folder in FOLDERS for p in folder.rglob("*.yaml")})
 #: the files whose asserted quantities are checked in Foxglove's plots: one command each, one folder
 PLOTTED_FILES = sorted([*(ROOT / "scenarios").glob("*.yaml"), *(ROOT / "scenarios" / "robots").glob("*.yaml")])
-PLOT_ENGINES = ("mujoco", "pybullet", "dart", "ode")  # the first installed that runs the file
+#: the first installed that runs the file plots it: MuJoCo, then PyBullet, then the registry's others
+PLOT_ENGINES = sorted(ENGINES, key=lambda b: {"mujoco": 0, "pybullet": 1}.get(b, 2))
 SEEK_TIMEOUT = 15.0  # seconds for Foxglove to show a seek's time and values
 
 

@@ -19,10 +19,10 @@ import pytest
 
 from reports import trace_format as tf
 from reports.trace_reader import read_trace
+from tests.engines import ENGINES
 from tests.paths import ROOT
 
 pytestmark = pytest.mark.slow
-ENGINES = ("pybullet", "mujoco", "dart", "ode")
 #: The hip servo (docs/semantics.md, "Position servo"): the error is multiplied by 1 - gain dt = 0.9 each
 #: step while the motor is not saturated (fmax 40 N m, the URDF's effort, against the ~1 N m of gravity on a
 #: 0.6 kg leg within 0.2 m of the hip); from 0 to 0.3 rad, after 50 steps: 0.3 (1 - 0.9^50) = 0.29845 rad.

@@ -1,4 +1,5 @@
-"""`scenario backends`: list the backends, each engine's own version (and its wrapper's), installed or not."""
+"""`scenario backends`: list the backends, each engine's own version (and its wrapper's), installed or not;
+engines registered from outside this repository (entry points) too, a broken registration with its reason."""
 
 from __future__ import annotations
 
@@ -8,7 +9,7 @@ from rich.console import Console
 from rich.table import Table
 
 from backends.errors import BackendError
-from backends.registry import DEFAULT_BACKEND, get_backend, is_installed, list_backends
+from backends.registry import DEFAULT_BACKEND, broken_backends, get_backend, is_installed, list_backends
 from runner.errors import ExitCode
 
 NAME = "backends"
@@ -41,5 +42,7 @@ def execute(args: argparse.Namespace, out: Console, err: Console) -> int:
             entry.description,
             "" if installed else entry.hint,
         )
+    for name, reason in broken_backends().items():  # an outside engine's entry point that cannot be loaded
+        table.add_row(name, "broken", "no", reason, "")
     out.print(table)
     return ExitCode.OK

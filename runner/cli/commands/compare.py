@@ -51,6 +51,10 @@ def configure(parser: argparse.ArgumentParser) -> None:
                         help="also overwrite files under the outputs' names that scenario did not write")  # fmt: skip
     options.add_overrides(parser)
     parser.add_argument(
+        "--imports-only", action="store_true",
+        help="show how each engine imported the scenario's robots (built, not stepped) and stop",
+    )  # fmt: skip
+    parser.add_argument(
         "--junit",
         type=Path,
         metavar="FILE",
@@ -64,6 +68,30 @@ def _backends(args: argparse.Namespace) -> list[str]:
     if args.reference and args.reference not in names:  # the reference is compared too, first
         names.insert(0, options.backend_names(argparse.Namespace(backend=[args.reference], backend_default=None))[0])
     return names
+
+
+def _runnable(work: list[tuple[LoadedScenario, str]], out: Console) -> list[tuple[LoadedScenario, str]]:
+    """The (case, engine) pairs whose engine accepts the case (what `scenario validate --backend` checks); the
+    others are named, with the refusal's reason, and left out of the comparison. Only when the engines were not
+    named: an engine the user names that refuses a case is an error row, as in `scenario run`."""
+    from backends.errors import UnsupportedFeature
+    from backends.registry import check_capabilities, get_backend
+    from runner.compile.program import build_program
+
+    kept = []
+    worlds: dict[int, object] = {}
+    for loaded, backend in work:
+        world = worlds.setdefault(id(loaded), build_program(loaded).world)
+        try:
+            check_capabilities(get_backend(backend), world)  # type: ignore[arg-type]
+        except UnsupportedFeature as refusal:
+            needs = ", ".join(sorted(str(getattr(c, "value", c)) for c in refusal.missing)) or str(refusal)
+            out.print(f"not compared: {loaded.model.scenario} · {loaded.variant} on {backend}, which refuses it up "
+                      f"front ({needs}; name the engines with --backend to see the refusal as an error)",
+                      markup=False, highlight=False)  # fmt: skip
+            continue
+        kept.append((loaded, backend))
+    return kept
 
 
 def _check(args: argparse.Namespace) -> None:
@@ -88,6 +116,14 @@ def execute(args: argparse.Namespace, out: Console, err: Console) -> int:
     cases: list[LoadedScenario] = []
     cases.extend(load_files(options.scenario_files(args.files), args.variant, args.all_variants, overrides))
     work = [(case, b) for case in cases for b in backends]
+    if args.backend is None:  # every installed engine by default: those that refuse a case up front sit it out
+        work = _runnable(work, out)
+    if any(loaded.robots for loaded in cases):
+        _show_imports(args, out, [loaded for loaded in cases if loaded.robots], backends)
+        if args.imports_only:
+            return ExitCode.OK
+    elif args.imports_only:
+        raise UsageError("`--imports-only` needs a scenario with robots (URDF or MJCF models)")
     jobs = [_case(args, loaded, b, overrides) for loaded, b in work]
     check_outputs(jobs, args.force)
     _check_reports(args.out, args.force)
@@ -146,6 +182,37 @@ def _case(args: argparse.Namespace, loaded: LoadedScenario, backend: str,
         cost=estimate_cost(loaded), budget=budget, sha256=loaded.sha256,
         trace=str(trace_path(traces, loaded, backend)), scenario=loaded.model.scenario, loaded=loaded,
     )  # fmt: skip
+
+
+def _show_imports(args: argparse.Namespace, out: Console, cases: list[LoadedScenario], backends: list[str]) -> None:
+    """Before any run: every engine builds each robot case's world in a worker (runner.exec.imports) and the
+    import tables are printed, and kept beside the traces for the report (reports.imports)."""
+    from reports.imports import imports_path, is_own_imports, write_imports
+    from reports.imports_render import terminal_lines
+    from runner.exec.imports import file_digits, read_imports
+    from runner.trace.output import write_error
+
+    work = [(loaded, b) for loaded in cases for b in backends]
+    reads = read_imports([Case(str(loaded.path), None if loaded.variant == BASE_CASE else loaded.variant, b,
+                               loaded.overrides, loaded=loaded) for loaded, b in work], args.jobs)  # fmt: skip
+    sections = []
+    for k, loaded in enumerate(cases):
+        section = {"scenario": loaded.model.scenario, "variant": loaded.variant,
+                   "digits": file_digits([desc.file for desc in loaded.robots.values()]),
+                   "reads": reads[k * len(backends):(k + 1) * len(backends)]}  # fmt: skip
+        sections.append(section)
+        for line in terminal_lines(section):
+            out.print(line, markup=False, highlight=False)
+    if args.imports_only:
+        return
+    traces = args.out / "traces"
+    target = imports_path(traces)
+    if target.exists() and not args.force and not is_own_imports(target):
+        raise TraceError(f"{target} exists and was not written by this tool; use --force to replace it")
+    try:
+        write_imports(traces, sections)
+    except OSError as exc:
+        raise write_error(exc, str(target)) from exc
 
 
 def _check_reports(out: Path, force: bool) -> None:

@@ -27,11 +27,12 @@ from reports import trace_format as tf
 from runner.trace.proto import physics_scenarios_pb2 as base
 
 __all__ = ["PACKAGE", "ScenarioMessages", "field_of", "part_name", "scenario_messages", "state_field_type",
-           "with_state"]
+           "with_state", "sensors_class"]
 
 PACKAGE = "physics_scenarios"
 FILE_NAME = "physics_scenarios_scenario.proto"
 STATE_FILE_NAME = "physics_scenarios_state.proto"
+SENSORS_FILE_NAME = "physics_scenarios_sensors.proto"
 _F = descriptor_pb2.FieldDescriptorProto
 
 #: state field types, by the Python type of the variable's initial value
@@ -147,3 +148,11 @@ def with_state(messages: ScenarioMessages, state: Mapping[str, Any]) -> Scenario
     _message(file, "State", [(name, kinds[kind], None) for name, kind in types.items()])
     (state_class,) = _classes([file], ("State",), with_base=False)
     return replace(messages, state=state_class, state_types=types)
+
+
+def sensors_class(fields: Sequence[str]) -> Any:
+    """``physics_scenarios.Sensors``: a double field per sensor quantity (its ``tf.sensor_field``), in order."""
+    file = descriptor_pb2.FileDescriptorProto(name=SENSORS_FILE_NAME, package=PACKAGE, syntax="proto3")
+    _message(file, "Sensors", [(name, _F.TYPE_DOUBLE, None) for name in fields])
+    (cls,) = _classes([file], ("Sensors",), with_base=False)
+    return cls

@@ -2,7 +2,8 @@
 
 ``tol(check, backend)`` returns the backend's own line when there is one, else ``"default"``. Every
 value carries a comment with what was measured and why the tolerance is what it is. Backend owners
-add their own lines; the defaults are ODE's analytic expectations with float64 rounding room.
+add their own lines (an engine outside this repository through ``add_tolerances``, from its own tests); the
+defaults are ODE's analytic expectations with float64 rounding room.
 """
 
 from __future__ import annotations
@@ -83,7 +84,12 @@ _TOLERANCES: dict[str, dict[str, float]] = {
     # relative improvement of 1e-8) well under 1e-6; ODE stores float32 (2^-24 = 6e-8 relative per
     # operation), over the sum of 4 points and the impulse-to-force division, ~10 operations: 6e-7.
     # Default 1e-6. Measured: pybullet 132.4350 N of 132.4350 N (4 points, depth 2.0e-5 m); worst 2e-7.
+    # drake misses it (DEVIATIONS below: the compliant contact still settling at the check).
     "contact_force": {"default": 1e-6},
+    # The same force from one engine step of four (dt/4) alone: Backend.contact_points() gives the last engine
+    # step's points. The same derivation (the impulse is m*g*h exactly at rest) holds for pybullet, mujoco and
+    # ode (measured +1e-9, +2e-13, +4e-8). dart misses it (DEVIATIONS below).
+    "contact_force_last_substep": {"default": 1e-6},
     # Resting height of a shape's centre above a plane, m.
     # pybullet: -1.2e-5 to -1.7e-5 m for box, sphere, capsule, cylinder (and the 30 degree ramp).
     # dart: the 1 cm drop lands 4.7 mm deep in one 0.01 s step; the ODE mapping's push-out (ERP 0.2, capped
@@ -91,6 +97,10 @@ _TOLERANCES: dict[str, dict[str, float]] = {
     # (With DART's own 1 mm/s cap it was -3.77 mm after 1 s, and this bound 5e-3.)
     # mujoco: -1.2e-6 to -4.9e-6 m at rest for all four shapes, -1.1e-6 m sliding down the 30 degree ramp
     # (it hovered +2.2 mm before the Coulomb correction of docs/backends/mujoco.md).
+    # drake (hydroelastic, modulus E = 1e6 Pa): a compliant body sinks until its pressure field carries its
+    # weight, the pressure rising linearly from 0 at the surface to E at the body's innermost points. A box on a
+    # face of area A, half thickness c: d = m g c / (E A): the 0.3 m lab box 0.22 mm (measured -0.27 mm), the
+    # cylinder 0.10 mm (measured -0.14 mm); within the default. The sphere and the ramp miss it: DEVIATIONS.
     "resting_height": {"default": 2e-3},
     # Resting height of a convex hull box's centre (test_robot_contract.py), m: as resting_height (one step of
     # landing), the hull being the box's exact vertices. pybullet: +9.0e-5 m (the adapter's 1e-4 m hull margin,
@@ -100,7 +110,9 @@ _TOLERANCES: dict[str, dict[str, float]] = {
     # pybullet: 5.6e-17 (Bullet integrates the rotation exactly for constant omega).
     # ode: 1.5e-5 (w, z after 1 rad): ODE's default rotation update is first order, each step turns
     # 2*atan(w*h/2) instead of w*h, 3.3e-5 rad short after 50 steps of 0.02 rad (the lab's mode).
-    "orientation": {"default": 1e-6, "ode": 3e-5},
+    # drake: 1.46e-5 (w, z after 1 rad), ODE's figure: its discrete update integrates q' = q + h/2*Omega*q and
+    # renormalises, which turns each step by 2*atan(w*h/2), the same first-order shortfall: 3e-5.
+    "orientation": {"default": 1e-6, "ode": 3e-5, "drake": 3e-5},
     # Apex ratio of a bouncing sphere, absolute around e^2 = 0.25.
     # pybullet: 0.2694 (e = 0.519 for bounce 0.5) at dt 0.001; 0.306, 0.298, 0.314 at dt 0.004, 0.01,
     # 0.04. Needs the adapter's 1 mm contactBreakingThreshold: with Bullet's 0.02 m a contact point
@@ -132,12 +144,58 @@ _TOLERANCES: dict[str, dict[str, float]] = {
     # most mu*dz/d: 0.5*2e-3/0.398 = 2.5e-3 (mu 0.5), 0.8*2e-3/0.255 = 6.3e-3 (mu 0.8), 0.25*2e-3/0.815 =
     # 6.1e-4 (mu 0.25); the largest, rounded up: 6.5e-3.
     # Measured: pybullet +9e-6, mujoco -4e-7 / +1.4e-5, worst of the four 2.6e-5.
+    # drake: 0.39353 m (-1.07 %): SAP regularises friction (a slip-dependent force below mu*N while the slip
+    # speed is under its stiction tolerance) and the compliant box rocks on its pressure field. NOT derived
+    # (measured deviation, cause); with point contact the box rests on one corner and slides 0.4758 m (+19.6 %).
     "friction_stop": {"default": 6.5e-3},
     # One step of free fall read back at once, m: the contract says "exactly". Also states read right
     # after the build or a reset_body (pose, velocities, joint coordinates at 0). pybullet: < 1e-15.
     # ode: 4.9e-8 m (box z) and 5.3e-8 m (door x): float32 positions, one ulp at 2 m is 2.4e-7.
     "fresh_states": {"default": 1e-9, "ode": 2.5e-7},
 }
+
+
+#: (test function, engine) -> the measured deviation from the truth and its cause. The test keeps its derived
+#: tolerance and is marked ``xfail(strict=True)`` on that engine (``fixtures.engine_fixtures``): the deviation
+#: is shown with its number, and an engine that meets the truth fails the run until its line is removed. A
+#: parametrised test's line may name its non-engine parameters, ``test_x[sphere]``, to mark only that case.
+DEVIATIONS: dict[tuple[str, str], str] = {
+    # contact_force (relative to m*g): the compliant hydroelastic box still moves at the check (SAP's
+    # relaxation-time damping of the pressure field; no SAP solver tolerance is reachable from pydrake 1.51).
+    ("test_contact_resting", "drake"): "measured 132.43557 N of m*g = 132.435 N (+4.3e-6 > 1e-6): the compliant "
+    "hydroelastic box (E 1e6 Pa) is still settling after 1 s (SAP damps its pressure field's oscillation slowly)",
+    ("test_contacts_with_substeps_are_those_used_during_the_step", "drake"): "measured 132.43561 N of m*g = "
+    "132.435 N (+4.6e-6 > 1e-6): the compliant hydroelastic box (E 1e6 Pa) is still settling after 1 s",
+    ("test_compound_body_rests_on_its_shapes", "drake"): "measured 19.62028 N of 2 g = 19.62 N (+1.4e-5 > 1e-6): "
+    "the two compliant hydroelastic boxes of the compound (E 1e6 Pa) are still settling at the check",
+    # resting_height (m): a compliant sphere sinks until pi E d^2 = m g (the field E (1 - rho/r) integrated over
+    # the plane's disc): d = sqrt(m g / (pi E)) = 2.56 mm for the 2.09 kg sphere; its tessellation (resolution
+    # hint 0.02 m) puts a face's centre L^2/(6 r) = 0.67 mm inside the sphere: 3.22 mm, beyond the 2 mm bound.
+    ("test_resting_height[sphere]", "drake"): "measured -3.23 mm of 0.1 m (> 2 mm): the hydroelastic sphere "
+    "(E 1e6 Pa) sinks sqrt(m g/(pi E)) = 2.56 mm, plus 0.67 mm of its tessellation (a 0.02 m face's centre)",
+    ("test_tilted_plane", "drake"): "measured +3.80 mm along the normal of 0.1 m (> 2 mm): the compliant cube "
+    "sliding on the 30 degree ramp rides on its leading edge's pressure field, tilted back (cause measured, "
+    "not derived)",
+    # contact points: a hydroelastic contact is a surface, and SAP makes one contact per face of it (points at
+    # the face centroids, backends/drake/_points.py); test_drake.py checks those points on their own.
+    ("test_box_on_plane_has_four_corner_points", "drake"): "measured 16 points, not the 4 corners: the "
+    "hydroelastic contact is a surface and Drake's solver makes one contact per face of it (the compliant "
+    "box's tessellated bottom: 16 faces)",
+    ("test_box_on_plane_substeps_last_engine_step", "drake"): "measured 16 points, not the 4 corners: one per "
+    "face of the hydroelastic contact surface",
+    ("test_resting_box_arrows_in_mcap_and_rrd", "drake"): "measured 16 arrows, not the 4 corners: one per face "
+    "of the hydroelastic contact surface (tests/trace/test_contact_points_trace.py)",
+    # contact_force_last_substep: DART's contact solve at h = 2.5 ms leaves an impulse error of 4e-7 N s per
+    # engine step (at h = 10 ms it is within 1e-6).
+    ("test_box_on_plane_substeps_last_engine_step", "dart"): "measured 132.434826 N of m*g = 132.435 N "
+    "(-1.3e-6 > 1e-6): DART's contact solve at h = 2.5 ms leaves 4e-7 N s of impulse per engine step",
+}
+
+
+def deviation(test: str, params: str, backend: str) -> str | None:
+    """The DEVIATIONS line of test function ``test`` on ``backend``, given its other parameters' id
+    (``params``, "" when none): the line for ``test[params]``, else the line for ``test``."""
+    return DEVIATIONS.get((f"{test}[{params}]", backend)) or DEVIATIONS.get((test, backend))
 
 
 def tol(check: str, backend: str) -> float:
@@ -147,3 +205,20 @@ def tol(check: str, backend: str) -> float:
     except KeyError:
         raise KeyError(f"no tolerance for check `{check}`; known: {', '.join(sorted(_TOLERANCES))}") from None
     return per_backend.get(backend, per_backend["default"])
+
+
+def add_tolerances(backend: str, lines: dict[str, float]) -> None:
+    """An engine's own lines (check -> tolerance), for an engine outside this repository: each, like the lines
+    above, owed to a measured figure and its cause, written beside the call."""
+    unknown = sorted(set(lines) - set(_TOLERANCES))
+    if unknown:
+        raise KeyError(f"no check named {', '.join(unknown)}; known: {', '.join(sorted(_TOLERANCES))}")
+    for check, value in lines.items():
+        _TOLERANCES[check][backend] = value
+
+
+def add_deviations(backend: str, lines: dict[str, str]) -> None:
+    """An engine's own DEVIATIONS lines (test function, or ``test[params]`` -> measured deviation and cause), for
+    an engine outside this repository."""
+    for test, reason in lines.items():
+        DEVIATIONS[(test, backend)] = reason

@@ -1,4 +1,4 @@
-"""Small CompiledWorlds built in Python for the shared backend suite, plus its two helpers.
+"""Small CompiledWorlds built in Python for the shared backend suite, plus its helpers.
 
 Masses and inertias follow ODE's dMassSet* formulas (backends/types.py), so the suite's analytic
 expectations are ODE's. Nothing here imports an engine.
@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import math
 
-import pytest
+import numpy as np
 
 from backends.base import Backend
 from backends.registry import create_backend
@@ -39,10 +39,18 @@ LAB_MOTOR = Motor(0.3, 100.0)
 GRIPPY = Surface(bounce=0.0, mu=1.0)
 
 
-def require(backend_cls: type[Backend], capability: Capability) -> None:
-    """Skip the calling test, saying why, when the backend does not declare ``capability``."""
-    if capability not in backend_cls.capabilities:
-        pytest.skip(f"backend `{backend_cls.name}` does not declare {capability.value}")
+def require(backend_cls: type[Backend], *capabilities: Capability) -> None:
+    """Skip the calling test, saying why, when the backend does not declare each of ``capabilities``."""
+    import pytest  # only under pytest: the worlds themselves do not need it
+
+    for capability in capabilities:
+        if capability not in backend_cls.capabilities:
+            pytest.skip(f"backend `{backend_cls.name}` does not declare {capability.value}")
+
+
+def same_rotation(q: np.ndarray, expected: tuple[float, ...]) -> np.ndarray:
+    """``q`` with its sign chosen to match ``expected`` (q and -q are the same rotation)."""
+    return q if float(np.dot(q, expected)) >= 0.0 else -q
 
 
 def make_backend(name: str, world: CompiledWorld) -> Backend:
@@ -167,13 +175,10 @@ def spin_up(shape: Shape) -> CompiledWorld:
     return world("spin-up", [body("body", shape, (0.0, 0.0, 1.0))], gravity=ZERO, dt=0.01)
 
 
-def lab_door(
-    *, lo: float | None = None, hi: float | None = None, motor: Motor | None = LAB_MOTOR
-) -> CompiledWorld:
+def lab_door(*, lo: float | None = None, hi: float | None = None, motor: Motor | None = LAB_MOTOR) -> CompiledWorld:
     """The lab's door at (1, 0, 1) on a slider to the environment along x."""
     door = box("door", LAB_DOOR, (1.0, 0.0, 1.0), density=1000.0)
-    joint = JointSpec("slider", JointKind.SLIDER, "door", None, axis=(1.0, 0.0, 0.0), lo=lo, hi=hi,
-                      motor=motor)
+    joint = JointSpec("slider", JointKind.SLIDER, "door", None, axis=(1.0, 0.0, 0.0), lo=lo, hi=hi, motor=motor)
     return world("door", [door], joints=(joint,), dt=0.04)
 
 

@@ -1,0 +1,116 @@
+"""Joint armature and joint springs against their analytic periods, on every engine that declares them (the
+others refuse them before the run, naming the capability).
+
+* **Armature** (hand-written: a 1 kg ball 0.5 m below a hinge about y, armature a = 0.25 kg m^2, released at
+  theta0 = 0.1 rad): MuJoCo adds a to the joint's mass-matrix entry (dof_armature), PyBullet gears a rotor of
+  moment a to the joint (backends/pybullet/_rotors.py). Period T = 2 pi sqrt((I + a) / (m g L)) (1 +
+  theta0^2 / 16) with I = m (L^2 + 2/5 r^2); without the armature it would be 29 % shorter.
+* **Spring** (MJCF: a 0.5 m box, 1 kg, on a vertical hinge at its end, so gravity has no torque about it;
+  stiffness k = I (2 pi)^2, started at 0.2 rad from its spring's rest): MuJoCo's passive spring, DART's own
+  joint spring (setSpringStiffness), PyBullet's joint torque -k (q - ref) from the step's start
+  (backends/pybullet/_springs.py). Period T = 2 pi sqrt(I / k) = 1 s, exact for any amplitude (linear).
+
+Periods are read from the upward zero crossings (linear interpolation between samples), averaged over the
+run. Tolerance, relative: the step changes a harmonic oscillator's frequency by (w h)^2 / 24 for
+semi-implicit Euler and by at most (w h)^2 / 2 for DART's implicit spring (its update is v (1 + w^2 h^2) =
+v - h w^2 q): bound (w h)^2; the pendulum's next series term 11 theta0^4 / 3072 (3.6e-7); the crossings'
+interpolation error (w h)^2 / 6 of a step per crossing. PyBullet's gear is one constraint row, which its
+solver meets exactly when nothing else touches (no contacts here).
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from backends.errors import UnsupportedFeature
+from backends.registry import KNOWN_BACKENDS, get_backend, is_installed
+from reports.trace_reader import read_trace
+from runner.language.load import load_scenario
+from runner.sim.run import run_loaded
+
+pytestmark = pytest.mark.slow
+ENGINES = [n for n, e in KNOWN_BACKENDS.items() if not e.hidden and is_installed(n)]
+G, H = 9.81, 0.001
+
+
+def _declares(engine: str, capability: str) -> bool:
+    return capability in {c.value for c in get_backend(engine).capabilities}
+
+
+def _period(times: np.ndarray, q: np.ndarray) -> float:
+    up = [k for k in range(1, len(q)) if q[k - 1] < 0.0 <= q[k]]
+    crossings = [float(times[k - 1] + (times[k] - times[k - 1]) * -q[k - 1] / (q[k] - q[k - 1])) for k in up]
+    assert len(crossings) >= 3, crossings
+    return (crossings[-1] - crossings[0]) / (len(crossings) - 1)
+
+
+def _run(tmp_path: Path, engine: str, text: str, capability: str) -> tuple[np.ndarray, np.ndarray] | None:
+    path = tmp_path / "s.yaml"
+    path.write_text("schema_version: 1\nscenario: periods\n" + text)
+    if not _declares(engine, capability):
+        with pytest.raises(UnsupportedFeature, match=capability):
+            run_loaded(load_scenario(path), engine, tmp_path / engine)
+        return None
+    result = run_loaded(load_scenario(path), engine, tmp_path / engine)
+    assert result.status == "passed", result.failure
+    assert result.trace is not None
+    trace = read_trace(result.trace)
+    if "bob" in trace.bodies:  # the pendulum's angle from the vertical (its joint reads from the start)
+        pos = trace.bodies["bob"].pos
+        return np.asarray(trace.times, float), np.arctan2(pos[:, 0], 2.0 - pos[:, 2])
+    joint = next(iter(trace.joints.values()))
+    return np.asarray(trace.joint_times, float), np.asarray(joint.position, float)
+
+
+@pytest.mark.parametrize("engine", ENGINES)
+def test_armature_lengthens_a_pendulums_period_to_that_of_i_plus_armature(tmp_path: Path, engine: str) -> None:
+    m, length, r, a, theta0 = 1.0, 0.5, 0.05, 0.25, 0.1
+    x0, z0 = length * math.sin(theta0), 2.0 - length * math.cos(theta0)
+    text = (
+        f"world: {{gravity: [0, 0, {-G}], dt: {H}, duration: 8.5}}\n"
+        f"bodies:\n  bob: {{sphere: {r}, mass: {m}, pos: [{x0!r}, 0, {z0!r}]}}\n"
+        "joints:\n  hinge: {type: hinge, bodies: [bob, environment], axis: [0, 1, 0], anchor: [0, 0, 2], "
+        f"dynamics: {{armature: {a}}}}}\n"
+    )
+    ran = _run(tmp_path, engine, text, "joint:armature")
+    if ran is None:
+        return
+    inertia = m * (length**2 + 0.4 * r**2)
+    omega = math.sqrt(m * G * length / (inertia + a))
+    truth = 2 * math.pi / omega * (1 + theta0**2 / 16)
+    tolerance = (omega * H) ** 2 * (1 + 1 / 6) + 11 * theta0**4 / 3072
+    period = _period(*ran)
+    assert abs(period - truth) <= tolerance * truth, (engine, period, truth)
+
+
+SPRING = """<mujoco>
+  <worldbody>
+    <body name="rod" pos="0 0 1">
+      <joint name="spin" type="hinge" axis="0 0 1" stiffness="{k!r}"/>
+      <geom type="box" size="0.25 0.02 0.02" pos="0.25 0 0" mass="1" contype="0" conaffinity="0"/>
+    </body>
+  </worldbody>
+</mujoco>
+"""
+
+
+@pytest.mark.parametrize("engine", ENGINES)
+def test_a_joint_spring_oscillates_with_period_2_pi_sqrt_i_over_k(tmp_path: Path, engine: str) -> None:
+    inertia = 1.0 / 12 * (0.5**2 + 0.04**2) + 1.0 * 0.25**2  # the box about the hinge at its end
+    omega = 2 * math.pi
+    (tmp_path / "spring.xml").write_text(SPRING.format(k=inertia * omega**2))
+    text = (
+        f"world: {{gravity: [0, 0, {-G}], dt: {H}, duration: 3.5}}\n"
+        "bodies:\n  marker: {box: [0.05, 0.05, 0.05], motion: static, pos: [50, 50, 0]}\n"
+        "robots:\n  r: {mjcf: spring.xml, initial: {joints: {spin: 0.2}}}\n"
+    )
+    ran = _run(tmp_path, engine, text, "joint:stiffness")
+    if ran is None:
+        return
+    period = _period(*ran)
+    tolerance = (omega * H) ** 2 * (1 + 1 / 6)
+    assert abs(period - 1.0) <= tolerance, (engine, period)
