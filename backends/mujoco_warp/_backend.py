@@ -27,7 +27,7 @@ import numpy as np
 from .._kit import BackendOptions, contact_point, group_by_pair, sorted_points
 from ..errors import EngineFailure, UnsupportedFeature
 from ..mujoco._backend import MujocoBackend
-from ..types import Capability, Contact, ContactPoint, Precision
+from ..types import Capability, CompiledWorld, Contact, ContactPoint, Precision
 from ._options import MujocoWarpOptions
 
 #: Constraint rows per world for each allowed contact (an elliptic contact's 3 rows) and per dof (limits,
@@ -41,8 +41,9 @@ os.environ.setdefault("WARP_CACHE_PATH", os.path.join(os.path.expanduser("~"), "
 
 
 def _quiet_warp() -> Any:
-    """Import Warp with its banner and per-module compile lines kept out of the user's terminal."""
-    with contextlib.redirect_stdout(io.StringIO()):
+    """Import Warp with its banner, its per-module compile lines and its missing-driver warning (a CPU run's
+    normal case; a CUDA device it cannot see is refused by name, ``_check_cuda``) kept out of the terminal."""
+    with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(io.StringIO()):
         import warp as wp
 
         wp.config.quiet = True
@@ -73,6 +74,19 @@ def _solver_tolerance(m: mujoco.MjModel, d: mujoco.MjData) -> float:
     return base * float(m.stat.meaninertia) * max(1, m.nv) / max(trace, mujoco.mjMINVAL)
 
 
+def _check_cuda(device: str) -> None:
+    """Refuse a CUDA device that Warp does not see, before anything is built."""
+    wp = _quiet_warp()
+    count = wp.get_cuda_device_count()
+    index = int(device.partition(":")[2] or 0)
+    if index >= count:
+        seen = f"{count} CUDA device{'s' if count != 1 else ''}" if count else "no CUDA device (no driver or GPU)"
+        raise UnsupportedFeature(
+            f"mujoco_warp: backend_options.mujoco_warp.device `{device}`: Warp sees {seen} on this machine; "
+            "use `device: cpu`"
+        )
+
+
 class MujocoWarpBackend(MujocoBackend):
     """MuJoCo's model stepped by MJWarp on a Warp device (docs/backends/mujoco_warp.md)."""
 
@@ -93,6 +107,12 @@ class MujocoWarpBackend(MujocoBackend):
     @classmethod
     def engine_label(cls) -> str:
         return f"MuJoCo Warp {cls.engine_version()} (MuJoCo {mujoco.mj_versionString()})"
+
+    @classmethod
+    def check_world(cls, world: CompiledWorld, options: BackendOptions) -> None:
+        super().check_world(world, options)
+        if isinstance(options, MujocoWarpOptions) and options.device != "cpu":
+            _check_cuda(options.device)
 
     def _build(self) -> None:
         super()._build()
