@@ -7,10 +7,12 @@ MuJoCo backend, and why (docs/backends/mujoco_warp.md):
 
 * MJWarp runs MuJoCo's own step: the MuJoCo adapter's Coulomb correction and ODE's impact reference
   (``backends.mujoco._coulomb``, ``_bounce``) rewrite the constraint rows between MuJoCo's pipeline stages on
-  the host, which MJWarp's fused device step does not expose; friction and bounces are MuJoCo's cone and solref
-  (conformance measures the difference);
-* float32 (``Precision.FLOAT32``); the state is copied host <-> device around each engine step, so every read
-  of the contract is the MuJoCo adapter's own (on the host MjData).
+  MjData; they are not ported to MJWarp's stages (``fwd_position`` ... ``solve``), so friction and bounces are
+  MuJoCo's cone and solref (the contract's ramp and conformance measure the difference);
+* float32 (``Precision.FLOAT32``), and the solver's stopping rule rescaled to MuJoCo's (``_solver_tolerance``);
+* the state is copied host <-> device around each engine step, so the poses and velocities are read as the
+  MuJoCo adapter reads them (on the host MjData); contacts, constraint forces and joint reactions come from the
+  device data.
 """
 
 from __future__ import annotations
