@@ -199,8 +199,8 @@ DEVIATIONS: dict[tuple[str, str], str] = {
     # correction of the sliding contacts' normal rows (backends/mujoco/_coulomb.py; docs/backends/mujoco_warp.md).
     ("test_tilted_plane", "mujoco_warp"): "measured 1.5338 m/s of 1.6029 m/s after 0.5 s (-4.3 % > 3 %), the cube "
     "1.53 mm above the ramp: MuJoCo's elliptic cone pushes a sliding contact off the surface by mu*|slip| per step "
-    "and bounds the friction by that inflated normal force (the MuJoCo adapter's Coulomb correction, which MJWarp's "
-    "step cannot take, gives +0.15 %)",
+    "and bounds the friction by that inflated normal force (the MuJoCo adapter's Coulomb correction, not ported to "
+    "MJWarp's pipeline stages, gives +0.15 %)",
     # contact_force_last_substep: DART's contact solve at h = 2.5 ms leaves an impulse error of 4e-7 N s per
     # engine step (at h = 10 ms it is within 1e-6).
     ("test_box_on_plane_substeps_last_engine_step", "dart"): "measured 132.434826 N of m*g = 132.435 N "
