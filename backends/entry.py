@@ -22,6 +22,10 @@ class BackendEntry:
     precision: Precision = Precision.FLOAT64
     #: the distribution that registered it through an entry point ("" for the built-in table)
     package: str = ""
+    #: run only where named (``--backend NAME``): listed by `scenario backends` but left out of the installed set
+    #: (``--backend all``, `scenario conformance`'s default, the pytest plugin's ``installed``, the engine lists
+    #: of the tests beyond the contract suite), for an engine whose one-world CPU run costs many times the others'
+    opt_in: bool = False
 
     def __post_init__(self) -> None:
         if not isinstance(self.precision, Precision):  # a mapping from an entry point spells it "float32"

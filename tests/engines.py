@@ -7,6 +7,7 @@ from __future__ import annotations
 from backends.registry import installed_backends, list_backends
 
 #: every listed engine, installed or not (hidden test backends excluded), in the registry's order
-ENGINES: tuple[str, ...] = tuple(e.name for e in list_backends())
+#: (an opt-in engine, ``BackendEntry.opt_in``, is in neither: it runs the contract suite and what names it)
+ENGINES: tuple[str, ...] = tuple(e.name for e in list_backends() if not e.opt_in)
 #: the listed engines installed here
 INSTALLED: tuple[str, ...] = tuple(installed_backends())

@@ -188,7 +188,7 @@ class MujocoBackend(Backend):
     # --- stepping -------------------------------------------------------------------------------
 
     def _step(self) -> None:
-        m, d, nsteps, motors = self._m, self._d, self._nsteps, self._helper_dof.size > 0
+        d, nsteps, motors = self._d, self._nsteps, self._helper_dof.size > 0
         native = self.world.model_options  # MuJoCo's own step, as the model file runs
         friction = self._layout.friction_damping
         forced = bool(self.forces)
@@ -207,12 +207,9 @@ class MujocoBackend(Backend):
                     self._put(i, pose, self._times[k - 1])
             if motors:
                 d.qvel[self._helper_dof] = self._target
-            if native:
-                mujoco.mj_step(m, d)
-            else:
-                _coulomb.step(m, d, friction, self._impacts)
+            self._engine_step(native, friction)
             if motors:
-                self._motor_mean.add(-d.qfrc_constraint[self._helper_dof])  # the helper feels -(motor force)
+                self._motor_mean.add(-self._constraint_forces()[self._helper_dof])  # the helper feels -(motor force)
             if watched:
                 self._reaction_mean.add(self._reactions_now())
             if k + 1 < nsteps:  # the last engine step's contacts stay in MjData until contacts() asks
@@ -230,6 +227,17 @@ class MujocoBackend(Backend):
         self._listed = None  # contacts() groups the last engine step's contacts when first asked
         self._stale = True
         self._check()
+
+    def _engine_step(self, native: bool, friction: float | None) -> None:
+        """One engine step of ``self._h`` on MjData (MJWarp's adapter steps its device copy instead)."""
+        if native:
+            mujoco.mj_step(self._m, self._d)
+        else:
+            _coulomb.step(self._m, self._d, friction, self._impacts)
+
+    def _constraint_forces(self) -> np.ndarray:
+        """The last engine step's constraint forces per dof (``qfrc_constraint``)."""
+        return self._d.qfrc_constraint
 
     def _reactions_now(self) -> np.ndarray:
         """The watched joints' wrenches on their first bodies in the engine step just taken, flattened.

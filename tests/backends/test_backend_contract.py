@@ -4,7 +4,12 @@ repository runs the same ones (tests/outside_engine/); this module collects them
 
 from __future__ import annotations
 
+from backends.registry import list_backends
+from backends.testing import engine_fixtures
 from backends.testing.contract import *  # noqa: F403
+
+#: every listed engine, opt-in ones included (conftest.py's lists leave those out of the other suites)
+backend_name, backend_cls, any_backend = engine_fixtures(*(e.name for e in list_backends()))
 
 
 def test_a_backend_without_joint_reactions_refuses_a_world_that_reads_one_up_front() -> None:

@@ -32,7 +32,7 @@ from runner.language.load import load_scenario
 from runner.sim.run import run_loaded
 
 pytestmark = pytest.mark.slow
-ENGINES = [n for n, e in KNOWN_BACKENDS.items() if not e.hidden and is_installed(n) and n != "mujoco"]
+ENGINES = [n for n, e in KNOWN_BACKENDS.items() if not (e.hidden or e.opt_in) and is_installed(n) and n != "mujoco"]
 G, L, H, T = 9.81, 0.5, 0.001, 0.5
 START = (0.3, 0.2)
 TWO_HINGES = """<mujoco model="two">

@@ -12,7 +12,7 @@ ROOT = Path(__file__).resolve().parents[2]
 SCENARIOS = sorted((ROOT / "scenarios").glob("*.yaml"))
 
 
-@pytest.fixture(params=[e.name for e in list_backends()])
+@pytest.fixture(params=[e.name for e in list_backends() if not e.opt_in])
 def backend(request: pytest.FixtureRequest) -> str:
     name = request.param
     if not is_installed(name):

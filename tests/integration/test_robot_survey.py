@@ -29,7 +29,7 @@ from runner.survey.table import CRASHED, FAILED, RAN, REFUSED, Survey, markdown
 pytestmark = pytest.mark.slow
 SECONDS = 0.5
 TARGET = 0.90
-ENGINES = [n for n, e in KNOWN_BACKENDS.items() if not e.hidden and is_installed(n)]
+ENGINES = [n for n, e in KNOWN_BACKENDS.items() if not (e.hidden or e.opt_in) and is_installed(n)]
 SUITE = str(Path(dm_control.__file__).parent / "suite")
 CORPORA = {
     "urdf": (["@pybullet_data"], ["random_urdfs/*", "*.xml"]),

@@ -21,7 +21,7 @@ from tests.paths import ROOT
 
 ROBOTS = sorted((ROOT / "scenarios" / "robots").glob("*.yaml"))
 DATA = data_root("@pybullet_data")[0]  # type: ignore[index]
-ENGINES = [n for n, e in KNOWN_BACKENDS.items() if not e.hidden]
+ENGINES = [n for n, e in KNOWN_BACKENDS.items() if not (e.hidden or e.opt_in)]
 #: What an engine is documented not to declare, so that it refuses the examples needing it up front
 #: (docs/robots.md): none at present (drake declares convex hulls since issue 32, docs/backends/drake.md).
 NOT_DECLARED: dict[str, frozenset[Capability]] = {}

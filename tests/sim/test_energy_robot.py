@@ -32,7 +32,7 @@ from tests.paths import ROOT
 pytestmark = pytest.mark.slow
 SCENARIO = ROOT / "scenarios" / "robots" / "pendulum5.yaml"
 URDF = ROOT / "scenarios" / "robots" / "pendulum5.urdf"
-ENGINES = [n for n, e in KNOWN_BACKENDS.items() if not e.hidden and is_installed(n)]
+ENGINES = [n for n, e in KNOWN_BACKENDS.items() if not (e.hidden or e.opt_in) and is_installed(n)]
 G = 9.81
 
 

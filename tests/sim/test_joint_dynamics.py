@@ -51,7 +51,7 @@ from runner.language.load import load_scenario
 from runner.sim.run import run_loaded
 
 pytestmark = pytest.mark.slow
-ENGINES = [n for n, e in KNOWN_BACKENDS.items() if not e.hidden and is_installed(n)]
+ENGINES = [n for n, e in KNOWN_BACKENDS.items() if not (e.hidden or e.opt_in) and is_installed(n)]
 G = 9.81
 
 

@@ -25,7 +25,7 @@ from runner.trace.contact_arrows import ARROW_LENGTH, KEY_SCALE
 from tests.paths import ROOT
 
 SCENARIO = ROOT / "tests" / "trace" / "data" / "contact_points.yaml"
-ENGINES = [e.name for e in list_backends() if is_installed(e.name)]
+ENGINES = [e.name for e in list_backends() if is_installed(e.name) and not e.opt_in]
 RERUN = importlib.util.find_spec("rerun") is not None
 HALF = 0.15
 #: a corner's x and y, and a point's height: within the resting depth of the box (tests/backends/tolerances.py,
