@@ -19,7 +19,7 @@ import contextlib
 import io
 import os
 import re
-from typing import Any, ClassVar
+from typing import TYPE_CHECKING, Any, ClassVar
 
 import mujoco
 import numpy as np
@@ -29,6 +29,9 @@ from ..errors import EngineFailure, UnsupportedFeature
 from ..mujoco._backend import MujocoBackend
 from ..types import Capability, Contact, Precision
 from ._options import MujocoWarpOptions
+
+if TYPE_CHECKING:
+    from ..batch import WorldBatch
 
 #: Constraint rows per world for each allowed contact (an elliptic contact's 3 rows) and per dof (limits,
 #: friction loss, the motors' rows), plus a margin.
@@ -67,6 +70,12 @@ class MujocoWarpBackend(MujocoBackend):
     }
     Options: ClassVar[type[MujocoWarpOptions]] = MujocoWarpOptions  # type: ignore[assignment]
     options: MujocoWarpOptions
+
+    @classmethod
+    def world_batch(cls) -> type[WorldBatch]:
+        from ._batch import MujocoWarpBatch  # many worlds in one MJWarp model (docs/batch.md)
+
+        return MujocoWarpBatch
 
     @classmethod
     def engine_label(cls) -> str:
