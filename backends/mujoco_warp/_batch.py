@@ -32,28 +32,32 @@ from ._compare import model_differences
 from ._view import WorldView
 
 
-def _world_differences(views: Sequence[WorldView]) -> str | None:
-    """What must be equal besides the MuJoCo model: the step, the device, the buffers."""
+def _world_differences(views: Sequence[WorldView], buffers: bool) -> str | None:
+    """What must be equal besides the MuJoCo model: the step, the device (``buffers``: the buffers, which
+    follow from the body count, so they are compared after the model's sizes)."""
     first = views[0]
     for k, v in enumerate(views[1:], start=1):
-        for what, a, b in (
+        checks = (
+            ("the contact buffer (contacts_per_body x bodies + 8)", v.nconmax, first.nconmax),
+            ("the constraint rows per world", v.njmax, first.njmax),
+        ) if buffers else (
             ("world.dt", v.world.dt, first.world.dt),
             ("MuJoCo steps per step (world.substeps, engine_substeps)", v.engine_steps, first.engine_steps),
             ("backend_options.mujoco_warp.device", v.options.device, first.options.device),
-            ("the contact buffer (contacts_per_body x bodies + 8)", v.nconmax, first.nconmax),
-            ("the constraint rows per world", v.njmax, first.njmax),
             ("the model file's own options", v.world.model_options, first.world.model_options),
-        ):
+        )  # fmt: skip
+        for what, a, b in checks:
             if a != b:
                 return f"{what} is {a!r} in variant {k} and {b!r} in variant 0"
     return None
 
 
 def _reason(views: Sequence[WorldView]) -> tuple[str | None, set[str]]:
-    reason = _world_differences(views)
+    reason = _world_differences(views, buffers=False)
     if reason is not None:
         return reason, set()
-    return model_differences([v.model for v in views])
+    reason, differ = model_differences([v.model for v in views])
+    return (reason, set()) if reason is not None else (_world_differences(views, buffers=True), differ)
 
 
 def _prepare(m: mujoco.MjModel, d: mujoco.MjData) -> None:

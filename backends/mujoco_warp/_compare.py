@@ -29,6 +29,12 @@ _DECIDES_CODE_PATHS = frozenset({
 })  # fmt: skip
 
 
+#: The sizes a user recognises, compared (and named) before MuJoCo's derived ones.
+_FIRST_SIZES = ("nbody", "njnt", "ngeom", "nq", "nv", "nu", "ntendon", "npair", "nexclude", "nmesh")
+
+_FIRST_ARRAYS = ("geom_type", "jnt_type", "body_parentid", "geom_size")
+
+
 def batched_model_fields() -> frozenset[str]:
     """The ``mujoco_warp.Model`` fields that may differ per world (see the module docstring)."""
     from mujoco_warp._src import types
@@ -87,7 +93,9 @@ def model_differences(models: Sequence[mujoco.MjModel]) -> tuple[str | None, set
     batched, device = batched_model_fields(), device_read_fields()
     first = models[0]
     sizes = [n for n in _model_attributes(first) if not isinstance(getattr(first, n), np.ndarray)]
+    sizes.sort(key=lambda n: (_FIRST_SIZES.index(n) if n in _FIRST_SIZES else len(_FIRST_SIZES), n))
     arrays = [n for n in _model_attributes(first) if isinstance(getattr(first, n), np.ndarray)]
+    arrays.sort(key=lambda n: (_FIRST_ARRAYS.index(n) if n in _FIRST_ARRAYS else len(_FIRST_ARRAYS), n))
     options = _option_attributes(first)
     differ: set[str] = set()
     for k, m in enumerate(models[1:], start=1):
