@@ -62,7 +62,7 @@ _KNOWN: dict[str, BackendEntry] = {
         options="backends.mujoco._options:MujocoOptions",
     ),
     "mujoco_warp": BackendEntry(
-        "mujoco_warp", "backends.mujoco_warp:MujocoWarpBackend", "mujoco_warp", "mujoco-warp", "mujoco-warp",
+        "mujoco_warp", "backends.mujoco_warp:MujocoWarpBackend", "mujoco_warp", "mujoco-warp", "mujoco_warp",
         "MuJoCo Warp (MJWarp): the MuJoCo backend's model stepped on a Warp device (CPU by default)",
         options="backends.mujoco_warp._options:MujocoWarpOptions", precision=Precision.FLOAT32,
     ),

@@ -24,10 +24,10 @@ from typing import TYPE_CHECKING, Any, ClassVar
 import mujoco
 import numpy as np
 
-from .._kit import group_by_pair
+from .._kit import BackendOptions, contact_point, group_by_pair, sorted_points
 from ..errors import EngineFailure, UnsupportedFeature
 from ..mujoco._backend import MujocoBackend
-from ..types import Capability, Contact, Precision
+from ..types import Capability, CompiledWorld, Contact, ContactPoint, Precision
 from ._options import MujocoWarpOptions
 
 if TYPE_CHECKING:
@@ -44,14 +44,50 @@ os.environ.setdefault("WARP_CACHE_PATH", os.path.join(os.path.expanduser("~"), "
 
 
 def _quiet_warp() -> Any:
-    """Import Warp with its banner and per-module compile lines kept out of the user's terminal."""
-    with contextlib.redirect_stdout(io.StringIO()):
+    """Import Warp with its banner, its per-module compile lines and its missing-driver warning (a CPU run's
+    normal case; a CUDA device it cannot see is refused by name, ``_check_cuda``) kept out of the terminal."""
+    with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(io.StringIO()):
         import warp as wp
 
         wp.config.quiet = True
         wp.config.verbose = False
         wp.init()
     return wp
+
+
+#: MJWarp's own floor on the solver tolerance (mujoco_warp.put_model: MuJoCo's default is meant for float64)
+FLOAT32_TOLERANCE = 1e-6
+
+
+def _solver_tolerance(m: mujoco.MjModel, d: mujoco.MjData) -> float:
+    """The tolerance that gives MJWarp MuJoCo's stopping rule.
+
+    MuJoCo scales its convergence test by ``1/(stat.meaninertia * nv)``, and the MuJoCo adapter sets
+    ``meaninertia`` from the dynamic bodies (``_model._rescale_solver``). MJWarp scales it by ``1/trace(M)``
+    of each step, where the motor helpers and kinematic bodies (a million times the heaviest body) dominate:
+    its solver stopped after one Newton iteration, short of a motor row's quadratic zone (a hinge motor reached
+    0.9918 of its target in the step it should have reached it). ``tolerance * meaninertia * nv / trace(M)``
+    restores MuJoCo's test; the heavy bodies are free bodies or slides, whose diagonal does not change with the
+    pose (a free joint's rotational dofs are in the body frame), so the start's trace holds."""
+    start = mujoco.MjData(m)
+    start.qpos[:] = d.qpos
+    mujoco.mj_forward(m, start)
+    trace = float(start.M[m.M_rowadr + m.M_rownnz - 1].sum())
+    base = max(float(m.opt.tolerance), FLOAT32_TOLERANCE)
+    return base * float(m.stat.meaninertia) * max(1, m.nv) / max(trace, mujoco.mjMINVAL)
+
+
+def _check_cuda(device: str) -> None:
+    """Refuse a CUDA device that Warp does not see, before anything is built."""
+    wp = _quiet_warp()
+    count = wp.get_cuda_device_count()
+    index = int(device.partition(":")[2] or 0)
+    if index >= count:
+        seen = f"{count} CUDA device{'s' if count != 1 else ''}" if count else "no CUDA device (no driver or GPU)"
+        raise UnsupportedFeature(
+            f"mujoco_warp: backend_options.mujoco_warp.device `{device}`: Warp sees {seen} on this machine; "
+            "use `device: cpu`"
+        )
 
 
 class MujocoWarpBackend(MujocoBackend):
@@ -68,7 +104,7 @@ class MujocoWarpBackend(MujocoBackend):
         Capability.WORLD_FLUID,
         Capability.COLLISION_EXPLICIT_PAIRS,
     }
-    Options: ClassVar[type[MujocoWarpOptions]] = MujocoWarpOptions  # type: ignore[assignment]
+    Options: ClassVar[type[BackendOptions]] = MujocoWarpOptions
     options: MujocoWarpOptions
 
     @classmethod
@@ -80,6 +116,12 @@ class MujocoWarpBackend(MujocoBackend):
     @classmethod
     def engine_label(cls) -> str:
         return f"MuJoCo Warp {cls.engine_version()} (MuJoCo {mujoco.mj_versionString()})"
+
+    @classmethod
+    def check_world(cls, world: CompiledWorld, options: BackendOptions) -> None:
+        super().check_world(world, options)
+        if isinstance(options, MujocoWarpOptions) and options.device != "cpu":
+            _check_cuda(options.device)
 
     def _build(self) -> None:
         super()._build()
@@ -104,6 +146,7 @@ class MujocoWarpBackend(MujocoBackend):
             raise UnsupportedFeature(f"mujoco_warp: MJWarp cannot run this world: {exc}") from None
         self._keep(out)
         self._frictionloss = self._wm.tendon_frictionloss
+        self._wm.opt.tolerance.fill_(_solver_tolerance(m, self._d))
 
     def _keep(self, out: io.StringIO) -> None:
         """Keep what MJWarp printed (its overflow warnings), not Warp's kernel compile/cache lines: those differ
@@ -144,6 +187,20 @@ class MujocoWarpBackend(MujocoBackend):
     def _constraint_forces(self) -> np.ndarray:
         return np.asarray(self._wd.qfrc_constraint.numpy()[0], dtype=np.float64)
 
+    def _reactions_now(self) -> np.ndarray:
+        """The MuJoCo adapter's reading (``MujocoBackend._reactions_now``) from MJWarp's own
+        ``rne_postconstraint`` on the device data: the host MjData has no accelerations or constraint forces."""
+        wd = self._wd
+        self._mjw.rne_postconstraint(self._wm, wd)
+        child, sign, first = self._reaction
+        wrench = wd.cfrc_int.numpy()[0][child].astype(np.float64)
+        subtree_com = wd.subtree_com.numpy()[0].astype(np.float64)
+        xipos = wd.xipos.numpy()[0].astype(np.float64)
+        force = sign[:, None] * wrench[:, 3:]
+        origin = sign[:, None] * (wrench[:, :3] + np.cross(subtree_com[self._m.body_rootid[child]], wrench[:, 3:]))
+        torque = origin - np.cross(xipos[first], force)
+        return np.hstack((force, torque)).ravel()
+
     def _check(self) -> None:
         """MJWarp keeps no warnings; blow-ups are the runner's to find (runner.sim.session)."""
 
@@ -163,6 +220,32 @@ class MujocoWarpBackend(MujocoBackend):
         owner = self._geom_body
         return group_by_pair(len(self.world.bodies), owner[geom[:, 0]], owner[geom[:, 1]], -dist, force)
 
+    def _contact_points(self) -> list[ContactPoint]:
+        """MJWarp's contacts of the last engine step (distance <= 0), read as the MuJoCo adapter reads MjData's:
+        ``pos``, the normal ``frame[0]`` and the normal force (``mujoco_warp.contact_force``, which decodes a
+        model file's pyramidal cone as ``mj_contactForce`` does)."""
+        wd = self._wd
+        n = int(wd.nacon.numpy()[0]) if self.steps else 0
+        if n == 0:
+            return []
+        c = wd.contact
+        dist = c.dist.numpy()[:n].astype(np.float64)
+        keep = np.flatnonzero(dist <= 0.0)
+        if keep.size == 0:
+            return []
+        wp = _quiet_warp()
+        ids = wp.array(keep.astype(np.int32), dtype=wp.int32, device=self._device)
+        wrench = wp.zeros(keep.size, dtype=wp.spatial_vector, device=self._device)
+        self._mjw.contact_force(self._wm, wd, ids, False, wrench)
+        force = wrench.numpy()[:, 0].astype(np.float64)
+        geom = c.geom.numpy()[keep]
+        pos = c.pos.numpy()[keep].astype(np.float64)
+        normal = c.frame.numpy()[keep, 0, :].astype(np.float64)
+        owner = self._geom_body
+        columns = zip(owner[geom[:, 0]].tolist(), owner[geom[:, 1]].tolist(), pos.tolist(), normal.tolist(),
+                      (-dist[keep]).tolist(), force.tolist(), strict=True)  # fmt: skip
+        return sorted_points([contact_point(*column) for column in columns])
+
     def _drain_messages(self) -> list[str]:
         out, self._messages = self._messages, []
         return out
@@ -170,8 +253,7 @@ class MujocoWarpBackend(MujocoBackend):
     def _settings(self) -> dict[str, Any]:
         s = super()._settings()
         s.update(
-            engine=f"mujoco_warp {self.engine_version()} (mujoco {mujoco.__version__}, warp "
-            f"{self._warp_version()})",
+            engine=f"mujoco_warp {self.engine_version()} (mujoco {mujoco.__version__}, warp {self._warp_version()})",
             device=str(self._device),
             step="mujoco_warp.step: MuJoCo's own step (no Coulomb correction, no ODE impact reference)",
             contact_buffer=self._nconmax,
@@ -185,4 +267,3 @@ class MujocoWarpBackend(MujocoBackend):
         import warp as wp
 
         return str(wp.config.version)
-
