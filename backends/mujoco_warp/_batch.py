@@ -27,7 +27,7 @@ from ..base import Backend
 from ..batch import WorldBatch
 from ..errors import EngineFailure, UnsupportedFeature
 from ..types import CompiledWorld
-from ._backend import _WARP_MODULE_LINE, MujocoWarpBackend, _quiet_warp
+from ._backend import _WARP_MODULE_LINE, MujocoWarpBackend, _quiet_warp, _solver_tolerance
 from ._compare import model_differences
 from ._view import WorldView
 
@@ -135,6 +135,10 @@ class MujocoWarpBatch(WorldBatch):
             for name in sorted(batched):
                 _assign(getattr(self._wm, name), np.stack([getattr(v.model, name) for v in views]))
             self._per_world_data()
+            tolerance = self._wm.opt.tolerance  # the single adapter's stopping rule, per world (_solver_tolerance)
+            per_world = np.array([_solver_tolerance(v.model, v.data) for v in views])
+            self._wm.opt.tolerance = wp.array(per_world, dtype=tolerance.dtype, device=self._device)
+            self._wm.opt.tolerance._is_batched = True
         self._messages(out)
         self.qpos = np.stack([v.data.qpos for v in views])
         self.qvel = np.stack([v.data.qvel for v in views])
@@ -280,6 +284,37 @@ class MujocoWarpBatch(WorldBatch):
         dist, geom, rows, bounds, efc = cached
         lo, hi = bounds[world], bounds[world + 1]
         return dist[lo:hi], geom[lo:hi], rows[lo:hi], efc[world]
+
+    def reaction_rows(self, world: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(cfrc_int, subtree_com, xipos) of world ``world`` after MJWarp's ``rne_postconstraint`` (run once for
+        all worlds per engine step), as the single adapter reads them."""
+        rows = self._cache.get("reactions")
+        if rows is None:
+            wd = self._wd
+            self._mjw.rne_postconstraint(self._wm, wd)
+            rows = self._cache["reactions"] = (wd.cfrc_int.numpy(), wd.subtree_com.numpy(), wd.xipos.numpy())
+        cfrc, com, xipos = rows
+        return cfrc[world].astype(np.float64), com[world].astype(np.float64), xipos[world].astype(np.float64)
+
+    def contact_points_of(self, world: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """World ``world``'s touching contacts of the last engine step, in MJWarp's order: geoms, positions,
+        normals, distances and normal forces (``mujoco_warp.contact_force``, as the single adapter reads them)."""
+        wd = self._wd
+        n = int(wd.nacon.numpy()[0])
+        c = wd.contact
+        dist = c.dist.numpy()[:n].astype(np.float64)
+        keep = np.flatnonzero((c.worldid.numpy()[:n] == world) & (dist <= 0.0))
+        if keep.size == 0:
+            empty = np.zeros((0, 3))
+            return np.zeros((0, 2), dtype=np.int64), empty, empty, np.zeros(0), np.zeros(0)
+        wp = self._wp
+        ids = wp.array(keep.astype(np.int32), dtype=wp.int32, device=self._device)
+        wrench = wp.zeros(keep.size, dtype=wp.spatial_vector, device=self._device)
+        self._mjw.contact_force(self._wm, wd, ids, False, wrench)
+        force = wrench.numpy()[:, 0].astype(np.float64)
+        pos = c.pos.numpy()[keep].astype(np.float64)
+        normal = c.frame.numpy()[keep, 0, :].astype(np.float64)
+        return c.geom.numpy()[keep], pos, normal, dist[keep], force
 
     # --- closing ------------------------------------------------------------------------------------------
 

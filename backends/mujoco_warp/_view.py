@@ -17,7 +17,7 @@ from typing import TYPE_CHECKING
 import mujoco
 import numpy as np
 
-from .._kit import KinematicPose, group_by_pair
+from .._kit import KinematicPose, contact_point, group_by_pair, sorted_points
 from ..errors import EngineFailure
 from ..mujoco._backend import MujocoBackend
 from ..types import BodyStates, CompiledWorld, Contact, ContactPoint, ImportedModel, JointStates, Quat, Vec3
@@ -155,7 +155,7 @@ class WorldView(MujocoWarpBackend):
 
     def _step(self) -> None:
         if not self._stepped:
-            raise RuntimeError(f"mujoco_warp batch: world {self._index} was not stepped by step_all since its last step()")
+            raise RuntimeError(f"mujoco_warp batch: world {self._index} was not stepped by step_all since its step()")
         self._stepped = False
         failure = self.take_failure()
         if failure is not None:
@@ -185,11 +185,11 @@ class WorldView(MujocoWarpBackend):
         self._dirty = True
 
     def _constraint_forces(self) -> np.ndarray:
-        assert self._batch is not None
+        assert self._batch is not None  # noqa: S101 - stepped only by a batch
         return self._batch.constraint_forces(self._index)
 
     def _touching(self) -> list[Contact]:
-        assert self._batch is not None
+        assert self._batch is not None  # noqa: S101 - stepped only by a batch
         dist, geom, rows, efc = self._batch.contacts_of(self._index)
         if dist.size == 0:
             return []
@@ -198,6 +198,26 @@ class WorldView(MujocoWarpBackend):
         force = np.where(rows >= 0, efc[np.maximum(rows, 0)], 0.0).astype(np.float64)
         owner = self._geom_body
         return group_by_pair(len(self.world.bodies), owner[geom[:, 0]], owner[geom[:, 1]], -dist, force)
+
+    def _reactions_now(self) -> np.ndarray:
+        """The single adapter's reading, from this world's rows of the batch's device data."""
+        assert self._batch is not None  # noqa: S101 - stepped only by a batch
+        wrench, subtree_com, xipos = self._batch.reaction_rows(self._index)
+        child, sign, first = self._reaction
+        wrench = wrench[child]
+        force = sign[:, None] * wrench[:, 3:]
+        origin = sign[:, None] * (wrench[:, :3] + np.cross(subtree_com[self._m.body_rootid[child]], wrench[:, 3:]))
+        torque = origin - np.cross(xipos[first], force)
+        return np.hstack((force, torque)).ravel()
+
+    def _contact_points(self) -> list[ContactPoint]:
+        if self._batch is None or not self.steps:
+            return []
+        geom, pos, normal, dist, force = self._batch.contact_points_of(self._index)
+        owner = self._geom_body
+        columns = zip(owner[geom[:, 0]].tolist(), owner[geom[:, 1]].tolist(), pos.tolist(), normal.tolist(),
+                      (-dist).tolist(), force.tolist(), strict=True)  # fmt: skip
+        return sorted_points([contact_point(*column) for column in columns])
 
     def _body_states(self) -> BodyStates:
         self.sync()
@@ -210,10 +230,6 @@ class WorldView(MujocoWarpBackend):
     def _contacts(self) -> list[Contact]:
         self.sync()
         return super()._contacts()
-
-    def _contact_points(self) -> list[ContactPoint]:
-        self.sync()
-        return super()._contact_points()
 
     def _imported_model(self) -> ImportedModel:
         self.sync()

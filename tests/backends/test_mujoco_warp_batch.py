@@ -17,6 +17,7 @@ import pytest
 
 pytest.importorskip("mujoco_warp")
 
+from backends.batch import WorldBatch  # noqa: E402
 from backends.errors import EngineFailure  # noqa: E402
 from backends.registry import create_backend, get_backend  # noqa: E402
 from backends.testing import worlds as w  # noqa: E402
@@ -37,7 +38,7 @@ def eight_drops() -> list[CompiledWorld]:
     return [drop(d, z, b) for d in (500.0, 2000.0) for z in (0.5, 1.0) for b in (0.0, 0.5)]
 
 
-def batch_class() -> type:
+def batch_class() -> type[WorldBatch]:
     cls = get_backend("mujoco_warp").world_batch()
     assert cls is not None
     return cls
@@ -161,21 +162,37 @@ def _row(z0: float) -> CompiledWorld:
     return dataclasses.replace(world, backend_options={"mujoco_warp": {"contacts_per_body": 1}})
 
 
+def _failing_step(world: CompiledWorld, steps: int) -> int | None:
+    """The step (1-based) in which ``world`` run alone fails, or None."""
+    with create_backend("mujoco_warp", world) as sim:
+        for k in range(1, steps + 1):
+            try:
+                sim.step()
+            except EngineFailure:
+                return k
+    return None
+
+
 def test_a_world_that_fills_its_contact_buffer_fails_alone() -> None:
     landing, high = _row(0.1), _row(5.0)  # the first rests on the ground from the start; the second is in the air
-    with pytest.raises(EngineFailure, match="contact buffer"):
-        run_alone(landing, 3)
-    high_alone, _ = run_alone(high, 3)
+    fails_at = _failing_step(landing, 5)
+    assert fails_at is not None and _failing_step(high, 5) is None
+    high_alone, _ = run_alone(high, 5)
     with batch_class()([landing, high]) as batch:
-        failures = batch.step_all([True, True])  # the first step: the resting row fills its buffer
+        wide, other = batch.views
+        for k in range(1, fails_at + 1):
+            failures = batch.step_all([True, True])
+            other.step()
+            if k < fails_at:
+                assert failures == {}
+                wide.step()
         assert set(failures) == {0} and "contact buffer (13 contacts)" in str(failures[0])
         with pytest.raises(EngineFailure, match="contact buffer"):
-            batch.views[0].step()
-        batch.views[1].step()
-        for _ in range(2):  # the runner has ended world 0's session
+            wide.step()
+        for _ in range(fails_at, 5):  # the runner has ended world 0's session
             assert batch.step_all([False, True]) == {}
-            batch.views[1].step()
-        assert np.array_equal(state(batch.views[1]), high_alone)
+            other.step()
+        assert np.array_equal(state(other), high_alone)
 
 
 def test_a_blown_up_world_leaves_the_others_as_they_would_be_alone() -> None:
