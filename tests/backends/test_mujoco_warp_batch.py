@@ -11,17 +11,19 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from typing import Any
 
 import numpy as np
 import pytest
 
 pytest.importorskip("mujoco_warp")
 
+from backends.base import Backend  # noqa: E402
 from backends.batch import WorldBatch  # noqa: E402
 from backends.errors import EngineFailure  # noqa: E402
 from backends.registry import create_backend, get_backend  # noqa: E402
 from backends.testing import worlds as w  # noqa: E402
-from backends.types import CompiledWorld, Surface  # noqa: E402
+from backends.types import CompiledWorld, Motor, Surface  # noqa: E402
 
 BOX = (0.2, 0.2, 0.2)
 STEPS = 120  # 1.2 s at dt 0.01: the 1 m drop lands at ~0.41 s, bounces, and the boxes come to rest
@@ -212,3 +214,70 @@ def test_a_blown_up_world_leaves_the_others_as_they_would_be_alone() -> None:
         calm_state = state(calm)
     alone, _ = run_alone(worlds[1], STEPS)
     assert np.array_equal(calm_state, alone)
+
+
+# --- worlds with host work in every step: motors, kinematic bodies, substeps, watched joints ----------------
+
+
+def _door(fmax: float) -> CompiledWorld:
+    return w.lab_door(lo=-0.1, hi=0.1, motor=Motor(0.3, fmax))
+
+
+def _scripted(sim: Backend, k: int, world: int) -> None:
+    """Inputs the runner would give: world 1's motor is retargeted and switched off; world 0's box kicked."""
+    if world == 1 and k == 10 and sim.world.name == "door":
+        sim.set_motor(0, -0.3, 50.0)
+    if world == 1 and k == 20 and sim.world.name == "door":
+        sim.set_motor(0, 0.0, 0.0)
+    if world == 0 and k == 5 and sim.world.name == "kick":
+        sim.apply_force(0, (0.0, 0.0, 1000.0), (0.0, 0.0, 0.0))
+
+
+def _reads(sim: Backend) -> list[object]:
+    return [state(sim), sim.joint_states(), sim.contacts(), sim.contact_points()] + (
+        [sim.joint_reactions()] if sim.world.reaction_joints else []
+    )
+
+
+def _same(a: Any, b: Any) -> bool:
+    if isinstance(a, np.ndarray):
+        return bool(np.array_equal(a, b, equal_nan=True))
+    if dataclasses.is_dataclass(a) and not isinstance(a, type):
+        return all(_same(getattr(a, f.name), getattr(b, f.name)) for f in dataclasses.fields(a))
+    if isinstance(a, list | tuple):
+        return len(a) == len(b) and all(_same(x, y) for x, y in zip(a, b, strict=True))
+    return bool(a == b)
+
+
+@pytest.mark.parametrize(
+    "pair",
+    [
+        pytest.param((_door(100.0), _door(400.0)), id="motors"),
+        pytest.param((w.kinematic_platform(), w.kinematic_platform()), id="kinematic"),
+        pytest.param((w.lab_kick(substeps=3), w.lab_kick(substeps=3)), id="substeps"),
+        pytest.param(
+            tuple(
+                dataclasses.replace(w.offset_hinge(lo=-0.5, hi=0.5), substeps=2, reaction_joints=("hinge",))
+                for _ in range(2)
+            ),
+            id="reactions",
+        ),  # fmt: skip
+    ],
+)
+def test_worlds_with_host_work_are_those_worlds_alone(pair: tuple[CompiledWorld, CompiledWorld]) -> None:
+    steps = 30
+    with batch_class()(pair) as batch:
+        got: list[list[list[object]]] = [[], []]
+        for k in range(steps):
+            for i, view in enumerate(batch.views):
+                _scripted(view, k, i)
+            assert batch.step_all([True, True]) == {}
+            for i, view in enumerate(batch.views):
+                view.step()
+                got[i].append(_reads(view))
+    for i, world in enumerate(pair):
+        with create_backend("mujoco_warp", world) as sim:
+            for k in range(steps):
+                _scripted(sim, k, i)
+                sim.step()
+                assert _same(got[i][k], _reads(sim)), f"world {i}, step {k + 1}"
