@@ -4,7 +4,8 @@ world-steps per second against N (issue 33: rising with the batch size on CPU; d
 The worlds are a 0.2 m box dropped on the ground plane, the variants cycling over mass (density 500 / 1000 /
 2000), start height (0.5 / 0.75 / 1.0 m) and bounce (0 / 0.3 / 0.6), dt 0.01. After ``warmup`` steps (the first
 one compiles Warp's kernels, or loads them from its cache; by then most boxes have landed, so the timed steps have
-contacts), ``steps`` steps are timed three ways:
+contacts), ``steps`` steps are timed three ways, in interleaved rounds, as CPU time on Warp's CPU device (its
+kernels run in this process) and wall time on a GPU:
 
 * **engine**: ``mujoco_warp.step`` on the batch's device model alone (no copies: MJWarp's own figure);
 * **batch**: ``step_all`` and every view's ``step()`` (the batch's copies host <-> device included);
@@ -32,6 +33,8 @@ HEIGHTS = (0.5, 0.75, 1.0)
 BOUNCES = (0.0, 0.3, 0.6)
 SIZE = 0.2
 DT = 0.01
+#: the timed steps are taken in this many interleaved rounds of engine / batch / batch+reads
+ROUNDS = 4
 #: issue 33: on CPU the world-steps per second rise with the batch size over these sizes
 CPU_SIZES = (1, 64, 256)
 GPU_SIZES = (1, 64, 1024, 8192)
@@ -98,31 +101,40 @@ def measure(n: int, device: str, steps: int, warmup: int) -> WorldsFigures:
         first = time.perf_counter() - started
         for _ in range(warmup - 1):
             one_step(False)
-        timed = []
-        for reads in (False, True):
-            started = time.perf_counter()
-            for _ in range(steps):
-                one_step(reads)
-            timed.append(time.perf_counter() - started)
-        engine = _engine_alone(batch, steps)
+        clock = _clock(device)
+        totals = [0.0, 0.0, 0.0]  # engine, batch, batch+reads: interleaved rounds, summed
+        for _ in range(ROUNDS):
+            part = steps // ROUNDS
+            totals[0] += _engine_alone(batch, part, clock)
+            for k, reads in ((1, False), (2, True)):
+                started = clock()
+                for _ in range(part):
+                    one_step(reads)
+                totals[k] += clock() - started
     finally:
         batch.close()
-    return WorldsFigures(n, device, build, first, steps, engine, timed[0], timed[1])
+    done = ROUNDS * (steps // ROUNDS)
+    return WorldsFigures(n, device, build, first, done, totals[0], totals[1], totals[2])
 
 
-def _engine_alone(batch: object, steps: int) -> float:
+def _clock(device: str) -> Callable[[], float]:
+    """CPU time on Warp's CPU device (its kernels run in this process, on one core: other programs' load on a
+    shared machine does not lengthen it), wall time on a GPU (the host waits for the device)."""
+    return time.process_time if device == "cpu" else time.perf_counter
+
+
+def _engine_alone(batch: object, steps: int, clock: Callable[[], float]) -> float:
     """MJWarp's step on the batch's device model, nothing else (the engine's own throughput)."""
     import mujoco_warp as mjw
     import warp as wp
 
     model, data = batch._wm, batch._wd  # type: ignore[attr-defined]  # noqa: SLF001 - the bench reads the device
-    mjw.step(model, data)
     wp.synchronize()
-    started = time.perf_counter()
+    started = clock()
     for _ in range(steps):
         mjw.step(model, data)
     wp.synchronize()
-    return time.perf_counter() - started
+    return clock() - started
 
 
 def run(sizes: Sequence[int], device: str, steps: int, warmup: int, log: Callable[[str], None]) -> list[WorldsFigures]:
@@ -158,7 +170,8 @@ def render(figs: Sequence[WorldsFigures], gpu_note: str = "") -> list[str]:
         "## 12. Batched worlds: box drops as the worlds of one mujoco_warp batch",
         "",
         f"bench/worlds.py: N variants of a 0.2 m box drop (mass x start height x bounce), dt {DT:g}, {steps} timed "
-        "steps after the warm-up; world-steps per second = worlds x steps / seconds. *engine*: `mujoco_warp.step` "
+        f"steps after the warm-up in {ROUNDS} interleaved rounds; world-steps per second = worlds x steps / seconds "
+        "(CPU time of the process on Warp's CPU device, wall time on a GPU). *engine*: `mujoco_warp.step` "
         "alone on the batch's device model; *batch*: `step_all` and each view's `step()`; *batch+reads*: and each "
         "view's `body_states()` (what the runner reads). Warp's CPU device runs its kernels on one core.",
         "",
