@@ -156,8 +156,8 @@ class MujocoWarpBatch(WorldBatch):
             shape = getattr(f.type, "shape", ())
             if not shape or shape[0] != "nworld" or not hasattr(datas[0], f.name):
                 continue
-            first = np.asarray(getattr(datas[0], f.name))
-            if all(np.array_equal(np.asarray(getattr(d, f.name)), first) for d in datas[1:]):
+            first = np.asarray(getattr(datas[0], f.name)).tobytes()
+            if all(np.asarray(getattr(d, f.name)).tobytes() == first for d in datas[1:]):
                 continue
             target = getattr(self._wd, f.name)
             rows = np.stack([np.asarray(getattr(d, f.name)) for d in datas])

@@ -79,6 +79,11 @@ def _same(a: Any, b: Any) -> bool:
     return bool(a == b)
 
 
+def _bytes(a: np.ndarray) -> tuple[tuple[int, ...], bytes]:
+    """An array's shape and bits: equal bits are equal values (a NaN included), compared at memcmp speed."""
+    return a.shape, a.tobytes()
+
+
 def _shown(value: Any) -> str:
     if isinstance(value, np.ndarray):
         flat = value.reshape(-1)
@@ -94,8 +99,9 @@ def model_differences(models: Sequence[mujoco.MjModel]) -> tuple[str | None, set
     first = models[0]
     sizes = [n for n in _model_attributes(first) if not isinstance(getattr(first, n), np.ndarray)]
     sizes.sort(key=lambda n: (_FIRST_SIZES.index(n) if n in _FIRST_SIZES else len(_FIRST_SIZES), n))
-    arrays = [n for n in _model_attributes(first) if isinstance(getattr(first, n), np.ndarray)]
+    arrays = [n for n in _model_attributes(first) if isinstance(getattr(first, n), np.ndarray) and n in device]
     arrays.sort(key=lambda n: (_FIRST_ARRAYS.index(n) if n in _FIRST_ARRAYS else len(_FIRST_ARRAYS), n))
+    reference = {n: _bytes(getattr(first, n)) for n in arrays}  # the host's own fields (dof_M0...) may differ
     options = _option_attributes(first)
     differ: set[str] = set()
     for k, m in enumerate(models[1:], start=1):
@@ -112,12 +118,11 @@ def model_differences(models: Sequence[mujoco.MjModel]) -> tuple[str | None, set
         for name in arrays:
             if name in differ:
                 continue
-            a, b = getattr(m, name), getattr(first, name)
-            if _same(a, b):
+            a = getattr(m, name)
+            if _bytes(a) == reference[name]:
                 continue
-            if name not in device:
-                continue  # the host's alone: each view reads its own world's model
             if name not in batched:
+                b = getattr(first, name)
                 return f"the MuJoCo model's `{name}` is {_shown(a)} in variant {k} and {_shown(b)} in variant 0 " \
                        "(MJWarp holds it once for all worlds)", set()  # fmt: skip
             differ.add(name)
