@@ -19,7 +19,7 @@ import contextlib
 import io
 import os
 import re
-from typing import TYPE_CHECKING, Any, ClassVar
+from typing import Any, ClassVar
 
 import mujoco
 import numpy as np
@@ -29,9 +29,6 @@ from ..errors import EngineFailure, UnsupportedFeature
 from ..mujoco._backend import MujocoBackend
 from ..types import Capability, CompiledWorld, Contact, ContactPoint, Precision
 from ._options import MujocoWarpOptions
-
-if TYPE_CHECKING:
-    from ..batch import WorldBatch
 
 #: Constraint rows per world for each allowed contact (an elliptic contact's 3 rows) and per dof (limits,
 #: friction loss, the motors' rows), plus a margin.
@@ -106,12 +103,6 @@ class MujocoWarpBackend(MujocoBackend):
     }
     Options: ClassVar[type[BackendOptions]] = MujocoWarpOptions
     options: MujocoWarpOptions
-
-    @classmethod
-    def world_batch(cls) -> type[WorldBatch]:
-        from ._batch import MujocoWarpBatch  # many worlds in one MJWarp model (docs/batch.md)
-
-        return MujocoWarpBatch
 
     @classmethod
     def engine_label(cls) -> str:
