@@ -52,10 +52,15 @@ def state(sim: object) -> np.ndarray:
 
 
 def run_alone(world: CompiledWorld, steps: int) -> tuple[np.ndarray, list]:
+    return run_alone_with_settings(world, steps)[:2]
+
+
+def run_alone_with_settings(world: CompiledWorld, steps: int) -> tuple[np.ndarray, list, dict]:
     with create_backend("mujoco_warp", world) as sim:
+        settings = sim.settings()
         for _ in range(steps):
             sim.step()
-        return state(sim), sim.contacts()
+        return state(sim), sim.contacts(), settings
 
 
 # --- why_not ----------------------------------------------------------------------------------------------
@@ -99,15 +104,17 @@ def test_a_different_friction_is_per_world() -> None:
 def test_each_world_of_a_batch_is_that_world_run_alone() -> None:
     worlds = eight_drops()
     with batch_class()(worlds) as batch:
+        settings = [v.settings() for v in batch.views]  # what the trace records of the engine
         for _ in range(STEPS):
             assert batch.step_all([True] * len(worlds)) == {}
             for view in batch.views:
                 view.step()
         batched = [(state(v), v.contacts()) for v in batch.views]
     for k, world in enumerate(worlds):
-        alone, contacts = run_alone(world, STEPS)
+        alone, contacts, alone_settings = run_alone_with_settings(world, STEPS)
         assert np.array_equal(batched[k][0], alone), f"world {k}: {np.abs(batched[k][0] - alone).max()}"
         assert batched[k][1] == contacts, f"world {k}"
+        assert settings[k] == alone_settings, f"world {k}"
     # the per-world fields reached the engine: at rest the ground carries each box's weight. Tolerance: the
     # contact rows' impedance 0.999 lets 0.1 % of the unconstrained acceleration through (backends/mujoco/_model.py)
     for k, world in enumerate(worlds):
