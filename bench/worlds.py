@@ -79,9 +79,12 @@ def measure(n: int, device: str, steps: int, warmup: int) -> WorldsFigures:
 
     from backends.registry import get_backend
 
-    batch_cls = get_backend("mujoco_warp").world_batch()
+    backend = get_backend("mujoco_warp")
+    batch_cls = backend.world_batch()
     assert batch_cls is not None  # noqa: S101 - the registry's mujoco_warp batches
     worlds = [replace(box_drop(k), backend_options={"mujoco_warp": {"device": device}}) for k in range(n)]
+    options = backend.Options.parse(worlds[0].options_for(backend.name), backend.name)
+    backend.check_world(worlds[0], options)  # a CUDA device Warp does not see: refused by name (UnsupportedFeature)
     on = [True] * n
     started = time.perf_counter()
     batch = batch_cls(worlds)
@@ -200,7 +203,13 @@ def main(argv: list[str] | None = None, device: str = "cpu", sizes: Sequence[int
     def log(text: str) -> None:
         print(f"[{time.perf_counter() - started:7.1f}s] {text}", flush=True)
 
-    figs = run([int(x) for x in a.worlds.split(",") if x.strip()], a.device, a.steps, a.warmup, log)
+    from backends.errors import BackendError
+
+    try:
+        figs = run([int(x) for x in a.worlds.split(",") if x.strip()], a.device, a.steps, a.warmup, log)
+    except BackendError as exc:  # the device refused (no CUDA device), an option refused: said, not a traceback
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
     text = "\n".join(render(figs)) + f"\nload average {os.getloadavg()[0]:.1f}, {os.cpu_count()} cores\n"
     print(text)
     if a.out is not None:
