@@ -83,17 +83,48 @@ class MujocoWarpBatch(WorldBatch):
 
     @classmethod
     def why_not(cls, worlds: Sequence[CompiledWorld]) -> str | None:
+        cls._forget()
         if not worlds:
             return "no worlds"
         try:
             views = [WorldView(w, None, i) for i, w in enumerate(worlds)]
         except UnsupportedFeature as exc:
             return str(exc)
-        try:
-            return _reason(views)[0]
-        finally:
+        reason = _reason(views)[0]
+        if reason is None:  # kept for the batch of these very worlds, usually built next (each build costs ~30 ms)
+            cls._accepted = (tuple(worlds), views)
+        else:
             for v in views:
                 v.close()
+        return reason
+
+    #: the worlds ``why_not`` last accepted and their views (one set, handed to the batch built from them)
+    _accepted: ClassVar[tuple[tuple[CompiledWorld, ...], list[WorldView]] | None] = None
+
+    @classmethod
+    def _forget(cls) -> None:
+        if cls._accepted is not None:
+            for v in cls._accepted[1]:
+                v.close()
+            cls._accepted = None
+
+    @classmethod
+    def _views_of(cls, worlds: Sequence[CompiledWorld], batch: MujocoWarpBatch) -> list[WorldView]:
+        """The views ``why_not`` built for these same world objects, or new ones."""
+        kept = cls._accepted
+        cls._accepted = None
+        if (
+            kept is not None
+            and len(kept[0]) == len(worlds)
+            and all(a is b for a, b in zip(kept[0], worlds, strict=True))
+        ):
+            for v in kept[1]:
+                v.attach(batch)
+            return kept[1]
+        if kept is not None:
+            for v in kept[1]:
+                v.close()
+        return [WorldView(w, batch, i) for i, w in enumerate(worlds)]
 
     def __init__(self, worlds: Sequence[CompiledWorld]) -> None:
         super().__init__(worlds)
@@ -101,7 +132,7 @@ class MujocoWarpBatch(WorldBatch):
         if not self.worlds:
             raise ValueError("a batch needs at least one world")
         self.engine_step_count = 0
-        self._views = [WorldView(w, self, i) for i, w in enumerate(self.worlds)]
+        self._views = self._views_of(self.worlds, self)
         reason, differ = _reason(self._views)
         if reason is not None:
             self._close_views()

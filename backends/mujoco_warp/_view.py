@@ -50,6 +50,10 @@ class WorldView(MujocoWarpBackend):
         self._messages: list[str] = []
         m.opt.disableflags &= ~int(mujoco.mjtDisableBit.mjDSBL_AUTORESET)
 
+    def attach(self, batch: MujocoWarpBatch) -> None:
+        """Become world ``index`` of ``batch`` (a view built by ``why_not``, before any step)."""
+        self._batch = batch
+
     # --- what the batch compares and copies -----------------------------------------------------------
 
     @property

@@ -103,6 +103,7 @@ def test_a_different_friction_is_per_world() -> None:
 
 def test_each_world_of_a_batch_is_that_world_run_alone() -> None:
     worlds = eight_drops()
+    assert batch_class().why_not(worlds) is None  # as a sweep does: the batch then takes the worlds it built
     with batch_class()(worlds) as batch:
         settings = [v.settings() for v in batch.views]  # what the trace records of the engine
         for _ in range(STEPS):
