@@ -13,6 +13,7 @@ from backends.errors import UnsupportedFeature
 from backends.registry import DEFAULT_BACKEND, check_capabilities, get_backend, is_installed, list_backends
 
 from . import batch, build, encoding, measure, memory, overhead, ray_cluster, robot, scaling, seed_loop, startup
+from . import worlds as world_batch
 from .instrument import wrapper_cost
 from .report import Results, append_notes, render
 
@@ -31,7 +32,7 @@ def runs_the_pile(name: str) -> bool:
     return True
 
 
-SECTIONS = ("overhead", "scaling", "memory", "batch", "encoding", "build", "robot", "seed", "startup", "ray")
+SECTIONS = ("overhead", "scaling", "memory", "batch", "encoding", "build", "robot", "seed", "startup", "ray", "worlds")
 
 
 def _ints(text: str) -> list[int]:
@@ -74,6 +75,9 @@ def parser() -> argparse.ArgumentParser:
     p.add_argument("--startup-reps", type=int, default=7, help="startup: interleaved rounds (median)")
     p.add_argument("--seed-duration", type=float, default=4.0, help="seed: simulated seconds of the pile on ODE")
     p.add_argument("--seed-reps", type=int, default=3, help="seed: interleaved repetitions (median)")
+    p.add_argument("--worlds-sizes", type=_ints, default=list(world_batch.CPU_SIZES), help="worlds: batch sizes")
+    p.add_argument("--worlds-steps", type=int, default=100, help="worlds: timed steps per batch size")
+    p.add_argument("--worlds-warmup", type=int, default=50, help="worlds: steps before timing")
     return p
 
 
@@ -86,6 +90,7 @@ def _quick(a: argparse.Namespace) -> None:
     a.build_sizes = [10, 40]
     a.seed_duration, a.seed_reps = 0.2, 1
     a.robot_reps, a.startup_reps = 1, 1
+    a.worlds_sizes, a.worlds_steps, a.worlds_warmup = [1, 8], 10, 3
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -114,6 +119,7 @@ def main(argv: list[str] | None = None) -> int:
         "robot": f"{', '.join(robot.ROBOTS)}, {args.robot_reps} reps, {','.join(args.robot_backends or installed)}",
         "startup": f"bench/scenarios/one_step.yaml on {startup.ENGINE}, {args.startup_reps} rounds",
         "seed": f"{'x'.join(map(str, args.pile))} boxes, {args.seed_duration:g} s on ode, {args.seed_reps} reps",
+        "worlds": f"{args.worlds_sizes} box drops on mujoco_warp (cpu), {args.worlds_steps} steps",
     }
     results = Results(command=shlex.join(["python", "-m", "bench", *(argv if argv is not None else sys.argv[1:])]),
                       sizes={k: v for k, v in sizes.items() if k in args.sections})  # fmt: skip
@@ -158,6 +164,9 @@ def main(argv: list[str] | None = None) -> int:
     if "startup" in args.sections:
         log(f"startup: {sizes['startup']}")
         results.startup = startup.run(args.startup_reps, log)
+    if "worlds" in args.sections and is_installed("mujoco_warp"):
+        log(f"worlds: {sizes['worlds']}")
+        results.worlds = world_batch.run(args.worlds_sizes, "cpu", args.worlds_steps, args.worlds_warmup, log)
     if "ray" in args.sections and not args.quick:  # CI runs the test itself (make test); --quick skips it
         log(f"ray: {ray_cluster.TEST}")
         results.ray = ray_cluster.run(log)

@@ -20,6 +20,7 @@ from . import encoding as enc
 from . import ray_cluster, seed_loop
 from . import robot as rbt
 from . import startup as sup
+from . import worlds as wb
 from .batch import BatchFigures
 from .measure import RAW_LOOPS
 from .memory import MemoryFigures
@@ -48,6 +49,7 @@ class Results:
     startup: sup.StartupFigures | None = None
     seed: seed_loop.SeedFigures | None = None
     ray: ray_cluster.RayFigures | None = None
+    worlds: list[wb.WorldsFigures] = field(default_factory=list)
     wrapper_us: float = 0.0
     load: tuple[float, float] = (0.0, 0.0)  # 1-minute load average at the start and the end
     wall_seconds: float = 0.0
@@ -115,6 +117,7 @@ def render(r: Results) -> str:
         out += rbt.render(r.robot)
     out += seed_loop.render(r.seed)
     out += sup.render(r.startup)
+    out += wb.render(r.worlds, wb.GPU_NOTE)
     out += ["## What remains, and why (profiling)", "", *_floor(r.overhead), *(f"- {c}" for c in KNOWN_CAUSES), ""]
     return "\n".join(out) + "\n"
 
@@ -172,7 +175,8 @@ def _targets(r: Results) -> list[str]:
                     f"({s:.2f}x of {ceiling:.2f}x) | {_met(share >= TARGET_CEILING)} | the ceiling: a pure-Python loop "
                     f"split over 2 processes; {rest}load average {r.load[0]:.1f}-{r.load[1]:.1f} on "
                     f"{os.cpu_count()} cores |")  # fmt: skip
-    for goal, measured, ok, where in [*rbt.target_rows(r.robot), *sup.target_rows(r.startup)]:
+    extra = [*rbt.target_rows(r.robot), *sup.target_rows(r.startup), *wb.target_rows(r.worlds)]
+    for goal, measured, ok, where in extra:
         rows.append(f"| {goal} | {measured} | {_met(ok)} | {where} |")
     return [*rows, ""]
 

@@ -9,14 +9,14 @@ from __future__ import annotations
 from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:
-    from ._backend import MujocoWarpBackend
+    from ._registered import MujocoWarpBackend
 
 __all__ = ["MujocoWarpBackend"]
 
 
 def __getattr__(name: str) -> Any:
-    if name == "MujocoWarpBackend":
-        from ._backend import MujocoWarpBackend
+    if name == "MujocoWarpBackend":  # the single-world adapter (_backend) with its batch (_batch)
+        from ._registered import MujocoWarpBackend
 
         return MujocoWarpBackend
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
