@@ -21,6 +21,8 @@ import contextlib
 import io
 import os
 import re
+import sys
+from collections.abc import Iterator
 from typing import Any, ClassVar
 
 import mujoco
@@ -45,13 +47,32 @@ os.environ.setdefault("WARP_CACHE_PATH", os.path.join(os.path.expanduser("~"), "
 def _quiet_warp() -> Any:
     """Import Warp with its banner, its per-module compile lines and its missing-driver warning (a CPU run's
     normal case; a CUDA device it cannot see is refused by name, ``_check_cuda``) kept out of the terminal."""
-    with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(io.StringIO()):
+    with _native_output_hidden(), contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(io.StringIO()):
         import warp as wp
 
         wp.config.quiet = True
         wp.config.verbose = False
         wp.init()
     return wp
+
+
+@contextlib.contextmanager
+def _native_output_hidden() -> Iterator[None]:
+    """File descriptors 1 and 2 sent to /dev/null meanwhile: Warp's native library writes its missing-driver
+    warning to them directly, past ``sys.stdout``/``sys.stderr``."""
+    sys.stdout.flush()
+    sys.stderr.flush()
+    saved = os.dup(1), os.dup(2)
+    null = os.open(os.devnull, os.O_WRONLY)
+    try:
+        os.dup2(null, 1)
+        os.dup2(null, 2)
+        yield
+    finally:
+        os.dup2(saved[0], 1)
+        os.dup2(saved[1], 2)
+        for fd in (*saved, null):
+            os.close(fd)
 
 
 #: MJWarp's own floor on the solver tolerance (mujoco_warp.put_model: MuJoCo's default is meant for float64)
