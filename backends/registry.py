@@ -45,7 +45,8 @@ _KNOWN: dict[str, BackendEntry] = {
         "pydrake",
         "drake",
         "drake",
-        "Drake (pydrake MultibodyPlant + SceneGraph), point contact and the SAP solver by default",
+        "Drake (pydrake MultibodyPlant + SceneGraph), hydroelastic contact (point contact as fallback) and the SAP "
+        "solver by default",
         options="backends.drake._options:DrakeOptions",
     ),
     "fake": BackendEntry(
