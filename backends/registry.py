@@ -61,6 +61,16 @@ _KNOWN: dict[str, BackendEntry] = {
         "mujoco", "backends.mujoco:MujocoBackend", "mujoco", "mujoco", "mujoco", "MuJoCo, built through MjSpec",
         options="backends.mujoco._options:MujocoOptions",
     ),
+    "newton": BackendEntry(
+        "newton",
+        "backends.newton:NewtonBackend",
+        "newton",
+        "newton",
+        "newton",
+        "NVIDIA Newton on Warp (CPU or CUDA), the XPBD solver by default (featherstone by option)",
+        options="backends.newton._options:NewtonOptions",
+        precision=Precision.FLOAT32,
+    ),
     "ode": BackendEntry(
         "ode",
         "backends.ode:OdeBackend",
