@@ -158,6 +158,8 @@ class NewtonBackend(Backend):
             qd[int(qd_start[handle.index])] = float(rate)
         del q_start
         model.joint_qd.assign(qd)
+        for state in (self._s0, self._s1):  # the states copied the model's rates when they were made
+            state.joint_qd.assign(qd)
         self._newton.eval_fk(model, model.joint_q, model.joint_qd, self._s0)
         for i, pose in self.kinematic.items():
             self._put(i, pose, 0.0)
@@ -353,7 +355,7 @@ class NewtonBackend(Backend):
                 if handle.spec.kind not in _RATED:
                     continue
                 value = handle.sign * float(jq[int(q_start[handle.index])])
-                if handle.spec.kind is JointKind.HINGE:  # continuous through +-pi
+                if handle.spec.kind is JointKind.HINGE and math.isfinite(value):  # continuous through +-pi
                     value += 2.0 * math.pi * round((self._prev_angle[j] - value) / (2.0 * math.pi))
                     self._prev_angle[j] = value
                 position[j] = value

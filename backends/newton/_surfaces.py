@@ -24,6 +24,8 @@ from ..types import CompiledWorld
 #: then holds until its tangential force exceeds 1e5 times its normal force.
 MU_INF = 1.0e5
 _TOL = 1e-9
+#: the body name pairs of the scenario's `pairs` entries, in the order written (for messages)
+Declared = frozenset[tuple[str, str]]
 
 
 @dataclass(frozen=True)
@@ -42,14 +44,23 @@ def solve(world: CompiledWorld) -> BodySurfaces:
     mu_target = {p: 2.0 * (MU_INF if math.isinf(s.mu) else s.mu) for p, s in zip(pairs, surfaces, strict=True)}
     e_target = {p: 2.0 * s.bounce for p, s in zip(pairs, surfaces, strict=True)}
     default = world.default_surface
+    declared = frozenset((p.a, p.b) for p in world.pair_surfaces)
     mu = solve_means(len(names), mu_target, names, "friction `mu`", hi=math.inf,
-                     fallback=MU_INF if math.isinf(default.mu) else default.mu)  # fmt: skip
-    e = solve_means(len(names), e_target, names, "restitution `bounce`", hi=1.0, fallback=default.bounce)
+                     fallback=MU_INF if math.isinf(default.mu) else default.mu, declared=declared)  # fmt: skip
+    e = solve_means(len(names), e_target, names, "restitution `bounce`", hi=1.0, fallback=default.bounce,
+                    declared=declared)  # fmt: skip
     return BodySurfaces(mu, e)
 
 
 def solve_means(
-    n: int, target: dict[tuple[int, int], float], names: Sequence[str], what: str, *, hi: float, fallback: float
+    n: int,
+    target: dict[tuple[int, int], float],
+    names: Sequence[str],
+    what: str,
+    *,
+    hi: float,
+    fallback: float,
+    declared: Declared = frozenset(),
 ) -> tuple[float, ...]:
     """c[a] + c[b] == target[(a, b)] with 0 <= c <= hi; bodies in no pair get ``fallback``."""
     adjacency: dict[int, list[tuple[int, float, tuple[int, int]]]] = {}
@@ -61,18 +72,20 @@ def solve_means(
     for start in sorted(adjacency):
         if start in done:
             continue
-        for i, value in _component(start, adjacency, names, what, hi).items():
+        for i, value in _component(start, adjacency, names, what, hi, declared).items():
             out[i] = value
             done.add(i)
     return tuple(out)
 
 
-def _refuse(names: Sequence[str], pair: tuple[int, int], what: str, why: str) -> UnsupportedFeature:
-    a, b = pair
+def _refuse(names: Sequence[str], declared: Declared, pair: tuple[int, int], what: str, why: str) -> UnsupportedFeature:
+    a, b = (names[i] for i in pair)
+    if (b, a) in declared:  # as the scenario's `pairs` entry names it
+        a, b = b, a
     return UnsupportedFeature(
         f"Backend `newton` gives each shape one {what} and a contact the mean of its two shapes' values (no "
-        f"per-pair surfaces): the pair `{names[a]}`-`{names[b]}` cannot get its value {why}. Backends with "
-        f"per-pair surfaces: mujoco, ode, pybullet."
+        f"per-pair surfaces): the pair `{a}`-`{b}` cannot get its value {why}. Backends with per-pair surfaces: "
+        f"mujoco, ode, pybullet."
     )
 
 
@@ -82,6 +95,7 @@ def _component(
     names: Sequence[str],
     what: str,
     hi: float,
+    declared: Declared,
 ) -> dict[int, float]:
     base, sign, order = {start: 0.0}, {start: 1}, [start]
     edges = []
@@ -97,11 +111,13 @@ def _component(
         scale = _TOL * max(1.0, abs(t))
         if coef == 0:
             if abs(rest) > scale:
-                raise _refuse(names, pair, what, "together with the other pairs of its bodies (a cycle of pairs)")
+                raise _refuse(
+                    names, declared, pair, what, "together with the other pairs of its bodies (a cycle of pairs)"
+                )
             continue
         value = rest / coef
         if fixed is not None and abs(value - fixed) > scale:
-            raise _refuse(names, pair, what, "together with the other pairs of its bodies (a cycle of pairs)")
+            raise _refuse(names, declared, pair, what, "together with the other pairs of its bodies (a cycle of pairs)")
         fixed = value if fixed is None else fixed
     # c_i = base_i + sign_i * t within [0, hi]
     lo_t = max(max((-base[i] for i in order if sign[i] > 0), default=-math.inf),
@@ -112,5 +128,7 @@ def _component(
         fixed = 0.5 * (lo_t + hi_t) if math.isfinite(lo_t + hi_t) else (lo_t if math.isfinite(lo_t) else hi_t)
     if fixed < lo_t - _TOL or fixed > hi_t + _TOL:
         worst = min(order, key=lambda i: min(base[i] + sign[i] * fixed, hi - base[i] - sign[i] * fixed))
-        raise _refuse(names, adjacency[worst][0][2], what, f"together with the other pairs of `{names[worst]}`")
+        raise _refuse(
+            names, declared, adjacency[worst][0][2], what, f"together with the other pairs of `{names[worst]}`"
+        )
     return {i: min(hi, max(0.0, base[i] + sign[i] * fixed)) for i in order}
