@@ -16,7 +16,16 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from .._kit import BackendOptions, KinematicPose, SubstepContacts, SubstepMean, group_by_pair, substep_times
+from .._kit import (
+    BackendOptions,
+    KinematicPose,
+    SubstepContacts,
+    SubstepMean,
+    contact_point,
+    group_by_pair,
+    sorted_points,
+    substep_times,
+)
 from ..base import Backend
 from ..errors import UnsupportedFeature
 from ..geometry import quat_matrices
@@ -26,6 +35,8 @@ from ..types import (
     Capability,
     CompiledWorld,
     Contact,
+    ContactPoint,
+    ImportedModel,
     JointKind,
     JointStates,
     Motion,
@@ -36,6 +47,7 @@ from ..types import (
 from . import _motors, _warp
 from ._build import build, xyzw
 from ._build import check as check_build
+from ._imported import read_imported
 from ._options import NewtonOptions
 
 
@@ -50,6 +62,7 @@ class NewtonBackend(Backend):
         Capability.SHAPE_COMPOUND,
         Capability.COM_OFFSET,
         Capability.COLLISION_FILTER,
+        Capability.CONTACT_POINTS,
     }
     Options: ClassVar[type[BackendOptions]] = NewtonOptions
     #: Warp raises RuntimeError for its own failures (a kernel that does not build, a device error)
@@ -119,6 +132,7 @@ class NewtonBackend(Backend):
         self._motor_mean = SubstepMean(len(self._joints))
         self._substep_contacts = SubstepContacts(world.substeps)
         self._contacts_now: list[Contact] = []
+        self._points_now: list[ContactPoint] = []
         self._prev_angle = np.zeros(len(self._joints))
         self._jq = wp.zeros_like(model.joint_q)
         self._jqd = wp.zeros_like(model.joint_qd)
@@ -251,7 +265,7 @@ class NewtonBackend(Backend):
             else:
                 self._solver.step(s0, self._s1, self._control, self._contacts_buf, self._h)
             self._s0, self._s1 = self._s1, self._s0
-            self._substep_contacts.add(self._read_contacts(before))
+            self._substep_contacts.add(self._read_contacts(before, points=k == n - 1 and self.world.contact_points))
         self._motor_mean.finish()
         dt = self.world.dt
         for i, pose in self.kinematic.items():
@@ -298,8 +312,9 @@ class NewtonBackend(Backend):
         self._control.joint_f.assign(joint_f)
         return out
 
-    def _read_contacts(self, body_q: np.ndarray) -> list[Contact]:
-        """The touching contacts of the engine step just taken, at the poses it started from."""
+    def _read_contacts(self, body_q: np.ndarray, points: bool = False) -> list[Contact]:
+        """The touching contacts of the engine step just taken, at the poses it started from; ``points``: keep
+        its touching points too (``contact_points``: halfway between the two shapes' surfaces)."""
         c = self._contacts_buf
         count = int(c.rigid_contact_count.numpy()[0])
         if count == 0:
@@ -318,6 +333,12 @@ class NewtonBackend(Backend):
         else:  # Featherstone: the penalty law's elastic part (the damping part is zero at rest)
             force = self.options.contact_stiffness * np.maximum(0.0, -separation)
         keep = np.flatnonzero(touching)
+        if points:
+            middle = 0.5 * (p0 + c.rigid_contact_margin0.numpy()[:count, None] * normal
+                            + p1 - c.rigid_contact_margin1.numpy()[:count, None] * normal)  # fmt: skip
+            found = [contact_point(int(a[r]), int(b[r]), middle[r], normal[r], -float(separation[r]), float(force[r]))
+                     for r in keep]  # fmt: skip
+            self._points_now = sorted_points(found)
         return group_by_pair(len(self.world.bodies), a[keep], b[keep], -separation[keep], force[keep])
 
     # --- outputs --------------------------------------------------------------------------------------
@@ -364,6 +385,12 @@ class NewtonBackend(Backend):
 
     def _contacts(self) -> list[Contact]:
         return list(self._contacts_now)
+
+    def _contact_points(self) -> list[ContactPoint]:
+        return list(self._points_now)
+
+    def _imported_model(self) -> ImportedModel:
+        return read_imported(self.world, self._built, self._s0.body_q.numpy().astype(float))
 
     def _close(self) -> None:
         self._solver = None

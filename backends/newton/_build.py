@@ -58,13 +58,7 @@ def check(world: CompiledWorld) -> None:
         for placed in body.placed_shapes():
             if placed.shape.kind is ShapeKind.PLANE and body.motion is not Motion.STATIC:
                 raise UnsupportedFeature(f"Backend `newton`: plane `{body.name}` must be static.")
-            if placed.shape.kind not in _SHAPES:
-                raise UnsupportedFeature(
-                    f"Backend `newton` has no mapping for shape kind `{placed.shape.kind.value}` ({body.name})."
-                )
 
-
-_SHAPES = (ShapeKind.BOX, ShapeKind.SPHERE, ShapeKind.CAPSULE, ShapeKind.CYLINDER, ShapeKind.PLANE)
 
 
 def xyzw(quat: Any) -> tuple[float, float, float, float]:
@@ -105,7 +99,7 @@ def build(wp: Any, newton: Any, world: CompiledWorld, options: NewtonOptions, de
                 density=0.0, mu=surfaces.mu[i], restitution=surfaces.restitution[i], mu_torsional=0.0,
                 mu_rolling=0.0, ke=options.contact_stiffness, kd=_damping(options.contact_stiffness, spec),
             )  # fmt: skip
-            ids.append(_shape(wp, builder, body[i], spec, placed.shape, placed.pos, placed.quat, cfg))
+            ids.append(_shape(wp, newton, builder, body[i], spec, placed.shape, placed.pos, placed.quat, cfg))
             owner.append(i)
         shapes.append(ids)
     handles = _joints(wp, newton, builder, world, groups, body, options)
@@ -127,7 +121,8 @@ def _inertia(spec: BodySpec) -> np.ndarray:
     return spec.inertia_tensor()
 
 
-def _shape(wp: Any, builder: Any, body: int, spec: BodySpec, shape: Shape, pos: Any, quat: Any, cfg: Any) -> int:
+def _shape(wp: Any, newton: Any, builder: Any, body: int, spec: BodySpec, shape: Shape, pos: Any, quat: Any,
+           cfg: Any) -> int:  # fmt: skip
     local = wp.transform(wp.vec3(*pos), wp.quat(*xyzw(quat)))
     if body < 0:  # static: the shape at its world pose
         local = wp.transform_multiply(wp.transform(wp.vec3(*spec.pos), wp.quat(*xyzw(spec.quat))), local)
@@ -144,6 +139,11 @@ def _shape(wp: Any, builder: Any, body: int, spec: BodySpec, shape: Shape, pos: 
     if kind is ShapeKind.CYLINDER:
         return int(builder.add_shape_cylinder(body, xform=local, radius=shape.radius, half_height=0.5 * shape.length,
                                               cfg=cfg, label=label))  # fmt: skip
+    if kind in (ShapeKind.CONVEX, ShapeKind.TRIMESH) and shape.mesh is not None:  # built, not declared (import)
+        vertices = np.asarray(shape.mesh.vertices, dtype=np.float32)
+        mesh = newton.Mesh(vertices, np.asarray(shape.mesh.faces, dtype=np.int32).ravel(), compute_inertia=False)
+        add = builder.add_shape_convex_hull if kind is ShapeKind.CONVEX else builder.add_shape_mesh
+        return int(add(body, xform=local, mesh=mesh, cfg=cfg, label=label))
     if kind is ShapeKind.PLANE:
         return int(builder.add_shape_plane(plane=None, xform=local, width=0.0, length=0.0, body=-1, cfg=cfg,
                                            label=label))  # fmt: skip

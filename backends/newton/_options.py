@@ -29,13 +29,13 @@ class NewtonOptions(BackendOptions):
         "docs/backends/newton.md)", minimum=1,
     )  # fmt: skip
     contact_stiffness: float = option(
-        1e6, "featherstone only: the penalty contact stiffness ke (N/m per contact point)", minimum=0.0,
-        min_exclusive=True,
+        1e4, "featherstone only: the penalty contact stiffness ke (N/m per contact point; integrated explicitly, "
+        "so bounded by dt: 1e6 blows the resting lab box up at dt 0.01)", minimum=0.0, min_exclusive=True,
     )  # fmt: skip
     limit_stiffness: float = option(
-        1e6, "featherstone only: the joint stops' penalty stiffness limit_ke (N/m or N m/rad); XPBD's stops are "
+        1e3, "featherstone only: the joint stops' penalty stiffness limit_ke (N/m or N m/rad); XPBD's stops are "
         "hard constraints", minimum=0.0, min_exclusive=True,
     )  # fmt: skip
     limit_damping: float = option(
-        4e4, "featherstone only: the joint stops' penalty damping limit_kd (N s/m or N m s/rad)", minimum=0.0,
+        10.0, "featherstone only: the joint stops' penalty damping limit_kd (N s/m or N m s/rad)", minimum=0.0,
     )  # fmt: skip
