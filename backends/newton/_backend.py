@@ -26,6 +26,7 @@ from .._kit import (
     sorted_points,
     substep_times,
 )
+from .._kit.pairs import touching_pairs
 from ..base import Backend
 from ..errors import UnsupportedFeature
 from ..geometry import quat_matrices
@@ -84,14 +85,13 @@ class NewtonBackend(Backend):
         check_build(world)
         if getattr(options, "solver", "xpbd") == "featherstone":
             names = [b.name for b in world.bodies]
-            for pair in [p for p in world.pair_surfaces if p.surface.bounce > 0] or (
-                [None] if world.default_surface.bounce > 0 and len(names) > 1 else []
-            ):
-                which = f"`{pair.a}`-`{pair.b}`" if pair else "the default surface"
-                raise UnsupportedFeature(
-                    f"Backend `newton` with `solver: featherstone` has no restitution coefficient (penalty contacts "
-                    f"bounce at e 0.5-0.6 whatever is asked): {which} needs contact:bounce; use `solver: xpbd`."
-                )
+            for a, b in touching_pairs(world):
+                if world.surface(names[a], names[b]).bounce > 0:
+                    raise UnsupportedFeature(
+                        f"Backend `newton` with `solver: featherstone` has no restitution coefficient (its penalty "
+                        f"contacts bounce whatever is asked): the pair `{names[a]}`-`{names[b]}` needs "
+                        "contact:bounce; use `solver: xpbd`."
+                    )
         if getattr(options, "device", "cpu") == "cuda":
             wp, _ = _warp.load()
             _warp.device(wp, "cuda")
@@ -161,14 +161,14 @@ class NewtonBackend(Backend):
                 qd[s:s + 3], qd[s + 3:s + 6] = self._com_velocity(i, spec.pos, spec.quat, spec.lin_vel, spec.ang_vel)
         bodies = world.bodies
         for handle in self._joints:
-            spec = handle.spec
-            if spec.kind not in _RATED:
+            joint = handle.spec
+            if joint.kind not in _RATED:
                 continue
             child = bodies[handle.child]
             parent = bodies[handle.parent] if handle.parent is not None else None
             lin = np.subtract(child.lin_vel, parent.lin_vel if parent else (0.0, 0.0, 0.0))
             ang = np.subtract(child.ang_vel, parent.ang_vel if parent else (0.0, 0.0, 0.0))
-            rate = np.dot(lin if spec.kind is JointKind.SLIDER else ang, spec.axis)
+            rate = np.dot(lin if joint.kind is JointKind.SLIDER else ang, joint.axis)
             qd[int(qd_start[handle.index])] = float(rate)
         del q_start
         model.joint_qd.assign(qd)
@@ -350,7 +350,7 @@ class NewtonBackend(Backend):
         lin, ang = np.zeros((n, 3)), np.zeros((n, 3))
         q = self._s0.body_q.numpy().astype(float)
         qd = self._s0.body_qd.numpy().astype(float)
-        for i in self._moving:
+        for i in self._moving.tolist():
             k = int(self._body[i])
             pos[i] = q[k, :3]
             quat[i] = (q[k, 6], q[k, 3], q[k, 4], q[k, 5])
