@@ -17,6 +17,8 @@ from ..geometry import quat_matrices
 from ..types import CompiledWorld, ImportedBody, ImportedJoint, ImportedModel, JointKind, Motion
 from ._build import Built
 
+#: Newton keeps "no limit" as +-1e10 (ModelBuilder's default joint limits): at or beyond it, no stop
+NO_LIMIT = 1e9
 _NOT_HELD = "joint damping, friction loss and effort limits: the runner's velocity motor (a clamped joint force)"
 
 
@@ -48,7 +50,8 @@ def read_imported(world: CompiledWorld, built: Built, body_q: np.ndarray) -> Imp
         d = int(qd_start[h.index])
         parent = _rotation(body_q[built.body[h.parent], 3:]) if h.parent is not None else np.eye(3)
         axis = parent @ _rotation(x_p[h.index, 3:]) @ axes[d]
-        lo, hi = stops(float(lower[d]), float(upper[d]), h.sign)
+        lo, hi = (float(v) if abs(float(v)) < NO_LIMIT else None for v in (lower[d], upper[d]))
+        lo, hi = stops(lo, hi, h.sign)
         joints.append(ImportedJoint(h.spec.name, kind, unit(axis, h.sign), lo, hi, None, None, None, None))
     return ImportedModel("newton", tuple(bodies), tuple(joints), (_NOT_HELD,))
 

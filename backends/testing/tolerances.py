@@ -208,6 +208,12 @@ DEVIATIONS: dict[tuple[str, str], str] = {
     "-2.4 %, pivot 0.5135 m: XPBD in maximal coordinates, the joint a relaxed position correction (16 "
     "iterations: the bob drifts 13.5 mm outward and lags; 64 iterations still -2.2 %); solver: featherstone "
     "(reduced coordinates) meets it to 5e-8",
+    ("test_box_on_plane_has_four_corner_points", "newton"): "measured 132.43419 N of m*g = 132.435 N summed over the "
+    "4 points (-6.1e-6 > 1e-6): XPBD's contact force from 16 relaxed, unconverged iterations (test_contact_resting)",
+    ("test_box_on_plane_substeps_last_engine_step", "newton"): "measured 132.41530 N of m*g = 132.435 N in the "
+    "last of 4 engine steps (-1.5e-4): XPBD's contact force from 16 relaxed, unconverged iterations",
+    ("test_compound_body_rests_on_its_shapes", "newton"): "measured 19.61952 N of 2 g = 19.62 N (-2.5e-5 > 1e-6): "
+    "XPBD's contact force from 16 relaxed, unconverged iterations (test_contact_resting)",
     # contact_force_last_substep: DART's contact solve at h = 2.5 ms leaves an impulse error of 4e-7 N s per
     # engine step (at h = 10 ms it is within 1e-6).
     ("test_box_on_plane_substeps_last_engine_step", "dart"): "measured 132.434826 N of m*g = 132.435 N "
