@@ -16,11 +16,12 @@ from backends.types import PairSurface, Surface
 
 
 def test_mean_rule_gives_every_pair_its_mu_and_bounce() -> None:
-    """A chain of pairs (ground-a 0.8, a-b 0.5, default 0.6 elsewhere would close a cycle: the ground-b pair is
-    given too) solved so that each contact's mean of its two bodies' values is the pair's, to rounding."""
+    """A cycle of three pairs (an odd cycle: one solution) solved so that each contact's mean of its two bodies'
+    values is the pair's, to rounding."""
     a = w.box("a", (0.2, 0.2, 0.2), (0.0, 0.0, 0.1))
     b = w.box("b", (0.2, 0.2, 0.2), (0.0, 1.0, 0.1))
-    pairs = (PairSurface("ground", "a", Surface(mu=0.8, bounce=0.3)), PairSurface("a", "b", Surface(mu=0.5, bounce=0.2)),
+    pairs = (PairSurface("ground", "a", Surface(mu=0.8, bounce=0.3)),
+             PairSurface("a", "b", Surface(mu=0.5, bounce=0.2)),
              PairSurface("b", "ground", Surface(mu=0.6, bounce=0.1)))  # fmt: skip
     world = w.world("pairs", [w.ground(), a, b], pairs=pairs)
     got = solve(world)
