@@ -58,7 +58,7 @@ _AFTER_GRAVITY = (
 def _known_miss(engine: str, e: float, dt: float) -> str | None:
     if e == 0.0 or dt < 0.01:
         return None
-    names = {"pybullet": "Bullet", "dart": "DART"}
+    names = {"pybullet": "Bullet", "dart": "DART", "newton": "Newton's XPBD"}
     return _AFTER_GRAVITY.format(engine=names[engine]) if engine in names else None
 
 
