@@ -14,12 +14,19 @@ FUZZ_CONCURRENT=20``. The counts are printed at the end of the session.
 from __future__ import annotations
 
 import os
+import signal
 from collections import Counter
 from collections.abc import Callable
 from typing import Any
 
 import pytest
 from hypothesis import HealthCheck, seed, settings
+
+if signal.getsignal(signal.SIGINT) is signal.SIG_IGN:
+    # started in the background by a non-interactive shell (`make fuzz &`, nohup): the commands under test would
+    # inherit SIGINT ignored and, as POSIX asks of a background job's programs (runner.interrupts.install), keep
+    # ignoring it; a handler here is reset to the default in them at exec, as a terminal gives it
+    signal.signal(signal.SIGINT, signal.default_int_handler)
 
 FUZZ_CASES = int(os.environ.get("FUZZ_CASES", "200"))
 FUZZ_STRUCTURED = int(os.environ.get("FUZZ_STRUCTURED", "200"))

@@ -255,10 +255,19 @@ def trace_seed(tmp_path_factory: pytest.TempPathFactory) -> bytes:
     return trace.read_bytes()
 
 
+@pytest.fixture(scope="module")
+def report_runtime() -> None:
+    """The report's embedded chart runtime (vl-convert's JavaScript bundle), built once per process whatever the
+    trace: 5-25 s here under load, a cost of the first report, not of a case (the hang bound is per case)."""
+    from reports.charts import render
+
+    render.runtime_gzip_base64()
+
+
 @fuzz_settings(FUZZ_FILES)
 @given(data=st.data(), report=st.integers(0, 24))
 def test_a_damaged_trace_is_read_recovered_or_refused_naming_it(folder: Path, trace_seed: bytes, data: st.DataObject,
-                                                               report: int) -> None:  # fmt: skip
+                                                               report: int, report_runtime: None) -> None:  # fmt: skip
     mutated: Mutated = data.draw(trace_bytes(trace_seed))
     path = folder / "fuzzed.mcap"
 
