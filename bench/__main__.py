@@ -164,7 +164,7 @@ def main(argv: list[str] | None = None) -> int:
     if "startup" in args.sections:
         log(f"startup: {sizes['startup']}")
         results.startup = startup.run(args.startup_reps, log)
-    if "worlds" in args.sections and is_installed("mujoco_warp"):
+    if "worlds" in args.sections and is_installed(world_batch.ENGINE):
         log(f"worlds: {sizes['worlds']}")
         results.worlds = world_batch.run(args.worlds_sizes, "cpu", args.worlds_steps, args.worlds_warmup, log)
     if "ray" in args.sections and not args.quick:  # CI runs the test itself (make test); --quick skips it

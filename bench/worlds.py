@@ -28,6 +28,8 @@ from pathlib import Path
 from backends.types import BodySpec as Body
 from backends.types import CompiledWorld, Motion, Shape, ShapeKind, Surface
 
+#: the one engine this benchmark is about (its batch: backends/mujoco_warp/_batch.py)
+ENGINE = "mujoco_warp"
 DENSITIES = (500.0, 1000.0, 2000.0)
 HEIGHTS = (0.5, 0.75, 1.0)
 BOUNCES = (0.0, 0.3, 0.6)
@@ -55,7 +57,7 @@ def box_drop(k: int) -> CompiledWorld:
                (0.0, 0.0, z0), (1.0, 0.0, 0.0, 0.0), zero, zero)  # fmt: skip
     return CompiledWorld(name="box-drop", gravity=(0.0, 0.0, -9.81), dt=DT, substeps=1, duration=2.0,
                          bodies=(ground, box), joints=(), default_surface=Surface(bounce=bounce, mu=1.0),
-                         pair_surfaces=(), backend_options={"mujoco_warp": {"device": "cpu"}})  # fmt: skip
+                         pair_surfaces=(), backend_options={ENGINE: {"device": "cpu"}})  # fmt: skip
 
 
 @dataclass(frozen=True)
@@ -79,10 +81,10 @@ def measure(n: int, device: str, steps: int, warmup: int) -> WorldsFigures:
 
     from backends.registry import get_backend
 
-    backend = get_backend("mujoco_warp")
+    backend = get_backend(ENGINE)
     batch_cls = backend.world_batch()
     assert batch_cls is not None  # noqa: S101 - the registry's mujoco_warp batches
-    worlds = [replace(box_drop(k), backend_options={"mujoco_warp": {"device": device}}) for k in range(n)]
+    worlds = [replace(box_drop(k), backend_options={ENGINE: {"device": device}}) for k in range(n)]
     options = backend.Options.parse(worlds[0].options_for(backend.name), backend.name)
     backend.check_world(worlds[0], options)  # a CUDA device Warp does not see: refused by name (UnsupportedFeature)
     on = [True] * n

@@ -30,11 +30,12 @@ FORBIDDEN = {
 }  # fmt: skip
 
 #: Engine modules, imported only inside their own adapter package.
-#: engine import -> the adapter packages that may import it (MuJoCo Warp's adapter builds MuJoCo's model)
+#: engine import -> the adapter packages that may import it (MuJoCo Warp's adapter builds MuJoCo's model; Warp is
+#: the device layer of both MuJoCo Warp and Newton)
 ENGINES = {"pybullet": ("backends.pybullet",), "pybullet_data": ("backends.pybullet",),
            "mujoco": ("backends.mujoco", "backends.mujoco_warp"), "mujoco_warp": ("backends.mujoco_warp",),
-           "warp": ("backends.mujoco_warp",), "dartpy": ("backends.dart",), "panda3d": ("backends.ode",),
-           "direct": ("backends.ode",)}  # fmt: skip
+           "warp": ("backends.mujoco_warp", "backends.newton"), "newton": ("backends.newton",),
+           "dartpy": ("backends.dart",), "panda3d": ("backends.ode",), "direct": ("backends.ode",)}  # fmt: skip
 
 
 def test_there_is_no_import_cycle() -> None:

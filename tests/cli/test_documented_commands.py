@@ -33,6 +33,10 @@ SKIPPED = {
     "pytest -q "
     "-p no:cacheprovider tests/reliability":
         "`make fuzz` itself (about an hour); its figures are in docs/reliability.md",
+    "python bench/gpu_batch.py": "needs a CUDA device (without one it refuses by name, exit 2; "
+    "tests/backends/test_mujoco_warp_cli.py checks that refusal)",
+    "python bench/gpu_batch.py --device cuda:1 --worlds 1,64,1024,8192,32768 --steps 200 --out gpu.md":
+        "needs a second CUDA device",
     "scenario sweep scenarios/box_pile.yaml --param count=10,50,100,200 --backend pybullet,mujoco,dart "
     "--executor ray --ray-address auto --out sweeps/pile":
         "needs a Ray cluster (tests/exec/test_ray.py runs a local one)",
