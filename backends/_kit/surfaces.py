@@ -146,6 +146,53 @@ def _solve_component(
     return {i: min(0.0, c[i] + s[i] * t_fixed) for i in order}
 
 
+Adjacency = dict[int, list[tuple[int, float, tuple[int, int]]]]
+
+
+def solve_sums(
+    start: int,
+    adjacency: Adjacency,
+    names: Sequence[str],
+    hi: float,
+    tol: float,
+    refuse: Callable[[tuple[int, int], str], UnsupportedFeature],
+) -> dict[int, float]:
+    """x[a] + x[b] == t for every pair (a, b, t) of the connected component of ``start``, every x in [0, hi]:
+    x[i] = c[i] + s[i]*t (s = +-1), t fixed by an odd cycle or chosen in the middle of the interval that keeps
+    every x in bounds (Drake's harmonic mean as sums of reciprocals, Newton's mean). ``refuse(pair, why)``: the
+    error naming the pair that cannot get its value."""
+    base, sign, order = {start: 0.0}, {start: 1}, [start]
+    edges = []
+    for u in order:  # breadth first; `order` grows while iterating
+        for v, t, pair in adjacency[u]:
+            edges.append((u, v, t, pair))
+            if v not in base:
+                base[v], sign[v] = t - base[u], -sign[u]
+                order.append(v)
+    fixed: float | None = None
+    for u, v, t, pair in edges:
+        coef, rest = sign[u] + sign[v], t - base[u] - base[v]
+        scale = tol * max(1.0, abs(t))
+        if coef == 0:
+            if abs(rest) > scale:
+                raise refuse(pair, "together with the other pairs of its bodies (a cycle of pairs)")
+            continue
+        value = rest / coef
+        if fixed is not None and abs(value - fixed) > scale:
+            raise refuse(pair, "together with the other pairs of its bodies (a cycle of pairs)")
+        fixed = value if fixed is None else fixed
+    lo_t = max(max((-base[i] for i in order if sign[i] > 0), default=-math.inf),
+               max((base[i] - hi for i in order if sign[i] < 0), default=-math.inf))  # fmt: skip
+    hi_t = min(min((hi - base[i] for i in order if sign[i] > 0), default=math.inf),
+               min((base[i] for i in order if sign[i] < 0), default=math.inf))  # fmt: skip
+    if fixed is None:
+        fixed = 0.5 * (lo_t + hi_t) if math.isfinite(lo_t + hi_t) else (lo_t if math.isfinite(lo_t) else hi_t)
+    if fixed < lo_t - tol or fixed > hi_t + tol:
+        worst = min(order, key=lambda i: min(base[i] + sign[i] * fixed, hi - base[i] - sign[i] * fixed))
+        raise refuse(adjacency[worst][0][2], f"together with the other pairs of `{names[worst]}`")
+    return {i: min(hi, max(0.0, base[i] + sign[i] * fixed)) for i in order}
+
+
 def solve_exact(
     blend: Blend,
     n: int,

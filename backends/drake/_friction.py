@@ -14,6 +14,7 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 
+from .._kit.surfaces import Adjacency, solve_sums
 from ..errors import UnsupportedFeature
 from ..types import CompiledWorld, Motion
 
@@ -97,36 +98,6 @@ def _solve_sums(n: int, target: dict[tuple[int, int], float], names: Sequence[st
     return x
 
 
-def _component(
-    start: int, adjacency: dict[int, list[tuple[int, float, tuple[int, int]]]], names: Sequence[str]
-) -> dict[int, float]:
-    """One connected component: x[i] = c[i] + s[i]*t (s = +-1), t fixed by an odd cycle or chosen in the
-    middle of the interval that keeps every x >= 0."""
-    c, s, order = {start: 0.0}, {start: 1}, [start]
-    fixed: float | None = None
-    edges = []
-    for u in order:  # breadth first; `order` grows while iterating
-        for v, t, pair in adjacency[u]:
-            edges.append((u, v, t, pair))
-            if v not in c:
-                c[v], s[v] = t - c[u], -s[u]
-                order.append(v)
-    for u, v, t, pair in edges:
-        coef, rest = s[u] + s[v], t - c[u] - c[v]
-        scale = _TOL * max(1.0, abs(t))
-        if coef == 0:
-            if abs(rest) > scale:
-                raise _refuse(names, pair, "together with the other pairs of its bodies (a cycle of pairs)")
-        else:
-            value = rest / coef
-            if fixed is not None and abs(value - fixed) > scale:
-                raise _refuse(names, pair, "together with the other pairs of its bodies (a cycle of pairs)")
-            fixed = value if fixed is None else fixed
-    lo = max((-c[i] for i in order if s[i] > 0), default=-math.inf)  # x = c + t >= 0
-    hi = min((c[i] for i in order if s[i] < 0), default=math.inf)  # x = c - t >= 0
-    if fixed is None:
-        fixed = 0.5 * (lo + hi)  # both bounds are finite: every component has both parities
-    if fixed < lo - _TOL or fixed > hi + _TOL:
-        worst = min(order, key=lambda i: c[i] + s[i] * fixed)
-        raise _refuse(names, adjacency[worst][0][2], f"together with the other pairs of `{names[worst]}`")
-    return {i: max(0.0, c[i] + s[i] * fixed) for i in order}
+def _component(start: int, adjacency: Adjacency, names: Sequence[str]) -> dict[int, float]:
+    """One connected component of the reciprocals' sums, every reciprocal >= 0 (``_kit.surfaces.solve_sums``)."""
+    return solve_sums(start, adjacency, names, math.inf, _TOL, lambda pair, why: _refuse(names, pair, why))

@@ -17,6 +17,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 from .._kit.pairs import touching_pairs
+from .._kit.surfaces import Adjacency, solve_sums
 from ..errors import UnsupportedFeature
 from ..types import CompiledWorld
 
@@ -91,44 +92,10 @@ def _refuse(names: Sequence[str], declared: Declared, pair: tuple[int, int], wha
 
 def _component(
     start: int,
-    adjacency: dict[int, list[tuple[int, float, tuple[int, int]]]],
+    adjacency: Adjacency,
     names: Sequence[str],
     what: str,
     hi: float,
     declared: Declared,
 ) -> dict[int, float]:
-    base, sign, order = {start: 0.0}, {start: 1}, [start]
-    edges = []
-    for u in order:  # breadth first; `order` grows while iterating
-        for v, t, pair in adjacency[u]:
-            edges.append((u, v, t, pair))
-            if v not in base:
-                base[v], sign[v] = t - base[u], -sign[u]
-                order.append(v)
-    fixed: float | None = None
-    for u, v, t, pair in edges:
-        coef, rest = sign[u] + sign[v], t - base[u] - base[v]
-        scale = _TOL * max(1.0, abs(t))
-        if coef == 0:
-            if abs(rest) > scale:
-                raise _refuse(
-                    names, declared, pair, what, "together with the other pairs of its bodies (a cycle of pairs)"
-                )
-            continue
-        value = rest / coef
-        if fixed is not None and abs(value - fixed) > scale:
-            raise _refuse(names, declared, pair, what, "together with the other pairs of its bodies (a cycle of pairs)")
-        fixed = value if fixed is None else fixed
-    # c_i = base_i + sign_i * t within [0, hi]
-    lo_t = max(max((-base[i] for i in order if sign[i] > 0), default=-math.inf),
-               max((base[i] - hi for i in order if sign[i] < 0), default=-math.inf))  # fmt: skip
-    hi_t = min(min((hi - base[i] for i in order if sign[i] > 0), default=math.inf),
-               min((base[i] for i in order if sign[i] < 0), default=math.inf))  # fmt: skip
-    if fixed is None:
-        fixed = 0.5 * (lo_t + hi_t) if math.isfinite(lo_t + hi_t) else (lo_t if math.isfinite(lo_t) else hi_t)
-    if fixed < lo_t - _TOL or fixed > hi_t + _TOL:
-        worst = min(order, key=lambda i: min(base[i] + sign[i] * fixed, hi - base[i] - sign[i] * fixed))
-        raise _refuse(
-            names, declared, adjacency[worst][0][2], what, f"together with the other pairs of `{names[worst]}`"
-        )
-    return {i: min(hi, max(0.0, base[i] + sign[i] * fixed)) for i in order}
+    return solve_sums(start, adjacency, names, hi, _TOL, lambda pair, why: _refuse(names, declared, pair, what, why))
