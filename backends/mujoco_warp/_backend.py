@@ -19,16 +19,14 @@ from __future__ import annotations
 
 import contextlib
 import io
-import os
 import re
-import sys
-from collections.abc import Iterator
 from typing import Any, ClassVar
 
 import mujoco
 import numpy as np
 
 from .._kit import BackendOptions, contact_point, group_by_pair, sorted_points
+from .._kit.quiet import keep_warp_cache_outside, silenced_output
 from ..errors import EngineFailure, UnsupportedFeature
 from ..mujoco._backend import MujocoBackend
 from ..types import Capability, CompiledWorld, Contact, ContactPoint, Precision
@@ -41,38 +39,19 @@ ROWS_PER_DOF = 2
 _WARP_MODULE_LINE = re.compile(r"^(Module \S+ \S+ load on device|Warp \d|   )")
 #: Warp's kernel cache, outside the repository (a first compile takes 20-100 s per new kind of scene; the
 #: environment's WARP_CACHE_PATH wins)
-os.environ.setdefault("WARP_CACHE_PATH", os.path.join(os.path.expanduser("~"), ".cache", "physics-scenarios", "warp"))
+keep_warp_cache_outside()
 
 
 def _quiet_warp() -> Any:
     """Import Warp with its banner, its per-module compile lines and its missing-driver warning (a CPU run's
     normal case; a CUDA device it cannot see is refused by name, ``_check_cuda``) kept out of the terminal."""
-    with _native_output_hidden(), contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(io.StringIO()):
+    with silenced_output():
         import warp as wp
 
         wp.config.quiet = True
         wp.config.verbose = False
         wp.init()
     return wp
-
-
-@contextlib.contextmanager
-def _native_output_hidden() -> Iterator[None]:
-    """File descriptors 1 and 2 sent to /dev/null meanwhile: Warp's native library writes its missing-driver
-    warning to them directly, past ``sys.stdout``/``sys.stderr``."""
-    sys.stdout.flush()
-    sys.stderr.flush()
-    saved = os.dup(1), os.dup(2)
-    null = os.open(os.devnull, os.O_WRONLY)
-    try:
-        os.dup2(null, 1)
-        os.dup2(null, 2)
-        yield
-    finally:
-        os.dup2(saved[0], 1)
-        os.dup2(saved[1], 2)
-        for fd in (*saved, null):
-            os.close(fd)
 
 
 #: MJWarp's own floor on the solver tolerance (mujoco_warp.put_model: MuJoCo's default is meant for float64)

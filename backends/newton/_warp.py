@@ -9,40 +9,17 @@ The kernel cache (a first compile takes 30-80 s per solver, docs/backends/newton
 
 from __future__ import annotations
 
-import contextlib
-import io
-import os
-import sys
-from collections.abc import Iterator
 from typing import Any
 
+from .._kit.quiet import keep_warp_cache_outside, silenced_output
 from ..errors import UnsupportedFeature
 
-os.environ.setdefault("WARP_CACHE_PATH", os.path.join(os.path.expanduser("~"), ".cache", "physics-scenarios", "warp"))
-
-
-@contextlib.contextmanager
-def _silenced_fds() -> Iterator[None]:
-    """stdout and stderr (the file descriptors: native code prints there) sent to /dev/null."""
-    sys.stdout.flush()
-    sys.stderr.flush()
-    saved = [os.dup(1), os.dup(2)]
-    null = os.open(os.devnull, os.O_WRONLY)
-    try:
-        os.dup2(null, 1)
-        os.dup2(null, 2)
-        with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(io.StringIO()):
-            yield
-    finally:
-        os.dup2(saved[0], 1)
-        os.dup2(saved[1], 2)
-        for fd in (*saved, null):
-            os.close(fd)
+keep_warp_cache_outside()
 
 
 def load() -> tuple[Any, Any]:
     """``(warp, newton)``, initialised once, quietly."""
-    with _silenced_fds():
+    with silenced_output():
         import warp as wp
 
         wp.config.quiet = True
