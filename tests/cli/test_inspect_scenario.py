@@ -28,6 +28,20 @@ def _inspect(*args: str) -> subprocess.CompletedProcess[str]:
                           cwd=ROOT, timeout=300)  # fmt: skip
 
 
+def _rows(text: str) -> list[list[str]]:
+    """The cells of rich's tables in ``text``, a wrapped row's continuation lines joined to it."""
+    rows: list[list[str]] = []
+    for line in text.splitlines():
+        if "│" not in line:
+            continue
+        cells = [cell.strip() for cell in line.split("│")[1:-1]]
+        if rows and cells and not cells[0] and len(cells) == len(rows[-1]):
+            rows[-1] = [f"{a} {b}".strip() for a, b in zip(rows[-1], cells, strict=True)]
+        else:
+            rows.append(cells)
+    return rows
+
+
 def _json(path: Path) -> dict[str, Any]:
     done = _inspect(str(path), "--json")
     assert done.returncode == 0, done.stderr
@@ -62,10 +76,11 @@ def test_names_as_the_file_spells_them_and_limits_in_text(tmp_path: Path) -> Non
     done = subprocess.run([sys.executable, "-m", "runner", "inspect", str(scenario)], capture_output=True,
                           text=True, cwd=ROOT, timeout=300, env={**os.environ, "COLUMNS": "200"})  # fmt: skip
     assert done.returncode == 0, done.stderr
-    rows = [[cell.strip() for cell in line.split("│")[1:-1]] for line in done.stdout.splitlines() if "│" in line]
+    rows = _rows(done.stdout)
     # spirit40.urdf: <joint name="8" type="revolute"> body -> hip0, axis 1 0 0, limits -0.707 .. 0.707
-    assert ["8", "hinge", "body", "hip0", "-0.707 .. 0.707 rad", "1 0 0"] in rows
-    assert ["jtoe0", "fixed", "lower0", "toe0", "", ""] in rows
+    # ... and <limit effort="40" velocity="30">
+    assert ["8", "hinge", "body", "hip0", "-0.707 .. 0.707 rad", "1 0 0", "effort 40, velocity 30"] in rows
+    assert ["jtoe0", "fixed", "lower0", "toe0", "", "", ""] in rows
     assert ["body", "5.75"] in rows  # <link name="body"> <mass value="5.75"/>
     assert "dog: no actuators in the model file" in done.stdout
 
@@ -103,3 +118,39 @@ def test_json_is_for_scenarios_and_a_broken_scenario_is_located(tmp_path: Path) 
                    "bodies: {ground: {plane: {}, motion: static}}\nrobots: {dog: {urdf: missing.urdf}}\n")
     done = _inspect(str(bad))
     assert done.returncode == 2 and "Traceback" not in done.stderr and f"{bad}:5:" in done.stderr + done.stdout
+
+
+def test_joint_dynamics_and_mimic_as_yourdfpy_reads_them(tmp_path: Path) -> None:
+    """The Franka Panda's `<limit effort velocity>`, `<dynamics>` and the finger's `<mimic>`, in the JSON and
+    the text, against yourdfpy's reading of the same file (issue 28: inspect lists what the file declares)."""
+    import yourdfpy
+
+    scenario = tmp_path / "panda.yaml"
+    scenario.write_text("schema_version: 1\nscenario: t\nworld: {dt: 0.01, duration: 0.1}\n"
+                        "bodies: {ground: {plane: {}, motion: static}}\n"
+                        'robots: {panda: {urdf: "@pybullet_data/franka_panda/panda.urdf", fixed: true}}\n')  # fmt: skip
+    robot = _json(scenario)["robots"]["panda"]
+    urdf = yourdfpy.URDF.load(str(DATA / "franka_panda" / "panda.urdf"), load_meshes=False)
+    mimics = 0
+    for j in robot["joints"]:
+        joint = urdf.joint_map[j["name"]]
+        expected: dict[str, float] = {}
+        if joint.limit is not None and joint.type != "fixed":
+            expected |= {k: float(v) for k in ("effort", "velocity") if (v := getattr(joint.limit, k)) is not None}
+        if joint.dynamics is not None:
+            expected |= {k: float(v) for k, attr in (("damping", "damping"), ("frictionloss", "friction"))
+                         if (v := getattr(joint.dynamics, attr)) is not None}  # fmt: skip
+        assert j["dynamics"] == {k: v for k, v in expected.items() if v != 0.0}, j["name"]
+        if joint.mimic is None:
+            assert j["mimic"] is None
+        else:
+            mimics += 1
+            assert j["mimic"] == {"leader": joint.mimic.joint, "multiplier": joint.mimic.multiplier or 1.0,
+                                  "offset": joint.mimic.offset or 0.0}  # fmt: skip
+    assert mimics == 1  # panda_finger_joint2 follows panda_finger_joint1
+    done = subprocess.run([sys.executable, "-m", "runner", "inspect", str(scenario)], capture_output=True,
+                          text=True, cwd=ROOT, timeout=300, env={**os.environ, "COLUMNS": "300"})  # fmt: skip
+    assert done.returncode == 0, done.stderr
+    rows = _rows(done.stdout)
+    follower = next(r for r in rows if r and r[0] == "panda_finger_joint2")
+    assert follower[-1] == "effort 20, velocity 0.2; = 1 x panda_finger_joint1", follower
