@@ -198,15 +198,18 @@ class Studio:
     def url(self, path: Path) -> str:
         return f"http://127.0.0.1:{self.port}/files/{quote(path.resolve().relative_to(self.files.resolve()).as_posix())}"
 
-    def open(self, trace: Path, layout: Path, ready: Callable[[View], bool], timeout: float = 60.0) -> View:
+    def open(self, trace: Path, layout: Path, ready: Callable[[View], bool], timeout: float = 60.0,
+             stalled: Callable[[View], bool] | None = None, stall_seconds: float = 6.0) -> View:
         """Mount a fresh Studio on ``trace`` with ``layout`` (one page for every trace: no reload) and wait
-        until ``ready(view)`` holds or ``timeout`` seconds pass.
+        until ``ready(view)`` holds, ``stalled(view)`` has held for ``stall_seconds``, or ``timeout`` seconds
+        pass.
 
         Studio 1.48 sometimes recreates its 3D renderer while it starts ("Disposing renderer" in the
         console: the renderer depends on its canvas) and the new one then never subscribes to /scene, so no
         seek brings the bodies back; mounting Studio again does. The caller decides whether to.
         """
         view = View(self.url(trace))
+        stalled_since: float | None = None
         self.browser.events.clear()
         start = time.monotonic()
         self.browser.evaluate(f"self.openTrace({json.dumps(view.url)}, {json.dumps(self.url(layout))})")
@@ -222,6 +225,12 @@ class Studio:
                 view.scene_pixels = self._pixels(probe["scene"], view)
             if ready(view):
                 break
+            if stalled is not None and stalled(view):
+                stalled_since = stalled_since or time.monotonic()
+                if time.monotonic() - stalled_since >= stall_seconds:
+                    break
+            else:
+                stalled_since = None
         view.seconds = time.monotonic() - start
         view.problem_lines = self._problem_lines()
         return view
