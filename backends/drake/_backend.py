@@ -72,10 +72,12 @@ class DrakeBackend(Backend):
     #: no contact:bounce (Drake has no restitution coefficient, only dissipation: refused up front); no
     #: shape:trimesh. Convex hulls are compliant hydroelastic ``Convex`` geometries (a 0.3 x 0.2 x 0.1 hull box
     #: rests 0.25 mm deep, the elastic foundation's m g c / (E A)); with ``contact_model: point`` they are
-    #: refused (``check_world``: one contact point per hull pair, docs/backends/drake.md).
+    #: refused (``check_world``: one contact point per hull pair, docs/backends/drake.md). Armature is the joint
+    #: actuator's rotor inertia, stiffness a joint spring force element (``_joint_dynamics``).
     capabilities: ClassVar[frozenset[Capability]] = (
         RIGID_BODY_CAPABILITIES | (ROBOT_CAPABILITIES - {Capability.SHAPE_TRIMESH})
-    ) - {Capability.CONTACT_BOUNCE} | {Capability.JOINT_REACTION, Capability.CONTACT_POINTS, Capability.JOINT_MIMIC}
+    ) - {Capability.CONTACT_BOUNCE} | {Capability.JOINT_REACTION, Capability.CONTACT_POINTS, Capability.JOINT_MIMIC,
+                                       Capability.JOINT_ARMATURE, Capability.JOINT_STIFFNESS}  # fmt: skip
     Options: ClassVar[type[BackendOptions]] = DrakeOptions
     #: pybind11 turns Drake's C++ exceptions (std::exception, DRAKE_THROW_UNLESS) into RuntimeError.
     engine_errors: ClassVar[tuple[type[BaseException], ...]] = (RuntimeError,)

@@ -10,7 +10,8 @@
   start is q = 0: slider -> ``PrismaticJoint``, hinge -> ``RevoluteJoint``, ball -> ``BallRpyJoint``, fixed
   -> ``WeldJoint``; stops are the joint's position limits (SAP limit constraints). Every slider and hinge
   gets a PD actuator (Kp 0, Kd ``motor_gain``) whose effort limit is ``fmax``: Drake clamps the PD force
-  inside the discrete solve, ODE's velocity motor.
+  inside the discrete solve, ODE's velocity motor. A joint's armature is that actuator's rotor inertia, its
+  stiffness a ``RevoluteSpring`` / ``PrismaticSpring`` (``_joint_dynamics``).
 * Convex hulls: ``Convex`` from the hull's vertices (an in-memory OBJ; Drake takes their hull), compliant
   hydroelastic like every moving shape (Drake tessellates a convex hull itself: tetrahedra from its faces to
   its centroid, pressure 0 on the surface and E at the centroid; the resolution hint is not used).
@@ -59,7 +60,7 @@ from pydrake.systems.framework import DiagramBuilder
 
 from ..errors import UnsupportedFeature
 from ..types import BodySpec, CompiledWorld, JointKind, JointSpec, Motion, Shape, ShapeKind
-from . import _friction
+from . import _friction, _joint_dynamics
 from ._options import DrakeOptions
 
 #: A kinematic body's mass over the heaviest dynamic body's (at least 1 kg): what rests on it or hits it
@@ -154,6 +155,7 @@ def check(world: CompiledWorld) -> None:
     """What the build would refuse, judged without the engine."""
     tree(world)
     _friction.solve(world)
+    _joint_dynamics.check(world)
     for body in world.bodies:
         if body.motion is not Motion.STATIC and body.mass <= 0.0:
             raise UnsupportedFeature(f"Backend `drake` needs a positive mass on moving body `{body.name}`.")
@@ -348,6 +350,7 @@ def _joints(world: CompiledWorld, plant: Any, bodies: list[Any], options: DrakeO
             fmax = spec.motor.fmax if spec.motor is not None else 0.0
             handle.actuator = plant.AddJointActuator(f"motor:{spec.name}", joint, effort_limit=max(fmax, 1e-30))
             handle.actuator.set_controller_gains(PdControllerGains(p=0.0, d=options.motor_gain))
+            _joint_dynamics.add(plant, handle)  # armature (the actuator's rotor inertia) and spring
         handles.append(handle)
     return handles
 

@@ -3,8 +3,8 @@
 The shared suite (test_backend_contract.py, test_robot_contract.py) checks the contract on drake too; this
 module checks the mapping itself: per-pair mu solved into per-geometry coefficients under Drake's harmonic
 mean (and refused where no solution exists), the refusals made before any engine call (bounce, hulls
-under point contact, loops of joints), a hull's rest depth, the contact model option, a motor that is off,
-and byte-identical traces.
+under point contact, loops of joints, armature or a spring on a ball joint), a hull's rest depth, the contact
+model option, a motor that is off, a joint spring's rest on a joint built reversed, and byte-identical traces.
 Worlds are small and short: CI runs on two cores.
 """
 
@@ -26,6 +26,7 @@ from backends.testing.worlds import G, coulomb_stop
 from backends.types import (
     BodySpec,
     Capability,
+    JointDynamics,
     JointKind,
     JointSpec,
     Motion,
@@ -354,3 +355,45 @@ def test_a_loop_between_two_bodies_is_refused() -> None:
     )
     with pytest.raises(UnsupportedFeature, match="joint `ba` closes a loop"):
         create_backend(NAME, w.world("loop", [a, b], joints=joints))
+
+
+def test_armature_or_a_spring_on_a_ball_joint_is_refused_naming_the_joint() -> None:
+    """Drake's reflected inertia and joint springs are one-dof; the language gives `dynamics` to sliders and
+    hinges only (an MJCF ball joint's is `joint:ball-dynamics`), and the adapter refuses any other before the build."""
+    bob = w.box("bob", (0.1, 0.1, 0.1), (0.0, 0.0, 0.5))
+    for dynamics in (JointDynamics(armature=0.1), JointDynamics(stiffness=2.0)):
+        joint = JointSpec("shoulder", JointKind.BALL, "bob", None, anchor=(0.0, 0.0, 1.0), dynamics=dynamics)
+        with pytest.raises(UnsupportedFeature, match="joint `shoulder` is a ball joint"):
+            create_backend(NAME, w.world("ball", [bob], joints=(joint,)))
+
+
+def test_a_spring_on_a_joint_built_reversed_keeps_its_rest_in_the_worlds_coordinate() -> None:
+    """`a` is welded to the world, so hinge `h` (body `a`, other `b`) is built with `b` as Drake's child and reads
+    Drake's coordinate negated: the spring's rest goes in negated too. `b`, a 0.4 x 0.1 x 0.1 box of 2 kg whose
+    centre is d = 0.2 m from the vertical hinge (gravity has no moment about it), armature a = 0.01: I = m (lx^2 +
+    ly^2) / 12 + m d^2 + a. Spring k = 5 towards 0.3 rad, from 0 at rest: Drake's step is semi-implicit Euler,
+    v' = v - h k (q - 0.3) / I, q' = q + h v' (a force element at the step's start, the reflected inertia in the
+    mass matrix), so the reading follows that map to rounding (n eps, n = 100 steps); with the rest's sign wrong
+    it would swing towards -0.6 instead of 0.6."""
+    a = w.box("a", (0.1, 0.1, 0.1), (0.0, 0.0, 1.0))
+    b = w.box("b", (0.4, 0.1, 0.1), (0.25, 0.0, 1.0), density=500.0)
+    k, rest, armature, h = 5.0, 0.3, 0.01, 0.01
+    joints = (
+        JointSpec("weld", JointKind.FIXED, "a", None, anchor=(0.0, 0.0, 1.0)),
+        JointSpec("h", JointKind.HINGE, "a", "b", axis=(0.0, 0.0, 1.0), anchor=(0.05, 0.0, 1.0),
+                  dynamics=JointDynamics(armature=armature, stiffness=k, springref=rest)),
+    )  # fmt: skip
+    world = w.world("reversed-spring", [a, b], joints=joints, dt=h)
+    assert _drake_tree(world)[1] == ("a", "b", -1.0)
+    inertia = 2.0 * (0.4**2 + 0.1**2) / 12 + 2.0 * 0.2**2 + armature
+    q, v, readings, expected = 0.0, 0.0, [], []
+    with create_backend(NAME, world) as sim:
+        for _ in range(100):
+            v -= h * k * (q - rest) / inertia
+            q += h * v
+            sim.step()
+            readings.append(float(sim.joint_states().position[1]))
+            expected.append(q)
+    assert max(expected) > 0.59  # it swings past the rest to about 2 x 0.3: the check is not vacuous
+    eps = get_backend(NAME).precision.eps
+    assert max(abs(r - e) for r, e in zip(readings, expected, strict=True)) <= 100 * eps * 10

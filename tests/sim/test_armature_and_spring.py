@@ -4,12 +4,16 @@ others refuse them before the run, naming the capability).
 * **Armature** (hand-written: a 1 kg ball 0.5 m below a hinge about y, armature a = 0.25 kg m^2, released at
   theta0 = 0.1 rad): MuJoCo adds a to the joint's mass-matrix entry (dof_armature), PyBullet gears a rotor of
   moment a to the joint (backends/pybullet/_rotors.py), DART raises its implicit damping term by a / h and
-  cancels that damping's force (backends/dart/_armature.py). Period T = 2 pi sqrt((I + a) / (m g L)) (1 +
-  theta0^2 / 16) with I = m (L^2 + 2/5 r^2); without the armature it would be 29 % shorter.
+  cancels that damping's force (backends/dart/_armature.py), Drake gives the joint's actuator a rotor inertia
+  a at gear ratio 1 (its reflected inertia, on the mass matrix's diagonal: backends/drake/_joint_dynamics.py).
+  Period T = 2 pi sqrt((I + a) / (m g L)) (1 + theta0^2 / 16) with I = m (L^2 + 2/5 r^2); without the armature
+  it would be 29 % shorter.
 * **Spring** (MJCF: a 0.5 m box, 1 kg, on a vertical hinge at its end, so gravity has no torque about it;
   stiffness k = I (2 pi)^2, started at 0.2 rad from its spring's rest): MuJoCo's passive spring, DART's own
   joint spring (setSpringStiffness), PyBullet's joint torque -k (q - ref) from the step's start
-  (backends/pybullet/_springs.py). Period T = 2 pi sqrt(I / k) = 1 s, exact for any amplitude (linear).
+  (backends/pybullet/_springs.py), Drake's RevoluteSpring / PrismaticSpring (explicit, from the step's
+  start). Period T = 2 pi sqrt(I / k) = 1 s, exact for any amplitude (linear). The last test runs armature
+  and spring together over a grid of k, a and h, hinge and slide, against MuJoCo's own mj_step.
 
 Periods are read from the upward zero crossings (linear interpolation between samples), averaged over the
 run. Tolerance, relative: the step changes a harmonic oscillator's frequency by (w h)^2 / 24 for
@@ -176,3 +180,92 @@ def test_a_bounded_motor_on_a_joint_with_armature_accelerates_it_at_fmax_over_i_
     rate = np.asarray(trace.joints["axle"].velocity, float)
     steps = len(times)
     assert np.all(np.abs(rate - 0.5 * times / 0.1) <= 1e-9 + steps * get_backend(engine).precision.eps * 10)
+
+
+#: A rod on a vertical hinge (I about it: ``ROD_INERTIA``) or a 1 kg box on a horizontal slide: gravity does no
+#: work, so the joint is a linear oscillator, omega^2 = k / (I + a), about the spring's rest.
+#: (kind, stiffness k, armature a, step h, springref, start from the model's zero)
+SPRING_GRID = [
+    ("hinge", 0.3335 * (2 * math.pi) ** 2, 0.25, 0.001, 0.0, 0.2),
+    ("hinge", 40.0, 0.05, 0.002, 0.3, 0.5),
+    ("slide", 20.0, 0.5, 0.005, -0.1, 0.1),
+    ("slide", 300.0, 2.0, 0.001, 0.0, -0.15),
+]
+ROD_INERTIA = 1.0 / 12 * (0.5**2 + 0.04**2) + 1.0 * 0.25**2
+OSCILLATOR = """<mujoco>
+  <compiler angle="radian"/>
+  <worldbody>
+    <body name="rod" pos="0 0 1">
+      <joint name="q" type="{kind}" axis="{axis}" stiffness="{k!r}" armature="{a!r}"
+             springref="{springref!r}"/>
+      <geom type="box" size="0.25 0.02 0.02" pos="0.25 0 0" mass="1" contype="0" conaffinity="0"/>
+    </body>
+  </worldbody>
+</mujoco>
+"""
+#: DART integrates its joint spring implicitly (its own setSpringStiffness; armature as implicit damping:
+#: backends/dart/_armature.py); every other engine declaring both applies -k (q - rest) from the step's start
+#: on an inertia I + a, which is MuJoCo's Euler step.
+IMPLICIT_SPRING = {"dart"}
+
+
+def _oscillator(q0: float, rest: float, w2: float, h: float, n: int, implicit: bool) -> np.ndarray:
+    """q_0..q_n of semi-implicit Euler (v' = v - h w2 (q - rest)) or, ``implicit``, of the step with the spring
+    at the step's end (v' (1 + w2 h^2) = v - h w2 (q - rest)); q' = q + h v' in both; from rest at q0."""
+    q, v, out = q0, 0.0, [q0]
+    for _ in range(n):
+        v = (v - h * w2 * (q - rest)) / (1.0 + w2 * h * h if implicit else 1.0)
+        q += h * v
+        out.append(q)
+    return np.asarray(out)
+
+
+@pytest.mark.parametrize("engine", ENGINES)
+@pytest.mark.parametrize(("kind", "k", "a", "h", "springref", "q0"), SPRING_GRID)
+def test_a_spring_on_a_joint_with_armature_runs_as_mujocos_own_mj_step(
+    tmp_path: Path, engine: str, kind: str, k: float, a: float, h: float, springref: float, q0: float
+) -> None:
+    """Armature and spring together, over a range of k, a and h, hinge and slide, started away from MJCF's
+    ``springref`` (radians: the compiler's angle): the joint oscillates about it with omega = sqrt(k / (I + a)).
+
+    * against MuJoCo's own ``mj_step`` on the same file (Euler, the same h, qpos = q0): an engine taking
+      the spring from the step's start runs the same map, so only rounding separates them (1e-9, the trace's,
+      plus 10 n eps A); DART's implicit spring differs by the two maps' difference, computed here exactly
+      (``_oscillator``) and allowed on top;
+    * against the analytic period 2 pi / omega, as the tests above: (omega h)^2 (1 + 1/6) relative.
+    """
+    axis, inertia = ("0 0 1", ROD_INERTIA) if kind == "hinge" else ("1 0 0", 1.0)
+    xml = OSCILLATOR.format(kind=kind, axis=axis, k=k, a=a, springref=springref)
+    (tmp_path / "osc.xml").write_text(xml)
+    w2 = k / (inertia + a)
+    omega, rest, amplitude = math.sqrt(w2), springref, abs(q0 - springref)
+    steps = round(3.5 * 2 * math.pi / omega / h)
+    text = (
+        f"world: {{gravity: [0, 0, {-G}], dt: {h!r}, duration: {steps * h!r}}}\n"
+        "bodies:\n  marker: {box: [0.05, 0.05, 0.05], motion: static, pos: [50, 50, 0]}\n"
+        f"robots:\n  r: {{mjcf: osc.xml, initial: {{joints: {{q: {q0!r}}}}}}}\n"
+    )
+    ran = _run(tmp_path, engine, text, "joint:stiffness")
+    if ran is None:
+        return
+    times, q = ran
+    mujoco = pytest.importorskip("mujoco", reason="MuJoCo's own mj_step is the reference")
+    model = mujoco.MjModel.from_xml_string(xml)
+    model.opt.timestep = h
+    data = mujoco.MjData(model)
+    data.qpos[0] = q0
+    native = [float(data.qpos[0])]
+    for _ in range(steps):
+        mujoco.mj_step(model, data)
+        native.append(float(data.qpos[0]))
+    index = np.rint(times / h).astype(int)
+    assert np.all(np.abs(times - index * h) <= 1e-9) and index[-1] == steps
+    tolerance = 1e-9 + 10 * steps * get_backend(engine).precision.eps * amplitude
+    if engine in IMPLICIT_SPRING:
+        explicit, implicit = (_oscillator(q0, rest, w2, h, steps, flag) for flag in (False, True))
+        tolerance += float(np.max(np.abs(explicit - implicit)))
+    off = np.abs(q - np.asarray(native)[index])
+    assert float(np.max(off)) <= tolerance, (engine, float(np.max(off)), tolerance)
+    period = _period(times, q - rest)
+    truth = 2 * math.pi / omega
+    assert abs(period - truth) <= (omega * h) ** 2 * (1 + 1 / 6) * truth, (engine, period, truth)
