@@ -149,7 +149,10 @@ class MujocoBackend(Backend):
         self._motored = motors  # world joints with a motor, their slots, signs
         self._motored_slot, self._motored_sign = self._motor_of[motors], self._sign[motors]
         self._stale = True
-        self._starts = set_start(m, self._d, world, lay.joint_id)[rated]  # an MJCF robot's start (_native)
+        # a reading counts from the start, itself from the file's zero: qpos0, a joint's `ref` (0 for the
+        # runner's own joints), so world = sign (qpos - qpos0) - start (an MJCF robot's start: _native)
+        starts = set_start(m, self._d, world, lay.joint_id)[rated]
+        self._starts = starts + self._rated_sign * m.qpos0[self._rated_qpos]
         for i, body in enumerate(world.bodies):
             if body.motion is Motion.DYNAMIC:
                 self._set_velocity(i, body.lin_vel, body.ang_vel)
