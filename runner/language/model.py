@@ -80,7 +80,10 @@ class Scenario(Strict):
     world: World
     surface: Surface = Field(default_factory=Surface, description="The default contact surface.")
     surfaces: list[PairSurface] = Field(default_factory=list, description="Overrides per body pair.")
-    bodies: dict[Name, Body] = Field(min_length=1)
+    bodies: dict[Name, Body] = Field(
+        default_factory=dict,
+        description="Hand-written bodies, by name; may be left out when `robots` bring every body.",
+    )
     joints: dict[Name, Joint] = Field(default_factory=dict)
     robots: dict[Name, Robot] = Field(
         default_factory=dict, description="Models loaded from URDF or MJCF files (docs/robots.md)."

@@ -191,6 +191,8 @@ def check_references(  # noqa: C901
                     bad(path + ("sound",), _unknown("sound", ref, model.sounds))
             if step.interval is not None and step.interval not in model.intervals:
                 bad(path + ("interval",), _unknown("interval", step.interval, model.intervals))
+    if not model.bodies and not model.robots:
+        bad(("bodies",), "a scenario needs at least one body: give `bodies` (or `robots`, whose links are bodies)")
     check_interval_cycles(model, bad)
     _check_actions(model, bad, body_names, sound_lengths, robots)
     _check_expressions(model, bad, body_names | group_names, robots)
