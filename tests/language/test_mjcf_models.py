@@ -121,11 +121,16 @@ def test_several_joints_per_body_ellipsoids_and_visual_geoms(tmp_path: Path) -> 
 
 
 def test_a_file_mujoco_refuses_is_refused_at_mujocos_line(tmp_path: Path) -> None:
-    path = _scenario(tmp_path, "hopper")  # pybullet_data's hopper uses `coordinate="global"`, dropped by MuJoCo
+    """Also through the legacy upgrade (runner.language.mjcf_legacy): humanoid_fixed's `fixed` joint on line 25
+    is removed before MuJoCo reads the file, and a bad geom type on line 40 is still MuJoCo's line 40."""
+    lines = (DATA / "humanoid_fixed.xml").read_text().split("\n")
+    assert 'type="capsule"' in lines[39]
+    lines[39] = lines[39].replace('type="capsule"', 'type="capsul"')
+    path = _scenario(tmp_path, "humanoid_fixed", "\n".join(lines))
     with pytest.raises(ScenarioValidationError) as caught:
         load_scenario(path)
     issue = caught.value.issues[0]
-    assert issue.file == str(tmp_path / "hopper.xml") and issue.line == 2 and "global coordinates" in issue.message
+    assert issue.file == str(tmp_path / "humanoid_fixed.xml") and issue.line == 40 and "capsul" in issue.message
 
 
 def test_options_model_needs_the_models_step_and_gravity(tmp_path: Path) -> None:
