@@ -161,6 +161,25 @@ def test_a_placed_robot_starts_where_the_description_puts_it_on_mujoco(tmp_path:
             assert np.allclose(states.quat[i], body.quat, rtol=0, atol=1e-12), body.name
 
 
+@pytest.mark.parametrize("model", ["hopper", "humanoid_fixed", "swimmer"])
+def test_a_legacy_file_is_built_on_mujoco_from_its_upgrade(tmp_path: Path, model: str) -> None:
+    """MuJoCo's backend reads the upgraded text (``ModelFile.xml``, runner.language.mjcf_legacy), not the file
+    MuJoCo 4 refuses: the bodies start where the description (the same upgrade) puts them, to rounding."""
+    import numpy as np
+
+    from backends.registry import create_backend
+
+    path = _scenario(tmp_path, model)
+    path.write_text(path.read_text().replace(f"mjcf: {model}.xml}}", f"mjcf: {model}.xml, pos: [1, 2, 0.5]}}"))
+    world = build_program(load_scenario(path)).world
+    assert world.models[0].xml and "type=\"fixed\"" not in world.models[0].xml  # upgraded (humanoid_fixed: the weld)
+    with create_backend("mujoco", world) as sim:
+        states = sim.body_states()
+        for i, body in enumerate(world.bodies):
+            assert np.allclose(states.pos[i], body.pos, rtol=0, atol=1e-12), body.name
+            assert np.allclose(states.quat[i], body.quat, rtol=0, atol=1e-12), body.name
+
+
 OUT_OF_RANGE = """<mujoco>
   <compiler angle="degree"/>
   <worldbody>
