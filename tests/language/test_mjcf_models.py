@@ -172,7 +172,7 @@ def test_a_legacy_file_is_built_on_mujoco_from_its_upgrade(tmp_path: Path, model
     path = _scenario(tmp_path, model)
     path.write_text(path.read_text().replace(f"mjcf: {model}.xml}}", f"mjcf: {model}.xml, pos: [1, 2, 0.5]}}"))
     world = build_program(load_scenario(path)).world
-    assert world.models[0].xml and "type=\"fixed\"" not in world.models[0].xml  # upgraded (humanoid_fixed: the weld)
+    assert world.models[0].xml and 'type="fixed"' not in world.models[0].xml  # upgraded (humanoid_fixed: the weld)
     with create_backend("mujoco", world) as sim:
         states = sim.body_states()
         for i, body in enumerate(world.bodies):
