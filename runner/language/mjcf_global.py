@@ -1,13 +1,18 @@
 """MJCF's `<compiler coordinate="global">` (MuJoCo 2.3.3 and older) rewritten in local frames.
 
 In the global dialect every position and orientation in `<worldbody>` is in world coordinates, given or left
-at its default (a body without `pos` is at the world's origin, a joint without `axis` turns about the world's
-z): a body's `pos` and orientation, its geoms', sites', cameras' and lights' `pos`, orientation and
+at its default (a geom or joint without `pos` is at the world's origin, a joint without `axis` turns about the
+world's z): a body's `pos` and orientation, its geoms', sites', cameras' and lights' `pos`, orientation and
 `fromto`, its joints' `pos` and `axis`, its `<inertial>` frame, a light's `dir`. MuJoCo 2.3.3 converted
 them to frames local to the parent body when it compiled the file; MuJoCo 4 refuses the file. Here each
 element's world pose is computed as that compiler read it (orientation from `quat`, `axisangle`, `euler` with
 `<compiler angle eulerseq>`, `xyaxes` or `zaxis`) and written back as its `pos`/`quat` (or `fromto`, `axis`,
 `dir`) in its parent's frame, full double precision; `coordinate` is then removed.
+
+A body without `pos`: MuJoCo 2.3.3 put its frame at its inertial frame (centre of mass, principal axes);
+pybullet's `loadMJCF` at the world's origin, unturned. Here pybullet's (the reference the upgrade is measured
+against, tests/backends/test_mjcf_legacy_pybullet.py): the body's geoms, joints and inertia are where both put
+them, so the dynamics are the same; only the frame a body's pose is reported in differs.
 
 What the conversion cannot place is refused at its line: a position or orientation in a `<default>` class
 (it would hold in every frame), and elements that compose frames of their own (`<include>`, `<frame>`,
@@ -152,8 +157,10 @@ def _refuse_unconvertible(root: Any, file: Path) -> None:
 def _convert_child(file: Path, compiler: Compiler, element: Any, origin: np.ndarray, frame: np.ndarray) -> None:
     """A body's geom, site, camera, light, inertial or joint from world coordinates into the body's frame
     (``origin``, ``frame``: the body's world position and rotation)."""
-    if element.tag in ("joint", "freejoint"):
-        if element.get("type") != "free" and element.tag == "joint":
+    if element.tag == "freejoint":
+        return  # no position or axis: the body's frame
+    if element.tag == "joint":
+        if element.get("type") != "free":
             axis = _numbers(file, element, "axis", 3) if element.get("axis") is not None else np.array([0.0, 0, 1])
             element.set("axis", _text(frame.T @ axis))
         pos = _numbers(file, element, "pos", 3) if element.get("pos") is not None else np.zeros(3)
@@ -201,5 +208,6 @@ def to_local(root: Any, file: Path) -> list[str]:
         _convert_body(file, compiler, world, np.zeros(3), np.eye(3))
     line = compilers[0].sourceline or 0
     return [f"legacy MJCF: `<compiler coordinate=\"global\">` (line {line}), which MuJoCo dropped in 2.3.3: every "
-            "body, geom, site, joint, inertial, camera and light of <worldbody> rewritten in its parent body's frame, "
-            "as MuJoCo 2.3.3 converted them"]  # fmt: skip
+            "body, geom, site, joint, inertial, camera and light of <worldbody> rewritten in its parent body's "
+            "frame, as MuJoCo 2.3.3 converted them (a body without `pos` at the world's origin, as pybullet reads "
+            "it)"]  # fmt: skip

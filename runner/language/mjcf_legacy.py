@@ -118,8 +118,7 @@ def _fixed_joints(root: Any, file: Path, notes: list[str]) -> None:
             _remove(joint)
 
 
-def _inertials(root: Any, file: Path, notes: list[str]) -> None:
-    del file
+def _inertials(root: Any, notes: list[str]) -> None:
     for inertial in _elements(root, "inertial"):
         if inertial.get("pos") is None and inertial.getparent().tag == "body":
             inertial.set("pos", "0 0 0")
@@ -260,7 +259,7 @@ def upgrade(file: Path) -> Upgraded | None:
     included = _includes(root, file)
     notes = to_local(root, file)
     _fixed_joints(root, file, notes)
-    _inertials(root, file, notes)
+    _inertials(root, notes)
     _materials(root, [tree for _, _, tree in included], notes)
     _option_collision(root, notes)
     _dangling(root, [tree for _, _, tree in included], notes)

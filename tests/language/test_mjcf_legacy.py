@@ -24,7 +24,8 @@ mujoco = pytest.importorskip("mujoco", reason="reading MJCF needs MuJoCo's compi
 TOL = 1e-12  # double rounding on numbers of order 1 (module docstring)
 
 #: one arm: a body at (1, 0, 0.5) turned 90 degrees about z, a child 0.4 m along the parent's x (world y),
-#: turned 30 degrees about its own y; hinges at each body's origin about local y and x; capsules along them
+#: turned 30 degrees about its own y; hinges at each body's origin about local y and x; capsules along them;
+#: and a free body (its geom's `pos` given: a geom without one is at the world's origin in global coordinates)
 GLOBAL = """<mujoco>
   <compiler coordinate="global" angle="degree" eulerseq="zyx"/>
   <worldbody>
@@ -38,6 +39,7 @@ GLOBAL = """<mujoco>
         <inertial pos="{com}" mass="1" diaginertia="0.01 0.01 0.01"/>
       </body>
     </body>
+    <body name="c" pos="0 0 2"><freejoint/><geom size="0.1" pos="0 0 2"/></body>
   </worldbody>
 </mujoco>
 """
@@ -54,6 +56,7 @@ LOCAL = """<mujoco>
         <inertial pos="0.05 0 0" mass="1" diaginertia="0.01 0.01 0.01"/>
       </body>
     </body>
+    <body name="c" pos="0 0 2"><freejoint/><geom size="0.1"/></body>
   </worldbody>
 </mujoco>
 """
