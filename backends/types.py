@@ -372,6 +372,11 @@ class ModelFile:
     #: the joints' start, (CompiledWorld joint name, position from the model's zero, rate), hinges and slides;
     #: the world's bodies and joints are already at that pose (their stops and readings from there)
     start: tuple[tuple[str, float, float], ...] = ()
+    #: the file upgraded from MJCF's legacy dialect (docs/robots.md), what the engine reads instead of the file
+    #: (its meshes still relative to ``path``), and the files its `<include>`s name (as written, absolute
+    #: path); "": the file as it is
+    xml: str = ""
+    includes: tuple[tuple[str, str], ...] = ()
 
 
 @dataclass(frozen=True)

@@ -17,6 +17,7 @@ import warnings
 from collections.abc import Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass, field, replace
+from pathlib import Path
 from typing import Any
 
 import mujoco
@@ -51,7 +52,7 @@ def load(world: CompiledWorld) -> NativeModel | None:
         raise UnsupportedFeature(f"mujoco: one MJCF robot per scenario is supported; found {names}")
     file = files[0]
     try:
-        spec = mujoco.MjSpec.from_file(file.path)
+        spec = _spec(file)
     except ValueError as exc:  # read by the same compiler when the scenario loaded: a changed file
         raise UnsupportedFeature(f"mujoco: MuJoCo refused {file.path}: {exc}") from None
     strip = len(file.robot) + 1
@@ -83,6 +84,17 @@ def load(world: CompiledWorld) -> NativeModel | None:
         native.geoms[file.bodies[i]] = geom_names
     _place(spec, file)
     return native
+
+
+def _spec(file: ModelFile) -> Any:
+    """The file's spec; for a file in MJCF's legacy dialect, the runner's upgrade of it (``ModelFile.xml``),
+    its meshes and includes found as from the file."""
+    if not file.xml:
+        return mujoco.MjSpec.from_file(file.path)
+    includes = {name: Path(path).read_bytes() for name, path in file.includes}
+    spec = mujoco.MjSpec.from_string(file.xml, include=includes or None)
+    spec.modelfiledir = str(Path(file.path).parent)
+    return spec
 
 
 def _place(spec: Any, file: ModelFile) -> None:

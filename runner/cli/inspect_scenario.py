@@ -35,7 +35,8 @@ def _dynamics(dynamics: JointDynamics) -> dict[str, float]:
 
 
 def robot_data(desc: ModelDesc) -> dict[str, Any]:
-    """One robot's model as plain data (the JSON output): its file, links, joints and actuators, in file order."""
+    """One robot's model as plain data (the JSON output): its file, links, joints and actuators, in file order,
+    and the loader's notes."""
     return {
         "file": desc.file,
         "root": desc.root,
@@ -49,6 +50,7 @@ def robot_data(desc: ModelDesc) -> dict[str, Any]:
             for j in desc.joints
         ],  # fmt: skip
         "actuators": [{"name": a.name, "kind": a.kind, "joint": a.joint, "line": a.line} for a in desc.actuators],
+        "notes": list(desc.notes),  # what the loader decided for the file (a legacy construct upgraded, ...)
     }
 
 
@@ -106,6 +108,7 @@ def _robot(name: str, robot: Mapping[str, Any]) -> list[Any]:
         parts.append(actuators)
     else:
         parts.append(Text(f"{name}: no actuators in the model file"))
+    parts += [Text(f"{name}: note: {note}", style="yellow") for note in robot.get("notes", ())]
     return parts
 
 

@@ -297,4 +297,6 @@ def model_file(
             frozenset({Capability.ACTUATOR_NATIVE}) if native else frozenset()
         ),
         start=tuple((f"{name}.{j}", q, v) for j, (q, v) in (values or {}).items()),
+        xml=desc.upgraded[0] if desc.upgraded is not None else "",
+        includes=desc.upgraded[1] if desc.upgraded is not None else (),
     )

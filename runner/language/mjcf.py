@@ -35,6 +35,7 @@ import numpy as np
 
 from backends.types import NO_DYNAMICS, JointDynamics, Mesh, PlacedShape, Shape, ShapeKind
 from runner.language.mesh_limits import check_mesh_file
+from runner.language.mjcf_legacy import Upgraded, upgrade
 from runner.language.model_names import check_names
 from runner.language.model_numbers import check_mjcf_numbers, check_number, check_vertices
 from runner.language.robot_desc import (
@@ -76,11 +77,17 @@ def _mujoco(file: Path) -> Any:
     return mujoco
 
 
-def compile_file(file: Path) -> Any:
-    """MuJoCo's compiled model of ``file`` (ModelFileError with MuJoCo's message and line when it refuses)."""
+def compile_file(file: Path, legacy: Upgraded | None = None) -> Any:
+    """MuJoCo's compiled model of ``file``, or of its upgrade from MJCF's legacy dialect (ModelFileError with
+    MuJoCo's message and line when it refuses)."""
     mujoco = _mujoco(file)
     try:
-        return mujoco.MjModel.from_xml_path(str(file))
+        if legacy is None:
+            return mujoco.MjModel.from_xml_path(str(file))
+        includes = {name: Path(path).read_bytes() for name, path in legacy.includes}
+        spec = mujoco.MjSpec.from_string(legacy.text, include=includes or None)
+        spec.modelfiledir = str(file.parent)  # meshes and textures relative to the file, as from the file
+        return spec.compile()
     except ValueError as exc:
         found = re.search(r"line (\d+)", str(exc))
         where = re.search(r"[Ff]ile[: ]+'?([^'\n]+\.xml)", str(exc))
@@ -363,7 +370,8 @@ def load_mjcf(file: Path) -> ModelDesc:
     check_mjcf_numbers(tree, file)
     _check_meshes(tree, file)
     mujoco = _mujoco(file)
-    model = compile_file(file)
+    legacy = upgrade(file)
+    model = compile_file(file, legacy)
     data = mujoco.MjData(model)
     mujoco.mj_kinematics(model, data)
     lines = _lines(tree)
@@ -402,7 +410,7 @@ def load_mjcf(file: Path) -> ModelDesc:
         )
     joints = []
     start: list[tuple[str, float]] = []
-    notes: list[str] = []
+    notes: list[str] = list(legacy.notes) if legacy is not None else []
     for b in range(1, model.nbody):
         parent = bodies[int(model.body_parentid[b])]
         line = lines.get(("body", bodies[b]), 0)
@@ -439,6 +447,7 @@ def load_mjcf(file: Path) -> ModelDesc:
         keyframes=tuple(_keyframes(model, joint_names, tree)),
         frames=tuple(_sites(model, bodies, set(joint_names))),
         start=tuple(start),
+        upgraded=(legacy.text, legacy.includes) if legacy is not None else None,
     )
 
 

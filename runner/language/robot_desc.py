@@ -167,6 +167,9 @@ class ModelDesc:
     #: (joint, position from the zero) where the model starts a joint whose zero is outside its range (MJCF:
     #: the nearest end, noted; a keyframe or the scenario's `initial` overrides it)
     start: tuple[tuple[str, float], ...] = ()
+    #: MJCF in the legacy dialect: the text MuJoCo 4 reads and the files its `<include>`s name (as written,
+    #: absolute path), runner.language.mjcf_legacy; None: the file as it is
+    upgraded: tuple[str, tuple[tuple[str, str], ...]] | None = None
 
     def keyframe(self, name: str) -> KeyframeDesc | None:
         return next((key for key in self.keyframes if key.name == name), None)

@@ -154,3 +154,16 @@ def test_joint_dynamics_and_mimic_as_yourdfpy_reads_them(tmp_path: Path) -> None
     rows = _rows(done.stdout)
     follower = next(r for r in rows if r and r[0] == "panda_finger_joint2")
     assert follower[-1] == "effort 20, velocity 0.2; = 1 x panda_finger_joint1", follower
+
+
+def test_a_legacy_mjcf_files_upgrade_is_listed_as_notes(tmp_path: Path) -> None:
+    """pybullet_data's hopper is in MJCF's legacy dialect (global coordinates, a missing material): `inspect`
+    says what the upgrade did (runner.language.mjcf_legacy), in the JSON and in the text."""
+    scenario = tmp_path / "s.yaml"
+    scenario.write_text("schema_version: 1\nscenario: t\nworld: {dt: 0.01, duration: 0.1}\n"
+                        "bodies: {ground: {plane: {}, motion: static}}\n"
+                        "robots: {hop: {mjcf: '@pybullet_data/mjcf/hopper.xml', pos: [0, 0, 0.1]}}\n")  # fmt: skip
+    notes = _json(scenario)["robots"]["hop"]["notes"]
+    assert len(notes) == 2 and 'coordinate="global"' in notes[0] and "material `geom`" in notes[1]
+    done = _inspect(str(scenario))
+    assert done.returncode == 0 and "hop: note: legacy MJCF" in done.stdout.replace("\n", " "), done.stdout

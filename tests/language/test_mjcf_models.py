@@ -121,11 +121,16 @@ def test_several_joints_per_body_ellipsoids_and_visual_geoms(tmp_path: Path) -> 
 
 
 def test_a_file_mujoco_refuses_is_refused_at_mujocos_line(tmp_path: Path) -> None:
-    path = _scenario(tmp_path, "hopper")  # pybullet_data's hopper uses `coordinate="global"`, dropped by MuJoCo
+    """Also through the legacy upgrade (runner.language.mjcf_legacy): humanoid_fixed's `fixed` joint on line 25
+    is removed before MuJoCo reads the file, and a bad geom type on line 40 is still MuJoCo's line 40."""
+    lines = (DATA / "humanoid_fixed.xml").read_text().split("\n")
+    assert 'type="capsule"' in lines[39]
+    lines[39] = lines[39].replace('type="capsule"', 'type="capsul"')
+    path = _scenario(tmp_path, "humanoid_fixed", "\n".join(lines))
     with pytest.raises(ScenarioValidationError) as caught:
         load_scenario(path)
     issue = caught.value.issues[0]
-    assert issue.file == str(tmp_path / "hopper.xml") and issue.line == 2 and "global coordinates" in issue.message
+    assert issue.file == str(tmp_path / "humanoid_fixed.xml") and issue.line == 40 and "capsul" in issue.message
 
 
 def test_options_model_needs_the_models_step_and_gravity(tmp_path: Path) -> None:
@@ -149,6 +154,25 @@ def test_a_placed_robot_starts_where_the_description_puts_it_on_mujoco(tmp_path:
         path.read_text().replace("mjcf: several.xml}", "mjcf: several.xml, pos: [1, 2, 0.5], hpr: [30, 20, 10]}")
     )
     world = build_program(load_scenario(path)).world
+    with create_backend("mujoco", world) as sim:
+        states = sim.body_states()
+        for i, body in enumerate(world.bodies):
+            assert np.allclose(states.pos[i], body.pos, rtol=0, atol=1e-12), body.name
+            assert np.allclose(states.quat[i], body.quat, rtol=0, atol=1e-12), body.name
+
+
+@pytest.mark.parametrize("model", ["hopper", "humanoid_fixed", "swimmer"])
+def test_a_legacy_file_is_built_on_mujoco_from_its_upgrade(tmp_path: Path, model: str) -> None:
+    """MuJoCo's backend reads the upgraded text (``ModelFile.xml``, runner.language.mjcf_legacy), not the file
+    MuJoCo 4 refuses: the bodies start where the description (the same upgrade) puts them, to rounding."""
+    import numpy as np
+
+    from backends.registry import create_backend
+
+    path = _scenario(tmp_path, model)
+    path.write_text(path.read_text().replace(f"mjcf: {model}.xml}}", f"mjcf: {model}.xml, pos: [1, 2, 0.5]}}"))
+    world = build_program(load_scenario(path)).world
+    assert world.models[0].xml and 'type="fixed"' not in world.models[0].xml  # upgraded (humanoid_fixed: the weld)
     with create_backend("mujoco", world) as sim:
         states = sim.body_states()
         for i, body in enumerate(world.bodies):
