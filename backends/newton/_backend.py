@@ -28,7 +28,7 @@ from .._kit import (
     substep_times,
 )
 from .._kit.pairs import touching_pairs
-from .._kit.stacks import stack_height
+from .._kit.stacks import stacks
 from ..base import Backend
 from ..errors import UnsupportedFeature
 from ..geometry import quat_matrices
@@ -85,7 +85,8 @@ class NewtonBackend(Backend):
     @classmethod
     def check_world(cls, world: CompiledWorld, options: BackendOptions) -> None:
         check_build(world)
-        check_stack(stack_height(_free_bodies(world)))
+        free = stacks(_free_bodies(world))
+        check_stack(free.tallest, free.landing)
         if getattr(options, "solver", "xpbd") == "featherstone":
             names = [b.name for b in world.bodies]
             kinematic = [b.name for b in world.bodies if b.motion is Motion.KINEMATIC]
