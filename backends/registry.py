@@ -80,7 +80,7 @@ _KNOWN: dict[str, BackendEntry] = {
         options="backends.newton._options:NewtonOptions",
         precision=Precision.FLOAT32,
         # installed by `[all]` (CI runs its contract suite: about 2.5 min of CPU with a cold kernel cache), but
-        # one world on Warp's CPU device costs many times the others (its conformance column took 997 s on two busy
+        # one world on Warp's CPU device costs many times the others (its conformance column took 362-997 s on two busy
         # cores; docs/backends/newton.md): it runs where named
         opt_in=True,
     ),
