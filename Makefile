@@ -48,9 +48,9 @@ sounds: $(STAMP)
 schema: $(STAMP)
 	$(BIN)/scenario schema > runner/schema/scenario.schema.json
 
-# mujoco_warp is opt-in (backends/registry.py): named here so that its column stays in the matrix
+# mujoco_warp and newton are opt-in (backends/registry.py): named here so that their columns stay in the matrix
 conformance: $(STAMP)
-	$(BIN)/scenario conformance --backend all,mujoco_warp --out traces/conformance --markdown docs/conformance.md
+	$(BIN)/scenario conformance --backend all,mujoco_warp,newton --out traces/conformance --markdown docs/conformance.md
 
 baselines: $(STAMP)
 	$(BIN)/scenario baseline scenarios/*.yaml --backend all --baseline baselines

@@ -138,7 +138,7 @@ def test_a_case_refused_up_front_is_counted_apart_and_leaves_the_matrix_passing(
 def test_the_expected_refusals_name_cases_of_the_suite() -> None:
     names = {p.name for p in DEFAULT_SUITE.glob("*.yaml")}
     expected = {"16_stacking_heights.yaml", "07_restitution.yaml", "07b_bounce_vel_below.yaml",
-                "07c_bounce_vel_above.yaml", "17_restitution_grid.yaml"}  # fmt: skip
+                "07c_bounce_vel_above.yaml", "17_restitution_grid.yaml", "19_joint_reaction.yaml"}  # fmt: skip
     assert set(matrix_module.expected_refusals(DEFAULT_SUITE)) == expected <= names
 
 
