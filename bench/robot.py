@@ -142,7 +142,7 @@ def render(figs: Sequence[RobotFigures]) -> list[str]:
                    f"{f.runner_ms:.3f} | {ratio} | {f.traced_ms:.3f} | {ratio_t} | {same} | {f.note} |")  # fmt: skip
     out += ["", "Where the runner's untraced step goes (ms per step, the instrumented runs' medians; *engine step*: "
             "the adapter's `step()`; *engine reads*: `body_states`, `joint_states` (and `contacts` where asked); "
-            "*motor commands*: the adapter's `set_motor`):", "",
+            "*motor commands*: the adapter's `set_motor` and `set_motors`):", "",
             "| backend | robot | " + " | ".join(PARTS) + " |", "|---|---|" + "---|" * len(PARTS)]  # fmt: skip
     for f in figs:
         if f.parts:
@@ -223,7 +223,7 @@ def _child(argv: Sequence[str]) -> int:
             t = {k: v / steps * 1e3 for k, v in split.seconds.items()}
             builds.append(split.total("engine", ins.ENGINE_SETUP))
             step, reads = t.get("engine.step", 0.0), sum(t.get(f"engine.{m}", 0.0) for m in ins.ENGINE_READS)
-            motors, drive_ms = t.get("engine.set_motor", 0.0), t.get("servos.drive", 0.0)
+            motors, drive_ms = t.get("engine.set_motor", 0.0) + t.get("engine.set_motors", 0.0), t.get("servos.drive", 0.0)
             named = {"engine step": step, "engine reads": reads, "motor commands": motors,
                      "servos (beyond the commands)": drive_ms - motors, "energy watchdog": t.get("energy.check", 0.0),
                      "assertions": t.get("assert.on_step", 0.0),

@@ -118,6 +118,8 @@ class PyBulletBackend(Backend):
         p.setTimeStep(self._h, physicsClientId=c)
         self._layout: Layout = build(p, c, world)
         self._frames = InertialFrames(world)
+        #: per joint tuple ``set_motors`` was given: (multibody, its links, (place in the tuple, sign) each)
+        self._motor_groups: dict[tuple[int, ...], list[tuple[int, list[int], list[tuple[int, float]]]]] = {}
         self._fit: SurfaceFit = fit_surfaces(world)
         # ODE bounces when the approach speed *before* the step exceeds bounce_vel; Bullet compares the
         # speed after this substep's gravity, so a resting body approaches at about g*h and bounces every
@@ -422,6 +424,23 @@ class PyBulletBackend(Backend):
         p.setJointMotorControl2(
             h.uid, h.link, p.VELOCITY_CONTROL, targetVelocity=h.sign * vel, force=fmax, physicsClientId=self._c
         )
+
+    def _set_motors(self, joints: tuple[int, ...], vels: list[float], fmaxes: list[float]) -> None:
+        """One ``setJointMotorControlArray`` per multibody: the same motor settings as ``setJointMotorControl2``
+        per joint (velocity control: target rate, maximum force, velocity gain 1)."""
+        groups = self._motor_groups.get(joints)
+        if groups is None:
+            handles = [self._layout.joints[k] for k in joints]
+            groups = [(uid, [h.link for h in handles if h.uid == uid],
+                       [(i, h.sign) for i, h in enumerate(handles) if h.uid == uid])
+                      for uid in dict.fromkeys(h.uid for h in handles)]  # fmt: skip
+            self._motor_groups[joints] = groups
+        c, mode = self._c, p.VELOCITY_CONTROL
+        for uid, links, places in groups:
+            p.setJointMotorControlArray(
+                uid, links, mode, targetVelocities=[sign * vels[i] for i, sign in places],
+                forces=[fmaxes[i] for i, _ in places], physicsClientId=c,
+            )  # fmt: skip
 
     def _reset_body(self, body: int, pos: Vec3, quat: Quat, lin_vel: Vec3, ang_vel: Vec3) -> None:
         uid = self._layout.uid[body]
