@@ -223,7 +223,8 @@ def _child(argv: Sequence[str]) -> int:
             t = {k: v / steps * 1e3 for k, v in split.seconds.items()}
             builds.append(split.total("engine", ins.ENGINE_SETUP))
             step, reads = t.get("engine.step", 0.0), sum(t.get(f"engine.{m}", 0.0) for m in ins.ENGINE_READS)
-            motors, drive_ms = t.get("engine.set_motor", 0.0) + t.get("engine.set_motors", 0.0), t.get("servos.drive", 0.0)
+            motors = t.get("engine.set_motor", 0.0) + t.get("engine.set_motors", 0.0)
+            drive_ms = t.get("servos.drive", 0.0)
             named = {"engine step": step, "engine reads": reads, "motor commands": motors,
                      "servos (beyond the commands)": drive_ms - motors, "energy watchdog": t.get("energy.check", 0.0),
                      "assertions": t.get("assert.on_step", 0.0),
