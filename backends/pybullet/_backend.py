@@ -216,6 +216,8 @@ class PyBulletBackend(Backend):
         order = [k for u in uids for k in self._motor_joints if layout.joints[k].uid == u]
         self._joint_order = np.array(order, dtype=np.int64)
         self._joint_sign = np.array([layout.joints[k].sign for k in order], dtype=float)
+        #: every joint read, in world order (a robot of hinges and sliders): the read's columns are the arrays
+        self._every_joint = order == list(range(len(world.joints)))
         self._motor_mean = SubstepMean(len(world.joints))
         self._watched = self._watch_reactions()
         self._reaction_mean = SubstepMean(6 * len(self._watched))
@@ -388,13 +390,18 @@ class PyBulletBackend(Backend):
 
     def _joint_states(self) -> JointStates:
         m, c = len(self.world.joints), self._c
-        pos, vel, force = np.full(m, np.nan), np.full(m, np.nan), np.zeros(m)
         if self._joint_reads:  # one getJointStates per multibody: (q, qd, reaction forces, applied torque)
             states = [s for uid, links in self._joint_reads for s in p.getJointStates(uid, links, physicsClientId=c)]
             rows = np.fromiter(_flat((s[0], s[1], s[3]) for s in states), np.float64, 3 * len(states))
             rows = rows.reshape(-1, 3) * self._joint_sign[:, None]
-            order = self._joint_order
-            pos[order], vel[order], force[order] = rows[:, 0], rows[:, 1], rows[:, 2]
+            if self._every_joint:
+                pos, vel, force = np.ascontiguousarray(rows.T)  # three contiguous rows: the same numbers
+            else:
+                pos, vel, force = np.full(m, np.nan), np.full(m, np.nan), np.zeros(m)
+                order = self._joint_order
+                pos[order], vel[order], force[order] = rows[:, 0], rows[:, 1], rows[:, 2]
+        else:
+            pos, vel, force = np.full(m, np.nan), np.full(m, np.nan), np.zeros(m)
         if self.world.substeps > 1 and self.steps:
             force = self._motor_mean.mean.copy()  # the mean over the step's substeps
         return JointStates(position=pos, velocity=vel, motor_force=force)
