@@ -445,8 +445,9 @@ class Session:
                 touching.setdefault(c.b, []).append(c.a)
             for i in self.program.contact_colliders:
                 hits.extend((names[i], names[other], True) for other in touching.get(i, ()))
-        for ev in self.collision_events.update(hits):
-            self.queue.append((ev.name, f"collision-{ev.kind}"))
+        if hits or self.collision_events.last:  # nothing touching now or before: no in, again or out event
+            for ev in self.collision_events.update(hits):
+                self.queue.append((ev.name, f"collision-{ev.kind}"))
         for event in self.conditions.check(self.resolver):  # after the collision events of the same step
             self.queue.append((event, "condition"))
 
