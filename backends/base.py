@@ -16,7 +16,8 @@ Semantics every backend must honour (ODE's):
   during the **next** ``step()`` only, over all its substeps, and are then cleared (ODE's dBodyAddForce).
   On a static or kinematic body it has no effect.
 * ``set_motor`` sets a joint's velocity motor: target rate ``vel`` with force bounded by ``fmax``;
-  ``fmax == 0`` switches it off. It persists until changed.
+  ``fmax == 0`` switches it off. It persists until changed. ``set_motors`` is the same for several joints
+  in one call (an adapter may send them to the engine in one call: ``_set_motors``).
 * ``set_kinematic`` places a kinematic body at a pose *now* and gives it the velocity it moves with
   during the next ``step()`` (linear and angular: what rests on it is carried by friction, also when it
   turns); after that step the body is exactly at ``pos + lin_vel*dt`` with ``quat`` rotated by
@@ -99,6 +100,7 @@ from __future__ import annotations
 
 import abc
 import math
+from collections.abc import Sequence
 from types import TracebackType
 from typing import TYPE_CHECKING, Any, ClassVar, NoReturn
 
@@ -162,6 +164,7 @@ class Backend(abc.ABC):
         self._motion = [b.motion for b in world.bodies]
         self._held = _held_by_joints(world)
         self._closed = True  # until built
+        self._motor_sets: set[tuple[int, ...]] = set()  # joint tuples ``set_motors`` has checked
         try:
             self._build()
         except self.engine_errors as exc:
@@ -304,6 +307,31 @@ class Backend(abc.ABC):
         except self.engine_errors as exc:
             raise engine_failure(self.name, f"setting the motor of `{spec.name}`", exc) from exc
 
+    def set_motors(self, joints: tuple[int, ...], vels: Sequence[float], fmaxes: Sequence[float]) -> None:
+        """``set_motor`` for several joints at once (the runner's servos, every step), with the same checks and
+        the same effect: one engine call where the engine has one (``_set_motors``). ``joints`` is a tuple so
+        that its indices and kinds are checked once per tuple, not per step; the values are checked each call."""
+        self._open("set_motors")
+        if joints not in self._motor_sets:
+            for joint in joints:
+                spec = self._joint(joint, "set_motors")
+                if spec.kind not in MOTORISED:
+                    self._refuse(f"set_motors: joint `{spec.name}` is a {spec.kind.value} joint, which has no motor")
+            if len(set(joints)) != len(joints):
+                self._refuse(f"set_motors: a joint is given twice in {joints!r}")
+            self._motor_sets.add(joints)
+        if not (len(vels) == len(fmaxes) == len(joints)):
+            self._refuse(f"set_motors: {len(joints)} joints, {len(vels)} vels and {len(fmaxes)} fmaxes")
+        if not (all(map(math.isfinite, vels)) and all(map(math.isfinite, fmaxes)) and min(fmaxes, default=0.0) >= 0):
+            for joint, vel, fmax in zip(joints, vels, fmaxes, strict=True):
+                if not (math.isfinite(vel) and math.isfinite(fmax) and fmax >= 0.0):
+                    self._refuse(f"set_motors: joint `{self.world.joints[joint].name}` needs a finite vel and a "
+                                 f"finite fmax >= 0; got vel={vel!r}, fmax={fmax!r}")  # fmt: skip
+        try:
+            self._set_motors(joints, [float(v) for v in vels], [float(f) for f in fmaxes])
+        except self.engine_errors as exc:
+            raise engine_failure(self.name, "setting the motors", exc) from exc
+
     def apply_force(self, body: int, force: Vec3, torque: Vec3) -> None:
         """Add a force and torque (world frame, at the COM) for the next step only (none on a body that
         is not dynamic)."""
@@ -403,6 +431,12 @@ class Backend(abc.ABC):
 
     @abc.abstractmethod
     def _set_motor(self, joint: int, vel: float, fmax: float) -> None: ...
+
+    def _set_motors(self, joints: tuple[int, ...], vels: list[float], fmaxes: list[float]) -> None:
+        """Several motors in one call (the contract's ``set_motors``; values checked): one ``_set_motor`` each
+        unless the engine has a call for many."""
+        for joint, vel, fmax in zip(joints, vels, fmaxes, strict=True):
+            self._set_motor(joint, vel, fmax)
 
     @abc.abstractmethod
     def _reset_body(self, body: int, pos: Vec3, quat: Quat, lin_vel: Vec3, ang_vel: Vec3) -> None: ...

@@ -18,7 +18,7 @@ from typing import Any
 #: Backend methods, by the part of the work they are.
 ENGINE_STEP = ("step",)
 ENGINE_READS = ("body_states", "joint_states", "contacts")
-ENGINE_INPUTS = ("set_kinematic", "set_motor", "apply_force", "reset_body")
+ENGINE_INPUTS = ("set_kinematic", "set_motor", "set_motors", "apply_force", "reset_body")
 ENGINE_SETUP = ("__init__", "settings", "close")
 #: TraceWriter methods (all of its public work).
 TRACE_METHODS = ("__init__", "attach", "scene", "step", "event", "log", "sound", "verdict", "verdicts", "finish")

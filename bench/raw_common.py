@@ -69,6 +69,9 @@ class Servo:
     gain: float
     fmax: float
     vmax: float | None
+    #: the joint's start position (program.joint_zeros): an engine that reads the joint from its start (as
+    #: PyBullet builds a robot at its start pose) adds it to read from the model's zero, as the runner does
+    zero: float = 0.0
 
 
 class RobotLoop(Protocol):

@@ -123,6 +123,7 @@ class MujocoRobotLoop:
     position and velocity read as numpy arrays (no per-body Python)."""
 
     def __init__(self, adapter: Any, servos: list[Servo]) -> None:
+        """``qpos`` counts from the model's zero, the runner's coordinate: no servo's ``zero`` is added."""
         from backends.mujoco import _coulomb
 
         self.m, self.d, lay = adapter._m, adapter._d, adapter._layout

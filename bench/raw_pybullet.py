@@ -135,6 +135,12 @@ class PyBulletRobotLoop:
         order = [k for u in uids for k in moving if lay.joints[k].uid == u]  # read order -> world joint
         self.joint_order, self.joint_sign = np.array(order), np.array([lay.joints[k].sign for k in order])
         self.servo_row = [order.index(s.joint) for s in servos]
+        #: PyBullet reads a joint from the pose the robot was built in, its start: the model's zero is back by
+        #: the start position (the runner's coordinate, runner.compile.world.joint_zeros)
+        self.zero = [s.zero for s in servos]
+        self.joint_zero = np.zeros(len(order))
+        for s, row in zip(servos, self.servo_row, strict=True):
+            self.joint_zero[row] = s.zero
         self.read()
 
     def step(self, targets: list[float]) -> None:
@@ -161,11 +167,12 @@ class PyBulletRobotLoop:
         joints = np.fromiter(_flat((j[0], j[1], j[3]) for j in states), np.float64, 3 * len(states)).reshape(-1, 3)
         self.rows, self.joints = rows, joints
         q = joints[:, 0]
-        self.q = [self.sign[i] * float(q[r]) for i, r in enumerate(self.servo_row)]
+        self.q = [self.sign[i] * float(q[r]) + self.zero[i] for i, r in enumerate(self.servo_row)]
 
     def joint_positions(self) -> dict[int, float]:
         """World joint index -> its position (the runner's coordinate) after the last read."""
-        return dict(zip(self.joint_order.tolist(), (self.joint_sign * self.joints[:, 0]).tolist(), strict=True))
+        q = self.joint_sign * self.joints[:, 0] + self.joint_zero
+        return dict(zip(self.joint_order.tolist(), q.tolist(), strict=True))
 
 
 #: bench/robot.py's hand-written robot loop for this engine (built from the adapter's world).

@@ -142,7 +142,7 @@ def render(figs: Sequence[RobotFigures]) -> list[str]:
                    f"{f.runner_ms:.3f} | {ratio} | {f.traced_ms:.3f} | {ratio_t} | {same} | {f.note} |")  # fmt: skip
     out += ["", "Where the runner's untraced step goes (ms per step, the instrumented runs' medians; *engine step*: "
             "the adapter's `step()`; *engine reads*: `body_states`, `joint_states` (and `contacts` where asked); "
-            "*motor commands*: the adapter's `set_motor`):", "",
+            "*motor commands*: the adapter's `set_motor` and `set_motors`):", "",
             "| backend | robot | " + " | ".join(PARTS) + " |", "|---|---|" + "---|" * len(PARTS)]  # fmt: skip
     for f in figs:
         if f.parts:
@@ -151,6 +151,21 @@ def render(figs: Sequence[RobotFigures]) -> list[str]:
 
 
 # --- the child process ----------------------------------------------------------------------------------------
+
+
+def _native_servo(program: Any, joint: int, spec: Any) -> Any:
+    """The runner's servo as the native loop drives it: its rate clamped to vmax and to the joint's velocity
+    limit (two symmetric clamps are one, to the smaller bound: the same numbers), its fmax within the joint's
+    effort limit (runner.sim.servo), read from the joint's start plus its stated zero."""
+    from runner.compile.joints import capped
+
+    from .raw_common import Servo
+
+    dyn = program.world.joints[joint].dynamics
+    bounds = [b for b in (spec.vmax, dyn.velocity) if b is not None]
+    return Servo(joint, spec.gain, capped(0.0, spec.fmax, dyn)[1], min(bounds) if bounds else None,
+                 program.joint_zeros.get(spec.joint, 0.0))  # fmt: skip
+
 
 
 def _child(argv: Sequence[str]) -> int:
@@ -169,7 +184,6 @@ def _child(argv: Sequence[str]) -> int:
     from runner.sim.session import Session
 
     from . import instrument as ins
-    from .raw_common import Servo
 
     backend, robot, reps = argv[0], argv[1], int(argv[2])
     loaded = load_scenario(ROBOTS[robot])
@@ -186,7 +200,7 @@ def _child(argv: Sequence[str]) -> int:
     except (ImportError, AttributeError):
         make_loop = None
     joint_index = {j.name: i for i, j in enumerate(program.world.joints)}
-    servos = [Servo(joint_index[s.joint], s.gain, s.fmax, s.vmax) for s in servo_specs(loaded.model)]
+    servos = [_native_servo(program, joint_index[s.joint], s) for s in servo_specs(loaded.model)]
     targets: list[list[float]] = []
     final: dict[str, np.ndarray] = {}
     seconds: dict[str, list[float]] = {}
@@ -223,7 +237,8 @@ def _child(argv: Sequence[str]) -> int:
             t = {k: v / steps * 1e3 for k, v in split.seconds.items()}
             builds.append(split.total("engine", ins.ENGINE_SETUP))
             step, reads = t.get("engine.step", 0.0), sum(t.get(f"engine.{m}", 0.0) for m in ins.ENGINE_READS)
-            motors, drive_ms = t.get("engine.set_motor", 0.0), t.get("servos.drive", 0.0)
+            motors = t.get("engine.set_motor", 0.0) + t.get("engine.set_motors", 0.0)
+            drive_ms = t.get("servos.drive", 0.0)
             named = {"engine step": step, "engine reads": reads, "motor commands": motors,
                      "servos (beyond the commands)": drive_ms - motors, "energy watchdog": t.get("energy.check", 0.0),
                      "assertions": t.get("assert.on_step", 0.0),

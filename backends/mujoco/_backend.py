@@ -132,6 +132,8 @@ class MujocoBackend(Backend):
         self._motor_of[motors[order]] = np.arange(motors.size)
         self._helper_dof = lay.helper_dof[motors][order]
         self._target = np.zeros(motors.size)  # per slot, in the MuJoCo joint's coordinate
+        #: per joint tuple ``set_motors`` was given: its motors' tendons, slots and signs
+        self._motor_rows: dict[tuple[int, ...], tuple[np.ndarray, np.ndarray, np.ndarray]] = {}
         self._motor_mean = SubstepMean(motors.size)
         self._reaction = _reaction_rows(world, m, lay)  # (child body, sign, first body) per watched joint
         self._reaction_mean = SubstepMean(6 * len(world.reaction_joints))
@@ -173,6 +175,20 @@ class MujocoBackend(Backend):
         slot = int(self._motor_of[joint])
         self._m.tendon_frictionloss[self._motor_tendon[slot]] = fmax  # 0: no row, the motor is off
         self._target[slot] = self._sign[joint] * vel
+
+    def _set_motors(self, joints: tuple[int, ...], vels: list[float], fmaxes: list[float]) -> None:
+        """The same writes as ``_set_motor``, one array assignment each for all the joints (a subclass that adds
+        to ``_set_motor``, MuJoCo Warp's, gets one call of it per joint)."""
+        if type(self)._set_motor is not MujocoBackend._set_motor:
+            super()._set_motors(joints, vels, fmaxes)
+            return
+        rows = self._motor_rows.get(joints)
+        if rows is None:
+            slots = self._motor_of[list(joints)].astype(int)
+            rows = self._motor_rows[joints] = (self._motor_tendon[slots], slots, self._sign[list(joints)])
+        tendons, slots, sign = rows
+        self._m.tendon_frictionloss[tendons] = fmaxes  # 0: no row, the motor is off
+        self._target[slots] = sign * np.array(vels)
 
     def _set_control(self, actuator: int, ctrl: float) -> None:
         """The MJCF file's actuator, in the file's order (the scenario's own parts add no actuator): MuJoCo

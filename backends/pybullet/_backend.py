@@ -118,6 +118,8 @@ class PyBulletBackend(Backend):
         p.setTimeStep(self._h, physicsClientId=c)
         self._layout: Layout = build(p, c, world)
         self._frames = InertialFrames(world)
+        #: per joint tuple ``set_motors`` was given: (multibody, its links, (place in the tuple, sign) each)
+        self._motor_groups: dict[tuple[int, ...], list[tuple[int, list[int], list[tuple[int, float]]]]] = {}
         self._fit: SurfaceFit = fit_surfaces(world)
         # ODE bounces when the approach speed *before* the step exceeds bounce_vel; Bullet compares the
         # speed after this substep's gravity, so a resting body approaches at about g*h and bounces every
@@ -214,6 +216,8 @@ class PyBulletBackend(Backend):
         order = [k for u in uids for k in self._motor_joints if layout.joints[k].uid == u]
         self._joint_order = np.array(order, dtype=np.int64)
         self._joint_sign = np.array([layout.joints[k].sign for k in order], dtype=float)
+        #: every joint read, in world order (a robot of hinges and sliders): the read's columns are the arrays
+        self._every_joint = order == list(range(len(world.joints)))
         self._motor_mean = SubstepMean(len(world.joints))
         self._watched = self._watch_reactions()
         self._reaction_mean = SubstepMean(6 * len(self._watched))
@@ -386,13 +390,18 @@ class PyBulletBackend(Backend):
 
     def _joint_states(self) -> JointStates:
         m, c = len(self.world.joints), self._c
-        pos, vel, force = np.full(m, np.nan), np.full(m, np.nan), np.zeros(m)
         if self._joint_reads:  # one getJointStates per multibody: (q, qd, reaction forces, applied torque)
             states = [s for uid, links in self._joint_reads for s in p.getJointStates(uid, links, physicsClientId=c)]
             rows = np.fromiter(_flat((s[0], s[1], s[3]) for s in states), np.float64, 3 * len(states))
             rows = rows.reshape(-1, 3) * self._joint_sign[:, None]
-            order = self._joint_order
-            pos[order], vel[order], force[order] = rows[:, 0], rows[:, 1], rows[:, 2]
+            if self._every_joint:
+                pos, vel, force = np.ascontiguousarray(rows.T)  # three contiguous rows: the same numbers
+            else:
+                pos, vel, force = np.full(m, np.nan), np.full(m, np.nan), np.zeros(m)
+                order = self._joint_order
+                pos[order], vel[order], force[order] = rows[:, 0], rows[:, 1], rows[:, 2]
+        else:
+            pos, vel, force = np.full(m, np.nan), np.full(m, np.nan), np.zeros(m)
         if self.world.substeps > 1 and self.steps:
             force = self._motor_mean.mean.copy()  # the mean over the step's substeps
         return JointStates(position=pos, velocity=vel, motor_force=force)
@@ -422,6 +431,23 @@ class PyBulletBackend(Backend):
         p.setJointMotorControl2(
             h.uid, h.link, p.VELOCITY_CONTROL, targetVelocity=h.sign * vel, force=fmax, physicsClientId=self._c
         )
+
+    def _set_motors(self, joints: tuple[int, ...], vels: list[float], fmaxes: list[float]) -> None:
+        """One ``setJointMotorControlArray`` per multibody: the same motor settings as ``setJointMotorControl2``
+        per joint (velocity control: target rate, maximum force, velocity gain 1)."""
+        groups = self._motor_groups.get(joints)
+        if groups is None:
+            handles = [self._layout.joints[k] for k in joints]
+            groups = [(uid, [h.link for h in handles if h.uid == uid],
+                       [(i, h.sign) for i, h in enumerate(handles) if h.uid == uid])
+                      for uid in dict.fromkeys(h.uid for h in handles)]  # fmt: skip
+            self._motor_groups[joints] = groups
+        c, mode = self._c, p.VELOCITY_CONTROL
+        for uid, links, places in groups:
+            p.setJointMotorControlArray(
+                uid, links, mode, targetVelocities=[sign * vels[i] for i, sign in places],
+                forces=[fmaxes[i] for i, _ in places], physicsClientId=c,
+            )  # fmt: skip
 
     def _reset_body(self, body: int, pos: Vec3, quat: Quat, lin_vel: Vec3, ang_vel: Vec3) -> None:
         uid = self._layout.uid[body]

@@ -20,6 +20,11 @@ def _cross(a: Vec3, b: Vec3) -> Vec3:
     return (a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0])
 
 
+#: up to this many offset bodies the conversion runs on plain floats (about 2.5 us per body); above, on
+#: whole arrays (about 30 us whatever the count) [measured, in-process: 7 bodies 29 / 32 us, 12: 46 / 33]
+PER_BODY_UP_TO = 8
+
+
 class InertialFrames:
     """The bodies with an inertial offset, and the conversions of their states."""
 
@@ -30,6 +35,8 @@ class InertialFrames:
         #: per offset body: its COM in the body frame and the conjugate of its principal axes' quaternion
         self._conj = [(*com, *quat_conj(iq)) for com, iq in self.offsets.values()]
         self._rows = np.array(list(self.offsets), dtype=np.int64)
+        #: the same, one row per quantity (cx, cy, cz, jw, jx, jy, jz), for the whole-array conversion
+        self._columns = np.array(self._conj, dtype=float).reshape(-1, 7).T.copy()
 
     def to_body(self, arr: np.ndarray) -> None:
         """Rows of (pos, quat x y z w, lin_vel, ang_vel) of inertial frames -> of body frames, in place.
@@ -38,6 +45,9 @@ class InertialFrames:
         product are written out here on plain floats (the same operations in the same order: the same
         numbers), the rows read out and written back in one call each instead of tuples and numpy scalars."""
         if not self._conj:
+            return
+        if len(self._conj) > PER_BODY_UP_TO:
+            self._to_body_columns(arr)
             return
         rows = arr[self._rows].tolist()
         for k, ((cx, cy, cz, jw, jx, jy, jz), row) in enumerate(zip(self._conj, rows, strict=True)):
@@ -59,6 +69,33 @@ class InertialFrames:
             lin = (vx + (oy * nz - oz * ny), vy + (oz * nx - ox * nz), vz + (ox * ny - oy * nx))
             rows[k] = [px - ax, py - ay, pz - az, bx, by, bz, bw, *lin, ox, oy, oz]
         arr[self._rows] = rows
+
+    def _to_body_columns(self, arr: np.ndarray) -> None:
+        """``to_body`` as whole-array operations on each quantity's column: the same operations in the same
+        order, element by element (the same numbers, bit for bit: numpy's elementwise arithmetic rounds as
+        Python's floats do), in about 45 numpy calls whatever the number of bodies."""
+        rows = arr[self._rows]
+        px, py, pz, x, y, z, w, vx, vy, vz, ox, oy, oz = rows.T
+        cx, cy, cz, jw, jx, jy, jz = self._columns
+        bw = w * jw - x * jx - y * jy - z * jz
+        bx = w * jx + x * jw + y * jz - z * jy
+        by = w * jy - x * jz + y * jw + z * jx
+        bz = w * jz + x * jy - y * jx + z * jw
+        ux = by * cz - bz * cy
+        uy = bz * cx - bx * cz
+        uz = bx * cy - by * cx
+        ax = cx + 2.0 * (bw * ux + by * uz - bz * uy)
+        ay = cy + 2.0 * (bw * uy + bz * ux - bx * uz)
+        az = cz + 2.0 * (bw * uz + bx * uy - by * ux)
+        nx, ny, nz = -ax, -ay, -az
+        out = np.empty_like(rows)
+        out[:, 0], out[:, 1], out[:, 2] = px - ax, py - ay, pz - az
+        out[:, 3], out[:, 4], out[:, 5], out[:, 6] = bx, by, bz, bw
+        out[:, 7] = vx + (oy * nz - oz * ny)
+        out[:, 8] = vy + (oz * nx - ox * nz)
+        out[:, 9] = vz + (ox * ny - oy * nx)
+        out[:, 10:13] = rows[:, 10:13]
+        arr[self._rows] = out
 
     def to_inertial(self, body: int, pos: Vec3, quat: Quat, lin_vel: Vec3, ang_vel: Vec3) -> tuple[Vec3, Quat, Vec3]:
         """A body-frame pose and origin velocity -> the inertial frame's pose and the COM's velocity."""

@@ -27,6 +27,7 @@ from .contract_edges import (
     test_misuse_is_a_contract_violation_and_changes_nothing,
     test_motor_force_with_substeps_is_the_mean,
     test_set_motor_on_a_joint_without_a_motor_is_a_contract_violation,
+    test_set_motors_is_set_motor_for_each_joint,
     test_turning_kinematic_body_carries_what_rests_on_it,
 )
 from .contract_motion import (
@@ -83,6 +84,7 @@ __all__ = [
     "test_resting_height",
     "test_restitution",
     "test_set_motor_on_a_joint_without_a_motor_is_a_contract_violation",
+    "test_set_motors_is_set_motor_for_each_joint",
     "test_slider_between_bodies",
     "test_slider_motor",
     "test_slider_stop",

@@ -42,6 +42,12 @@ _MISUSE: dict[str, Callable[[Backend], object]] = {
     "negative joint index": lambda sim: sim.set_motor(-1, 0.1, 1.0),
     "set_motor with a negative fmax": lambda sim: sim.set_motor(0, 0.1, -1.0),
     "set_motor with a NaN vel": lambda sim: sim.set_motor(0, math.nan, 1.0),
+    "set_motors with a joint index past the end": lambda sim: sim.set_motors((0, len(sim.world.joints)), [0.1] * 2,
+                                                                              [1.0] * 2),  # fmt: skip
+    "set_motors with a NaN vel": lambda sim: sim.set_motors((0,), [math.nan], [1.0]),
+    "set_motors with a negative fmax": lambda sim: sim.set_motors((0,), [0.1], [-1.0]),
+    "set_motors with fewer values than joints": lambda sim: sim.set_motors((0,), [], []),
+    "set_motors with a joint twice": lambda sim: sim.set_motors((0, 0), [0.1, 0.2], [1.0, 1.0]),
     # no model file's actuator in the world: refused by an engine without actuator:native, and by MuJoCo
     "set_control without an actuator": lambda sim: sim.set_control(0, 1.0),
     "set_control with a NaN ctrl": lambda sim: sim.set_control(0, math.nan),
@@ -75,6 +81,33 @@ def test_set_motor_on_a_joint_without_a_motor_is_a_contract_violation(
 ) -> None:
     require(backend_cls, Capability.JOINT_BALL)
     _refused_and_unchanged(backend_name, w.misuse(with_ball=True), lambda sim: sim.set_motor(1, 0.1, 1.0))
+    _refused_and_unchanged(backend_name, w.misuse(with_ball=True), lambda sim: sim.set_motors((0, 1), [0.1] * 2,
+                                                                                              [1.0] * 2))  # fmt: skip
+
+
+def test_set_motors_is_set_motor_for_each_joint(backend_name: str, backend_cls: type[Backend]) -> None:
+    """``set_motors`` (one engine call where the engine has one) gives the engine the same commands as one
+    ``set_motor`` per joint: the same states, to the bit, after commands that change every step (in the
+    tuple's order, not the world's, and one joint switched off)."""
+    require(backend_cls, Capability.JOINT_SLIDER, Capability.JOINT_MOTOR)
+    world = w.two_doors()
+    commands = [((1, 0), [0.01 * k, -0.02 * k], [100.0, 50.0 if k < 5 else 0.0]) for k in range(10)]
+    states = []
+    for batched in (False, True):
+        with make_backend(backend_name, world) as sim:
+            for joints, vels, fmaxes in commands:
+                if batched:
+                    sim.set_motors(joints, vels, fmaxes)
+                else:
+                    for joint, vel, fmax in zip(joints, vels, fmaxes, strict=True):
+                        sim.set_motor(joint, vel, fmax)
+                sim.step()
+            s, js = sim.body_states(), sim.joint_states()
+            states.append((s.pos, s.lin_vel, js.position, js.velocity, js.motor_force))
+    moved = states[0][3]
+    assert abs(moved[1]) > 0.0 and abs(moved[0]) > 0.0  # both motors drove their doors
+    for one, many in zip(*states, strict=True):
+        assert np.array_equal(one, many)
 
 
 def test_forces_on_bodies_that_are_not_dynamic_have_no_effect(any_backend: str) -> None:
@@ -101,6 +134,7 @@ _CALLS: dict[str, Callable[[Backend], object]] = {
     "drain_messages": lambda sim: sim.drain_messages(),
     "set_kinematic": lambda sim: sim.set_kinematic(1, *_POSE),
     "set_motor": lambda sim: sim.set_motor(0, 0.1, 1.0),
+    "set_motors": lambda sim: sim.set_motors((0,), [0.1], [1.0]),
     "apply_force": lambda sim: sim.apply_force(2, (1.0, 0.0, 0.0), ZERO),
     "reset_body": lambda sim: sim.reset_body(2, *_POSE),
     "set_control": lambda sim: sim.set_control(0, 1.0),
@@ -128,6 +162,7 @@ _HOOKS: dict[str, tuple[str, Callable[[Backend], object]]] = {
     "settings": ("_settings", lambda sim: sim.settings()),
     "set_kinematic": ("_place_kinematic", lambda sim: sim.set_kinematic(1, *_POSE)),
     "set_motor": ("_set_motor", lambda sim: sim.set_motor(0, 0.1, 1.0)),
+    "set_motors": ("_set_motors", lambda sim: sim.set_motors((0,), [0.1], [1.0])),
     "reset_body": ("_reset_body", lambda sim: sim.reset_body(2, *_POSE)),
     "close": ("_close", lambda sim: sim.close()),
 }

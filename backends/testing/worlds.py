@@ -199,6 +199,16 @@ def lab_door(*, lo: float | None = None, hi: float | None = None, motor: Motor |
     return world("door", [door], joints=(joint,), dt=0.04)
 
 
+def two_doors() -> CompiledWorld:
+    """Two of the lab's doors, each on a slider to the environment with its motor off (along x and along y)."""
+    doors = [box("door_x", LAB_DOOR, (1.0, 0.0, 1.0), density=1000.0), box("door_y", LAB_DOOR, (1.0, 5.0, 1.0),
+             density=1000.0)]  # fmt: skip
+    off = Motor(0.0, 0.0)
+    joints = (JointSpec("slider_x", JointKind.SLIDER, "door_x", None, axis=(1.0, 0.0, 0.0), motor=off),
+              JointSpec("slider_y", JointKind.SLIDER, "door_y", None, axis=(0.0, 1.0, 0.0), motor=off))  # fmt: skip
+    return world("two-doors", doors, joints=joints, dt=0.04)
+
+
 def offset_hinge(
     *, lo: float | None = None, hi: float | None = None, kind: JointKind = JointKind.HINGE
 ) -> CompiledWorld:

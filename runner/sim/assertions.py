@@ -39,6 +39,24 @@ class _Check:
     seen: bool = False
     previous: bool | None = None  # becomes: the condition at the last step
     extra: dict[str, Any] = field(default_factory=dict)
+    #: how the running check treats it each step (``_route``), decided once from the spec's type
+    route: str = ""
+    #: an `at:` check's step (its time's nearest step; None: `at: end`)
+    at_step: int | None = None
+
+
+def _route(spec: Any, dt: float) -> tuple[str, int | None]:
+    """What ``AssertionTracker._on_step`` does with an assertion each step, and an `at:` check's step."""
+    at = getattr(spec, "at", None)
+    if isinstance(spec, A.ValueAssertion | A.CheckAssertion | A.ContactAssertion) and at is not None:
+        return "at", None if at == "end" else math.floor(float(at) / dt + 0.5 + 1e-9)
+    if isinstance(spec, A.AlwaysAssertion | A.NeverAssertion | A.EventuallyAssertion | A.ContactAssertion):
+        return "window", None
+    if isinstance(spec, A.MaxAssertion | A.MinAssertion):
+        return "extremum", None
+    if isinstance(spec, A.BecomesAssertion):
+        return "becomes", None
+    return "", None  # decided at the end (events, sounds)
 
 
 class AssertionTracker:
@@ -46,7 +64,8 @@ class AssertionTracker:
         self.backend = backend
         self.dt = dt
         self.expr = expressions
-        self.checks = [_Check(s, type(s).__name__.removesuffix("Assertion").lower()) for s in specs]
+        self.checks = [_Check(s, type(s).__name__.removesuffix("Assertion").lower(), route=route, at_step=at_step)
+                       for s in specs for route, at_step in (_route(s, dt),)]  # fmt: skip
         self.decided: list[Verdict] = []  # verdicts decided since the last pop_decided(), in order
 
     def pop_decided(self) -> list[Verdict]:
@@ -79,6 +98,8 @@ class AssertionTracker:
 
     def on_step(self, t: float, r: Resolver, contact: Callable[[str, str], bool], final: bool = False) -> None:
         pending = [c for c in self.checks if c.done is None]
+        if not pending:
+            return
         self._on_step(t, r, contact, final)
         for c in pending:
             if c.done is not None:
@@ -89,20 +110,24 @@ class AssertionTracker:
         return apply_known_limit(v, getattr(spec, "known_limits", {}), self.backend)
 
     def _on_step(self, t: float, r: Resolver, contact: Callable[[str, str], bool], final: bool) -> None:
+        step: int | None = None  # the recorded step nearest to t (as _at_time), when an `at:` check asks
         for c in self.checks:
             if c.done is not None:
                 continue
-            s = c.spec
-            if (
-                isinstance(s, A.ValueAssertion | A.CheckAssertion | A.ContactAssertion)
-                and getattr(s, "at", None) is not None
-            ):
-                if self._at_time(s.at, t, final):
+            s, route = c.spec, c.route
+            if route == "at":
+                if c.at_step is None:
+                    hit = final
+                else:
+                    if step is None:
+                        step = math.floor(t / self.dt + 0.5)
+                    hit = step == c.at_step
+                if hit:
                     c.done = self._sample(s, t, r, contact)
                 continue
-            if isinstance(s, A.AlwaysAssertion | A.NeverAssertion | A.EventuallyAssertion | A.ContactAssertion):
+            if route == "window":
                 self._over_window(c, t, r, contact)
-            elif isinstance(s, A.MaxAssertion | A.MinAssertion):
+            elif route == "extremum":
                 lo, hi = _window(s.during)
                 if lo - TIME_EPS <= t <= hi + TIME_EPS:
                     is_max = isinstance(s, A.MaxAssertion)
@@ -112,7 +137,7 @@ class AssertionTracker:
                         c.best, c.best_time = number, t
                     if c.best is not None and hi <= t + TIME_EPS:
                         c.done = self._extremum(c, r)
-            elif isinstance(s, A.BecomesAssertion):
+            elif route == "becomes":
                 self._becomes(c, t, r)
 
     def _over_window(self, c: _Check, t: float, r: Resolver, contact: Callable[[str, str], bool]) -> None:

@@ -42,6 +42,7 @@ microseconds per step for tens of bodies.
 
 from __future__ import annotations
 
+import math
 from collections import deque
 
 import numpy as np
@@ -49,7 +50,7 @@ import numpy as np
 from backends.types import IDENTITY_QUAT, BodyStates, CompiledWorld, JointStates, Motion
 from runner.errors import EnergyGain
 
-__all__ = ["GAIN_FRACTION", "WINDOW_STEPS", "EnergyWatch", "body_energies"]
+__all__ = ["GAIN_FRACTION", "WINDOW_STEPS", "BodyEnergy", "EnergyWatch", "body_energies"]
 
 #: steps the reference looks back: ERP 0.2 corrects 1 - 0.8^25 = 99.6 % of a penetration within them
 WINDOW_STEPS = 25
@@ -84,6 +85,56 @@ def _quat_matrix_form() -> np.ndarray:
 _QUAT_MATRIX = _quat_matrix_form()
 
 
+class BodyEnergy:
+    """(kinetic, total) mechanical energy of a fixed set of bodies (J), from their body-frame states:
+    translational kinetic energy of the centre of mass, rotational about it, plus the gravitational
+    -m g.p_com. ``com`` (N, 3) places each centre of mass in its body frame (None: at the origin) and
+    ``tensor`` (N, 3, 3) is each inertia tensor about it in the body frame (None: ``inertia``, principal
+    moments along the body axes).
+
+    The check runs every step, mostly on a few to a hundred bodies, where each numpy call costs more than
+    its arithmetic (about 1 us): what does not change between steps is made once here, the bodies'
+    rotation matrices are one product (:func:`_quat_matrix_form`), the COM offset and the COM's velocity
+    are one batched product each, and the rest a few whole-array calls."""
+
+    def __init__(
+        self,
+        index: np.ndarray | slice,
+        mass: np.ndarray,
+        inertia: np.ndarray,
+        gravity: np.ndarray,
+        com: np.ndarray | None = None,
+        tensor: np.ndarray | None = None,
+    ) -> None:
+        self.index = index
+        self.half_mass = 0.5 * mass
+        self.mass = mass
+        self.gravity = gravity
+        #: (N, 3, 1): each COM in its body frame, as the batched product takes it
+        self.com = None if com is None else np.ascontiguousarray(com, float)[:, :, None]
+        #: 1/2 the inertia: principal moments (N, 3), or the full tensor (N, 3, 3) in the body frame
+        self.half_inertia = 0.5 * inertia
+        self.half_tensor = None if tensor is None else 0.5 * tensor
+
+    def __call__(self, states: BodyStates) -> tuple[np.ndarray, np.ndarray]:
+        index = self.index
+        quat, w = states.quat[index], states.ang_vel[index]
+        pos, v = states.pos[index], states.lin_vel[index]
+        n = len(quat)
+        rot = ((quat[:, :, None] * quat[:, None, :]).reshape(n, 16) @ _QUAT_MATRIX).reshape(n, 3, 3)
+        body_w = (w[:, None, :] @ rot)[:, 0, :]  # R^T w, the body-frame angular velocity
+        if self.com is not None:
+            offset = (rot @ self.com)[:, :, 0]  # R com: from the body frame's origin to the COM, world axes
+            pos = pos + offset
+            v = v + ((w @ _SKEW).reshape(n, 3, 3) @ offset[:, :, None])[:, :, 0]  # the COM's: v + w x offset
+        if self.half_tensor is None:
+            rotational = np.add.reduce(self.half_inertia * body_w * body_w, axis=1)
+        else:
+            rotational = np.add.reduce((body_w[:, None, :] @ self.half_tensor)[:, 0, :] * body_w, axis=1)
+        kinetic = self.half_mass * np.add.reduce(v * v, axis=1) + rotational
+        return kinetic, kinetic - self.mass * (pos @ self.gravity)
+
+
 def body_energies(
     states: BodyStates,
     index: np.ndarray | slice,
@@ -93,31 +144,8 @@ def body_energies(
     com: np.ndarray | None = None,
     tensor: np.ndarray | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
-    """(kinetic, total) mechanical energy of the bodies ``index`` (J): translational kinetic energy of the
-    centre of mass, rotational about it, plus the gravitational -m g.p_com. The states are those of the body
-    frames; ``com`` (N, 3) places each centre of mass in its body frame (None: at the origin) and ``tensor``
-    (N, 3, 3) is each inertia tensor about it in the body frame (None: ``inertia``, principal moments along
-    the body axes).
-
-    The check runs every step, mostly on a few to a hundred bodies, where each numpy call costs more than
-    its arithmetic: the bodies' rotation matrices are one product (:func:`_quat_matrix_form`) and every
-    other quantity one or two whole-array calls."""
-    quat = states.quat[index]
-    w = states.ang_vel[index]
-    n = len(quat)
-    rot = ((quat[:, :, None] * quat[:, None, :]).reshape(n, 16) @ _QUAT_MATRIX).reshape(n, 3, 3)
-    body_w = (w[:, None, :] @ rot)[:, 0, :]  # R^T w, the body-frame angular velocity
-    pos, v = states.pos[index], states.lin_vel[index]
-    if com is not None:
-        offset = (rot @ com[:, :, None])[:, :, 0]  # R com: from the body frame's origin to the COM, world axes
-        pos = pos + offset
-        v = v + ((w @ _SKEW).reshape(n, 3, 3) @ offset[:, :, None])[:, :, 0]  # the COM's: v + w x offset
-    if tensor is None:
-        rotational = np.add.reduce(inertia * body_w * body_w, axis=1)
-    else:
-        rotational = np.add.reduce((body_w[:, None, :] @ tensor)[:, 0, :] * body_w, axis=1)
-    kinetic = 0.5 * (mass * np.add.reduce(v * v, axis=1) + rotational)
-    return kinetic, kinetic - mass * (pos @ gravity)
+    """(kinetic, total) mechanical energy of the bodies ``index`` (J): :class:`BodyEnergy`'s, once."""
+    return BodyEnergy(index, mass, inertia, gravity, com, tensor)(states)
 
 
 class EnergyWatch:
@@ -143,7 +171,10 @@ class EnergyWatch:
         self.com = np.array([b.com for b in bodies], float).reshape(-1, 3) if offset else None
         self.tensor = np.array([b.inertia_tensor() for b in bodies], float).reshape(-1, 3, 3) if turned else None
         self.gravity = np.asarray(world.gravity, float)
+        self._energy = BodyEnergy(self.rows, self.mass, self.inertia, self.gravity, self.com, self.tensor)
         self.motors = np.array([k for k, j in enumerate(world.joints) if j.motor is not None], dtype=int)
+        #: the same joints as a slice when every joint has a motor (a robot's, usually: no copy per step)
+        self._motor_rows: np.ndarray | slice = slice(None) if self.motors.size == len(world.joints) else self.motors
         #: joints whose coordinate holds energy of its own: a rotor's (armature) kinetic energy 1/2 a qdot^2 and
         #: a spring's (stiffness) 1/2 k (q - ref)^2, exchanged with the bodies' (docs/semantics.md, "Joint
         #: dynamics"); without them a rotor slowing down would read as the bodies gaining energy
@@ -174,18 +205,21 @@ class EnergyWatch:
         if not self.index.size:
             return
         if self.motors.size:
-            power = joints.motor_force[self.motors] * joints.velocity[self.motors]
-            if not np.isfinite(power).all():  # rare: nan_to_num alone costs more than the rest of the line
-                power = np.nan_to_num(power)
-            self.work += float(np.abs(power).sum()) * self.dt
-        kinetic, energy = body_energies(states, self.rows, self.mass, self.inertia, self.gravity, self.com, self.tensor)
-        total = float(energy.sum()) - self.work
+            rows = self._motor_rows
+            power = np.abs(joints.motor_force[rows] * joints.velocity[rows])
+            work = float(np.add.reduce(power))
+            if not math.isfinite(work):  # rare (a sum of |terms| is finite iff they all are, short of overflow)
+                work = float(np.add.reduce(np.nan_to_num(power)))
+            self.work += work * self.dt
+        kinetic, energy = self._energy(states)
+        total = float(np.add.reduce(energy)) - self.work
         if self.stored.size:
             rate, stretch = joints.velocity[self.stored], joints.position[self.stored] - self.springref
             joint_kinetic = 0.5 * self.armature * rate * rate
             total += float(np.nansum(joint_kinetic + 0.5 * self.stiffness * stretch * stretch))
             kinetic = np.append(kinetic, np.nansum(joint_kinetic))
         entry = (total, energy)
+        k_now = float(np.add.reduce(kinetic))
         if self._driven:
             self._driven = False
             self._window.clear()
@@ -193,9 +227,10 @@ class EnergyWatch:
             self._totals.clear()
             self._totals.append(total)
             self._reference, self._reference_at, self._reference_bodies = total, t, energy
-            self._k_peak = float(kinetic.sum())
+            self._k_peak = k_now
             return
-        self._k_peak = max(self._k_peak, float(kinetic.sum()))
+        if k_now > self._k_peak:
+            self._k_peak = k_now
         rise = total - self._reference
         if rise > 0.0:
             bound = self.bound(energy)

@@ -54,21 +54,37 @@ class Servos:
         #: within its effort limit): the same operations as ``capped``, in its order, without its per-step calls
         self._fixed = [(j, s.gain, s.vmax, self.dynamics[j].velocity, capped(0.0, s.fmax, self.dynamics[j])[1])
                        for j, s in self.specs]  # fmt: skip
+        self._joints = tuple(j for j, _ in self.specs)
+        self._fmaxes = [fixed[4] for fixed in self._fixed]
+        #: every target, when none is an expression (read once, not every step)
+        constant = [s.target for _, s in self.specs if isinstance(s.target, float)]
+        self._constant = constant if len(constant) == len(self.specs) else None
 
     def __bool__(self) -> bool:
         return bool(self.specs)
 
     def targets(self, resolver: Resolver) -> list[float]:
         """Every servo's target now, in ``specs`` order (an expression target is read every step)."""
+        if self._constant is not None:
+            return self._constant
         return [s.target if isinstance(s.target, float) else float(s.target.number(resolver)) for _, s in self.specs]
 
     def drive(self, backend: Backend, positions: list[float], resolver: Resolver) -> None:
-        set_motor = backend.set_motor
-        for (j, gain, vmax, limit, fmax), target in zip(self._fixed, self.targets(resolver), strict=True):
+        """Every servo's motor command, in one ``set_motors`` call (one engine call where the engine has one;
+        the same commands as one ``set_motor`` per joint)."""
+        vels = []
+        isfinite = math.isfinite
+        for (j, gain, vmax, limit, _), target in zip(self._fixed, self.targets(resolver), strict=True):
             vel = gain * (target - positions[j])
             if vmax is not None:
                 vel = max(-vmax, min(vmax, vel))
-            if math.isfinite(vel):  # a NaN reading is the engine's failure, which the runner reports itself
-                if limit is not None:
-                    vel = max(-limit, min(limit, vel))
-                set_motor(j, vel, fmax)
+            if limit is not None and isfinite(vel):  # a non-finite rate is dropped below, not clamped
+                vel = max(-limit, min(limit, vel))
+            vels.append(vel)
+        if all(map(isfinite, vels)):
+            backend.set_motors(self._joints, vels, self._fmaxes)
+            return
+        # a NaN reading is the engine's failure, which the runner reports itself: that joint gets no command
+        kept = [k for k, vel in enumerate(vels) if isfinite(vel)]
+        backend.set_motors(tuple(self._joints[k] for k in kept), [vels[k] for k in kept],
+                           [self._fmaxes[k] for k in kept])  # fmt: skip

@@ -38,7 +38,7 @@ from runner.sim.actuators import Actuators
 from runner.sim.assertions import AssertionTracker, Verdict
 from runner.sim.budget import Watchdog
 from runner.sim.collisions import EventHandler, SolidTraverser, quat_matrices
-from runner.sim.conditions import ConditionTriggers, HandlerGate, with_zeros
+from runner.sim.conditions import ConditionTriggers, HandlerGate, JointZeros, with_zeros
 from runner.sim.drives import Drives, initial_drives
 from runner.sim.energy import EnergyWatch
 from runner.sim.held import HeldForces
@@ -194,7 +194,7 @@ class Session:
         self.collision_events = EventHandler(c.in_, c.again, c.out)
         self.conditions = ConditionTriggers(program.triggers, program.expressions)
         self.handler_gate = HandlerGate()
-        self._zeros = [(self.joint_index[j], offset) for j, offset in program.joint_zeros.items()]
+        self._zeros = JointZeros([(self.joint_index[j], offset) for j, offset in program.joint_zeros.items()])
         self.servos = Servos(servo_specs(model), self.joint_index, self.world)  # position servos (sim.servo)
         self.drives = Drives(self.world, initial_drives(model))  # position and torque commands (sim.drives)
         self.actuators = Actuators(model, program.loaded.robots, self.joint_index)  # MJCF actuators (sim.actuators)
@@ -445,15 +445,16 @@ class Session:
                 touching.setdefault(c.b, []).append(c.a)
             for i in self.program.contact_colliders:
                 hits.extend((names[i], names[other], True) for other in touching.get(i, ()))
-        for ev in self.collision_events.update(hits):
-            self.queue.append((ev.name, f"collision-{ev.kind}"))
+        if hits or self.collision_events.last:  # nothing touching now or before: no in, again or out event
+            for ev in self.collision_events.update(hits):
+                self.queue.append((ev.name, f"collision-{ev.kind}"))
         for event in self.conditions.check(self.resolver):  # after the collision events of the same step
             self.queue.append((event, "condition"))
 
     def _record(self, t: float, k: int = 0, last: bool = False) -> None:
         """Step ``k`` ends at ``t``: sounds that ended, the trace (every ``record_every``-th step and the
         last), running assertions (every step)."""
-        for name, end in list(self.playing_sounds.items()):
+        for name, end in list(self.playing_sounds.items()) if self.playing_sounds else ():
             if end <= t + 1e-9:
                 del self.playing_sounds[name]
                 self.sound_stops.append((end, name))
@@ -466,6 +467,8 @@ class Session:
 
     def _log_verdicts(self, t: float) -> None:
         """Log the verdicts the tracker decided, at ``t``, the time they were decided."""
+        if not self.tracker.decided:
+            return
         decided = self.tracker.pop_decided()
         if self.trace is not None:
             for v in decided:
@@ -525,16 +528,17 @@ class Session:
         yield t
         for k in range(steps):
             t = k * self.dt
-            pending = list(self.queue)
-            self.queue.clear()
-            while inputs and inputs[0].step <= k:
-                pending.append((inputs.popleft().event, "input"))
-            pending.extend((event, "input") for event in self.injected)
-            self.injected.clear()
-            for event, source in pending:
-                self.dispatch(event, t, source)
-                if self.ended:
-                    break
+            if self.queue or self.injected or (inputs and inputs[0].step <= k):  # events due at t
+                pending = list(self.queue)
+                self.queue.clear()
+                while inputs and inputs[0].step <= k:
+                    pending.append((inputs.popleft().event, "input"))
+                pending.extend((event, "input") for event in self.injected)
+                self.injected.clear()
+                for event, source in pending:
+                    self.dispatch(event, t, source)
+                    if self.ended:
+                        break
             if self.ended:
                 break
             t_next = (k + 1) * self.dt

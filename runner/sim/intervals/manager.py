@@ -314,6 +314,8 @@ class IntervalManager:
 
     def step(self, now: float) -> None:
         """One frame at ``now``: Python tasks, C++ intervals in name order, Python callbacks, done events."""
+        if not (self._tasks or self._names or self._slots or self._removed or self._done):
+            return  # no interval has been started: nothing to step
         if self._in_step:
             raise RuntimeError("IntervalManager.step() called from inside step()")
         self._in_step = True
