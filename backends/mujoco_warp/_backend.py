@@ -140,6 +140,7 @@ class MujocoWarpBackend(MujocoBackend):
         self._keep(out)
         self._frictionloss = self._wm.tendon_frictionloss
         self._wm.opt.tolerance.fill_(_solver_tolerance(m, self._d))
+        self._controls_changed = False
 
     def _keep(self, out: io.StringIO) -> None:
         """Keep what MJWarp printed (its overflow warnings), not Warp's kernel compile/cache lines: those differ
@@ -156,12 +157,22 @@ class MujocoWarpBackend(MujocoBackend):
             values.reshape(-1)[self._motor_tendon[slot]] = fmax
             self._frictionloss.assign(values)
 
+    def _set_control(self, actuator: int, ctrl: float) -> None:
+        """The host ``ctrl`` (the MuJoCo adapter's), copied to the device before the next engine step."""
+        if 0 <= actuator < self._m.nu and self._d.ctrl[actuator] == ctrl:
+            return  # the runner sets every driven actuator's ctrl before every step, mostly unchanged
+        super()._set_control(actuator, ctrl)
+        self._controls_changed = True
+
     def _engine_step(self, native: bool, friction: float | None) -> None:
         del native, friction  # MJWarp's step is MuJoCo's own (module docstring)
         d, wd = self._d, self._wd
         wd.qpos.assign(d.qpos.reshape(1, -1))
         wd.qvel.assign(d.qvel.reshape(1, -1))
         wd.xfrc_applied.assign(d.xfrc_applied.reshape(1, -1, 6))
+        if self._controls_changed:  # held on the device until changed, as MjData's
+            wd.ctrl.assign(d.ctrl.reshape(1, -1))
+            self._controls_changed = False
         with contextlib.redirect_stdout(io.StringIO()) as out:
             self._mjw.step(self._wm, wd)
         self._keep(out)

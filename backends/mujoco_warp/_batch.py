@@ -4,8 +4,9 @@ The worlds are built as the single-world adapter builds them (one MuJoCo model a
 views, ``_view.WorldView``); ``_compare`` checks that they differ only where MJWarp holds a value per world, and
 world 0's model goes to the device with those fields batched (``put_model(batch_sizes=...)``, then each world's
 row). Each engine step copies every world's qpos, qvel and applied forces up (one copy of each array for all
-worlds), takes one ``mujoco_warp.step`` and copies qpos, qvel and time back (one copy each); contacts,
-constraint forces and the efc forces are copied only when a world reads them, once for all worlds per engine step.
+worlds; the actuators' ctrl and the motors' force limits too when a world changed them), takes one
+``mujoco_warp.step`` and copies qpos, qvel and time back (one copy each); contacts, constraint forces and the efc
+forces are copied only when a world reads them, once for all worlds per engine step.
 
 A world a step cannot be trusted for (its contacts filled the buffer) is reported by index; the others go on. A
 world the runner has ended (``active`` False) is held at its initial state so that it cannot fill the shared
@@ -156,6 +157,7 @@ class MujocoWarpBatch(WorldBatch):
         self._nconmax = first.nconmax
         self._naconmax = n * first.nconmax
         self._motors_changed = False
+        self._controls_changed = False
         self._frictionloss_rows = m0.ntendon > 0  # the motors' force limits: set_motor changes them per world
         batched = set(differ) | ({"tendon_frictionloss"} if self._frictionloss_rows else set())
         for v in views[1:]:  # world 0's is prepared by put_data itself
@@ -214,6 +216,10 @@ class MujocoWarpBatch(WorldBatch):
     def motors_changed(self) -> None:
         self._motors_changed = True
 
+    def controls_changed(self) -> None:
+        """A world's actuator ctrl changed on its host MjData (``set_control``)."""
+        self._controls_changed = True
+
     def step_all(self, active: Sequence[bool]) -> dict[int, EngineFailure]:
         if self._closed:
             raise RuntimeError("step_all() called after close()")
@@ -229,6 +235,9 @@ class MujocoWarpBatch(WorldBatch):
         if self._motors_changed:
             _assign(self._wm.tendon_frictionloss, np.stack([v.model.tendon_frictionloss for v in views]))
             self._motors_changed = False
+        if self._controls_changed:  # each world's own ctrl, held on the device until changed (as MjData's)
+            _assign(self._wd.ctrl, np.stack([v.data.ctrl for v in views]))
+            self._controls_changed = False
         busy = [v for i, v in enumerate(views) if on[i] and v.busy()]
         failures: dict[int, EngineFailure] = {}
         for v in busy:

@@ -184,9 +184,13 @@ class WorldView(MujocoWarpBackend):
         self._dirty = True
 
     def _set_control(self, actuator: int, ctrl: float) -> None:
-        self.sync()
-        super()._set_control(actuator, ctrl)
-        self._dirty = True
+        """The host ``ctrl``; the batch copies every world's row before its next engine step (no host work:
+        the world may stay idle)."""
+        if 0 <= actuator < self._m.nu and self._d.ctrl[actuator] == ctrl:
+            return
+        MujocoBackend._set_control(self, actuator, ctrl)
+        if self._batch is not None:
+            self._batch.controls_changed()
 
     def _constraint_forces(self) -> np.ndarray:
         assert self._batch is not None  # noqa: S101 - stepped only by a batch
