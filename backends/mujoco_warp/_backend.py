@@ -2,13 +2,12 @@
 
 The world is built exactly as the MuJoCo backend builds it (``backends.mujoco._model.build``: the same MjModel,
 ODE's mapping of motors, stops, surfaces and kinematic bodies), copied to a Warp device with
-``mujoco_warp.put_model``/``put_data`` (one world) and stepped with ``mujoco_warp.step``. What differs from the
+``mujoco_warp.put_model``/``put_data`` (one world) and stepped on MJWarp's stages. What differs from the
 MuJoCo backend, and why (docs/backends/mujoco_warp.md):
 
-* MJWarp runs MuJoCo's own step: the MuJoCo adapter's Coulomb correction and ODE's impact reference
-  (``backends.mujoco._coulomb``, ``_bounce``) rewrite the constraint rows between MuJoCo's pipeline stages on
-  MjData; they are not ported to MJWarp's stages (``fwd_position`` ... ``solve``), so friction and bounces are
-  MuJoCo's cone and solref (the contract's ramp and conformance measure the difference);
+* the engine step is the MuJoCo adapter's (``backends.mujoco._coulomb.step``: its friction reference, ODE's impact
+  reference and the Coulomb correction between MuJoCo's stages) taken on MJWarp's stages (``_corrections``);
+  a model file's own options get ``mujoco_warp.step``, MuJoCo's own, as on the MuJoCo backend;
 * float32 (``Precision.FLOAT32``), and the solver's stopping rule rescaled to MuJoCo's (``_solver_tolerance``);
 * the state is copied host <-> device around each engine step, so the poses and velocities are read as the
   MuJoCo adapter reads them (on the host MjData); contacts, constraint forces and joint reactions come from the
@@ -30,6 +29,7 @@ from .._kit.quiet import keep_warp_cache_outside, silenced_output
 from ..errors import EngineFailure, UnsupportedFeature
 from ..mujoco._backend import MujocoBackend
 from ..types import Capability, CompiledWorld, Contact, ContactPoint, Precision
+from . import _corrections
 from ._options import MujocoWarpOptions
 
 #: Constraint rows per world for each allowed contact (an elliptic contact's 3 rows) and per dof (limits,
@@ -165,7 +165,6 @@ class MujocoWarpBackend(MujocoBackend):
         self._controls_changed = True
 
     def _engine_step(self, native: bool, friction: float | None) -> None:
-        del native, friction  # MJWarp's step is MuJoCo's own (module docstring)
         d, wd = self._d, self._wd
         wd.qpos.assign(d.qpos.reshape(1, -1))
         wd.qvel.assign(d.qvel.reshape(1, -1))
@@ -174,7 +173,11 @@ class MujocoWarpBackend(MujocoBackend):
             wd.ctrl.assign(d.ctrl.reshape(1, -1))
             self._controls_changed = False
         with contextlib.redirect_stdout(io.StringIO()) as out:
-            self._mjw.step(self._wm, wd)
+            if native:  # the model file's own options: MuJoCo's own step, as the mujoco backend takes it
+                self._mjw.step(self._wm, wd)
+            else:
+                rules = [_corrections.WorldRules(friction, self._impacts)]
+                _corrections.step(self._mjw, self._wm, wd, rules, self._h, float(self._m.opt.impratio))
         self._keep(out)
         d.qpos[:] = wd.qpos.numpy()[0]
         d.qvel[:] = wd.qvel.numpy()[0]
@@ -256,14 +259,14 @@ class MujocoWarpBackend(MujocoBackend):
 
     def _settings(self) -> dict[str, Any]:
         s = super()._settings()
+        own = "mujoco_warp.step1, fwd_actuation, fwd_acceleration, the solve (again for the Coulomb correction), "
+        own += "implicit: the MuJoCo adapter's step"
         s.update(
             engine=f"mujoco_warp {self.engine_version()} (mujoco {mujoco.__version__}, warp {self._warp_version()})",
             device=str(self._device),
-            step="mujoco_warp.step: MuJoCo's own step (no Coulomb correction, no ODE impact reference)",
+            step="mujoco_warp.step" if self.world.model_options else own,
             contact_buffer=self._nconmax,
         )
-        for key in ("friction", "contact_normal_reference", "bounce_vel"):
-            s.pop(key, None)
         return s
 
     @staticmethod

@@ -28,6 +28,7 @@ from ..base import Backend
 from ..batch import WorldBatch
 from ..errors import EngineFailure, UnsupportedFeature
 from ..types import CompiledWorld
+from . import _corrections
 from ._backend import _WARP_MODULE_LINE, MujocoWarpBackend, _quiet_warp, _solver_tolerance
 from ._compare import model_differences
 from ._view import WorldView
@@ -177,6 +178,7 @@ class MujocoWarpBatch(WorldBatch):
         self.qvel = np.stack([v.data.qvel for v in views])
         self.time = np.array([v.data.time for v in views])
         self._xfrc = np.zeros((n, m0.nbody, 6))
+        self._rules = [v.rules for v in views]
         self._start_qpos = self.qpos.copy()
         self._cache: dict[str, Any] = {}
 
@@ -268,8 +270,12 @@ class MujocoWarpBatch(WorldBatch):
         wd.qpos.assign(self.qpos)
         wd.qvel.assign(self.qvel)
         _assign(wd.xfrc_applied, self._xfrc)
+        first = self._views[0]
         with contextlib.redirect_stdout(io.StringIO()) as out:
-            self._mjw.step(self._wm, wd)
+            if first.world.model_options:  # the model files' own options (equal in all worlds): MuJoCo's step
+                self._mjw.step(self._wm, wd)
+            else:
+                _corrections.step(self._mjw, self._wm, wd, self._rules, first.engine_h, first.model.opt.impratio)
         self._messages(out, on)
         self.qpos = wd.qpos.numpy().astype(np.float64)
         self.qvel = wd.qvel.numpy().astype(np.float64)

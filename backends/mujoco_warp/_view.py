@@ -21,6 +21,7 @@ from .._kit import KinematicPose, contact_point, group_by_pair, sorted_points
 from ..errors import EngineFailure
 from ..mujoco._backend import MujocoBackend
 from ..types import BodyStates, CompiledWorld, Contact, ContactPoint, ImportedModel, JointStates, Quat, Vec3
+from . import _corrections
 from ._backend import ROWS_PER_CONTACT, ROWS_PER_DOF, MujocoWarpBackend, _quiet_warp
 
 if TYPE_CHECKING:
@@ -75,6 +76,16 @@ class WorldView(MujocoWarpBackend):
     @property
     def njmax(self) -> int:
         return self._njmax
+
+    @property
+    def rules(self) -> _corrections.WorldRules:
+        """The MuJoCo adapter's corrections of this world's engine steps (its surfaces' damping and bounces)."""
+        return _corrections.WorldRules(self._layout.friction_damping, self._impacts)
+
+    @property
+    def engine_h(self) -> float:
+        """The engine step (s)."""
+        return self._h
 
     @property
     def engine_steps(self) -> int:
