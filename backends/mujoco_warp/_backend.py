@@ -76,6 +76,16 @@ def _solver_tolerance(m: mujoco.MjModel, d: mujoco.MjData) -> float:
     return base * float(m.stat.meaninertia) * max(1, m.nv) / max(trace, mujoco.mjMINVAL)
 
 
+def box_box_as_mujoco(wm: Any) -> None:
+    """Box-box contacts by MJWarp's analytic collider, MuJoCo's ``mjc_BoxBox``, not its default convex (GJK/EPA)
+    path, which misses contacts a box on a larger box has (a 0.1 m cube 1.2 mm into a 4 x 4 x 0.1 m box: no
+    contact, where MuJoCo finds 4, and the cube fell through; mujoco_warp issues 1430 and 1526). MJWarp reads the
+    flag when it collides (``collision_driver._narrowphase``); the host model is left as it is."""
+    from mujoco_warp._src.types import DisableBit
+
+    wm.opt.disableflags = int(wm.opt.disableflags) | int(DisableBit.NATIVECCD)
+
+
 def _check_cuda(device: str) -> None:
     """Refuse a CUDA device that Warp does not see, before anything is built."""
     wp = _quiet_warp()
@@ -138,6 +148,7 @@ class MujocoWarpBackend(MujocoBackend):
         except NotImplementedError as exc:  # MJWarp's own refusal of a model feature (its feature-parity list)
             raise UnsupportedFeature(f"mujoco_warp: MJWarp cannot run this world: {exc}") from None
         self._keep(out)
+        box_box_as_mujoco(self._wm)
         self._frictionloss = self._wm.tendon_frictionloss
         self._wm.opt.tolerance.fill_(_solver_tolerance(m, self._d))
         self._controls_changed = False

@@ -29,7 +29,7 @@ from ..batch import WorldBatch
 from ..errors import EngineFailure, UnsupportedFeature
 from ..types import CompiledWorld
 from . import _corrections
-from ._backend import _WARP_MODULE_LINE, MujocoWarpBackend, _quiet_warp, _solver_tolerance
+from ._backend import _WARP_MODULE_LINE, MujocoWarpBackend, _quiet_warp, _solver_tolerance, box_box_as_mujoco
 from ._compare import model_differences
 from ._view import WorldView
 
@@ -165,6 +165,7 @@ class MujocoWarpBatch(WorldBatch):
             _prepare(v.model, v.data)
         with wp.ScopedDevice(self._device), contextlib.redirect_stdout(io.StringIO()) as out:
             self._wm = mjw.put_model(m0, batch_sizes={name: n for name in sorted(batched)})
+            box_box_as_mujoco(self._wm)
             self._wd = mjw.put_data(m0, first.data, nworld=n, nconmax=first.nconmax, njmax=first.njmax)
             for name in sorted(batched):
                 _assign(getattr(self._wm, name), np.stack([getattr(v.model, name) for v in views]))
