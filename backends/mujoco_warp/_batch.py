@@ -4,9 +4,10 @@ The worlds are built as the single-world adapter builds them (one MuJoCo model a
 views, ``_view.WorldView``); ``_compare`` checks that they differ only where MJWarp holds a value per world, and
 world 0's model goes to the device with those fields batched (``put_model(batch_sizes=...)``, then each world's
 row). Each engine step copies every world's qpos, qvel and applied forces up (one copy of each array for all
-worlds; the actuators' ctrl and the motors' force limits too when a world changed them), takes one
-``mujoco_warp.step`` and copies qpos, qvel and time back (one copy each); contacts, constraint forces and the efc
-forces are copied only when a world reads them, once for all worlds per engine step.
+worlds; the actuators' ctrl and the motors' force limits too when a world changed them), takes one engine step
+for all worlds (``_corrections.step``: the MuJoCo adapter's, each world's Coulomb iteration its own) and copies
+qpos, qvel and time back (one copy each); contacts, constraint forces and the efc forces are copied only when a
+world reads them, once for all worlds per engine step.
 
 A world a step cannot be trusted for (its contacts filled the buffer) is reported by index; the others go on. A
 world the runner has ended (``active`` False) is held at its initial state so that it cannot fill the shared

@@ -3,8 +3,9 @@
 A view is the single-world adapter (``MujocoWarpBackend``) without a device model of its own: it keeps its world's
 MuJoCo model and host ``MjData`` (built exactly as the single-world adapter builds them), its inputs and every
 read of the MuJoCo adapter. Its engine steps are taken by the batch: ``step_all`` runs, for every world, the
-MuJoCo adapter's step around one batched ``mujoco_warp.step`` per engine step (``begin`` / ``before`` / ``after``
-/ ``end`` below are that step's parts, in its order), and the view's ``step()`` only consumes it.
+MuJoCo adapter's step around one batched engine step (``_corrections.step``) per engine step (``begin`` /
+``before`` / ``after`` / ``end`` below are that step's parts, in its order), and the view's ``step()`` only
+consumes it.
 
 A world with nothing to do on the host during a step (no forces, motors, kinematic bodies, watched joints, resets
 or substeps: a box drop) is "idle": its host ``MjData`` is filled from the batch's copies only when it is read.
