@@ -11,7 +11,8 @@ Jacobian) and the implicitfast integration. Each world iterates on its own conta
 a world that has stopped keeps its references, and a solve starts from the step's warm start
 (``qacc_warmstart``), so solving it again for the others gives it the same result: a world's step is the one
 it takes alone. Differences from the MuJoCo adapter: float32 (MJWarp's); the impedance of a row is computed
-from its contact's ``solimp`` (MJWarp keeps no ``efc_KBIP``) and ``R = 1/D``.
+from its contact's ``solimp`` (MJWarp keeps no ``efc_KBIP``) and ``R = 1/D``; ``step2``'s acceleration-stage
+sensors are not computed (the adapter reads no ``sensordata``; a model file's own options take ``mujoco_warp.step``).
 """
 
 from __future__ import annotations
