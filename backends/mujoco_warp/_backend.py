@@ -2,13 +2,12 @@
 
 The world is built exactly as the MuJoCo backend builds it (``backends.mujoco._model.build``: the same MjModel,
 ODE's mapping of motors, stops, surfaces and kinematic bodies), copied to a Warp device with
-``mujoco_warp.put_model``/``put_data`` (one world) and stepped with ``mujoco_warp.step``. What differs from the
+``mujoco_warp.put_model``/``put_data`` (one world) and stepped on MJWarp's stages. What differs from the
 MuJoCo backend, and why (docs/backends/mujoco_warp.md):
 
-* MJWarp runs MuJoCo's own step: the MuJoCo adapter's Coulomb correction and ODE's impact reference
-  (``backends.mujoco._coulomb``, ``_bounce``) rewrite the constraint rows between MuJoCo's pipeline stages on
-  MjData; they are not ported to MJWarp's stages (``fwd_position`` ... ``solve``), so friction and bounces are
-  MuJoCo's cone and solref (the contract's ramp and conformance measure the difference);
+* the engine step is the MuJoCo adapter's (``backends.mujoco._coulomb.step``: its friction reference, ODE's impact
+  reference and the Coulomb correction between MuJoCo's stages) taken on MJWarp's stages (``_corrections``);
+  a model file's own options get ``mujoco_warp.step``, MuJoCo's own, as on the MuJoCo backend;
 * float32 (``Precision.FLOAT32``), and the solver's stopping rule rescaled to MuJoCo's (``_solver_tolerance``);
 * the state is copied host <-> device around each engine step, so the poses and velocities are read as the
   MuJoCo adapter reads them (on the host MjData); contacts, constraint forces and joint reactions come from the
@@ -30,6 +29,7 @@ from .._kit.quiet import keep_warp_cache_outside, silenced_output
 from ..errors import EngineFailure, UnsupportedFeature
 from ..mujoco._backend import MujocoBackend
 from ..types import Capability, CompiledWorld, Contact, ContactPoint, Precision
+from . import _corrections
 from ._options import MujocoWarpOptions
 
 #: Constraint rows per world for each allowed contact (an elliptic contact's 3 rows) and per dof (limits,
@@ -74,6 +74,16 @@ def _solver_tolerance(m: mujoco.MjModel, d: mujoco.MjData) -> float:
     trace = float(start.M[m.M_rowadr + m.M_rownnz - 1].sum())
     base = max(float(m.opt.tolerance), FLOAT32_TOLERANCE)
     return base * float(m.stat.meaninertia) * max(1, m.nv) / max(trace, mujoco.mjMINVAL)
+
+
+def box_box_as_mujoco(wm: Any) -> None:
+    """Box-box contacts by MJWarp's analytic collider, MuJoCo's ``mjc_BoxBox``, not its default convex (GJK/EPA)
+    path, which misses contacts a box on a larger box has (a 0.1 m cube 1.2 mm into a 4 x 4 x 0.1 m box: no
+    contact, where MuJoCo finds 4, and the cube fell through; mujoco_warp issues 1430 and 1526). MJWarp reads the
+    flag when it collides (``collision_driver._narrowphase``); the host model is left as it is."""
+    from mujoco_warp._src.types import DisableBit
+
+    wm.opt.disableflags = int(wm.opt.disableflags) | int(DisableBit.NATIVECCD)
 
 
 def _check_cuda(device: str) -> None:
@@ -138,8 +148,10 @@ class MujocoWarpBackend(MujocoBackend):
         except NotImplementedError as exc:  # MJWarp's own refusal of a model feature (its feature-parity list)
             raise UnsupportedFeature(f"mujoco_warp: MJWarp cannot run this world: {exc}") from None
         self._keep(out)
+        box_box_as_mujoco(self._wm)
         self._frictionloss = self._wm.tendon_frictionloss
         self._wm.opt.tolerance.fill_(_solver_tolerance(m, self._d))
+        self._controls_changed = False
 
     def _keep(self, out: io.StringIO) -> None:
         """Keep what MJWarp printed (its overflow warnings), not Warp's kernel compile/cache lines: those differ
@@ -156,14 +168,27 @@ class MujocoWarpBackend(MujocoBackend):
             values.reshape(-1)[self._motor_tendon[slot]] = fmax
             self._frictionloss.assign(values)
 
+    def _set_control(self, actuator: int, ctrl: float) -> None:
+        """The host ``ctrl`` (the MuJoCo adapter's), copied to the device before the next engine step."""
+        if 0 <= actuator < self._m.nu and self._d.ctrl[actuator] == ctrl:
+            return  # the runner sets every driven actuator's ctrl before every step, mostly unchanged
+        super()._set_control(actuator, ctrl)
+        self._controls_changed = True
+
     def _engine_step(self, native: bool, friction: float | None) -> None:
-        del native, friction  # MJWarp's step is MuJoCo's own (module docstring)
         d, wd = self._d, self._wd
         wd.qpos.assign(d.qpos.reshape(1, -1))
         wd.qvel.assign(d.qvel.reshape(1, -1))
         wd.xfrc_applied.assign(d.xfrc_applied.reshape(1, -1, 6))
+        if self._controls_changed:  # held on the device until changed, as MjData's
+            wd.ctrl.assign(d.ctrl.reshape(1, -1))
+            self._controls_changed = False
         with contextlib.redirect_stdout(io.StringIO()) as out:
-            self._mjw.step(self._wm, wd)
+            if native:  # the model file's own options: MuJoCo's own step, as the mujoco backend takes it
+                self._mjw.step(self._wm, wd)
+            else:
+                rules = [_corrections.WorldRules(friction, self._impacts)]
+                _corrections.step(self._mjw, self._wm, wd, rules, self._h, float(self._m.opt.impratio))
         self._keep(out)
         d.qpos[:] = wd.qpos.numpy()[0]
         d.qvel[:] = wd.qvel.numpy()[0]
@@ -245,14 +270,14 @@ class MujocoWarpBackend(MujocoBackend):
 
     def _settings(self) -> dict[str, Any]:
         s = super()._settings()
+        own = "mujoco_warp.step1, fwd_actuation, fwd_acceleration, the solve (again for the Coulomb correction), "
+        own += "implicit: the MuJoCo adapter's step"
         s.update(
             engine=f"mujoco_warp {self.engine_version()} (mujoco {mujoco.__version__}, warp {self._warp_version()})",
             device=str(self._device),
-            step="mujoco_warp.step: MuJoCo's own step (no Coulomb correction, no ODE impact reference)",
+            step="mujoco_warp.step" if self.world.model_options else own,
             contact_buffer=self._nconmax,
         )
-        for key in ("friction", "contact_normal_reference", "bounce_vel"):
-            s.pop(key, None)
         return s
 
     @staticmethod

@@ -4,8 +4,10 @@ The worlds are built as the single-world adapter builds them (one MuJoCo model a
 views, ``_view.WorldView``); ``_compare`` checks that they differ only where MJWarp holds a value per world, and
 world 0's model goes to the device with those fields batched (``put_model(batch_sizes=...)``, then each world's
 row). Each engine step copies every world's qpos, qvel and applied forces up (one copy of each array for all
-worlds), takes one ``mujoco_warp.step`` and copies qpos, qvel and time back (one copy each); contacts,
-constraint forces and the efc forces are copied only when a world reads them, once for all worlds per engine step.
+worlds; the actuators' ctrl and the motors' force limits too when a world changed them), takes one engine step
+for all worlds (``_corrections.step``: the MuJoCo adapter's, each world's Coulomb iteration its own) and copies
+qpos, qvel and time back (one copy each); contacts, constraint forces and the efc forces are copied only when a
+world reads them, once for all worlds per engine step.
 
 A world a step cannot be trusted for (its contacts filled the buffer) is reported by index; the others go on. A
 world the runner has ended (``active`` False) is held at its initial state so that it cannot fill the shared
@@ -27,7 +29,8 @@ from ..base import Backend
 from ..batch import WorldBatch
 from ..errors import EngineFailure, UnsupportedFeature
 from ..types import CompiledWorld
-from ._backend import _WARP_MODULE_LINE, MujocoWarpBackend, _quiet_warp, _solver_tolerance
+from . import _corrections
+from ._backend import _WARP_MODULE_LINE, MujocoWarpBackend, _quiet_warp, _solver_tolerance, box_box_as_mujoco
 from ._compare import model_differences
 from ._view import WorldView
 
@@ -156,12 +159,14 @@ class MujocoWarpBatch(WorldBatch):
         self._nconmax = first.nconmax
         self._naconmax = n * first.nconmax
         self._motors_changed = False
+        self._controls_changed = False
         self._frictionloss_rows = m0.ntendon > 0  # the motors' force limits: set_motor changes them per world
         batched = set(differ) | ({"tendon_frictionloss"} if self._frictionloss_rows else set())
         for v in views[1:]:  # world 0's is prepared by put_data itself
             _prepare(v.model, v.data)
         with wp.ScopedDevice(self._device), contextlib.redirect_stdout(io.StringIO()) as out:
             self._wm = mjw.put_model(m0, batch_sizes={name: n for name in sorted(batched)})
+            box_box_as_mujoco(self._wm)
             self._wd = mjw.put_data(m0, first.data, nworld=n, nconmax=first.nconmax, njmax=first.njmax)
             for name in sorted(batched):
                 _assign(getattr(self._wm, name), np.stack([getattr(v.model, name) for v in views]))
@@ -175,6 +180,7 @@ class MujocoWarpBatch(WorldBatch):
         self.qvel = np.stack([v.data.qvel for v in views])
         self.time = np.array([v.data.time for v in views])
         self._xfrc = np.zeros((n, m0.nbody, 6))
+        self._rules = [v.rules for v in views]
         self._start_qpos = self.qpos.copy()
         self._cache: dict[str, Any] = {}
 
@@ -214,6 +220,10 @@ class MujocoWarpBatch(WorldBatch):
     def motors_changed(self) -> None:
         self._motors_changed = True
 
+    def controls_changed(self) -> None:
+        """A world's actuator ctrl changed on its host MjData (``set_control``)."""
+        self._controls_changed = True
+
     def step_all(self, active: Sequence[bool]) -> dict[int, EngineFailure]:
         if self._closed:
             raise RuntimeError("step_all() called after close()")
@@ -229,6 +239,9 @@ class MujocoWarpBatch(WorldBatch):
         if self._motors_changed:
             _assign(self._wm.tendon_frictionloss, np.stack([v.model.tendon_frictionloss for v in views]))
             self._motors_changed = False
+        if self._controls_changed:  # each world's own ctrl, held on the device until changed (as MjData's)
+            _assign(self._wd.ctrl, np.stack([v.data.ctrl for v in views]))
+            self._controls_changed = False
         busy = [v for i, v in enumerate(views) if on[i] and v.busy()]
         failures: dict[int, EngineFailure] = {}
         for v in busy:
@@ -259,8 +272,12 @@ class MujocoWarpBatch(WorldBatch):
         wd.qpos.assign(self.qpos)
         wd.qvel.assign(self.qvel)
         _assign(wd.xfrc_applied, self._xfrc)
+        first = self._views[0]
         with contextlib.redirect_stdout(io.StringIO()) as out:
-            self._mjw.step(self._wm, wd)
+            if first.world.model_options:  # the model files' own options (equal in all worlds): MuJoCo's step
+                self._mjw.step(self._wm, wd)
+            else:
+                _corrections.step(self._mjw, self._wm, wd, self._rules, first.engine_h, first.model.opt.impratio)
         self._messages(out, on)
         self.qpos = wd.qpos.numpy().astype(np.float64)
         self.qvel = wd.qvel.numpy().astype(np.float64)

@@ -3,8 +3,9 @@
 A view is the single-world adapter (``MujocoWarpBackend``) without a device model of its own: it keeps its world's
 MuJoCo model and host ``MjData`` (built exactly as the single-world adapter builds them), its inputs and every
 read of the MuJoCo adapter. Its engine steps are taken by the batch: ``step_all`` runs, for every world, the
-MuJoCo adapter's step around one batched ``mujoco_warp.step`` per engine step (``begin`` / ``before`` / ``after``
-/ ``end`` below are that step's parts, in its order), and the view's ``step()`` only consumes it.
+MuJoCo adapter's step around one batched engine step (``_corrections.step``) per engine step (``begin`` /
+``before`` / ``after`` / ``end`` below are that step's parts, in its order), and the view's ``step()`` only
+consumes it.
 
 A world with nothing to do on the host during a step (no forces, motors, kinematic bodies, watched joints, resets
 or substeps: a box drop) is "idle": its host ``MjData`` is filled from the batch's copies only when it is read.
@@ -21,6 +22,7 @@ from .._kit import KinematicPose, contact_point, group_by_pair, sorted_points
 from ..errors import EngineFailure
 from ..mujoco._backend import MujocoBackend
 from ..types import BodyStates, CompiledWorld, Contact, ContactPoint, ImportedModel, JointStates, Quat, Vec3
+from . import _corrections
 from ._backend import ROWS_PER_CONTACT, ROWS_PER_DOF, MujocoWarpBackend, _quiet_warp
 
 if TYPE_CHECKING:
@@ -75,6 +77,16 @@ class WorldView(MujocoWarpBackend):
     @property
     def njmax(self) -> int:
         return self._njmax
+
+    @property
+    def rules(self) -> _corrections.WorldRules:
+        """The MuJoCo adapter's corrections of this world's engine steps (its surfaces' damping and bounces)."""
+        return _corrections.WorldRules(self._layout.friction_damping, self._impacts)
+
+    @property
+    def engine_h(self) -> float:
+        """The engine step (s)."""
+        return self._h
 
     @property
     def engine_steps(self) -> int:
@@ -184,9 +196,13 @@ class WorldView(MujocoWarpBackend):
         self._dirty = True
 
     def _set_control(self, actuator: int, ctrl: float) -> None:
-        self.sync()
-        super()._set_control(actuator, ctrl)
-        self._dirty = True
+        """The host ``ctrl``; the batch copies every world's row before its next engine step (no host work:
+        the world may stay idle)."""
+        if 0 <= actuator < self._m.nu and self._d.ctrl[actuator] == ctrl:
+            return
+        MujocoBackend._set_control(self, actuator, ctrl)
+        if self._batch is not None:
+            self._batch.controls_changed()
 
     def _constraint_forces(self) -> np.ndarray:
         assert self._batch is not None  # noqa: S101 - stepped only by a batch

@@ -201,12 +201,6 @@ DEVIATIONS: dict[tuple[str, str], str] = {
     "face of the hydroelastic contact surface",
     ("test_resting_box_arrows_in_mcap_and_rrd", "drake"): "measured 16 arrows, not the 4 corners: one per face "
     "of the hydroelastic contact surface (tests/trace/test_contact_points_trace.py)",
-    # mujoco_warp runs MuJoCo's own step: MJWarp's fused step has no place for the MuJoCo adapter's Coulomb
-    # correction of the sliding contacts' normal rows (backends/mujoco/_coulomb.py; docs/backends/mujoco_warp.md).
-    ("test_tilted_plane", "mujoco_warp"): "measured 1.5338 m/s of 1.6029 m/s after 0.5 s (-4.3 % > 3 %), the cube "
-    "1.53 mm above the ramp: MuJoCo's elliptic cone pushes a sliding contact off the surface by mu*|slip| per step "
-    "and bounds the friction by that inflated normal force (the MuJoCo adapter's Coulomb correction, not ported to "
-    "MJWarp's pipeline stages, gives +0.15 %)",
     # newton (XPBD, the default solver, 16 iterations): maximal coordinates, every joint and contact a relaxed
     # position correction solved by a fixed number of Gauss-Seidel iterations (docs/backends/newton.md).
     ("test_contact_resting", "newton"): "measured 132.43419 N of m*g = 132.435 N (-6.1e-6 > 1e-6): XPBD's contact "

@@ -162,6 +162,34 @@ def test_a_view_steps_only_after_step_all() -> None:
             batch.views[0].step()
 
 
+def _launched(mu: float, z0: float = 0.0999) -> CompiledWorld:
+    """A 0.2 m box launched along x at 1 m/s on the ground (mu): it slides to a stop after 1/(2 mu g)."""
+    box = dataclasses.replace(w.box("box", BOX, (0.0, 0.0, z0), density=500.0), lin_vel=(1.0, 0.0, 0.0))
+    return w.world("slide", [w.ground(), box], dt=0.01, surface=Surface(bounce=0.0, mu=mu))
+
+
+def test_sliding_worlds_correct_their_friction_each_alone() -> None:
+    """The Coulomb correction iterates each world's solves to its own test (backends/mujoco_warp/_corrections.py):
+    worlds sliding on different mu, and one in the air, end as each does alone, bit for bit; the slides' speeds
+    are Coulomb's, v0 - mu g t, within float32 (2 x 30 velocity updates rounded to 2^-24 of 1 m/s: 4e-6) and the
+    contact rows' impedance (0.999: 1e-3 of mu g t leaks through, at most 3e-4 m/s at 0.3 s)."""
+    worlds = [_launched(0.1), _launched(0.3), _launched(0.3, z0=2.0)]
+    steps = 30
+    with batch_class()(worlds) as batch:
+        for _ in range(steps):
+            assert batch.step_all([True] * len(worlds)) == {}
+            for view in batch.views:
+                view.step()
+        batched = [state(v) for v in batch.views]
+    for k, world in enumerate(worlds[:2]):
+        alone, _ = run_alone(world, steps)
+        assert np.array_equal(batched[k], alone), f"world {k}: {np.abs(batched[k] - alone).max()}"
+        mu = world.default_surface.mu
+        expected = 1.0 - mu * w.G * steps * world.dt
+        assert batched[k][1, 7] == pytest.approx(expected, abs=4e-6 + 1e-3 * mu * w.G * steps * world.dt)
+    assert np.array_equal(batched[2], run_alone(worlds[2], steps)[0])
+
+
 # --- failures, per world ------------------------------------------------------------------------------------
 
 
