@@ -75,7 +75,7 @@ def test_discover_lists_every_variant_with_its_checks() -> None:
     assert height.known_limits == {}
     motor = next(c for c in cases if c.id == "04_slider_motor").checks[0]
     assert motor.tolerance == {"default": "1e-9", "mujoco": "2e-6"}
-    assert set(motor.known_limits) == {"ode", "drake", "newton"}
+    assert set(motor.known_limits) == {"ode", "drake", "newton", "mujoco_warp"}
 
 
 @pytest.mark.parametrize(
