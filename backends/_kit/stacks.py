@@ -11,6 +11,7 @@ imports an engine.
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 
 import numpy as np
@@ -127,7 +128,14 @@ def stack_height(world: CompiledWorld) -> int:
     return stacks(world).tallest
 
 
-__all__ = ["LANDING_GAP", "Stacks", "stack_height", "stacks"]
+def free_bodies(world: CompiledWorld) -> CompiledWorld:
+    """The world without the bodies a joint holds, for a stacking limit: a robot's links are carried by their
+    joints, not by contacts with the link below (a franka panda's 8 links start one above the other)."""
+    held = {name for j in world.joints for name in (j.body, j.other) if name is not None}
+    return dataclasses.replace(world, bodies=tuple(b for b in world.bodies if b.name not in held), joints=())
+
+
+__all__ = ["LANDING_GAP", "Stacks", "free_bodies", "stack_height", "stacks"]
 
 
 def refuse_column(

@@ -11,7 +11,6 @@ stepping) and the motors' net actuation. docs/backends/drake.md has the mapping 
 
 from __future__ import annotations
 
-import dataclasses
 import logging
 import math
 from typing import Any, ClassVar
@@ -22,7 +21,7 @@ from pydrake.multibody.plant import ExternallyAppliedSpatialForce
 from pydrake.multibody.tree import PdControllerGains, default_model_instance
 
 from .._kit import BackendOptions, KinematicPose, SubstepContacts, SubstepMean, group_by_pair, substep_times
-from .._kit.stacks import stack_height
+from .._kit.stacks import free_bodies, stack_height
 from ..base import Backend
 from ..types import (
     RIGID_BODY_CAPABILITIES,
@@ -87,7 +86,7 @@ class DrakeBackend(Backend):
     def check_world(cls, world: CompiledWorld, options: BackendOptions) -> None:
         check_build(world)  # a loop of joints, a pair's mu the geometries cannot combine to, ... (no engine)
         check_hulls(world, options)
-        check_stack(stack_height(_free_bodies(world)))
+        check_stack(stack_height(free_bodies(world)))
 
     def _build(self) -> None:
         world = self.world
@@ -347,12 +346,6 @@ class DrakeBackend(Backend):
     def _close(self) -> None:
         self._context = None
 
-
-def _free_bodies(world: CompiledWorld) -> CompiledWorld:
-    """The world without the bodies a joint holds, for the stacking limit: a robot's links are carried by their
-    joints, not by contacts with the link below (a franka panda's 8 links start one above the other)."""
-    held = {name for j in world.joints for name in (j.body, j.other) if name is not None}
-    return dataclasses.replace(world, bodies=tuple(b for b in world.bodies if b.name not in held), joints=())
 
 
 def _mean_normal(surface: Any) -> np.ndarray:

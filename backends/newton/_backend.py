@@ -11,7 +11,6 @@ the mapping and its measured limits.
 
 from __future__ import annotations
 
-import dataclasses
 import math
 from typing import Any, ClassVar
 
@@ -28,7 +27,7 @@ from .._kit import (
     substep_times,
 )
 from .._kit.pairs import touching_pairs
-from .._kit.stacks import stacks
+from .._kit.stacks import free_bodies, stacks
 from ..base import Backend
 from ..errors import UnsupportedFeature
 from ..geometry import quat_matrices
@@ -85,7 +84,7 @@ class NewtonBackend(Backend):
     @classmethod
     def check_world(cls, world: CompiledWorld, options: BackendOptions) -> None:
         check_build(world)
-        free = stacks(_free_bodies(world))
+        free = stacks(free_bodies(world))
         check_stack(free.tallest, free.landing)
         if getattr(options, "solver", "xpbd") == "featherstone":
             names = [b.name for b in world.bodies]
@@ -424,9 +423,3 @@ def _to_world(body_q: np.ndarray, bodies: np.ndarray, points: np.ndarray) -> np.
             out[r] = body_q[k, :3] + _rotate(body_q[k, 3:], points[r])
     return out
 
-
-def _free_bodies(world: CompiledWorld) -> CompiledWorld:
-    """The world without the bodies a joint holds, for the stacking limit: a robot's links are carried by their
-    joints, not by contacts with the link below."""
-    held = {name for j in world.joints for name in (j.body, j.other) if name is not None}
-    return dataclasses.replace(world, bodies=tuple(b for b in world.bodies if b.name not in held), joints=())
