@@ -89,7 +89,7 @@ Edge cases, the same on every backend (checked here, before any engine call):
   it is.
 
 Blow-ups (NaN, inf, runaway speeds) are detected by the runner, once, for every engine
-(``runner.sim.session.MAX_SPEED``); an adapter reports only what its engine itself calls fatal.
+(``runner.sim.blowup.MAX_SPEED``); an adapter reports only what its engine itself calls fatal.
 
 An adapter implements the underscored hooks (``_build``, ``_step``, ``_body_states``, ...); the public
 methods here validate, translate engine errors and keep the inputs every adapter needs (the kinematic

@@ -16,26 +16,22 @@ Per step k, from t_k = k*dt to t_{k+1}:
 
 from __future__ import annotations
 
-import math
 import time as wallclock
 from collections import deque
-from collections.abc import Callable, Generator, Sequence
-from dataclasses import dataclass, field
+from collections.abc import Callable, Generator
 from typing import Any, overload
 
 import numpy as np
 
 from backends.base import Backend
 from backends.errors import EngineFailure
-from backends.types import BodyStates, Capability, Motion
+from backends.types import Capability
 from runner import interrupts
-from runner.compile.joints import capped
 from runner.compile.program import Program
-from runner.language import model_behaviour as B
-from runner.language.hpr import hpr_to_quat, quat_to_hpr
 from runner.sim.actions import run_actions
 from runner.sim.actuators import Actuators
-from runner.sim.assertions import AssertionTracker, Verdict
+from runner.sim.assertions import AssertionTracker
+from runner.sim.blowup import MAX_SPEED, blown_up, last_good
 from runner.sim.budget import Watchdog
 from runner.sim.collisions import EventHandler, SolidTraverser, quat_matrices
 from runner.sim.conditions import ConditionTriggers, HandlerGate, JointZeros, with_zeros
@@ -46,85 +42,18 @@ from runner.sim.intervals import IntervalManager
 from runner.sim.joint_dynamics import JointFriction, driven_joints, native_joints
 from runner.sim.kinematics import KinematicTable
 from runner.sim.resolver import Snapshot, StateResolver
+from runner.sim.result import RunResult
 from runner.sim.servo import Servos, servo_specs
-
-#: The one blow-up limit, for every engine (docs/semantics.md, "Blow-ups"): a body whose state is not finite,
-#: or whose linear (m/s) or angular (rad/s) speed exceeds this, has blown up. Adapters check nothing
-#: themselves beyond what their engine calls fatal (backends/base.py).
-MAX_SPEED = 1.0e4
-
+from runner.sim.session_inputs import SessionInputs
 
 #: what ``Session.advance(pause=True)`` yields right before each engine step: the inputs of the step are set,
 #: and a lockstep driver (runner.sim.lockstep) steps every world of a batch before the session goes on
 BEFORE_STEP = "before-step"
 
-_MAX_SPEED_SQUARED = MAX_SPEED * MAX_SPEED  # 1e8, exact: |v|^2 <= it  <=>  |v| <= MAX_SPEED (sqrt is monotone)
-_FAST_LIMIT = _MAX_SPEED_SQUARED * (1.0 - 1e-9)  # the sums' fast test: far more than any rounding below the limit
 
+class Session(SessionInputs):
+    """The step loop over one backend; what the scenario's behaviour does to it is :class:`SessionInputs`."""
 
-def _blown_up(states: BodyStates) -> tuple[int, bool] | None:
-    """The first body whose state is not finite or too fast, and whether it is not finite; None if none.
-
-    Every step checks every body, so the common case (all well) is four whole-array calls: the sums of the
-    squared speeds over all bodies bound each body's (a sum of non-negative terms is at least each of them;
-    a NaN or an inf makes the sum fail the comparison, and the positions' and quaternions' sums are not
-    finite when an element is not), held a little below the limit so that no rounding of the sums can let
-    a body through. Anything else takes the exact per-body test.
-    """
-    lin, ang = states.lin_vel, states.ang_vel
-    if not len(lin) or (
-        float(np.vdot(lin, lin)) <= _FAST_LIMIT
-        and float(np.vdot(ang, ang)) <= _FAST_LIMIT
-        and math.isfinite(float(np.add.reduce(states.pos, axis=None)) + float(np.add.reduce(states.quat, axis=None)))
-    ):
-        return None
-    lin2, ang2 = np.add.reduce(lin * lin, axis=1), np.add.reduce(ang * ang, axis=1)
-    if (
-        np.isfinite(states.pos).all()
-        and np.isfinite(states.quat).all()
-        and float(lin2.max()) <= _MAX_SPEED_SQUARED
-        and float(ang2.max()) <= _MAX_SPEED_SQUARED
-    ):
-        return None
-    bad = ~(
-        np.isfinite(states.pos).all(axis=1)
-        & np.isfinite(states.quat).all(axis=1)
-        & np.isfinite(lin).all(axis=1)
-        & np.isfinite(ang).all(axis=1)
-    )
-    fast = (np.linalg.norm(np.nan_to_num(lin, nan=np.inf), axis=1) > MAX_SPEED) | (
-        np.linalg.norm(np.nan_to_num(ang, nan=np.inf), axis=1) > MAX_SPEED
-    )
-    broken = np.flatnonzero(bad | fast)
-    if not broken.size:
-        return None
-    i = int(broken[0])
-    return i, bool(bad[i])
-
-
-@dataclass
-class RunResult:
-    scenario: str
-    variant: str
-    backend: str
-    status: str  # passed | failed | engine-failure | interrupted
-    verdicts: list[Verdict]
-    end_time: float
-    steps: int
-    events: list[tuple[float, str, str]]
-    sounds: list[tuple[float, str]]
-    wall_seconds: float
-    trace: str | None = None
-    failure: str | None = None
-    extra: dict[str, Any] = field(default_factory=dict)
-    engine_messages: int = 0  # lines the engine printed about itself (Backend.drain_messages), in the trace log
-
-    @property
-    def passed(self) -> bool:
-        return self.status == "passed"
-
-
-class Session:
     def __init__(
         self,
         program: Program,
@@ -206,13 +135,7 @@ class Session:
         # energy from nowhere: exit 3 (runner.sim.energy)
         self.energy = EnergyWatch(self.world, backend.name, program.joint_zeros)
 
-    # --- services used by actions and intervals (runner.sim.intervals.IntervalHost) --------------------
-    def evaluate(self, text: str) -> Any:
-        return self.program.expressions[text].evaluate(self.resolver)
-
-    def truth(self, text: str) -> bool:
-        return self.program.expressions[text].truth(self.resolver)
-
+    # --- what conditions and assertions read ------------------------------------------------------
     @property
     def contact_pairs(self) -> set[tuple[str, str]]:
         """The touching pairs by name, made from the last contacts read when something first asks."""
@@ -225,125 +148,8 @@ class Session:
         pairs = self.contact_pairs
         return (a, b) in pairs or (b, a) in pairs
 
-    def get_pos(self, body: str) -> tuple[float, float, float]:
-        return self.kinematics.get(body).target_pos
-
-    def get_hpr(self, body: str) -> tuple[float, float, float]:
-        return self.kinematics.get(body).target_hpr
-
-    def get_scale(self, body: str) -> float:
-        return self.kinematics.get(body).target_scale
-
-    def set_pos(self, body: str, pos: Sequence[float]) -> None:
-        self.kinematics.get(body).target_pos = (float(pos[0]), float(pos[1]), float(pos[2]))
-
-    def set_hpr(self, body: str, hpr: Sequence[float]) -> None:
-        self.kinematics.get(body).target_hpr = (float(hpr[0]), float(hpr[1]), float(hpr[2]))
-
-    def set_scale(self, body: str, scale: float) -> None:
-        self.kinematics.get(body).target_scale = float(scale)
-
     def run_actions(self, actions: Any, at: float) -> None:
         run_actions(self, actions, at)
-
-    def play_sound(self, sound: str, offset: float, volume: float, loop: bool, at: float) -> None:
-        if sound in self.playing_sounds:
-            self.sound_stops.append((at, sound))
-            if self.trace is not None:
-                self.trace.sound(at, sound, "stop")  # a replay restarts the sound (OpenAL play() stops first)
-        length = self.program.sounds[sound].length
-        self.playing_sounds[sound] = math.inf if loop else at + max(length - offset, 0.0)
-        self.sound_starts.append((at, sound))
-        if self.trace is not None:
-            self.trace.sound(at, sound, "start", offset, volume)
-
-    def stop_sound(self, sound: str, at: float) -> None:
-        if self.playing_sounds.pop(sound, None) is not None:
-            self.sound_stops.append((at, sound))
-            if self.trace is not None:
-                self.trace.sound(at, sound, "stop")
-
-    def interval_event(self, ival: str, what: str, at: float) -> None:
-        if self.trace is not None:
-            self.trace.log(at, "debug", f"interval {ival}: {what}", "intervals")
-
-    def set_motor(self, joint: str, vel: float, fmax: float | None) -> None:
-        fmax = self.motors[joint][1] if fmax is None else fmax
-        self.motors[joint] = (vel, fmax)
-        self.joint_friction.release(joint)  # the scenario's motor is the joint's from now on
-        self.drives.release(joint)  # velocity mode: no position or torque command any more
-        k = self.joint_index[joint]
-        self.backend.set_motor(k, *capped(vel, fmax, self.world.joints[k].dynamics))
-
-    def set_drive(self, command: B.DriveCommand) -> None:
-        """A joint's command from now on: velocity mode is its motor; position and torque mode turn the motor
-        off and hand the engine a torque before every step (runner.sim.drives)."""
-        if command.vel is not None:
-            self.set_motor(command.joint, command.vel, command.fmax)
-            return
-        self.drives.set(command.joint, command)
-        if self.motors[command.joint][1] > 0:
-            self.motors[command.joint] = (0.0, 0.0)
-            self.backend.set_motor(self.joint_index[command.joint], 0.0, 0.0)
-
-    def set_control(self, command: B.ControlCommand) -> None:
-        """An MJCF actuator's `ctrl` from now on (runner.sim.actuators)."""
-        self.actuators.set(command.actuator, command.ctrl)
-
-    def _command_joints(self) -> None:
-        """The position and torque commands, and the MJCF actuators, before the step (runner.sim.drives)."""
-        snap = self.snapshot
-        extra: dict[int, float] = {}
-        if self.actuators and self.native_actuators:
-            self.energy.driven()  # the engine's actuators do work the check does not book
-            self.actuators.drive_native(self.backend, self._number)
-        elif self.actuators:
-            extra = self.actuators.torques(snap.joints.position.tolist(), snap.joints.velocity.tolist(), self._number)
-        for i, force, torque in self.drives.wrenches(
-            snap.bodies.pos, snap.bodies.quat, snap.joints.position, snap.joints.velocity, self._number, extra
-        ):
-            self.add_force(self.names[i], force.tolist(), torque.tolist(), 1.0)
-
-    def _number(self, value: float | str) -> float:
-        """A command's number, or its expression's value now."""
-        return float(self.program.expressions[value].number(self.resolver)) if isinstance(value, str) else value
-
-    def add_force(self, body: str, force: Sequence[float], torque: Sequence[float], scale: float) -> None:
-        i = self.body_index[body]
-        acc = self.forces.setdefault(i, np.zeros(6))
-        self.energy.driven()  # a force's work is not booked: the energy check starts afresh after this step
-        acc[:3] += np.asarray(force, float) * scale
-        acc[3:] += np.asarray(torque, float) * scale
-
-    def hold_force(self, command: B.ApplyCommand, at: float) -> None:
-        steps = self.held.start(self.body_index[command.body], command)
-        how = f"for {steps} steps" if steps is not None else f"until `{command.until}`"
-        self.log(at, "debug", f"apply on `{command.body}`: held {how}", "handler")
-
-    def reset(self, command: B.ResetCommand) -> None:
-        """The lab's reset: a dynamic body teleported with new velocities, a kinematic one moved to a pose."""
-        index = self.body_index[command.body]
-        body = self.world.bodies[index]
-        self.energy.driven()
-        pos = command.pos if command.pos is not None else body.pos
-        if command.quat is not None:
-            quat = command.quat
-        elif command.hpr is not None:
-            quat = hpr_to_quat(command.hpr)
-        else:
-            quat = body.quat
-        if body.motion is Motion.KINEMATIC:
-            if command.hpr is not None:
-                hpr = command.hpr
-            else:
-                hpr = quat_to_hpr(quat) if command.quat is not None else self.program.start_hpr[body.name]
-            self.kinematics.teleport(self.backend, body.name, pos, hpr)
-        elif body.motion is Motion.DYNAMIC:
-            self.backend.reset_body(index, pos, quat, command.vel, command.angvel)
-
-    def log(self, at: float, level: str, message: str, name: str) -> None:
-        if self.trace is not None:
-            self.trace.log(at, level, message, name)
 
     def dispatch(self, event: str, at: float, source: str, depth: int = 0) -> None:
         """Deliver an event to its handler now (Panda3D's messenger.send is synchronous)."""
@@ -366,25 +172,13 @@ class Session:
         self.log(at, "info", f"scenario ended: {reason}", "scenario")
 
     # --- the loop --------------------------------------------------------------------------------
-    def _last_good(self, i: int) -> dict[str, Any] | None:
-        """Body ``i``'s last state that passed the checks, as every engine failure reports it."""
-        last = self.snapshot.bodies
-        if not len(last.pos):  # nothing read yet
-            return None
-        return {
-            "time": self.snapshot.time,
-            "pos": last.pos[i].tolist(),
-            "vel": last.lin_vel[i].tolist(),
-            "angvel": last.ang_vel[i].tolist(),
-        }
-
     def _step(self, t_next: float) -> None:
         """The engine's step; a blow-up the engine detects itself gets the same record as the runner's."""
         try:
             self.backend.step()
         except EngineFailure as exc:
             if exc.body in self.body_index:
-                exc.last_good = self._last_good(self.body_index[exc.body])
+                exc.last_good = last_good(self.snapshot, self.body_index[exc.body])
                 exc.time = t_next if exc.time is None else exc.time
             self._log_engine_messages(t_next)
             raise
@@ -398,7 +192,7 @@ class Session:
 
     def _read(self, t: float, contacts: bool = True) -> None:
         states = self.backend.body_states()
-        broken = _blown_up(states)
+        broken = blown_up(states)
         if broken is not None:
             i, bad = broken
             name = self.world.bodies[i].name
@@ -408,14 +202,14 @@ class Session:
                 backend=self.backend.name,
                 body=name,
                 time=t,
-                last_good=self._last_good(i),
+                last_good=last_good(self.snapshot, i),
             )
         joints = with_zeros(self.backend.joint_states(), self._zeros)  # stated zeros (compile.joints)
         joints = self.drives.with_torques(joints)  # `<joint>.force` includes a drive's torque (sim.drives)
         try:
             self.energy.check(t, states, joints)
         except EngineFailure as exc:
-            exc.last_good = self._last_good(self.body_index[exc.body]) if exc.body in self.body_index else None
+            exc.last_good = last_good(self.snapshot, self.body_index[exc.body]) if exc.body in self.body_index else None
             raise
         self.snapshot.time = t
         self.snapshot.bodies = states

@@ -1,4 +1,4 @@
-"""Blow-ups are found once, by the runner, with one limit for every engine (runner.sim.session.MAX_SPEED).
+"""Blow-ups are found once, by the runner, with one limit for every engine (runner.sim.blowup.MAX_SPEED).
 
 The adapters check nothing themselves (backends/base.py); a body that leaves the limit on any engine ends
 the run as an engine failure that names the body, the time and its last good state.
@@ -11,8 +11,8 @@ from pathlib import Path
 import pytest
 
 from runner.language.load import load_scenario
+from runner.sim.blowup import MAX_SPEED
 from runner.sim.run import run_loaded
-from runner.sim.session import MAX_SPEED
 
 # 1e8 N for one step of 0.01 s on the 4 kg box: dv = 2.5e5 m/s, far beyond MAX_SPEED (1e4 m/s) and below
 # PyBullet's raised speed cap (1e6 m/s); nothing touches it, so every engine integrates exactly F*dt/m.

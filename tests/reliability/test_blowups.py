@@ -25,7 +25,7 @@ import pytest
 
 from backends.registry import is_installed
 from reports.trace_reader import read_trace
-from runner.sim.session import MAX_SPEED
+from runner.sim.blowup import MAX_SPEED
 from tests.engines import ENGINES
 
 G = 9.81
