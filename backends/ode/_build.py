@@ -39,6 +39,7 @@ from panda3d.ode import (
 from ..errors import UnsupportedFeature
 from ..geometry import quat_rotate
 from ..types import IDENTITY_QUAT, BodySpec, CompiledWorld, JointKind, JointSpec, Motion, ShapeKind, Surface
+from ._colliders import check_colliders
 from ._options import OdeOptions
 from ._shapes import FrameOffset, build_robot_geoms, check_static_shapes, is_robot_body
 
@@ -134,18 +135,6 @@ def _geom(space: Any, spec: BodySpec) -> Any:
     return OdePlaneGeom(space, n[0], n[1], n[2], d)
 
 
-def _check_colliders(world: CompiledWorld) -> None:
-    """ODE in this build has no capsule-cylinder collider: such a pair would pass through silently."""
-    kinds = {(p.shape.kind, b.motion is Motion.DYNAMIC) for b in world.bodies for p in b.placed_shapes()}
-    caps = {dyn for kind, dyn in kinds if kind is ShapeKind.CAPSULE}
-    cyls = {dyn for kind, dyn in kinds if kind is ShapeKind.CYLINDER}
-    if any(a or b for a in caps for b in cyls):
-        raise UnsupportedFeature(
-            f"Scenario `{world.name}` has a capsule and a cylinder that may touch; ODE (panda3d) has no "
-            "capsule-cylinder collider, so they would pass through each other."
-        )
-
-
 def _surface_classes(world: CompiledWorld) -> tuple[list[int], dict[tuple[int, int], Surface]]:
     """Class 0 for bodies in no pair override, one class each for the others; the surface per class pair."""
     named = sorted({world.body_index(n) for p in world.pair_surfaces for n in (p.a, p.b)})
@@ -222,7 +211,7 @@ def set_motor(handle: JointHandle, vel: float, fmax: float) -> None:
 
 
 def build_scene(world: CompiledWorld, options: OdeOptions) -> Scene:
-    _check_colliders(world)
+    check_colliders(world)
     ode_world = OdeWorld()
     ode_world.setGravity(*world.gravity)
     ode_world.setErp(options.erp)
