@@ -39,7 +39,7 @@ from panda3d.ode import (
 from ..errors import UnsupportedFeature
 from ..geometry import quat_rotate
 from ..types import IDENTITY_QUAT, BodySpec, CompiledWorld, JointKind, JointSpec, Motion, ShapeKind, Surface
-from ._colliders import check_colliders
+from ._colliders import Prisms
 from ._options import OdeOptions
 from ._shapes import FrameOffset, build_robot_geoms, check_static_shapes, is_robot_body
 
@@ -211,7 +211,6 @@ def set_motor(handle: JointHandle, vel: float, fmax: float) -> None:
 
 
 def build_scene(world: CompiledWorld, options: OdeOptions) -> Scene:
-    check_colliders(world)
     ode_world = OdeWorld()
     ode_world.setGravity(*world.gravity)
     ode_world.setErp(options.erp)
@@ -227,6 +226,7 @@ def build_scene(world: CompiledWorld, options: OdeOptions) -> Scene:
     geom_body: list[int] = []  # per geom: its body's index
     offsets: dict[int, FrameOffset] = {}
     meshes: dict[int, Any] = {}
+    prisms = Prisms(world, meshes)
     for index, spec in enumerate(world.bodies):
         robot = is_robot_body(spec)
         body: OdeBody | None = None
@@ -259,6 +259,7 @@ def build_scene(world: CompiledWorld, options: OdeOptions) -> Scene:
         for geom in body_geoms:
             geom.setCategoryBits(BitMask32(category))
             geom.setCollideBits(BitMask32(collide))
+        body_geoms += prisms.add(space, index, spec, body_geoms, body)  # capsule-cylinder (_colliders)
         bodies.append(body)
         geoms.extend(body_geoms)
         geom_body.extend([index] * len(body_geoms))

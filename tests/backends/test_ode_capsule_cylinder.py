@@ -1,73 +1,133 @@
-"""ODE (panda3d) has no capsule-cylinder collider: which scenes holding both shapes run, which are refused.
+"""Capsule against cylinder on ODE (panda3d has no collider for the pair): the prism stand-in.
 
-Only a pair the scene would test can be missed: two bodies, one of them dynamic, not excluded
-(backends/ode/_colliders.py). The expectations are free fall and resting heights, with ODE's tolerances.
+A cylinder that a capsule on another body can touch (one of them dynamic, the pair not excluded) gets a
+prism of ``FACETS`` facets inscribed in it, collided with capsules only (backends/ode/_colliders.py). The
+expectations are analytic resting heights and free fall, with the prism's facet bound and ODE's contact
+softness derived below.
 """
 
 from __future__ import annotations
 
 import dataclasses
+import math
 
+import numpy as np
 import pytest
 
 pytest.importorskip("panda3d.ode")
 
-from backends.errors import UnsupportedFeature  # noqa: E402
+from backends.geometry import quat_from_axis_angle  # noqa: E402
+from backends.ode._colliders import FACETS, prism, prism_bodies  # noqa: E402
 from backends.testing import worlds as w  # noqa: E402
 from backends.testing.worlds import G, make_backend  # noqa: E402
-from backends.types import BodySpec, Motion, PlacedShape, Shape, ShapeKind  # noqa: E402
+from backends.types import BodySpec, CompiledWorld, Motion, PlacedShape, Shape, ShapeKind  # noqa: E402
 
-CAPSULE = Shape(ShapeKind.CAPSULE, radius=0.05, length=0.2)
-CYLINDER = Shape(ShapeKind.CYLINDER, radius=0.1, length=0.2)
-#: Resting height allowance (m). At rest ODE's contact spring k = ERP/(h CFM) holds m g at a depth
-#: m g h CFM / ERP = 1 kg * 9.81 m/s^2 * 0.01 s * 1e-5 / 0.2 = 4.9e-6 m (one contact; less on several). The
-#: landing's penetration (at most v h = 0.44 m/s * 0.01 s = 4.4 mm after a 1 cm drop) is pushed out at ERP 0.2
-#: per step: 0.8^n of it is left after n steps, below 1e-8 m after the 90 steps at rest. 1e-4 m bounds both.
-REST = 1e-4
+CAP_R, CYL_R = 0.05, 0.1
+CAPSULE = Shape(ShapeKind.CAPSULE, radius=CAP_R, length=0.2)
+CYLINDER = Shape(ShapeKind.CYLINDER, radius=CYL_R, length=0.2)
+#: Resting allowance (m) for ODE's contact softness. At rest its contact spring k = ERP/(h CFM) holds the
+#: load at a depth m g h CFM / ERP: 2.1 kg (the capsule) * 9.81 m/s^2 * 0.01 s * 1e-5 / 0.2 = 1.0e-5 m on
+#: one contact (less on several). The landing's penetration (at most v h = 0.44 m/s * 0.01 s = 4.4 mm after a
+#: 1 cm drop) is pushed out at ERP 0.2 per step: 0.8^n of it is left after n steps, below 1e-8 m after the
+#: 90 steps at rest. 1e-4 m bounds both.
+SOFT = 1e-4
+#: The prism's facets lie inside the cylinder by up to its sagitta: 1.2e-4 m for the 0.1 m radius.
+SAGITTA = CYL_R * (1.0 - math.cos(math.pi / FACETS))
+ALONG_X = quat_from_axis_angle((0.0, 1.0, 0.0), math.pi / 2)  # local z (a capsule's, a cylinder's axis) to x
+ALONG_Y = quat_from_axis_angle((1.0, 0.0, 0.0), math.pi / 2)  # local z to -y
 
 
-def _fall(world_bodies: list[BodySpec], steps: int = 50, **kw: object) -> tuple[float, ...]:
-    world = w.world("capcyl", world_bodies, steps=steps)
-    world = dataclasses.replace(world, **kw)  # type: ignore[arg-type]
+def _run(world: CompiledWorld, steps: int) -> tuple[np.ndarray, np.ndarray, list[tuple[int, int]]]:
     with make_backend("ode", world) as sim:
         for _ in range(steps):
             sim.step()
-        return tuple(float(z) for z in sim.body_states().pos[:, 2])
+        s = sim.body_states()
+        pairs = [(c.a, c.b) for c in sim.contacts()]
+        return np.array(s.pos), np.array(s.lin_vel), pairs
 
 
-def test_capsule_and_cylinder_on_one_body_run() -> None:
-    """dm_control's pendulum: a decoration cylinder and the pole's capsule on one link (never tested by
-    ODE). A compound of both, cylinder down, rests on the ground at the cylinder's half-length."""
+def _across(steps: int = 100) -> CompiledWorld:
+    """A capsule (along y) 1 cm above lying across a static cylinder (along x) centred at the origin."""
+    cyl = w.body("cyl", CYLINDER, (0.0, 0.0, 0.0), motion=Motion.STATIC, quat=ALONG_X)
+    cap = w.body("cap", CAPSULE, (0.0, 0.0, CYL_R + CAP_R + 0.01), quat=ALONG_Y)
+    return w.world("capsule-across-cylinder", [cyl, cap], steps=steps)
+
+
+def test_capsule_rests_across_a_cylinder_at_the_sum_of_radii() -> None:
+    """On the true cylinder the capsule's axis rests at r_cyl + r_cap above the cylinder's axis; on the
+    prism it rests between that and SAGITTA lower, each within ODE's softness."""
+    pos, vel, pairs = _run(_across(), 100)
+    z = float(pos[1, 2])
+    assert CYL_R + CAP_R - SAGITTA - SOFT <= z <= CYL_R + CAP_R + SOFT
+    assert abs(pos[1, 0]) < 0.01 and abs(pos[1, 1]) < 0.01  # still across the top
+    assert np.linalg.norm(vel[1]) < 0.01
+    assert pairs == [(0, 1)]
+
+
+def test_capsule_rests_on_a_falling_cylinders_end_face() -> None:
+    """A dynamic cylinder upright on the ground, a capsule lying on its top face: the prism's end faces are
+    the cylinder's, so the capsule rests at the cylinder's length + r_cap (two contact layers' softness)."""
+    cyl = w.body("cyl", CYLINDER, (0.0, 0.0, 0.1 + 0.005))
+    cap = w.body("cap", CAPSULE, (0.0, 0.0, 0.2 + CAP_R + 0.02), quat=ALONG_X)
+    pos, vel, pairs = _run(w.world("capsule-on-cylinder", [w.ground(), cyl, cap], steps=100), 100)
+    assert float(pos[1, 2]) == pytest.approx(0.1, abs=SOFT)
+    assert float(pos[2, 2]) == pytest.approx(0.2 + CAP_R, abs=2 * SOFT)
+    assert np.linalg.norm(vel[2]) < 0.01
+    assert sorted(pairs) == [(0, 1), (1, 2)]
+
+
+def test_same_scenario_same_states() -> None:
+    """The prism's contacts are deterministic: two runs give the same bytes."""
+    a, b = _run(_across(), 60), _run(_across(), 60)
+    assert a[0].tobytes() == b[0].tobytes() and a[1].tobytes() == b[1].tobytes()
+
+
+def test_prism_is_inscribed_and_closed() -> None:
+    mesh = prism(CYL_R, 0.2)
+    r = np.hypot(*np.array(mesh.vertices)[:, :2].T)
+    assert r == pytest.approx(CYL_R, abs=1e-15)
+    edges: dict[tuple[int, int], int] = {}
+    for a, b, c in mesh.faces:
+        for e in ((a, b), (b, c), (c, a)):
+            edges[e] = edges.get(e, 0) + 1
+    assert all(edges.get((b, a)) == 1 for a, b in edges)  # every edge once each way: closed, consistently wound
+    # outward: the signed volume of a counter-clockwise (outside) winding is the prism's, pi r^2 l sin(2pi/n)/(2pi/n)
+    v = np.array(mesh.vertices)
+    vol = sum(np.dot(v[a], np.cross(v[b], v[c])) for a, b, c in mesh.faces) / 6.0
+    n = FACETS
+    assert vol == pytest.approx(n / 2 * CYL_R**2 * math.sin(2 * math.pi / n) * 0.2, rel=1e-12)
+
+
+def test_capsule_and_cylinder_on_one_body_need_no_prism() -> None:
+    """dm_control's pendulum: a decoration cylinder and the pole's capsule on one link (ODE never tests two
+    geoms of one body). A compound of both, cylinder down, rests on the ground at the cylinder's half-length."""
     shapes = (PlacedShape(CYLINDER), PlacedShape(CAPSULE, pos=(0.0, 0.0, 0.25)))
     body = BodySpec("pole", Motion.DYNAMIC, Shape(ShapeKind.COMPOUND), 1.0, (0.01, 0.01, 0.01),
                     (0.0, 0.0, 0.11), (1.0, 0.0, 0.0, 0.0), shapes=shapes)
-    _, z = _fall([w.ground(), body], steps=100)
-    assert z == pytest.approx(0.1, abs=REST)
+    world = w.world("one-body", [w.ground(), body], steps=100)
+    assert prism_bodies(world) == frozenset()
+    pos, _, _ = _run(world, 100)
+    assert float(pos[1, 2]) == pytest.approx(0.1, abs=SOFT)
 
 
-def test_an_excluded_pair_runs_and_passes_through() -> None:
-    """A capsule falling onto a static cylinder, the pair excluded (a joint's links, MJCF contype): it runs,
+def test_an_excluded_pair_passes_through() -> None:
+    """A capsule falling onto a static cylinder, the pair excluded (a joint's links, MJCF contype): no prism,
     and the capsule falls freely through the cylinder, as the exclusion says."""
     cap = w.body("cap", CAPSULE, (0.0, 0.0, 0.5))
     cyl = w.body("cyl", CYLINDER, (0.0, 0.0, 0.0), motion=Motion.STATIC)
-    z, _ = _fall([cap, cyl], excluded_pairs=(("cyl", "cap"),))
+    world = dataclasses.replace(w.world("excluded", [cap, cyl], steps=50), excluded_pairs=(("cyl", "cap"),))
+    assert prism_bodies(world) == frozenset()
+    pos, _, pairs = _run(world, 50)
     # ODE's semi-implicit Euler: v_n = -g h n, z_n = z0 - g h^2 n (n + 1) / 2; float32 state: 1e-5 m
-    assert z == pytest.approx(0.5 - G * 0.01**2 * 50 * 51 / 2, abs=1e-5)
-    assert z < -0.5  # below the cylinder (top at 0.1 m): it passed through
+    assert float(pos[0, 2]) == pytest.approx(0.5 - G * 0.01**2 * 50 * 51 / 2, abs=1e-5)
+    assert pairs == []
 
 
-def test_static_and_kinematic_capsule_and_cylinder_run() -> None:
-    """ODE never tests static or kinematic geoms against each other (category bits): nothing to miss."""
-    cap = w.body("cap", CAPSULE, (0.0, 0.0, 0.1), motion=Motion.KINEMATIC)
-    cyl = w.body("cyl", CYLINDER, (0.0, 0.0, 0.0), motion=Motion.STATIC)
-    ball = w.sphere("ball", 0.1, (1.0, 0.0, 0.5))
-    z = _fall([cap, cyl, ball], steps=10)
-    assert z[0] == pytest.approx(0.1, abs=1e-6)
-
-
-def test_a_free_capsule_over_a_cylinder_is_refused() -> None:
-    """A free capsule that can fall on a cylinder would pass through it: refused, both bodies named."""
-    cap = w.body("cap", CAPSULE, (0.0, 0.0, 1.0))
-    cyl = w.body("cyl", CYLINDER, (0.0, 0.0, 0.5), motion=Motion.STATIC)
-    with pytest.raises(UnsupportedFeature, match=r"`cap` \(a capsule\) and body `cyl` \(a cylinder\).*ODE"):
-        make_backend("ode", w.world("capcyl", [cap, cyl]))
+def test_only_cylinders_a_capsule_can_touch_get_a_prism() -> None:
+    """Static and kinematic shapes never meet (category bits); a free capsule meets both cylinders."""
+    still = w.body("still", CAPSULE, (0.0, 0.0, 0.1), motion=Motion.KINEMATIC)
+    ground_cyl = w.body("ground_cyl", CYLINDER, (0.0, 0.0, 0.0), motion=Motion.STATIC)
+    assert prism_bodies(w.world("still", [still, ground_cyl])) == frozenset()
+    free = w.body("free", CAPSULE, (1.0, 0.0, 1.0))
+    moving_cyl = w.body("moving_cyl", CYLINDER, (2.0, 0.0, 1.0))
+    assert prism_bodies(w.world("free", [still, ground_cyl, free, moving_cyl])) == frozenset({1, 3})
