@@ -5,7 +5,8 @@ principal inertia (already ODE's dMassSet* values); static bodies are bodiless g
 are bodies with gravity off and a huge mass (KINEMATIC_MASS_RATIO), re-placed by the backend after every
 step. Collision filtering uses ODE's category/collide bits, so static-static, static-kinematic and
 kinematic-kinematic pairs are never tested (ODE collides a pair when either geom's category matches the
-other's collide bits).
+other's collide bits). A cylinder that a capsule can touch also gets a prism stand-in, tested against
+capsules only (``_colliders``: panda3d's ODE has no capsule-cylinder collider).
 """
 
 from __future__ import annotations
