@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -21,6 +22,8 @@ from backends.ode._colliders import FACETS, prism, prism_bodies  # noqa: E402
 from backends.testing import worlds as w  # noqa: E402
 from backends.testing.worlds import G, make_backend  # noqa: E402
 from backends.types import BodySpec, CompiledWorld, Motion, PlacedShape, Shape, ShapeKind  # noqa: E402
+from runner.compile.program import build_program  # noqa: E402
+from runner.language.load import load_scenario  # noqa: E402
 
 CAP_R, CYL_R = 0.05, 0.1
 CAPSULE = Shape(ShapeKind.CAPSULE, radius=CAP_R, length=0.2)
@@ -131,3 +134,76 @@ def test_only_cylinders_a_capsule_can_touch_get_a_prism() -> None:
     free = w.body("free", CAPSULE, (1.0, 0.0, 1.0))
     moving_cyl = w.body("moving_cyl", CYLINDER, (2.0, 0.0, 1.0))
     assert prism_bodies(w.world("free", [still, ground_cyl, free, moving_cyl])) == frozenset({1, 3})
+
+
+def test_prisms_follow_compound_shapes_and_com_offsets() -> None:
+    """Robot bodies (compound shapes, a COM off the frame): the prism takes its cylinder's pose, static
+    (placed in the world) or moving (a geom offset from the COM). A static compound holds a cylinder turned to
+    lie along x at (0, 0, 0.3); a dynamic compound (a 0.2 m box, an upright cylinder on it, its COM 5 cm up)
+    stands on the ground. Capsules dropped 1 cm rest across the first at 0.3 + r_cyl + r_cap (within the
+    sagitta) and on the second's top face at 0.2 + 0.2 + r_cap."""
+    lying = PlacedShape(CYLINDER, pos=(0.0, 0.0, 0.3), quat=ALONG_X)
+    rack = BodySpec("rack", Motion.STATIC, Shape(ShapeKind.COMPOUND), 0.0, (0.0, 0.0, 0.0), (1.0, 0.0, 0.0),
+                    (1.0, 0.0, 0.0, 0.0), shapes=(lying,))
+    on_rack = w.body("on_rack", CAPSULE, (1.0, 0.0, 0.3 + CYL_R + CAP_R + 0.01), quat=ALONG_Y)
+    base = PlacedShape(Shape(ShapeKind.BOX, size=(0.2, 0.2, 0.2)))
+    post = PlacedShape(CYLINDER, pos=(0.0, 0.0, 0.2))
+    stand = BodySpec("stand", Motion.DYNAMIC, Shape(ShapeKind.COMPOUND), 2.0, (0.02, 0.02, 0.02),
+                     (-1.0, 0.0, 0.1 + 0.005), (1.0, 0.0, 0.0, 0.0), shapes=(base, post), com=(0.0, 0.0, 0.05))
+    on_stand = w.body("on_stand", CAPSULE, (-1.0, 0.0, 0.3 + 0.1 + CAP_R + 0.02), quat=ALONG_X)
+    world = w.world("compound", [w.ground(), rack, on_rack, stand, on_stand], steps=100)
+    assert prism_bodies(world) == frozenset({1, 3})
+    pos, vel, pairs = _run(world, 100)
+    assert 0.3 + CYL_R + CAP_R - SAGITTA - SOFT <= float(pos[2, 2]) <= 0.3 + CYL_R + CAP_R + SOFT
+    assert float(pos[3, 2]) == pytest.approx(0.1, abs=SOFT)
+    assert float(pos[4, 2]) == pytest.approx(0.4 + CAP_R, abs=2 * SOFT)
+    assert np.linalg.norm(vel[[2, 4]], axis=1).max() < 0.01
+    assert sorted(pairs) == [(0, 3), (1, 2), (3, 4)]
+
+
+_MJCF = """<mujoco model="capsule-on-roller">
+  <worldbody>
+    <geom name="floor" type="plane" size="2 2 .1"/>
+    <geom name="roller" type="cylinder" fromto="0 -.3 .2 0 .3 .2" size=".1"/>
+    <body name="bar" pos="0 0 .36">
+      <freejoint/>
+      <geom name="bar" type="capsule" fromto="-.2 0 0 .2 0 0" size=".05" density="1000"/>
+    </body>
+    <body name="arm" pos="1 0 .5">
+      <joint name="swing" type="hinge" axis="0 1 0"/>
+      <geom name="hub" type="cylinder" fromto="0 -.03 0 0 .03 0" size=".04"/>
+      <geom name="upper" type="capsule" fromto="0 0 0 0 0 -.2" size=".02"/>
+      <body name="forearm" pos="0 0 -.2">
+        <joint name="elbow" type="hinge" axis="0 1 0"/>
+        <geom name="lower" type="capsule" fromto="0 0 0 .2 0 0" size=".02"/>
+      </body>
+    </body>
+  </worldbody>
+</mujoco>
+"""
+
+_SCENARIO = """schema_version: 1
+scenario: capsule-on-roller
+world: {gravity: [0, 0, -9.81], dt: 0.01, duration: 1.0}
+robots:
+  model: {mjcf: model.xml}
+"""
+
+
+def test_an_mjcf_capsule_rests_on_its_cylinder(tmp_path: Path) -> None:
+    """An MJCF file as MuJoCo reads it: a free capsule bar (r 0.05) dropped 1 cm across the world body's
+    roller (r 0.1, axis along y at z 0.2) rests at 0.2 + 0.1 + 0.05 within the sagitta. The arm's hub
+    cylinder shares its link with a capsule and is its forearm's parent (MuJoCo's parent filter excludes the
+    pair): it needs a prism for the free bar only."""
+    (tmp_path / "model.xml").write_text(_MJCF)
+    (tmp_path / "scene.yaml").write_text(_SCENARIO)
+    world = build_program(load_scenario(tmp_path / "scene.yaml")).world
+    assert sorted(world.bodies[i].name for i in prism_bodies(world)) == ["model.arm", "model.worldbody"]
+    assert ("model.arm", "model.forearm") in world.excluded_pairs
+    no_bar = dataclasses.replace(world, bodies=tuple(b for b in world.bodies if b.name != "model.bar"))
+    # the roller still needs one for the arm's capsules (MuJoCo's parent filter never applies to the world body)
+    assert [no_bar.bodies[i].name for i in prism_bodies(no_bar)] == ["model.worldbody"]
+    bar = world.body_index("model.bar")
+    pos, vel, _ = _run(world, 100)
+    assert 0.35 - SAGITTA - SOFT <= float(pos[bar, 2]) <= 0.35 + SOFT
+    assert np.linalg.norm(vel[bar]) < 0.01
