@@ -56,10 +56,17 @@ def _across(steps: int = 100) -> CompiledWorld:
     return w.world("capsule-across-cylinder", [cyl, cap], steps=steps)
 
 
-def test_capsule_rests_across_a_cylinder_at_the_sum_of_radii() -> None:
+@pytest.mark.parametrize(
+    "options", [{}, {"collide": "auto", "impact_cfm": False, "friction_pyramid": "axes"}], ids=["callback", "auto"]
+)
+def test_capsule_rests_across_a_cylinder_at_the_sum_of_radii(options: dict[str, object]) -> None:
     """On the true cylinder the capsule's axis rests at r_cyl + r_cap above the cylinder's axis; on the
-    prism it rests between that and SAGITTA lower, each within ODE's softness."""
-    pos, vel, pairs = _run(_across(), 100)
+    prism it rests between that and SAGITTA lower, each within ODE's softness. Both contact paths (the
+    Python near-callback, panda3d's autoCollide) collide the prism."""
+    world = dataclasses.replace(_across(), backend_options={"ode": options})
+    with make_backend("ode", world) as sim:
+        assert sim._collider.mode == ("auto" if options else "callback")  # type: ignore[attr-defined]
+    pos, vel, pairs = _run(world, 100)
     z = float(pos[1, 2])
     assert CYL_R + CAP_R - SAGITTA - SOFT <= z <= CYL_R + CAP_R + SOFT
     assert abs(pos[1, 0]) < 0.01 and abs(pos[1, 1]) < 0.01  # still across the top
