@@ -10,8 +10,8 @@ shape meets the cylinder itself, and the cylinder still meets the capsule, givin
 Error bound. The prism lies inside the cylinder: its end faces are the cylinder's, and its side is at most
 the sagitta ``r (1 - cos(pi / FACETS))`` inside the curved surface (at a facet's middle; 0 at its edges). A
 capsule touching the side therefore rests between 0 and ``r (1 - cos(pi / FACETS))`` closer to the axis than
-on the true cylinder: 1.2e-3 r at 64 facets (0.12 mm for a 10 cm radius; 0.04 mm for dm_control's finger
-spinner's 3.4 cm), plus ODE's usual contact softness.
+on the true cylinder: 1.2e-3 r at 64 facets (0.12 mm for a 10 cm radius; 0.04 mm for the 3.4 cm hub
+of dm_control's finger), plus ODE's usual contact softness.
 
 A pair needs the prism only where the scene :func:`~backends.ode._build.build_scene` makes tests it: the two
 shapes on two different bodies (ODE never tests two geoms of one body), at least one of them dynamic (the

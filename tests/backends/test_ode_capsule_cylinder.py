@@ -214,3 +214,15 @@ def test_an_mjcf_capsule_rests_on_its_cylinder(tmp_path: Path) -> None:
     pos, vel, _ = _run(world, 100)
     assert 0.35 - SAGITTA - SOFT <= float(pos[bar, 2]) <= 0.35 + SOFT
     assert np.linalg.norm(vel[bar]) < 0.01
+
+
+def test_imported_model_counts_no_prism() -> None:
+    """``imported_model()`` reports the world's shapes: a dynamic cylinder with its prism is one shape."""
+    cyl = w.body("cyl", CYLINDER, (0.0, 0.0, 0.1 + 0.005))
+    cap = w.body("cap", CAPSULE, (0.0, 0.0, 0.2 + CAP_R + 0.02), quat=ALONG_X)
+    world = w.world("imported", [w.ground(), cyl, cap])
+    assert prism_bodies(world) == frozenset({1})
+    with make_backend("ode", world) as sim:
+        imported = sim.imported_model()
+    assert imported is not None
+    assert {b.name: b.shapes for b in imported.bodies} == {"cyl": 1, "cap": 1}
