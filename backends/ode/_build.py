@@ -5,7 +5,8 @@ principal inertia (already ODE's dMassSet* values); static bodies are bodiless g
 are bodies with gravity off and a huge mass (KINEMATIC_MASS_RATIO), re-placed by the backend after every
 step. Collision filtering uses ODE's category/collide bits, so static-static, static-kinematic and
 kinematic-kinematic pairs are never tested (ODE collides a pair when either geom's category matches the
-other's collide bits).
+other's collide bits). A cylinder that a capsule can touch also gets a prism stand-in, tested against
+capsules only (``_colliders``: panda3d's ODE has no capsule-cylinder collider).
 """
 
 from __future__ import annotations
@@ -39,6 +40,7 @@ from panda3d.ode import (
 from ..errors import UnsupportedFeature
 from ..geometry import quat_rotate
 from ..types import IDENTITY_QUAT, BodySpec, CompiledWorld, JointKind, JointSpec, Motion, ShapeKind, Surface
+from ._colliders import Prisms
 from ._options import OdeOptions
 from ._shapes import FrameOffset, build_robot_geoms, check_static_shapes, is_robot_body
 
@@ -134,18 +136,6 @@ def _geom(space: Any, spec: BodySpec) -> Any:
     return OdePlaneGeom(space, n[0], n[1], n[2], d)
 
 
-def _check_colliders(world: CompiledWorld) -> None:
-    """ODE in this build has no capsule-cylinder collider: such a pair would pass through silently."""
-    kinds = {(p.shape.kind, b.motion is Motion.DYNAMIC) for b in world.bodies for p in b.placed_shapes()}
-    caps = {dyn for kind, dyn in kinds if kind is ShapeKind.CAPSULE}
-    cyls = {dyn for kind, dyn in kinds if kind is ShapeKind.CYLINDER}
-    if any(a or b for a in caps for b in cyls):
-        raise UnsupportedFeature(
-            f"Scenario `{world.name}` has a capsule and a cylinder that may touch; ODE (panda3d) has no "
-            "capsule-cylinder collider, so they would pass through each other."
-        )
-
-
 def _surface_classes(world: CompiledWorld) -> tuple[list[int], dict[tuple[int, int], Surface]]:
     """Class 0 for bodies in no pair override, one class each for the others; the surface per class pair."""
     named = sorted({world.body_index(n) for p in world.pair_surfaces for n in (p.a, p.b)})
@@ -222,7 +212,6 @@ def set_motor(handle: JointHandle, vel: float, fmax: float) -> None:
 
 
 def build_scene(world: CompiledWorld, options: OdeOptions) -> Scene:
-    _check_colliders(world)
     ode_world = OdeWorld()
     ode_world.setGravity(*world.gravity)
     ode_world.setErp(options.erp)
@@ -238,6 +227,7 @@ def build_scene(world: CompiledWorld, options: OdeOptions) -> Scene:
     geom_body: list[int] = []  # per geom: its body's index
     offsets: dict[int, FrameOffset] = {}
     meshes: dict[int, Any] = {}
+    prisms = Prisms(world, meshes)
     for index, spec in enumerate(world.bodies):
         robot = is_robot_body(spec)
         body: OdeBody | None = None
@@ -270,6 +260,7 @@ def build_scene(world: CompiledWorld, options: OdeOptions) -> Scene:
         for geom in body_geoms:
             geom.setCategoryBits(BitMask32(category))
             geom.setCollideBits(BitMask32(collide))
+        body_geoms += prisms.add(space, index, spec, body_geoms, body)  # capsule-cylinder (_colliders)
         bodies.append(body)
         geoms.extend(body_geoms)
         geom_body.extend([index] * len(body_geoms))

@@ -3,7 +3,8 @@ joint parameters.
 
 The OdeBody sits at the centre of mass (``dBodySetMass`` wants it there), so ``getPosition`` is the COM in
 the world; ``getMass().getInertialTensor()`` is the tensor about it. A body's shapes are the geoms of the
-space attached to it. Per joint: its type, ``getAxis`` (world; a universal joint's ``getAxis1``) and
+space attached to it (a cylinder's capsule stand-in, ``_colliders``, left out). Per joint: its type,
+``getAxis`` (world; a universal joint's ``getAxis1``) and
 ``getParamLoStop``/``HiStop`` (ODE's +-dInfinity: no stop). ODE has no joint damping, friction, effort or
 velocity parameter (panda3d exposes no ``dJointSetDamping``; the motor's FMax is the runner's command):
 those are None.
@@ -16,13 +17,14 @@ from typing import Any
 from .._kit.imported import body, principal, stops, unit
 from ..types import CompiledWorld, ImportedBody, ImportedJoint, ImportedModel, JointKind, Motion
 from ._build import Scene, axis_arg
+from ._colliders import CAT_PRISM
 
 
 def _geoms_per_body(space: Any, bodies: list[Any]) -> list[int]:
     count = [0] * len(bodies)
     for g in range(space.getNumGeoms()):
         geom = space.getGeom(g)
-        if not geom.hasBody():
+        if not geom.hasBody() or geom.getCategoryBits().getWord() == CAT_PRISM:  # a stand-in is no shape
             continue
         owner = geom.getBody()
         for i, b in enumerate(bodies):

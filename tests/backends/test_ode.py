@@ -377,14 +377,6 @@ def test_settings_record_the_options() -> None:
     assert settings["stepper"] == "dWorldQuickStep" and settings["cfm"] == CFM and settings["erp"] == ERP
 
 
-def test_capsule_against_cylinder_is_refused() -> None:
-    """ODE here has no capsule-cylinder collider (0 contacts even when overlapping)."""
-    cap = w.body("cap", Shape(ShapeKind.CAPSULE, radius=0.1, length=0.2), (0.0, 0.0, 1.0))
-    cyl = w.body("cyl", Shape(ShapeKind.CYLINDER, radius=0.1, length=0.2), (0.0, 0.0, 0.5), motion=Motion.STATIC)
-    with pytest.raises(UnsupportedFeature, match="capsule-cylinder"):
-        make_backend("ode", w.world("capcyl", [cap, cyl]))
-
-
 def test_panda3d_assertion_is_an_engine_failure() -> None:
     """A failed panda3d assertion (nassert) inside the step raises AssertionError: it leaves as EngineFailure."""
     with make_backend("ode", w.free_fall()) as sim:
