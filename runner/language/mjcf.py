@@ -14,11 +14,13 @@ message and line), and the compiled model is mapped into the engine-neutral desc
 - every hinge's and slide's damping, friction loss, armature and stiffness (:class:`JointDynamics`);
 - several joints in one body, in order (every engine: a chain of light bodies where MuJoCo is not the engine,
   backends/_kit/chains.py);
-- what only an engine that reads the file itself can run (`<equality>`,
-  `<tendon>`, a ball joint's dynamics, explicit contact pairs, a massless moving body, fluid forces) is
-  recorded in :attr:`ModelDesc.needs` as capabilities: MuJoCo, which builds the robot from the file
-  (backends/mujoco), runs it; another engine refuses it before the run. Armature and stiffness are named
-  there too (`joint:armature`, `joint:stiffness`), so that an engine without them refuses at their line.
+- tendons and equalities (runner.language.mjcf_needs): a tendon without a force of its own is inert (a note);
+  an equality that couples two hinges or slides linearly is a mimic (``JointDesc.mimic``, `joint:mimic`);
+- what only an engine that reads the file itself can run (a tendon that acts, any other `<equality>`, a ball
+  joint's dynamics, explicit contact pairs, a massless moving body, fluid forces) is recorded in
+  :attr:`ModelDesc.needs` as capabilities, with what needs it at its line: MuJoCo, which builds the robot from
+  the file (backends/mujoco), runs it; another engine refuses it before the run. Armature and stiffness are
+  named there too (`joint:armature`, `joint:stiffness`), so that an engine without them refuses at their line.
 
 Named sites become frames on their bodies (``ModelDesc.frames``: readable, never simulated); cameras, lights,
 `<custom>`, `<sensor>`, `<visual>`, `<statistic>` do not change the dynamics of a step
