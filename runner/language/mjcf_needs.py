@@ -221,6 +221,7 @@ def _equalities(model: Any, mujoco: Any, tree: Any, joints: list[str], tendons: 
             continue
         follow, lead, multiplier, offset = joints[pair[0]], joints[pair[1]], pair[2], pair[3]
         found.mimics[follow] = MimicDesc(lead, multiplier, offset)
+        found.need("joint:mimic", f"equality `{name}`: joint `{follow}` follows `{lead}`", lines[e])
         shift = f" {'-' if offset < 0 else '+'} {abs(offset):.6g}" if offset else ""
         found.notes.append(f"equality `{name}`: joint `{follow}` = {multiplier:.6g} x `{lead}`{shift} from the zero "
                            "configuration, a mimic joint (joint:mimic); MuJoCo holds it softly, by the equality's "

@@ -78,9 +78,10 @@ def test_an_acting_tendon_runs_on_mujoco_and_is_refused_up_front_elsewhere(tmp_p
     path = _scenario(tmp_path, "constrained", CONSTRAINED)
     desc = load_scenario(path).robots["r"]
     limit = "tendon `t`'s length limit [-0.5, 0.5]"
-    assert [(n.capability, n.what) for n in desc.needs] == [("constraint:tendon", limit)]
+    follows = "equality `equality_0`: joint `jb` follows `ja`"
+    assert [(n.capability, n.what) for n in desc.needs] == [("joint:mimic", follows), ("constraint:tendon", limit)]
     tendon_line = next(k for k, line in enumerate(CONSTRAINED.splitlines(), 1) if '<fixed name="t"' in line)
-    assert desc.needs[0].line == tendon_line
+    assert desc.needs[1].line == tendon_line
     assert {j.name: j.mimic for j in desc.joints if j.mimic is not None} == {"jb": MimicDesc("ja", 0.5, 0.0)}
     ran = _run(path, "mujoco")
     assert ran.returncode == 0, ran.stderr

@@ -146,7 +146,8 @@ def test_each_kind_of_coupling_is_the_mimic_mujoco_holds(tmp_path: Path, kind: s
     element, expected = EQUALITIES[kind]
     (tmp_path / "kinds.xml").write_text(KINDS % element)
     desc = load_mjcf(tmp_path / "kinds.xml")
-    assert [n.capability for n in desc.needs] == []
+    line = (KINDS % element).splitlines().index(f"  <equality>{element}</equality>") + 1
+    assert [(n.capability, n.line) for n in desc.needs] == [("joint:mimic", line)]  # named where DART, ODE refuse
     (jb,) = [j for j in desc.joints if j.mimic is not None]
     assert jb.name == "jb" and jb.mimic is not None
     assert (jb.mimic.leader, jb.mimic.multiplier, jb.mimic.offset) == pytest.approx(
@@ -168,8 +169,10 @@ REFUSED = {
 def test_other_equalities_stay_refused_naming_why(tmp_path: Path, kind: str) -> None:
     element, why = REFUSED[kind]
     (tmp_path / "kinds.xml").write_text(KINDS % element)
-    (need,) = load_mjcf(tmp_path / "kinds.xml").needs
-    assert need.capability == EQUALITY and why in need.what
+    needs = {n.capability: n for n in load_mjcf(tmp_path / "kinds.xml").needs}
+    assert set(needs) == ({EQUALITY, "joint:mimic"} if kind == "a loop" else {EQUALITY})  # the loop's first holds
+    need = needs[EQUALITY]
+    assert why in need.what
     assert need.line == (KINDS % element).splitlines().index(f"  <equality>{element}</equality>") + 1
 
 
@@ -332,6 +335,8 @@ def test_an_engine_without_mimic_refuses_the_pair_up_front(tmp_path: Path, engin
     command = [sys.executable, "-m", "runner", "validate", str(tmp_path / "pair.yaml"), "-b", engine]
     done = subprocess.run(command, cwd=ROOT, capture_output=True, text=True, timeout=300, check=False)
     assert done.returncode == 2 and "joint:mimic" in done.stderr and f"`{engine}`" in done.stderr, done.stderr
+    line = PAIR.splitlines().index("  <equality>") + 2
+    assert f"pair.xml:{line}: equality `coupling`: joint `follow` follows `lead`" in done.stderr, done.stderr
     assert "Traceback" not in done.stderr
 
 
