@@ -18,7 +18,7 @@ length at qpos0 (``tendon_length0``), a fixed tendon's being sum(coef_i q_i):
 
 One that reduces to a linear relation between exactly two hinges or slides becomes a mimic
 (:class:`MimicDesc`: follower = multiplier x leader + offset, in these coordinates), run by the engines that
-declare ``joint:mimic``:
+declare ``joint:mimic`` (a ``joint:mimic`` need at the equality's line, so that the others' refusal names it):
 
 * a joint equality of degree 1: joint1 follows joint2, multiplier polycoef[1], offset polycoef[0];
 * one fixed tendon of two joints, a x_a + b x_b = polycoef[0] (dm_control's manipulator: -0.5 thumb + 0.5
