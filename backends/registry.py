@@ -227,8 +227,10 @@ def check_capabilities(cls: type[Backend], world: CompiledWorld) -> None:
     lacking = world.required_capabilities() - cls.capabilities
     missing = sorted(c.value for c in lacking)
     if missing:
+        sites = [f"robot `{m.robot}`: {site}" for m in world.models for c, site in m.need_sites if c in lacking]
+        where = f" ({'; '.join(sites)})" if sites else ""
         refusal = UnsupportedFeature(
-            f"Scenario `{world.name}` needs {', '.join(missing)}, which backend `{cls.name}` does not "
+            f"Scenario `{world.name}` needs {', '.join(missing)}{where}, which backend `{cls.name}` does not "
             f"support. Supported: {', '.join(sorted(c.value for c in cls.capabilities))}."
             f"{_alternatives(cls, lacking)}"
         )

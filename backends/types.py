@@ -377,6 +377,9 @@ class ModelFile:
     #: path); "": the file as it is
     xml: str = ""
     includes: tuple[tuple[str, str], ...] = ()
+    #: (capability, what in the file needs it and where: "model.xml:47: tendon `string`'s length limit"), for
+    #: a refusal's message
+    need_sites: tuple[tuple[Capability, str], ...] = ()
 
 
 @dataclass(frozen=True)

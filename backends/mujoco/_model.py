@@ -217,7 +217,7 @@ def build(world: CompiledWorld, opts: MujocoOptions, h: float) -> Layout:
         geoms[name] = add_geoms(spec, mj, body, default, group[name] in moving)
     names = _native.Names(native)
     _add_motors(spec, world, heavy, h, names)
-    _add_mimics(spec, world, edges, h, opts)
+    _add_mimics(spec, world, edges, h, opts, native)
     if native is not None:
         geoms.update({b: native.geoms[b] for b in native.bodies})
         group.update({b: b for b in native.bodies})
@@ -363,14 +363,19 @@ def _add_joint(mj: Any, body: BodySpec, world: CompiledWorld, edge: Edge, h: flo
     mj_joint.solimp_limit = _SOLIMP
 
 
-def _add_mimics(spec: Any, world: CompiledWorld, edges: dict[str, Edge], h: float, opts: MujocoOptions) -> None:
+def _add_mimics(
+    spec: Any, world: CompiledWorld, edges: dict[str, Edge], h: float, opts: MujocoOptions, native: NativeModel | None
+) -> None:
     """Each coupling (URDF `<mimic>`, ``joint:mimic``) as MuJoCo's URDF importer and MJCF write it: a joint
     equality ``q1 - q1_0 = polycoef(q2 - q2_0)`` with polycoef (offset, multiplier) in MuJoCo's coordinates
     (the edge's sign x the world's; qpos0 is the start, as for every joint here), as stiff as a joint's stop
-    (ODE's ERP correction), so a coupling and a stop hold alike."""
+    (ODE's ERP correction), so a coupling and a stop hold alike. A coupling of an MJCF robot's joints is the
+    file's own `<equality>` (runner.language.mjcf_needs), which MuJoCo reads with the file: not added again."""
     sign = {edge.joint: edge.sign for edge in edges.values() if edge.joint is not None}
     index = {joint.name: k for k, joint in enumerate(world.joints)}
     for coupling in world.couplings:
+        if native is not None and coupling.joint in native.joints:
+            continue
         ratio, offset = coupling.engine_terms(sign[index[coupling.joint]], sign[index[coupling.leader]])
         data = [0.0] * mujoco.mjNEQDATA
         data[0], data[1] = offset, ratio

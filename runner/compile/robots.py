@@ -12,6 +12,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 from dataclasses import dataclass, replace
+from pathlib import Path
 
 from backends.geometry import IDENTITY, quat_mul, quat_rotate
 from backends.types import (
@@ -299,4 +300,6 @@ def model_file(
         start=tuple((f"{name}.{j}", q, v) for j, (q, v) in (values or {}).items()),
         xml=desc.upgraded[0] if desc.upgraded is not None else "",
         includes=desc.upgraded[1] if desc.upgraded is not None else (),
-    )
+        need_sites=tuple((Capability(n.capability), f"{Path(desc.file).name}:{n.line}: {n.what}" if n.line else
+                          f"{Path(desc.file).name}: {n.what}") for n in desc.needs),
+    )  # fmt: skip

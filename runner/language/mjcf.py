@@ -14,11 +14,13 @@ message and line), and the compiled model is mapped into the engine-neutral desc
 - every hinge's and slide's damping, friction loss, armature and stiffness (:class:`JointDynamics`);
 - several joints in one body, in order (every engine: a chain of light bodies where MuJoCo is not the engine,
   backends/_kit/chains.py);
-- what only an engine that reads the file itself can run (`<equality>`,
-  `<tendon>`, a ball joint's dynamics, explicit contact pairs, a massless moving body, fluid forces) is
-  recorded in :attr:`ModelDesc.needs` as capabilities: MuJoCo, which builds the robot from the file
-  (backends/mujoco), runs it; another engine refuses it before the run. Armature and stiffness are named
-  there too (`joint:armature`, `joint:stiffness`), so that an engine without them refuses at their line.
+- tendons and equalities (runner.language.mjcf_needs): a tendon without a force of its own is inert (a note);
+  an equality that couples two hinges or slides linearly is a mimic (``JointDesc.mimic``, `joint:mimic`);
+- what only an engine that reads the file itself can run (a tendon that acts, any other `<equality>`, a ball
+  joint's dynamics, explicit contact pairs, a massless moving body, fluid forces) is recorded in
+  :attr:`ModelDesc.needs` as capabilities, with what needs it at its line: MuJoCo, which builds the robot from
+  the file (backends/mujoco), runs it; another engine refuses it before the run. Armature and stiffness are
+  named there too (`joint:armature`, `joint:stiffness`), so that an engine without them refuses at their line.
 
 Named sites become frames on their bodies (``ModelDesc.frames``: readable, never simulated); cameras, lights,
 `<custom>`, `<sensor>`, `<visual>`, `<statistic>` do not change the dynamics of a step
@@ -36,6 +38,7 @@ import numpy as np
 from backends.types import NO_DYNAMICS, JointDynamics, Mesh, PlacedShape, Shape, ShapeKind
 from runner.language.mesh_limits import check_mesh_file
 from runner.language.mjcf_legacy import Upgraded, upgrade
+from runner.language.mjcf_needs import read_needs
 from runner.language.model_names import check_names
 from runner.language.model_numbers import check_mjcf_numbers, check_number, check_vertices
 from runner.language.robot_desc import (
@@ -46,7 +49,6 @@ from runner.language.robot_desc import (
     LinkDesc,
     ModelDesc,
     ModelFileError,
-    ModelNeed,
     quat4,
     resolved,
     vec,
@@ -141,11 +143,6 @@ def _lines(tree: Any) -> dict[tuple[str, str], int]:
             and e.get("name")}  # fmt: skip
 
 
-def _first_line(tree: Any, tag: str) -> int:
-    found = next(iter(tree.getroot().iter(tag)), None)
-    return (found.sourceline or 0) if found is not None else 0
-
-
 def _names(model: Any, file: Path, lines: dict[tuple[str, str], int]) -> tuple[list[str], list[str]]:
     """Every body's and joint's name in the description: the file's, else `body_<i>`, `<body>_joint` (the
     k-th unnamed joint of a body with several: `<body>_joint<k>`), `<body>_free`."""
@@ -164,12 +161,6 @@ def _names(model: Any, file: Path, lines: dict[tuple[str, str], int]) -> tuple[l
     return bodies, joints
 
 
-def _has_dynamics(model: Any, j: int) -> bool:
-    dofs = slice(int(model.jnt_dofadr[j]), int(model.jnt_dofadr[j]) + (6 if int(model.jnt_type[j]) == 0 else 3))
-    return bool(np.any(model.dof_damping[dofs] != 0) or np.any(model.dof_frictionloss[dofs] != 0)
-                or np.any(model.dof_armature[dofs] != 0) or model.jnt_stiffness[j] != 0)  # fmt: skip
-
-
 def _dynamics(model: Any, j: int) -> JointDynamics:
     """A hinge's or slide's damping, friction loss, armature and spring as MuJoCo compiled them (defaults
     applied); the spring's rest position from the zero configuration (``qpos_spring - qpos0``)."""
@@ -183,40 +174,6 @@ def _dynamics(model: Any, j: int) -> JointDynamics:
         stiffness=float(model.jnt_stiffness[j]),
         springref=float(model.qpos_spring[q] - model.qpos0[q]),
     )
-
-
-def _needs(
-    model: Any, tree: Any, bodies: list[str], joints: list[str], lines: dict[tuple[str, str], int]
-) -> list[ModelNeed]:
-    """What only an engine reading the file itself runs (module docstring), once per capability."""
-    out: dict[str, ModelNeed] = {}
-
-    def need(capability: str, what: str, line: int) -> None:
-        out.setdefault(capability, ModelNeed(capability, what, line))
-
-    for b in range(1, model.nbody):  # several joints in one body are every engine's (CompiledWorld.joint_chains)
-        if model.body_mass[b] <= 0 and int(model.body_jntnum[b]) > 0:
-            need("body:massless", f"body `{bodies[b]}` moves but has no mass", lines.get(("body", bodies[b]), 0))
-    for j in range(model.njnt):  # damping and friction loss of hinges and slides are every engine's (the runner's)
-        dof, name = int(model.jnt_dofadr[j]), joints[j]
-        line = lines.get(("joint", name), _first_line(tree, "joint"))
-        if int(model.jnt_type[j]) in (0, 1) and _has_dynamics(model, j):
-            need("joint:ball-dynamics", f"joint `{name}`'s damping, friction loss, armature or stiffness", line)
-        elif model.dof_armature[dof] > 0:
-            need("joint:armature", f"joint `{name}`'s armature", line)
-        if int(model.jnt_type[j]) in (2, 3) and model.jnt_stiffness[j] > 0:
-            need("joint:stiffness", f"joint `{name}`'s stiffness", line)
-    if any(model.jnt_limited[j] and int(model.jnt_type[j]) == 1 for j in range(model.njnt)):
-        need("joint:ball-range", "a ball joint's range", _first_line(tree, "joint"))
-    if model.neq:
-        need("constraint:equality", "<equality>", _first_line(tree, "equality"))
-    if model.ntendon:
-        need("constraint:tendon", "<tendon>", _first_line(tree, "tendon"))
-    if model.npair:
-        need("collision:explicit-pairs", "<contact><pair>", _first_line(tree, "pair"))
-    if model.opt.density or model.opt.viscosity or np.any(model.opt.wind != 0):
-        need("world:fluid", "<option> density, viscosity or wind", _first_line(tree, "option"))
-    return list(out.values())
 
 
 def _welded(model: Any, a: int, b: int) -> bool:
@@ -411,6 +368,7 @@ def load_mjcf(file: Path) -> ModelDesc:
     joints = []
     start: list[tuple[str, float]] = []
     notes: list[str] = list(legacy.notes) if legacy is not None else []
+    found = read_needs(model, mujoco, tree, bodies, joint_names, lines)
     for b in range(1, model.nbody):
         parent = bodies[int(model.body_parentid[b])]
         line = lines.get(("body", bodies[b]), 0)
@@ -432,14 +390,15 @@ def load_mjcf(file: Path) -> ModelDesc:
                              f"and the limit would throw it)")  # fmt: skip
             anchor = vec(data.xanchor[j]) if kind != "free" else vec(data.xpos[b])
             joints.append(JointDesc(joint_names[j], kind, parent, bodies[b], vec(data.xaxis[j]), anchor, lo, hi,
-                                    lines.get(("joint", joint_names[j]), line), _dynamics(model, j)))  # fmt: skip
+                                    lines.get(("joint", joint_names[j]), line), _dynamics(model, j),
+                                    found.mimics.get(joint_names[j])))  # fmt: skip
     return ModelDesc(
         str(file),
         "worldbody",
         tuple(within_budget(links)),
         tuple(joints),
-        notes=tuple(notes),
-        needs=tuple(_needs(model, tree, bodies, joint_names, lines)),
+        notes=tuple(notes + found.notes),
+        needs=tuple(found.needs),
         actuators=tuple(_actuators(model, joint_names, lines, mujoco)),
         excluded=tuple(_excluded(model, bodies)),
         timestep=float(model.opt.timestep),

@@ -79,8 +79,9 @@ class LinkDesc:
 
 @dataclass(frozen=True)
 class MimicDesc:
-    """URDF `<mimic>`: the joint's position is ``multiplier`` x ``leader``'s + ``offset``, both read as the
-    description reads them (from each joint's zero in the description: the file's, or its start clamp)."""
+    """URDF `<mimic>` or an MJCF equality coupling two joints (runner.language.mjcf_needs): the joint's position
+    is ``multiplier`` x ``leader``'s + ``offset``, both read as the description reads them (from each joint's zero
+    in the description: the file's, or its start clamp; MJCF: qpos0)."""
 
     leader: str
     multiplier: float
@@ -101,7 +102,7 @@ class JointDesc:
     #: damping, friction loss, armature, stiffness, effort and velocity limits (URDF `<dynamics>`/`<limit>`,
     #: MJCF's compiled joint), in the joint's coordinate as ``lo``/``hi``
     dynamics: JointDynamics = NO_DYNAMICS
-    mimic: MimicDesc | None = None  # URDF <mimic>: held at a multiple of another joint's position
+    mimic: MimicDesc | None = None  # URDF <mimic>, MJCF equality: held at a multiple of another's position
 
 
 @dataclass(frozen=True)

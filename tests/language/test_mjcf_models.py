@@ -14,6 +14,7 @@ from backends.types import MODEL_FILE_CAPABILITIES, ShapeKind
 from runner.compile.program import build_program
 from runner.errors import ScenarioValidationError
 from runner.language.load import load_scenario
+from runner.language.robot_desc import MimicDesc
 from tests.paths import ROOT
 
 pytest.importorskip("mujoco", reason="reading MJCF needs MuJoCo's compiler (the `mujoco` extra)")
@@ -71,22 +72,24 @@ CONSTRAINED = """<mujoco>
 """
 
 
-def test_tendons_and_equality_run_on_mujoco_and_are_refused_up_front_elsewhere(tmp_path: Path) -> None:
+def test_an_acting_tendon_runs_on_mujoco_and_is_refused_up_front_elsewhere(tmp_path: Path) -> None:
+    """The tendon's length limit acts (constraint:tendon, named at its line); the joint equality jb = 0.5 ja is
+    a mimic (runner.language.mjcf_needs), which PyBullet would run: the refusal names the tendon alone."""
     path = _scenario(tmp_path, "constrained", CONSTRAINED)
     desc = load_scenario(path).robots["r"]
-    assert [n.capability for n in desc.needs] == ["constraint:equality", "constraint:tendon"]
-    assert (
-        desc.needs[0].line
-        == CONSTRAINED.splitlines().index(
-            '  <equality><joint joint1="jb" joint2="ja" polycoef="0 .5 0 0 0"/></equality>'
-        )
-        + 1
-    )
+    limit = "tendon `t`'s length limit [-0.5, 0.5]"
+    follows = "equality `equality_0`: joint `jb` follows `ja`"
+    assert [(n.capability, n.what) for n in desc.needs] == [("joint:mimic", follows), ("constraint:tendon", limit)]
+    tendon_line = next(k for k, line in enumerate(CONSTRAINED.splitlines(), 1) if '<fixed name="t"' in line)
+    assert desc.needs[1].line == tendon_line
+    assert {j.name: j.mimic for j in desc.joints if j.mimic is not None} == {"jb": MimicDesc("ja", 0.5, 0.0)}
     ran = _run(path, "mujoco")
     assert ran.returncode == 0, ran.stderr
     refused = _run(path, "pybullet")
     assert refused.returncode == 2
-    assert "constraint:equality, constraint:tendon" in refused.stderr and "`pybullet`" in refused.stderr
+    assert "needs constraint:tendon (robot `r`: constrained.xml:" in refused.stderr, refused.stderr
+    assert f"constrained.xml:{tendon_line}: tendon `t`'s length limit [-0.5, 0.5])" in refused.stderr
+    assert "`pybullet`" in refused.stderr and "Traceback" not in refused.stderr
 
 
 SEVERAL = """<mujoco>

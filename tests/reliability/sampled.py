@@ -31,8 +31,9 @@ STARTUP_SECONDS = 30.0
 #: what a worker may hold past the ceiling before it is killed (tests/reliability/test_memory_ceiling.py)
 OVERSHOOT_MIB = 512
 #: `run`'s and `validate`'s refusal of what the file legitimately holds and the engine lacks (docs/reliability.md's
-#: exit-code table, "capability refused"): it names the feature and the engine, not a line
-CAPABILITY = re.compile(r"needs [\w:, -]+, which backend `[\w-]+` does not support")
+#: exit-code table, "capability refused"): it names the feature and the engine, and (in parentheses) what in a
+#: robot's model file needs it, at the model file's line
+CAPABILITY = re.compile(r"needs [\w:, -]+(?: \(.*?\))?, which backend `[\w-]+` does not support")
 _SEEN: Counter[str] = Counter()
 _PEAKS: dict[str, list[float]] = {}
 
