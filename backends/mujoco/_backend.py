@@ -41,8 +41,9 @@ from ..types import (
 )
 from . import _coulomb, _native
 from ._bounce import Impacts
+from ._geoms import IMPEDANCE, MU_MAX
 from ._imported import read_imported
-from ._model import IMPEDANCE, KINEMATIC_MASS_RATIO, MU_MAX, Layout, build, plan_tree
+from ._model import KINEMATIC_MASS_RATIO, Layout, build, plan_tree
 from ._native import set_start
 from ._options import MujocoOptions, check_stack, engine_substeps
 

@@ -2,13 +2,13 @@
 
 ODE's contact row asks the step to end with the normal velocity ``max(push, e*approach)`` (the bounce
 only when the approach speed before the step exceeds ``bounce_vel``), where ``push = erp*depth/h`` is
-capped at the contact max correcting velocity. The model's solref (``_model.contact_solref``,
+capped at the contact max correcting velocity. The model's solref (``_geoms.contact_solref``,
 ``(-erp/h^2, -(1+e)/h)``) gives MuJoCo's row ``aref = -B*v - K*I*(pos - margin)``, which ends the step
 at ``-e*v + push``: the bounce *plus* the push-out, whatever ``bounce_vel``, and an uncapped push-out.
 Before the constraint solve, :func:`normal_reference` rewrites to ``aref = (target - v)/h`` the normal
 rows of impacts (a bouncing surface approached faster than :data:`IMPACT_SPEED`) and of push-outs
 above the cap: with the constant impedance the row then ends the step at ``target`` (1e-3 of the
-unconstrained acceleration leaks, ``_model.IMPEDANCE``). ``v`` (``efc_vel``) is the velocity before
+unconstrained acceleration leaks, ``_geoms.IMPEDANCE``). ``v`` (``efc_vel``) is the velocity before
 the step, as ODE's. A bouncing surface's slower contacts (resting ones) keep MuJoCo's reference with
 ``bounce_erp`` (their bounce is below ``e`` cm/s), as before issue 17, unless deeper than 3 times the
 depth at which that reference holds a resting body (``Impacts.rest``, from the 1e-3 leak): a landing's
