@@ -19,15 +19,20 @@ Contacts whose friction is MuJoCo's own cone (mu above ``_coulomb.MU_COULOMB``, 
 MuJoCo's normal row, push-out uncapped, less the bounce below ``bounce_vel``: their normal row already
 carries the cone's push ``mu*|jar_t|`` (the lab's box, mu 5000, hopped on its door at each change of the
 door's motion with ODE's row, measured), so ODE's reference would not be ODE's contact there
-(docs/backends/mujoco.md).
+(docs/backends/mujoco.md). A world's parameters for it: :func:`impacts_of`.
 """
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 
 import mujoco
 import numpy as np
+
+from ..types import CompiledWorld
+from ._geoms import IMPEDANCE
+from ._options import MujocoOptions
 
 #: Approach speed (m/s) above which a bouncing contact is an impact and gets ODE's reference.
 IMPACT_SPEED = 0.01
@@ -88,3 +93,16 @@ def normal_reference(d: mujoco.MjData, impacts: Impacts, mu_coulomb: float) -> N
     target = np.where(impact & coulomb, np.maximum(ode, bounce), np.where(deep, np.maximum(ode, own), own))
     target = np.where(cone, push, target)
     d.efc_aref[rows[change]] = (target[change] - v[change]) / h
+
+
+def impacts_of(world: CompiledWorld, m: mujoco.MjModel, h: float, o: MujocoOptions) -> Impacts:
+    """The normal rows' parameters: the world's bounce_vel and the pairs' own (by MuJoCo geom id)."""
+    pairs: dict[tuple[int, int], float] = {}
+    for pair in world.pair_surfaces:
+        try:  # a primitive body's one geom (a compound body's geoms keep the world's bounce_vel)
+            a, b = m.geom(f"geom:{pair.a}").id, m.geom(f"geom:{pair.b}").id
+        except KeyError:
+            continue
+        pairs[(min(a, b), max(a, b))] = pair.surface.bounce_vel
+    rest = (1.0 - IMPEDANCE) * math.hypot(*world.gravity) * h * h / o.bounce_erp
+    return Impacts(h, o.erp, o.max_correcting_vel, rest, world.default_surface.bounce_vel, pairs)
