@@ -24,31 +24,14 @@ Semantics every backend must honour (ODE's):
   ``ang_vel*dt``. A kinematic body not set again keeps its last velocity for the next step (the runner
   always sets it, to zero when it stops).
 * ``reset_body`` teleports a dynamic body that no joint holds and sets its velocities (the lab's reset).
-* ``set_control`` sets the control input of a model file's actuator (MJCF `<actuator>`, by its index in the
-  file), held until changed; only an engine running model files' actuators itself (``actuator:native``).
 * ``contacts()`` lists the body pairs whose contacts the engine **used during the last step**: found at
   the start of each engine step (at the poses before it), touching (distance <= 0), in any of the step's
   substeps. Per pair: the most points and the deepest penetration of any substep, and the mean normal
   force over the substeps (the transmitted impulse / dt). Static and kinematic bodies never touch each
   other. ``JointStates.motor_force`` is likewise the mean over the step's substeps.
-* ``contact_points()`` (only an adapter that declares ``contacts:points``; the runner calls it only when a
-  scenario asks, as reading points costs time): every touching point (distance <= 0) of the step's **last**
-  engine step, sorted by (a, b) and in the engine's order within a pair, each with its world position, its
-  unit normal pointing from body ``a`` to body ``b`` (the force on ``b`` is ``+force * normal``), its depth
-  and its normal force in that engine step. With one engine step per scenario step a pair's point forces
-  sum to its ``contacts()`` normal force; with several, ``contacts()`` is the mean over them and the points
-  are the last one's (docs/semantics.md, "Contact points").
 * States are read fresh after the step (never a stale cache), positions in metres, quaternions
   (w, x, y, z; a quaternion and its negation are the same orientation), velocities in the world frame.
 * ``drain_messages()`` returns what the engine printed about itself since the last call (lines).
-* ``imported_model()`` (optional hook ``_imported_model``) reads back, before any step, how the engine holds the
-  world it was built from: per dynamic body its mass, principal inertia about the COM, COM in the body frame
-  and collision shapes counted; per joint its kind, world axis, stops, and the damping, friction loss, effort
-  and velocity limits the engine itself holds (``backends.types.ImportedModel``). The values come FROM THE
-  ENGINE (pybullet getDynamicsInfo/getJointInfo, MuJoCo's mjModel arrays, DART's BodyNode/Joint getters,
-  ODE's OdeMass and joint params), never from ``self.world``: they show what the engine will simulate, which
-  is what ``scenario compare`` compares across engines. An adapter that cannot read them back returns None
-  (the default) and the comparison says "not reported".
 
 Robots (the capabilities in ``backends.types.ROBOT_CAPABILITIES``; the full text is in backends/types.py and
 docs/robots.md). An adapter declares one only when it honours all of it:
@@ -66,15 +49,8 @@ docs/robots.md). An adapter declares one only when it honours all of it:
 * Joints of a model are ordinary ``JointSpec`` entries (world-frame axis and anchor at the start; positions
   from the start pose); the position servo is the runner's (``set_motor`` every step), never the adapter's.
 
-Sensing (``joint:reaction``, declared by an adapter that implements ``_joint_reactions``):
-
-* ``joint_reactions()`` gives, for each joint of ``CompiledWorld.reaction_joints`` in that order, the wrench
-  the joint applied to its first body (``JointSpec.body``) during the last step: its constraint rows, its
-  motor and its stops together (everything the joint transmits; contacts, gravity and applied forces are not
-  the joint's), as the mean over the step's substeps (as ``motor_force``). One row of six numbers: the force
-  (N, world frame), then the torque (N m, world frame) **about that body's centre of mass** (the runner moves
-  it to the joint's anchor). Zeros before the first step. An engine computes it only for those joints (it
-  may cost a sensor or a pass over the tree); the runner calls it only when the list is not empty.
+The optional capabilities (``contact_points()``, ``joint_reactions()``, ``set_control``,
+``imported_model()``, ``drain_messages()``) and what they must give: :mod:`backends.optional_contract`.
 
 Edge cases, the same on every backend (checked here, before any engine call):
 
@@ -102,24 +78,21 @@ import abc
 import math
 from collections.abc import Sequence
 from types import TracebackType
-from typing import TYPE_CHECKING, Any, ClassVar, NoReturn
-
-import numpy as np
+from typing import TYPE_CHECKING, Any, ClassVar
 
 from ._kit.chains import chained
 from ._kit.motion import KinematicPose, KinematicTrack, OneStepForces
 from ._kit.options import BackendOptions
-from .errors import ContractViolation, engine_failure
+from .contract_checks import held_by_joints
+from .errors import engine_failure
+from .optional_contract import OptionalContract
 from .types import (
     MODEL_FILE_CAPABILITIES,
     BodyStates,
     Capability,
     CompiledWorld,
     Contact,
-    ContactPoint,
-    ImportedModel,
     JointKind,
-    JointSpec,
     JointStates,
     Motion,
     Precision,
@@ -134,8 +107,9 @@ if TYPE_CHECKING:
 MOTORISED = frozenset({JointKind.SLIDER, JointKind.HINGE, JointKind.UNIVERSAL})
 
 
-class Backend(abc.ABC):
-    """Adapter from a compiled world to one physics engine."""
+class Backend(OptionalContract, abc.ABC):
+    """Adapter from a compiled world to one physics engine (the optional capabilities: OptionalContract; the
+    checks every public method makes: ContractChecks)."""
 
     #: Registry name, e.g. ``"pybullet"``.
     name: ClassVar[str]
@@ -162,7 +136,7 @@ class Backend(abc.ABC):
         self.forces = OneStepForces()
         self.steps = 0  # scenario steps taken
         self._motion = [b.motion for b in world.bodies]
-        self._held = _held_by_joints(world)
+        self._held = held_by_joints(world)
         self._closed = True  # until built
         self._motor_sets: set[tuple[int, ...]] = set()  # joint tuples ``set_motors`` has checked
         try:
@@ -252,17 +226,6 @@ class Backend(abc.ABC):
         except self.engine_errors as exc:
             raise engine_failure(self.name, "reading joint states", exc) from exc
 
-    def joint_reactions(self) -> np.ndarray:
-        """(len(world.reaction_joints), 6): force, then torque about the first body's COM, world frame, that
-        each watched joint applied to its first body during the last step (see the module docstring)."""
-        self._open("joint_reactions")
-        if Capability.JOINT_REACTION not in self.capabilities:
-            self._refuse("joint_reactions: this backend does not declare joint:reaction")
-        try:
-            return self._joint_reactions()
-        except self.engine_errors as exc:
-            raise engine_failure(self.name, "reading joint reactions", exc) from exc
-
     def contacts(self) -> list[Contact]:
         """The pairs in contact during the last step, sorted by (a, b)."""
         self._open("contacts")
@@ -270,16 +233,6 @@ class Backend(abc.ABC):
             return self._contacts()
         except self.engine_errors as exc:
             raise engine_failure(self.name, "reading contacts", exc) from exc
-
-    def contact_points(self) -> list[ContactPoint]:
-        """The touching points of the last step's last engine step, sorted by (a, b) (``contacts:points``)."""
-        self._open("contact_points")
-        if Capability.CONTACT_POINTS not in self.capabilities:
-            self._refuse("contact_points(): this backend does not declare contacts:points")
-        try:
-            return self._contact_points()
-        except self.engine_errors as exc:
-            raise engine_failure(self.name, "reading contact points", exc) from exc
 
     def set_kinematic(self, body: int, pos: Vec3, quat: Quat, lin_vel: Vec3, ang_vel: Vec3) -> None:
         """Place kinematic body ``body`` now and set the velocity it moves with during the next step."""
@@ -339,19 +292,6 @@ class Backend(abc.ABC):
         if self._motion_of(body, "apply_force") is Motion.DYNAMIC:
             self.forces.add(body, force, torque)
 
-    def set_control(self, actuator: int, ctrl: float) -> None:
-        """Set the control input of the model file's actuator ``actuator`` (MJCF `<actuator>`, in the file's
-        order) on an engine that builds the file itself (``Capability.ACTUATOR_NATIVE``); held until changed."""
-        self._open("set_control")
-        if Capability.ACTUATOR_NATIVE not in self.capabilities:
-            self._refuse(f"set_control: {self.name} does not run a model file's actuators")
-        if not math.isfinite(ctrl):
-            self._refuse(f"set_control: actuator {actuator} needs a finite ctrl; got {ctrl!r}")
-        try:
-            self._set_control(int(actuator), float(ctrl))
-        except self.engine_errors as exc:
-            raise engine_failure(self.name, f"setting the control of actuator {actuator}", exc) from exc
-
     def reset_body(self, body: int, pos: Vec3, quat: Quat, lin_vel: Vec3, ang_vel: Vec3) -> None:
         """Teleport a dynamic body that no joint holds and set its velocities."""
         self._open("reset_body")
@@ -366,22 +306,6 @@ class Backend(abc.ABC):
             self._reset_body(body, pos, quat, lin_vel, ang_vel)
         except self.engine_errors as exc:
             raise engine_failure(self.name, f"resetting `{name}`", exc) from exc
-
-    def imported_model(self) -> ImportedModel | None:
-        """How the engine holds the world, read back from it (module docstring); None: the adapter cannot say.
-        Only before the first step: afterwards the bodies have moved and the read would not be the import."""
-        self._open("imported_model")
-        if self.steps:
-            self._refuse(f"imported_model() after {self.steps} step(s); it reads the world as built")
-        try:
-            return self._imported_model()
-        except self.engine_errors as exc:
-            raise engine_failure(self.name, "reading the imported model back", exc) from exc
-
-    def drain_messages(self) -> list[str]:
-        """What the engine printed about itself since the last call, one line each (default: nothing)."""
-        self._open("drain_messages")
-        return self._drain_messages()
 
     def close(self) -> None:
         """Release the engine. Idempotent; every other method refuses afterwards."""
@@ -441,64 +365,11 @@ class Backend(abc.ABC):
     @abc.abstractmethod
     def _reset_body(self, body: int, pos: Vec3, quat: Quat, lin_vel: Vec3, ang_vel: Vec3) -> None: ...
 
-    def _contact_points(self) -> list[ContactPoint]:
-        """The last engine step's touching points (an adapter that declares ``contacts:points``)."""
-        self._refuse("contact_points() is declared but not implemented")
-    def _joint_reactions(self) -> np.ndarray:
-        """``joint:reaction``: the rows of :meth:`joint_reactions` (only adapters that declare it)."""
-        self._refuse("joint_reactions: not implemented by this adapter")
-
     def _place_kinematic(self, body: int, pose: KinematicPose) -> None:  # noqa: B027 - optional hook
         """A kinematic body was given a new pose and velocity (``self.kinematic[body]``): impose it now."""
 
     def _settings(self) -> dict[str, Any]:
         return {"options": self.options.as_dict()} if self.Options.keys() else {}
 
-    def _set_control(self, actuator: int, ctrl: float) -> None:  # an engine running model files overrides it
-        self._refuse(f"set_control: {self.name} does not run a model file's actuators")
-
-    def _drain_messages(self) -> list[str]:
-        return []
-
-    def _imported_model(self) -> ImportedModel | None:
-        """Read the built world back from the engine (``imported_model``); None: this adapter cannot."""
-        return None
-
     def _close(self) -> None:  # noqa: B027 - optional hook
         """Release the engine's resources (called once)."""
-
-    # --- checks ------------------------------------------------------------------------------------
-
-    def _open(self, method: str) -> None:
-        if self._closed:
-            self._refuse(f"{method}() called after close()")
-
-    def _refuse(self, what: str) -> NoReturn:
-        raise ContractViolation(f"{self.name}: {what} (backends/base.py, the contract)")
-
-    def _motion_of(self, body: int, method: str) -> Motion:
-        if not (_is_index(body) and 0 <= body < len(self._motion)):
-            self._refuse(f"{method}: no body {body!r} (the world has {len(self._motion)})")
-        return self._motion[body]
-
-    def _joint(self, joint: int, method: str) -> JointSpec:
-        joints = self.world.joints
-        if not (_is_index(joint) and 0 <= joint < len(joints)):
-            self._refuse(f"{method}: no joint {joint!r} (the world has {len(joints)})")
-        return joints[joint]
-
-
-def _is_index(value: object) -> bool:
-    """A Python or numpy integer (not a bool, not a float that happens to be whole)."""
-    return (type(value) is int) or isinstance(value, np.integer)
-
-
-def _held_by_joints(world: CompiledWorld) -> dict[int, str]:
-    """Body index -> the name of a joint that holds it (either end, the environment excluded)."""
-    index = {b.name: i for i, b in enumerate(world.bodies)}
-    held: dict[int, str] = {}
-    for joint in world.joints:
-        for name in (joint.body, joint.other):
-            if name is not None and name in index:
-                held.setdefault(index[name], joint.name)
-    return held

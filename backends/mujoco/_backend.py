@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import math
 from typing import Any, ClassVar
 
 import mujoco
@@ -13,14 +12,11 @@ from .._kit import (
     KinematicPose,
     SubstepContacts,
     SubstepMean,
-    contact_point,
-    group_by_pair,
-    sorted_points,
     substep_times,
 )
 from .._kit.stacks import stack_height
 from ..base import Backend
-from ..errors import EngineFailure, UnsupportedFeature
+from ..errors import EngineFailure
 from ..geometry import quat_conj, quat_rotate
 from ..types import (
     MODEL_FILE_CAPABILITIES,
@@ -40,11 +36,13 @@ from ..types import (
     Vec3,
 )
 from . import _coulomb, _native
-from ._bounce import Impacts
+from ._bounce import impacts_of
 from ._imported import read_imported
-from ._model import IMPEDANCE, KINEMATIC_MASS_RATIO, MU_MAX, Layout, build, plan_tree
+from ._model import build, plan_tree
 from ._native import set_start
 from ._options import MujocoOptions, check_stack, engine_substeps
+from ._reads import check_reactions, contact_points, reaction_rows, reactions_now, touching
+from ._settings import engine_settings
 
 
 def _no_log_file() -> None:
@@ -98,7 +96,7 @@ class MujocoBackend(Backend):
         if isinstance(options, MujocoOptions) and options.engine_substeps is None:
             check_stack(stack_height(world))  # set by hand, the column is the scenario's to judge
         plan_tree(world, _native.load(world))  # a kinematic loop, one MJCF robot at most, ... (no model built)
-        _check_reactions(world)
+        check_reactions(world)
 
     def _build(self) -> None:
         world = self.world
@@ -112,7 +110,7 @@ class MujocoBackend(Backend):
         self._m = self._layout.model
         self._d = mujoco.MjData(self._m)
         m, lay = self._m, self._layout
-        self._impacts = _impacts(world, m, self._h, self.options)
+        self._impacts = impacts_of(world, m, self._h, self.options)
         ids = lay.body_id
         self._root = m.body_rootid[ids]
         self._free = {  # world index -> (qpos address, dof address) of free bodies (dynamic or kinematic)
@@ -135,7 +133,7 @@ class MujocoBackend(Backend):
         #: per joint tuple ``set_motors`` was given: its motors' tendons, slots and signs
         self._motor_rows: dict[tuple[int, ...], tuple[np.ndarray, np.ndarray, np.ndarray]] = {}
         self._motor_mean = SubstepMean(motors.size)
-        self._reaction = _reaction_rows(world, m, lay)  # (child body, sign, first body) per watched joint
+        self._reaction = reaction_rows(world, m, lay)  # (child body, sign, first body) per watched joint
         self._reaction_mean = SubstepMean(6 * len(world.reaction_joints))
         self._substep_contacts = SubstepContacts(self._nsteps)  # the step's engine steps but the last
         self._listed: list[Contact] | None = []  # None: the last engine step's contacts are still in MjData
@@ -265,15 +263,8 @@ class MujocoBackend(Backend):
         through its joint, at the subtree centre of mass of its tree's root, world axes, from the step's
         accelerations and the kinematics the step was computed with (still in MjData after it). Moved to the
         world origin, turned to the first body (the opposite wrench where the tree hangs the joint from the
-        other end) and moved to that body's centre of mass."""
-        m, d = self._m, self._d
-        mujoco.mj_rnePostConstraint(m, d)
-        child, sign, first = self._reaction
-        wrench = d.cfrc_int[child]
-        force = sign[:, None] * wrench[:, 3:]
-        origin = sign[:, None] * (wrench[:, :3] + np.cross(d.subtree_com[m.body_rootid[child]], wrench[:, 3:]))
-        torque = origin - np.cross(d.xipos[first], force)
-        return np.hstack((force, torque)).ravel()
+        other end) and moved to that body's centre of mass (``_reads.reactions_now``)."""
+        return reactions_now(self._m, self._d, self._reaction)
 
     def _joint_reactions(self) -> np.ndarray:
         return self._reaction_mean.mean.reshape(-1, 6).copy()
@@ -338,45 +329,11 @@ class MujocoBackend(Backend):
 
     def _touching(self) -> list[Contact]:
         """Body pairs touching (distance <= 0) in the last engine step (MjData keeps them until the next)."""
-        d, n = self._d, self._d.ncon
-        if n == 0:
-            return []
-        c = d.contact
-        dist, geom, rows = c.dist[:n], c.geom[:n], c.efc_address[:n]
-        keep = dist <= 0.0
-        if not keep.all():
-            dist, geom, rows = dist[keep], geom[keep], rows[keep]
-        # elliptic cone: a contact's first row is its normal; a contact at distance 0 is "in the gap":
-        # touching, with no row (address -1, 0 N; efc_force[-1] is only read, then dropped, when nefc > 0)
-        force = np.where(rows >= 0, d.efc_force[rows], 0.0) if d.nefc else np.zeros(rows.size)
-        owner = self._geom_body
-        return group_by_pair(len(self.world.bodies), owner[geom[:, 0]], owner[geom[:, 1]], -dist, force)
+        return touching(self._d, self._geom_body, len(self.world.bodies))
 
     def _contact_points(self) -> list[ContactPoint]:
-        """MjData's contacts of the last engine step (distance <= 0), read as columns: ``pos`` (midway between
-        the surfaces), ``frame[:3]`` (the normal, from geom1 to geom2) and the normal force: on the elliptic
-        cone the contact's first constraint row (as ``_touching``), on a model's pyramidal cone
-        ``mj_contactForce`` (its rows are the pyramid's edges)."""
-        m, d = self._m, self._d
-        n = d.ncon if self.steps else 0
-        if n == 0:
-            return []
-        c = d.contact
-        keep = np.flatnonzero(c.dist[:n] <= 0.0)
-        rows = c.efc_address[keep]
-        if m.opt.cone == mujoco.mjtCone.mjCONE_ELLIPTIC:
-            force = np.where(rows >= 0, d.efc_force[rows] if d.nefc else 0.0, 0.0)
-        else:
-            force, wrench = np.zeros(len(keep)), np.zeros(6)
-            for i, k in enumerate(keep.tolist()):
-                if rows[i] >= 0:
-                    mujoco.mj_contactForce(m, d, k, wrench)
-                    force[i] = wrench[0]
-        owner = self._geom_body
-        geom = c.geom[keep]
-        columns = zip(owner[geom[:, 0]].tolist(), owner[geom[:, 1]].tolist(), c.pos[keep].tolist(),
-                      c.frame[keep, :3].tolist(), (-c.dist[keep]).tolist(), force.tolist(), strict=True)  # fmt: skip
-        return sorted_points([contact_point(*column) for column in columns])
+        """MjData's contacts of the last engine step (distance <= 0): ``_reads.contact_points``."""
+        return contact_points(self._m, self._d, self._geom_body, bool(self.steps))
 
     def _contacts(self) -> list[Contact]:
         if self._listed is None:  # first call since the step: group the last engine step's contacts now
@@ -419,97 +376,6 @@ class MujocoBackend(Backend):
         return read_imported(self._m, self._d, self.world, self._layout, self._sign, starts)
 
     def _settings(self) -> dict[str, Any]:
-        o = self.options
-        if self.world.model_options:
-            opt = self._m.opt
-            return {
-                "engine": f"mujoco {mujoco.__version__}",
-                "options": "the model file's own <option> and contact parameters; mujoco.mj_step",
-                "timestep": float(opt.timestep),
-                "engine_steps_per_step": self._nsteps,
-                "integrator": mujoco.mjtIntegrator(int(opt.integrator)).name,
-                "cone": mujoco.mjtCone(int(opt.cone)).name,
-                "solver": mujoco.mjtSolver(int(opt.solver)).name,
-                "iterations": int(opt.iterations),
-                "tolerance": float(opt.tolerance),
-            }
-        return {
-            "engine": f"mujoco {mujoco.__version__}",
-            "timestep": self._h,
-            "engine_steps_per_step": self._nsteps,
-            "stack_height": self._stack,
-            "integrator": "implicitfast",
-            "cone": "elliptic",
-            "solver": "Newton",
-            "iterations": int(self._m.opt.iterations),
-            "tolerance": float(self._m.opt.tolerance),
-            "motors": "tendon frictionloss rows (bounded velocity constraints), impedance 0.9999",
-            "contact_solref": f"(-erp/h^2, -(1+bounce)/h), erp {o.erp}, bounce_erp {o.bounce_erp}",
-            "max_correcting_vel": o.max_correcting_vel,
-            "contact_normal_reference": "ODE's for impacts (approach > 1 cm/s) and capped push-outs: "
-            f"max(bounce*approach above bounce_vel, min(erp*depth/h, max_correcting_vel {o.max_correcting_vel:g}"
-            " m/s)); MuJoCo's from solref for the others",
-            "friction_solref": "(-1, -1/h)",
-            "friction": f"Coulomb for mu <= {_coulomb.MU_COULOMB:g}: sliding contacts' normal reference corrected "
-            f"for the convex cone (at most {_coulomb.MAX_SOLVES} solves per engine step, {_coulomb.TOLERANCE:g} m/s)",
-            "impedance": IMPEDANCE,
-            "mu_max": MU_MAX,
-            "kinematic_mass_ratio": KINEMATIC_MASS_RATIO,
-            "bounce_vel": "honoured (the normal row's reference, set before each solve)",
-        }
-
-
-def _impacts(world: CompiledWorld, m: mujoco.MjModel, h: float, o: MujocoOptions) -> Impacts:
-    """The normal rows' parameters: the world's bounce_vel and the pairs' own (by MuJoCo geom id)."""
-    pairs: dict[tuple[int, int], float] = {}
-    for pair in world.pair_surfaces:
-        try:  # a primitive body's one geom (a compound body's geoms keep the world's bounce_vel)
-            a, b = m.geom(f"geom:{pair.a}").id, m.geom(f"geom:{pair.b}").id
-        except KeyError:
-            continue
-        pairs[(min(a, b), max(a, b))] = pair.surface.bounce_vel
-    rest = (1.0 - IMPEDANCE) * math.hypot(*world.gravity) * h * h / o.bounce_erp
-    return Impacts(h, o.erp, o.max_correcting_vel, rest, world.default_surface.bounce_vel, pairs)
-
-
-def _reaction_rows(world: CompiledWorld, m: mujoco.MjModel, lay: Layout) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """For each joint of ``world.reaction_joints``: the MuJoCo body it hangs (its child in the tree), +1 when
-    that is the joint's first body and -1 when it is the other, and the first body's MuJoCo id."""
-    index = {j.name: k for k, j in enumerate(world.joints)}
-    hung = {edge.joint: name for name, edge in lay.edges.items() if edge.joint is not None}
-    child, sign, first = [], [], []
-    for name in world.reaction_joints:
-        k = index[name]
-        spec = world.joints[k]
-        body = int(lay.body_id[world.body_index(spec.body)])
-        if k in hung:
-            below = int(lay.body_id[world.body_index(hung[k])])
-        elif lay.joint_id[k] >= 0:  # a joint of a model built from its file
-            below = int(m.jnt_bodyid[lay.joint_id[k]])
-        else:
-            below = -1
-        other = int(lay.body_id[world.body_index(spec.other)]) if spec.other is not None else 0
-        if below < 0 or below not in (body, other) or body == other or m.body_jntnum[below] > 1:
-            raise UnsupportedFeature(
-                f"mujoco: the reaction of joint `{name}` (its body is moved by several joints in one MuJoCo body, "
-                f"or merged with the other: MuJoCo gives a body's wrench from its parent, not one joint's)"
-            )
-        child.append(below)
-        sign.append(1.0 if below == body else -1.0)
-        first.append(body)
-    return np.array(child, dtype=np.intp), np.array(sign), np.array(first, dtype=np.intp)
-
-
-def _check_reactions(world: CompiledWorld) -> None:
-    """Refuse, before anything is built, reading the reaction of a joint that shares its body with another joint
-    of a model file (MJCF's several joints in one body, ``CompiledWorld.joint_chains``): MuJoCo's ``cfrc_int``
-    is one wrench per body."""
-    chained = {j: chain for chain in world.joint_chains for j in chain}
-    by_name = {j.name: j for j in world.joints}
-    for name in world.reaction_joints:
-        if name in chained:
-            body = by_name[name].body
-            raise UnsupportedFeature(
-                f"mujoco: the reaction of joint `{name}`: its body `{body}` is moved by several joints of the model "
-                f"file, and MuJoCo gives one wrench per body (cfrc_int), not one per joint"
-            )
+        return engine_settings(
+            self._m, self.options, bool(self.world.model_options), self._h, self._nsteps, self._stack
+        )

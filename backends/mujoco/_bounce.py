@@ -2,13 +2,13 @@
 
 ODE's contact row asks the step to end with the normal velocity ``max(push, e*approach)`` (the bounce
 only when the approach speed before the step exceeds ``bounce_vel``), where ``push = erp*depth/h`` is
-capped at the contact max correcting velocity. The model's solref (``_model.contact_solref``,
+capped at the contact max correcting velocity. The model's solref (``_geoms.contact_solref``,
 ``(-erp/h^2, -(1+e)/h)``) gives MuJoCo's row ``aref = -B*v - K*I*(pos - margin)``, which ends the step
 at ``-e*v + push``: the bounce *plus* the push-out, whatever ``bounce_vel``, and an uncapped push-out.
 Before the constraint solve, :func:`normal_reference` rewrites to ``aref = (target - v)/h`` the normal
 rows of impacts (a bouncing surface approached faster than :data:`IMPACT_SPEED`) and of push-outs
 above the cap: with the constant impedance the row then ends the step at ``target`` (1e-3 of the
-unconstrained acceleration leaks, ``_model.IMPEDANCE``). ``v`` (``efc_vel``) is the velocity before
+unconstrained acceleration leaks, ``_geoms.IMPEDANCE``). ``v`` (``efc_vel``) is the velocity before
 the step, as ODE's. A bouncing surface's slower contacts (resting ones) keep MuJoCo's reference with
 ``bounce_erp`` (their bounce is below ``e`` cm/s), as before issue 17, unless deeper than 3 times the
 depth at which that reference holds a resting body (``Impacts.rest``, from the 1e-3 leak): a landing's
@@ -19,15 +19,20 @@ Contacts whose friction is MuJoCo's own cone (mu above ``_coulomb.MU_COULOMB``, 
 MuJoCo's normal row, push-out uncapped, less the bounce below ``bounce_vel``: their normal row already
 carries the cone's push ``mu*|jar_t|`` (the lab's box, mu 5000, hopped on its door at each change of the
 door's motion with ODE's row, measured), so ODE's reference would not be ODE's contact there
-(docs/backends/mujoco.md).
+(docs/backends/mujoco.md). A world's parameters for it: :func:`impacts_of`.
 """
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 
 import mujoco
 import numpy as np
+
+from ..types import CompiledWorld
+from ._geoms import IMPEDANCE
+from ._options import MujocoOptions
 
 #: Approach speed (m/s) above which a bouncing contact is an impact and gets ODE's reference.
 IMPACT_SPEED = 0.01
@@ -88,3 +93,16 @@ def normal_reference(d: mujoco.MjData, impacts: Impacts, mu_coulomb: float) -> N
     target = np.where(impact & coulomb, np.maximum(ode, bounce), np.where(deep, np.maximum(ode, own), own))
     target = np.where(cone, push, target)
     d.efc_aref[rows[change]] = (target[change] - v[change]) / h
+
+
+def impacts_of(world: CompiledWorld, m: mujoco.MjModel, h: float, o: MujocoOptions) -> Impacts:
+    """The normal rows' parameters: the world's bounce_vel and the pairs' own (by MuJoCo geom id)."""
+    pairs: dict[tuple[int, int], float] = {}
+    for pair in world.pair_surfaces:
+        try:  # a primitive body's one geom (a compound body's geoms keep the world's bounce_vel)
+            a, b = m.geom(f"geom:{pair.a}").id, m.geom(f"geom:{pair.b}").id
+        except KeyError:
+            continue
+        pairs[(min(a, b), max(a, b))] = pair.surface.bounce_vel
+    rest = (1.0 - IMPEDANCE) * math.hypot(*world.gravity) * h * h / o.bounce_erp
+    return Impacts(h, o.erp, o.max_correcting_vel, rest, world.default_surface.bounce_vel, pairs)

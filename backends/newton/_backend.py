@@ -21,9 +21,6 @@ from .._kit import (
     KinematicPose,
     SubstepContacts,
     SubstepMean,
-    contact_point,
-    group_by_pair,
-    sorted_points,
     substep_times,
 )
 from .._kit.pairs import touching_pairs
@@ -47,8 +44,9 @@ from ..types import (
     Vec3,
 )
 from . import _motors, _warp
-from ._build import build, xyzw
+from ._build import build, rotate_xyzw, xyzw
 from ._build import check as check_build
+from ._contacts import read_contacts
 from ._imported import read_imported
 from ._options import NewtonOptions, check_stack
 
@@ -168,7 +166,9 @@ class NewtonBackend(Backend):
             k = child_of.get(int(self._body[i]))
             if k is not None and int(joint_type[k]) == free:
                 s = int(qd_start[k])
-                qd[s:s + 3], qd[s + 3:s + 6] = self._com_velocity(i, spec.pos, spec.quat, spec.lin_vel, spec.ang_vel)
+                qd[s : s + 3], qd[s + 3 : s + 6] = self._com_velocity(
+                    i, spec.pos, spec.quat, spec.lin_vel, spec.ang_vel
+                )
         bodies = world.bodies
         for handle in self._joints:
             joint = handle.spec
@@ -246,7 +246,7 @@ class NewtonBackend(Backend):
         joint = int(np.flatnonzero(child == k)[0])
         s, sd = int(model.joint_q_start.numpy()[joint]), int(model.joint_qd_start.numpy()[joint])
         jq, jqd = self._s0.joint_q.numpy().copy(), self._s0.joint_qd.numpy().copy()
-        jq[s:s + 7], jqd[sd:sd + 6] = q, qd
+        jq[s : s + 7], jqd[sd : sd + 6] = q, qd
         self._s0.joint_q.assign(jq)
         self._s0.joint_qd.assign(jqd)
 
@@ -313,7 +313,7 @@ class NewtonBackend(Backend):
             wanted = self._m_eff[j] * (handle.sign * vel - float(rates[qd_index])) / self._h
             if handle.parent is None and q is not None:
                 k = int(self._body[handle.child])
-                com = q[k, :3] + _rotate(q[k, 3:], self._com[handle.child])
+                com = q[k, :3] + rotate_xyzw(q[k, 3:], self._com[handle.child])
                 row = applied[k] if applied is not None else None
                 wanted -= _motors.bias(handle, self.world.bodies[handle.child], com, self._gravity, row)
             force = min(fmax, max(-fmax, wanted))
@@ -323,33 +323,14 @@ class NewtonBackend(Backend):
         return out
 
     def _read_contacts(self, body_q: np.ndarray, points: bool = False) -> list[Contact]:
-        """The touching contacts of the engine step just taken, at the poses it started from; ``points``: keep
-        its touching points too (``contact_points``: halfway between the two shapes' surfaces)."""
-        c = self._contacts_buf
-        count = int(c.rigid_contact_count.numpy()[0])
-        if count == 0:
-            return []
-        shape0, shape1 = c.rigid_contact_shape0.numpy()[:count], c.rigid_contact_shape1.numpy()[:count]
-        owner, body = self._built.shape_owner, self._body
-        a, b = owner[shape0], owner[shape1]
-        p0 = _to_world(body_q, body[a], c.rigid_contact_point0.numpy()[:count])
-        p1 = _to_world(body_q, body[b], c.rigid_contact_point1.numpy()[:count])
-        normal = c.rigid_contact_normal.numpy()[:count].astype(float)
-        margin = c.rigid_contact_margin0.numpy()[:count] + c.rigid_contact_margin1.numpy()[:count]
-        separation = np.einsum("ij,ij->i", normal, p1 - p0) - margin
-        touching = separation <= 0.0
-        if self._obs is not None:
-            force = np.abs(np.einsum("ij,ij->i", self._obs.contact_f.numpy()[:count, :3].astype(float), normal))
-        else:  # Featherstone: the penalty law's elastic part (the damping part is zero at rest)
-            force = self.options.contact_stiffness * np.maximum(0.0, -separation)
-        keep = np.flatnonzero(touching)
-        if points:
-            middle = 0.5 * (p0 + c.rigid_contact_margin0.numpy()[:count, None] * normal
-                            + p1 - c.rigid_contact_margin1.numpy()[:count, None] * normal)  # fmt: skip
-            found = [contact_point(int(a[r]), int(b[r]), middle[r], normal[r], -float(separation[r]), float(force[r]))
-                     for r in keep]  # fmt: skip
-            self._points_now = sorted_points(found)
-        return group_by_pair(len(self.world.bodies), a[keep], b[keep], -separation[keep], force[keep])
+        """The touching contacts of the engine step just taken (``_contacts.read_contacts``); ``points``: keep its
+        touching points too."""
+        found, touching_points = read_contacts(self._contacts_buf, body_q, self._built.shape_owner, self._body,
+                                               self._obs, self.options.contact_stiffness, len(self.world.bodies),
+                                               points)  # fmt: skip
+        if touching_points is not None:
+            self._points_now = touching_points
+        return found
 
     # --- outputs --------------------------------------------------------------------------------------
 
@@ -365,7 +346,7 @@ class NewtonBackend(Backend):
             pos[i] = q[k, :3]
             quat[i] = (q[k, 6], q[k, 3], q[k, 4], q[k, 5])
             w = qd[k, 3:]
-            lin[i] = qd[k, :3] - np.cross(w, _rotate(q[k, 3:], self._com[i]))
+            lin[i] = qd[k, :3] - np.cross(w, rotate_xyzw(q[k, 3:], self._com[i]))
             ang[i] = w
         for i, pose in self.kinematic.items():  # exactly where the contract puts them (float32 aside)
             pos[i], quat[i], lin[i], ang[i] = pose.pos, pose.quat, pose.lin_vel, pose.ang_vel
@@ -408,18 +389,3 @@ class NewtonBackend(Backend):
 
 
 _RATED = (JointKind.SLIDER, JointKind.HINGE)
-
-
-def _rotate(q_xyzw: np.ndarray, v: np.ndarray) -> np.ndarray:
-    x, y, z, w = (float(c) for c in q_xyzw)
-    return np.asarray(quat_matrices((w, x, y, z)) @ np.asarray(v, dtype=float))
-
-
-def _to_world(body_q: np.ndarray, bodies: np.ndarray, points: np.ndarray) -> np.ndarray:
-    """Contact points in their bodies' frames (static shapes: the world's) to the world frame."""
-    out = points.astype(float).copy()
-    for r, k in enumerate(bodies):
-        if k >= 0:
-            out[r] = body_q[k, :3] + _rotate(body_q[k, 3:], points[r])
-    return out
-

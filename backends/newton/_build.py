@@ -67,12 +67,17 @@ def check(world: CompiledWorld) -> None:
                 raise UnsupportedFeature(f"Backend `newton`: plane `{body.name}` must be static.")
 
 
-
 def xyzw(quat: Any) -> tuple[float, float, float, float]:
     """A (w, x, y, z) quaternion, normalised, in Newton's (x, y, z, w) order."""
     w, x, y, z = (float(v) for v in quat)
     n = math.sqrt(w * w + x * x + y * y + z * z)
     return (x / n, y / n, z / n, w / n)
+
+
+def rotate_xyzw(q_xyzw: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """``v`` rotated by a Newton quaternion (x, y, z, w)."""
+    x, y, z, w = (float(c) for c in q_xyzw)
+    return np.asarray(quat_matrices((w, x, y, z)) @ np.asarray(v, dtype=float))
 
 
 def build(wp: Any, newton: Any, world: CompiledWorld, options: NewtonOptions, device: str) -> Built:

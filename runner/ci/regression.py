@@ -24,13 +24,13 @@ from runner.ci.golden import (
     Tol,
     Tolerances,
     golden_name,
-    read_golden,
     record_from_trace,
     sample_every,
     write_golden,
 )
 from runner.ci.golden_compare import Comparison, compare
 from runner.ci.golden_plot import write_divergence_plot
+from runner.ci.golden_read import read_golden
 from runner.ci.render import verdict_text
 from runner.errors import ExitCode
 from runner.exec.cases import CaseResult, case_of

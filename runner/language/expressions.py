@@ -14,32 +14,33 @@ from __future__ import annotations
 
 import ast
 import math
-import operator
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Any, Protocol
 
-from runner.errors import ScenarioError
 from runner.language.explain import fmt, group_member
+from runner.language.expression_values import (
+    ARITY,
+    BINARY_OPERATORS,
+    COMPARISONS,
+    CONSTANTS,
+    PURE_FUNCTIONS,
+    RUNNER_ARITY,
+    RUNNER_FUNCTIONS,
+    EvaluationError,
+    ExpressionError,
+    bounded,
+    is_number,
+    kind_of,
+    nan_on_math_error,
+)
+
+# the errors (runner.language.expression_values) and fmt (runner.language.explain) are re-exported: the
+# language, the compiler and the run import them from here
+__all__ = ["EvaluationError", "Expression", "ExpressionError", "Resolver", "compile_expression", "fmt"]
 
 MAX_LENGTH = 2000
 MAX_NODES = 500
-#: Integers stay exact up to 2**53 (a float's mantissa); a larger one becomes a float, so that no value
-#: grows without bound (`floor(1e308)*floor(1e308)` would be a 2,000-bit integer, and squaring it each step
-#: would take gigabytes).
-MAX_EXACT_INT = 2**53
-
-
-class ExpressionError(ValueError):
-    """The text is not a valid expression (the message says what and where in the text)."""
-
-
-class EvaluationError(ExpressionError, ScenarioError):
-    """A valid expression could not be evaluated during a run (wrong types, a function of nothing...).
-
-    A :class:`~runner.errors.ScenarioError`: the run stops, its trace is finished with status ``error``
-    and the command exits with code 2, naming the expression.
-    """
 
 
 class Resolver(Protocol):
@@ -55,138 +56,6 @@ class _Part:
     fn: Callable[[Resolver], Any]
     extremum_of: str | None = None  # `max(crate.speed)`: the group's dotted name, to name the member
 
-
-def _aggregate(f: Callable[..., Any]) -> Callable[..., Any]:
-    def wrapped(*args: Any) -> Any:
-        if len(args) == 1 and isinstance(args[0], list | tuple):
-            args = tuple(args[0])
-        if not args:
-            raise EvaluationError(f"{f.__name__}() of nothing")
-        return f(args)
-
-    return wrapped
-
-
-def bounded(value: Any) -> Any:
-    """``value``, with an integer beyond :data:`MAX_EXACT_INT` turned into a float (±inf beyond the float
-    range, as float arithmetic gives: ``1e308 * 10`` is inf). Anything else is returned as it is."""
-    if type(value) is int and not -MAX_EXACT_INT <= value <= MAX_EXACT_INT:
-        try:
-            return float(value)
-        except OverflowError:
-            return math.inf if value > 0 else -math.inf
-    return value
-
-
-def _power(a: float, b: float) -> float:
-    """``a ** b`` as a float: a negative base with a fractional exponent is NaN (never a complex number),
-    an overflow too (through the caller); bounded in time whatever the operands."""
-    return math.pow(a, b)
-
-
-def _is_number(value: Any) -> bool:
-    return isinstance(value, bool | int | float)
-
-
-def _kind(value: Any) -> str:
-    if isinstance(value, str):
-        return f"text {value[:20]!r}"
-    if isinstance(value, list | tuple):
-        return f"a list of {len(value)} values (a body group? use max(), min(), mean()...)"
-    return type(value).__name__
-
-
-def _arithmetic(op: Callable[[Any, Any], Any]) -> Callable[[Any, Any], Any]:
-    """``op`` on numbers only (text or lists would repeat or concatenate: unbounded memory); a math
-    error gives NaN (1/0, an overflow), like the functions below."""
-
-    def run(a: Any, b: Any) -> Any:
-        if not (_is_number(a) and _is_number(b)):
-            raise EvaluationError(f"arithmetic needs numbers, found {_kind(a)} and {_kind(b)}")
-        try:
-            return bounded(op(bounded(a), bounded(b)))
-        except (ZeroDivisionError, OverflowError, ValueError):  # ValueError: math.pow(-1, 0.5)
-            return math.nan
-
-    return run
-
-
-def _nan_on_math_error(fn: Callable[..., Any]) -> Callable[..., Any]:
-    def run(*args: Any) -> Any:
-        try:
-            return bounded(fn(*(bounded(a) for a in args)))
-        except ExpressionError:
-            raise
-        except (ValueError, OverflowError, ZeroDivisionError):  # sqrt(-1), log(0), round(inf)...
-            return math.nan
-        except TypeError as exc:
-            raise EvaluationError(f"{exc} (found {', '.join(_kind(a) for a in args)})") from None
-
-    return run
-
-
-PURE_FUNCTIONS: dict[str, Callable[..., Any]] = {
-    "abs": abs,
-    "sqrt": math.sqrt,
-    "sin": math.sin,
-    "cos": math.cos,
-    "tan": math.tan,
-    "asin": math.asin,
-    "acos": math.acos,
-    "atan": math.atan,
-    "atan2": math.atan2,
-    "exp": math.exp,
-    "log": math.log,
-    "hypot": math.hypot,
-    "radians": math.radians,
-    "degrees": math.degrees,
-    "floor": math.floor,
-    "ceil": math.ceil,
-    "round": round,
-    "sign": lambda x: (x > 0) - (x < 0),
-    "min": _aggregate(min),
-    "max": _aggregate(max),
-    "sum": _aggregate(sum),
-    "mean": _aggregate(lambda v: sum(v) / len(v)),
-    "all": _aggregate(all),
-    "any": _aggregate(any),
-    "len": lambda v: len(v),
-    "clamp": lambda x, lo, hi: max(lo, min(hi, x)),
-}
-#: How many arguments each function takes: (least, most); None: any number from the least.
-ARITY: dict[str, tuple[int, int | None, str]] = {
-    **{name: (1, 1, "x") for name in ("abs", "sqrt", "sin", "cos", "tan", "asin", "acos", "atan", "exp",
-                                      "radians", "degrees", "floor", "ceil", "sign")},
-    "atan2": (2, 2, "y, x"),
-    "log": (1, 2, "x[, base]"),
-    "round": (1, 2, "x[, digits]"),
-    "hypot": (1, None, "x, y, ..."),
-    **{name: (1, None, "a list, or values") for name in ("min", "max", "sum", "mean", "all", "any")},
-    "len": (1, 1, "a list"),
-    "clamp": (3, 3, "x, lo, hi"),
-}  # fmt: skip
-#: Functions the runner resolves (they need the run's state): contact(a, b), playing('ival'), count('event').
-RUNNER_FUNCTIONS = frozenset({"contact", "playing", "count"})
-RUNNER_ARITY = {"contact": 2, "playing": 1, "count": 1}
-CONSTANTS = {"pi": math.pi, "e": math.e, "inf": math.inf, "true": True, "false": False, "True": True, "False": False}
-
-_BIN = {
-    ast.Add: _arithmetic(operator.add),
-    ast.Sub: _arithmetic(operator.sub),
-    ast.Mult: _arithmetic(operator.mul),
-    ast.Div: _arithmetic(operator.truediv),
-    ast.FloorDiv: _arithmetic(operator.floordiv),
-    ast.Mod: _arithmetic(operator.mod),
-    ast.Pow: _arithmetic(_power),
-}
-_CMP = {
-    ast.Eq: operator.eq,
-    ast.NotEq: operator.ne,
-    ast.Lt: operator.lt,
-    ast.LtE: operator.le,
-    ast.Gt: operator.gt,
-    ast.GtE: operator.ge,
-}
 
 Evaluator = Callable[[Resolver], Any]
 
@@ -229,14 +98,14 @@ class Expression:
     def truth(self, resolver: Resolver) -> bool:
         """The value as a condition: NaN (a failed operation) is false; text or a list is an error."""
         value = self.evaluate(resolver)
-        if not _is_number(value):
-            raise EvaluationError(f"cannot evaluate {self.text!r}: expected true or false, found {_kind(value)}")
+        if not is_number(value):
+            raise EvaluationError(f"cannot evaluate {self.text!r}: expected true or false, found {kind_of(value)}")
         return bool(value) and not (isinstance(value, float) and math.isnan(value))
 
     def number(self, resolver: Resolver) -> float:
         value = self.evaluate(resolver)
-        if not _is_number(value):
-            raise EvaluationError(f"cannot evaluate {self.text!r}: expected a number, found {_kind(value)}")
+        if not is_number(value):
+            raise EvaluationError(f"cannot evaluate {self.text!r}: expected a number, found {kind_of(value)}")
         return float(bounded(value))
 
 
@@ -321,8 +190,8 @@ class _Compiler:
                 return lambda r: constant
             self.names.add(name)
             return self.shown(node, lambda r: bounded(r.value(name)))
-        if isinstance(node, ast.BinOp) and type(node.op) in _BIN:
-            op, left, right = _BIN[type(node.op)], self.compile(node.left), self.compile(node.right)
+        if isinstance(node, ast.BinOp) and type(node.op) in BINARY_OPERATORS:
+            op, left, right = BINARY_OPERATORS[type(node.op)], self.compile(node.left), self.compile(node.right)
             return self.shown(node, lambda r: op(left(r), right(r)))
         if isinstance(node, ast.UnaryOp):
             operand = self.compile(node.operand)
@@ -337,9 +206,9 @@ class _Compiler:
             if isinstance(node.op, ast.And):
                 return lambda r: all(p(r) for p in parts)
             return lambda r: any(p(r) for p in parts)
-        if isinstance(node, ast.Compare) and all(type(o) in _CMP for o in node.ops):
+        if isinstance(node, ast.Compare) and all(type(o) in COMPARISONS for o in node.ops):
             first = self.compile(node.left)
-            rest = [(_CMP[type(o)], self.compile(c)) for o, c in zip(node.ops, node.comparators, strict=True)]
+            rest = [(COMPARISONS[type(o)], self.compile(c)) for o, c in zip(node.ops, node.comparators, strict=True)]
 
             def compare(r: Resolver) -> bool:
                 left = first(r)
@@ -367,11 +236,11 @@ class _Compiler:
             if len(node.args) < least or (most is not None and len(node.args) > most):
                 count = str(least) if least == most else f"{least} or more" if most is None else f"{least} to {most}"
                 raise self.fail(
-                    node, f"{fname}() takes {count} argument{'s' if most != 1 else ''} ({signature}), "
-                    f"found {len(node.args)}",
+                    node,
+                    f"{fname}() takes {count} argument{'s' if most != 1 else ''} ({signature}), found {len(node.args)}",
                 )
             args = [self.compile(a) for a in node.args]
-            fn = _nan_on_math_error(PURE_FUNCTIONS[fname])
+            fn = nan_on_math_error(PURE_FUNCTIONS[fname])
             group = _dotted(node.args[0]) if fname in ("max", "min") and len(node.args) == 1 else None
             return self.shown(node, lambda r: fn(*(a(r) for a in args)), group)
         if fname in RUNNER_FUNCTIONS:

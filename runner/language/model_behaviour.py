@@ -6,7 +6,7 @@ from typing import TYPE_CHECKING, Annotated, Any, Literal, Union
 
 from pydantic import AfterValidator, Discriminator, Field, Tag, field_validator, model_validator
 
-from runner.language.expressions import bounded
+from runner.language.expression_values import bounded
 from runner.language.model_base import (
     EventName,
     Expr,

@@ -31,7 +31,9 @@ import numpy as np
 from backends.types import BodyStates, Contact, ContactPoint, JointStates
 from reports import trace_format as tf
 from runner.errors import OutputError, OutputInUse, TraceError
-from runner.trace.writer import SolidVisual, TraceMeta, TraceWriter, finish_on_exit
+from runner.trace.records import TraceMeta, finish_on_exit
+from runner.trace.scene import SolidVisual
+from runner.trace.writer import TraceWriter
 
 __all__ = ["BATCH_STEPS", "BackgroundTraceWriter"]
 
@@ -166,6 +168,7 @@ class BackgroundTraceWriter:
 
     def contact_points(self, t: float, points: Sequence[ContactPoint]) -> None:
         self._send("contact_points", t, list(points))
+
     def sensors(self, t: float, values: Sequence[float]) -> None:
         self._send("sensors", t, [float(v) for v in values])
 

@@ -18,7 +18,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping, Sequence
-from dataclasses import replace
+from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
@@ -26,11 +26,11 @@ from foxglove_schemas_protobuf.ArrowPrimitive_pb2 import ArrowPrimitive
 from foxglove_schemas_protobuf.LinePrimitive_pb2 import LinePrimitive
 
 from backends.geometry import quat_conj, quat_rotate
-from backends.types import BodySpec, JointKind, JointSpec, PlacedShape, Shape, ShapeKind
+from backends.types import BodySpec, JointKind, JointSpec, PlacedShape, Shape, ShapeKind, Vec3
 from reports import trace_format as tf
 from runner.trace import foxglove as fx
 
-__all__ = ["COLLISION_RGBA", "PLANE_EXTENT", "joint_entities", "scene_entities"]
+__all__ = ["COLLISION_RGBA", "PLANE_EXTENT", "SolidVisual", "joint_entities", "scene_entities"]
 
 PLANE_EXTENT = fx.PLANE_EXTENT  # metres: an unbounded plane is drawn this wide
 COLLISION_RGBA = fx.SOLID_RGBA
@@ -39,6 +39,19 @@ GRID_LIFT = 5e-4  # metres above the plane, so the lines are not hidden in its t
 JOINT_RGBA = {"hinge": (0.85, 0.15, 0.85, 1.0), "slider": (0.1, 0.75, 0.85, 1.0),
               "universal": (0.85, 0.15, 0.85, 1.0), "ball": (0.85, 0.15, 0.85, 1.0)}  # fmt: skip
 ARROW_MIN, ARROW_MAX = 0.05, 0.5  # metres: a joint's arrow is 0.6 x its body's size, within these
+
+
+@dataclass(frozen=True)
+class SolidVisual:
+    """A Panda3D-style collision solid for the 3D view (translucent), in its body's frame."""
+
+    node: str
+    body: str
+    kind: str  # "sphere" | "polygon" | "box"
+    center: Vec3 = (0.0, 0.0, 0.0)
+    radius: float = 0.0
+    size: Vec3 = (0.0, 0.0, 0.0)  # box: full edge lengths
+    vertices: tuple[Vec3, ...] = ()  # polygon: body frame, already scaled; order gives the normal
 
 
 def grid_spacing(extent: float) -> float:

@@ -2,12 +2,13 @@
 
 Layout, topics and metadata: :mod:`reports.trace_format`. The container is written by the official
 Foxglove SDK's native (Rust) MCAP writer (``foxglove-sdk``), zstd level 1 chunks, while the run goes on
-(memory constant in the duration), to ``<path>.partial`` through an unbuffered sink of ours, so a finished
-chunk is in the operating system at once; a chunk closes when it exceeds ``chunk_size`` bytes and after
-the first step at or past each multiple of ``flush_interval`` simulated seconds, which bounds what a hard
-kill loses. ``finish()`` writes the ``result`` record and the summary, then renames the file to
-``<path>``. Messages are encoded by :class:`runner.trace.encoder.TraceEncoder` (protobuf; the per-step ones
-through serialised templates). Why this writer and level: docs/trace-format.md, "Cost".
+(memory constant in the duration), to ``<path>.partial`` through an unbuffered sink of ours
+(:mod:`runner.trace.sink`), so a finished chunk is in the operating system at once; a chunk closes when it
+exceeds ``chunk_size`` bytes and after the first step at or past each multiple of ``flush_interval``
+simulated seconds, which bounds what a hard kill loses. The scenario record is built by
+:mod:`runner.trace.records`. ``finish()`` writes the ``result`` record and the summary, then renames the
+file to ``<path>``. Messages are encoded by :class:`runner.trace.encoder.TraceEncoder` (protobuf; the
+per-step ones through serialised templates). Why this writer and level: docs/trace-format.md, "Cost".
 
 The SDK logs a failed sink write as a warning instead of raising it; the sink keeps the first failure and
 every call here re-raises it, so a full disk still ends the run with its error (docs/reliability.md).
@@ -20,7 +21,6 @@ import json
 import math
 import os
 from collections.abc import Callable, Mapping, Sequence
-from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from types import TracebackType
 from typing import Any, TypeVar
@@ -28,18 +28,20 @@ from typing import Any, TypeVar
 import foxglove
 from foxglove.mcap import MCAPCompression, MCAPWriteOptions
 
-from backends.errors import EngineFailure
-from backends.types import BodySpec, BodyStates, Contact, ContactPoint, JointSpec, JointStates, Vec3
+from backends.types import BodyStates, Contact, ContactPoint, JointStates
 from reports import trace_format as tf
 from runner.errors import TraceError
 from runner.trace import contact_arrows, output
 from runner.trace import foxglove as fx
 from runner.trace import proto as pb
 from runner.trace.encoder import TraceEncoder, dumps, verdict_text
+from runner.trace.records import TraceMeta, finish_on_exit, scenario_record
 from runner.trace.repeats import EventRuns
-from runner.trace.scene import scene_entities
+from runner.trace.scene import SolidVisual, scene_entities
+from runner.trace.sink import open_partial
 from runner.trace.sounds import SoundBank
 
+# TraceMeta (runner.trace.records) and SolidVisual (runner.trace.scene) are the writer's inputs, re-exported
 __all__ = ["COMPRESSION_THREADS", "ZSTD_LEVEL", "SolidVisual", "TraceMeta", "TraceWriter"]
 
 _T = TypeVar("_T")
@@ -52,102 +54,6 @@ ZSTD_LEVEL = 1
 #: depends on its input and parameters, the worker count included, never on timing: a fixed count keeps
 #: "same scenario, backend and engine version => same bytes" (checked by the bench and tests/trace).
 COMPRESSION_THREADS = 1
-
-
-@dataclass(frozen=True)
-class TraceMeta:
-    scenario: str
-    variant: str
-    backend: str
-    backend_version: str
-    engine_settings: Mapping[str, Any]
-    dt: float
-    substeps: int
-    duration: float
-    tool_version: str
-    scenario_sha256: str
-    scenario_path: str
-    schema_version: int
-    bodies: Sequence[BodySpec]
-    joints: Sequence[JointSpec]
-    state_names: Sequence[str]
-    extra: Mapping[str, str] = field(default_factory=dict)
-
-
-@dataclass(frozen=True)
-class SolidVisual:
-    """A Panda3D-style collision solid for the 3D view (translucent), in its body's frame."""
-
-    node: str
-    body: str
-    kind: str  # "sphere" | "polygon" | "box"
-    center: Vec3 = (0.0, 0.0, 0.0)
-    radius: float = 0.0
-    size: Vec3 = (0.0, 0.0, 0.0)  # box: full edge lengths
-    vertices: tuple[Vec3, ...] = ()  # polygon: body frame, already scaled; order gives the normal
-
-
-class _Sink:
-    """An unbuffered file: the mcap writer hands it whole records, so nothing waits in Python.
-
-    A write that fails (disk full, I/O error) is undone: the file is cut back to the end of the last
-    whole write, so a ``.partial`` left by the failure ends on a record boundary and is read to its end
-    by ``inspect --recover``; every later write fails at once (:class:`~runner.errors.OutputError`)."""
-
-    def __init__(self, path: Path, exclusive: bool) -> None:
-        self._path = path
-        self._file = open(path, "xb" if exclusive else "wb", buffering=0)
-        self._pos = 0
-        self.failed: TraceError | None = None
-        self._discard = False
-
-    def write(self, data: bytes | memoryview) -> int:
-        if self._discard:  # abandoned: the SDK writer's last words go nowhere
-            return len(memoryview(data))
-        if self.failed is not None:
-            raise self.failed
-        view = memoryview(data).cast("B")
-        total = len(view)
-        try:
-            while view:
-                view = view[self._file.write(view) :]
-        except OSError as exc:
-            with contextlib.suppress(OSError):
-                os.ftruncate(self._file.fileno(), self._pos)
-            self.failed = output.write_error(exc, f"trace {self._path}")
-            raise self.failed from exc
-        self._pos += total
-        return total
-
-    def tell(self) -> int:
-        return self._pos
-
-    def seek(self, offset: int, whence: int = os.SEEK_SET) -> int:
-        """Where the file is: the SDK writes with ``disable_seeking`` and only asks for the position."""
-        if (whence, offset) not in ((os.SEEK_CUR, 0), (os.SEEK_SET, self._pos)):
-            raise OSError(f"the trace sink does not seek (asked {offset}, {whence})")
-        return self._pos
-
-    def check(self) -> None:
-        """Raise the first failed write, which the SDK only logs."""
-        if self.failed is not None and not self._discard:
-            raise self.failed
-
-    def discard(self) -> None:
-        """Ignore every later write (an abandoned trace keeps what is in the file)."""
-        self._discard = True
-
-    def flush(self) -> None:
-        """Nothing is buffered here."""
-
-    def close(self, sync: bool) -> None:
-        if self._file.closed:
-            return
-        try:
-            if sync:
-                os.fsync(self._file.fileno())
-        finally:
-            self._file.close()
 
 
 class TraceWriter:
@@ -187,7 +93,7 @@ class TraceWriter:
         self._encoder = TraceEncoder(self._names, self._joint_names)
         self._runs = EventRuns(meta.dt)  # events delivered on every step: one Log line per run
         self._sounds = SoundBank()
-        self._sink = self._open()
+        self._sink = open_partial(self.path, self.partial_path, self._force)
         self._context = foxglove.Context()  # this trace's channels reach this trace's writer only
         try:
             options = MCAPWriteOptions(
@@ -197,7 +103,7 @@ class TraceWriter:
             self._writer = self._sdk(foxglove.open_mcap, self._sink, context=self._context, writer_options=options)
             self._channels: dict[str, foxglove.Channel] = {}
             self._register_all()
-            self._sdk(self._writer.write_metadata, tf.METADATA_SCENARIO, self._scenario_record())
+            self._sdk(self._writer.write_metadata, tf.METADATA_SCENARIO, scenario_record(meta))
         except BaseException as exc:
             self._abandon()
             if self._sink.failed is not None:  # the disk was full before the scenario record was whole:
@@ -208,20 +114,6 @@ class TraceWriter:
             raise
 
     # ---- opening ---------------------------------------------------------------------------------
-
-    def _open(self) -> _Sink:
-        if not self._force and self.path.exists():
-            raise TraceError(f"{self.path} already exists; pass --force to overwrite it")
-        if not self._force and self.partial_path.exists():
-            raise TraceError(
-                f"{self.partial_path} (an unfinished trace) already exists; read it with "
-                f"`scenario inspect --recover {self.partial_path}` or pass --force to overwrite it"
-            )
-        try:
-            self.path.parent.mkdir(parents=True, exist_ok=True)
-            return _Sink(self.partial_path, exclusive=not self._force)
-        except OSError as exc:
-            raise output.write_error(exc, f"trace {self.partial_path}") from exc
 
     def _sdk(self, call: Callable[..., _T], *args: Any, **kwargs: Any) -> _T:
         """``call(*args, **kwargs)`` on the SDK writer; a failed write raises the sink's own error (the SDK's
@@ -244,31 +136,6 @@ class TraceWriter:
     def _register_all(self) -> None:
         for channel in self._encoder.channels():
             self._register(channel.topic, channel.schema_name, channel.schema_data)
-
-    def _scenario_record(self) -> dict[str, str]:
-        m = self.meta
-        record = {
-            tf.KEY_NAME: m.scenario,
-            tf.KEY_VARIANT: m.variant,
-            tf.KEY_BACKEND: m.backend,
-            tf.KEY_BACKEND_VERSION: m.backend_version,
-            tf.KEY_ENGINE_SETTINGS: dumps(m.engine_settings, sort_keys=True),
-            tf.KEY_DT: repr(float(m.dt)),
-            tf.KEY_SUBSTEPS: str(int(m.substeps)),
-            tf.KEY_DURATION: repr(float(m.duration)),
-            tf.KEY_TOOL_VERSION: m.tool_version,
-            tf.KEY_SCENARIO_SHA256: m.scenario_sha256,
-            tf.KEY_SCENARIO_PATH: m.scenario_path,
-            tf.KEY_SCHEMA_VERSION: str(m.schema_version),
-            tf.KEY_TRACE_FORMAT: str(tf.TRACE_FORMAT_VERSION),
-            tf.KEY_BODIES: dumps(self._names),
-            tf.KEY_BODY_SPECS: dumps([fx.body_spec_record(b) for b in m.bodies]),
-            tf.KEY_JOINTS: dumps(self._joint_names),
-            tf.KEY_JOINT_SPECS: dumps([asdict(j) for j in m.joints]),
-            tf.KEY_STATE: dumps(list(m.state_names)),
-        }
-        record.update({str(k): str(v) for k, v in m.extra.items()})
-        return record
 
     # ---- writing ---------------------------------------------------------------------------------
 
@@ -365,6 +232,7 @@ class TraceWriter:
         ns = self._ns(t)
         message = contact_arrows.scene_update(ns, points, float(scale))
         self._write(tf.TOPIC_CONTACT_POINTS, ns, message.SerializeToString(deterministic=True))
+
     def sensors(self, t: float, values: Sequence[float]) -> None:
         """/sensors at a recorded step: the values of the sensor quantities ``meta.extra[KEY_SENSORS]`` lists,
         in that order (the channel is registered with the first)."""
@@ -484,27 +352,3 @@ class TraceWriter:
     ) -> None:
         if self._final is None and not self._closed:
             finish_on_exit(self, exc)
-
-
-def finish_on_exit(writer: Any, exc: BaseException | None) -> None:
-    """Finish a writer left by its run (``__exit__`` of both writers): the status says how the run ended;
-    finishing never masks the exception that ended it."""
-    status, summary = exit_status(exc)
-    if exc is None:
-        writer.finish(status, summary)
-        return
-    try:
-        writer.finish(status, summary)
-    except Exception:  # noqa: BLE001 - never mask the exception that ended the run
-        writer._abandon()
-
-
-def exit_status(exc: BaseException | None) -> tuple[str, dict[str, Any]]:
-    """The status and summary a trace is finished with when its run ends without a result."""
-    if exc is None:
-        return tf.STATUS_ERROR, {"error": "the run ended without recording a result"}
-    if isinstance(exc, KeyboardInterrupt | SystemExit):
-        return tf.STATUS_INTERRUPTED, {"error": f"{type(exc).__name__}: {exc}".rstrip(": ")}
-    if isinstance(exc, EngineFailure):
-        return tf.STATUS_ENGINE_FAILURE, {"error": f"{type(exc).__name__}: {exc}", "body": exc.body, "time": exc.time}
-    return tf.STATUS_ERROR, {"error": f"{type(exc).__name__}: {exc}"}

@@ -20,7 +20,7 @@ from reports import trace_format as tf
 from reports.scene3d.model import EntityVisual, entity_from_message
 from runner.trace import contact_arrows, scene
 from runner.trace import foxglove as fx
-from runner.trace.writer import SolidVisual
+from runner.trace.scene import SolidVisual
 
 __all__ = ["TapListener", "TraceTap", "scene_entities"]
 

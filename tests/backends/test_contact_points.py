@@ -1,5 +1,5 @@
 """``Backend.contact_points()`` (capability ``contacts:points``): every touching point of the last engine step
-with its position, its normal from body a to body b and its normal force (backends/base.py)."""
+with its position, its normal from body a to body b and its normal force (backends/optional_contract.py)."""
 
 from __future__ import annotations
 

@@ -94,7 +94,7 @@ def _tracking_bound(engine: str) -> float:
     steps = round(T / H)
     bound = ROUNDING + steps * get_backend(engine).precision.eps * 4.0  # |q| < 4 rad over the run
     if engine == "mujoco":
-        from backends.mujoco._model import IMPEDANCE
+        from backends.mujoco._geoms import IMPEDANCE
         from backends.mujoco._options import MujocoOptions
 
         d, stiffness = IMPEDANCE, MujocoOptions().erp / H**2

@@ -117,7 +117,7 @@ def test_each_world_of_a_batch_is_that_world_run_alone() -> None:
         assert batched[k][1] == contacts, f"world {k}"
         assert settings[k] == alone_settings, f"world {k}"
     # the per-world fields reached the engine: at rest the ground carries each box's weight. Tolerance: the
-    # contact rows' impedance 0.999 lets 0.1 % of the unconstrained acceleration through (backends/mujoco/_model.py)
+    # contact rows' impedance 0.999 lets 0.1 % of the unconstrained acceleration through (backends/mujoco/_geoms.py)
     for k, world in enumerate(worlds):
         if world.default_surface.bounce:
             continue  # the bouncing 1 m drop is still in the air at 1.2 s

@@ -10,7 +10,7 @@ from pathlib import Path
 import pytest
 
 from backends.registry import engine_version
-from runner.ci.golden import read_golden
+from runner.ci.golden_read import read_golden
 from runner.ci.regression import check_cases, golden_path
 from runner.language.load import load_scenario
 

@@ -7,7 +7,7 @@ import pytest
 
 from backends.errors import UnsupportedFeature
 from backends.registry import check_capabilities, get_backend, is_installed, list_backends
-from runner.ci.golden import read_golden
+from runner.ci.golden_read import read_golden
 from runner.ci.regression import golden_path
 from runner.compile.world import compile_world
 from runner.language.load import load_all

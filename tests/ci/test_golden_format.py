@@ -12,12 +12,12 @@ from runner.ci.golden import (
     Tolerances,
     VerdictLine,
     dumps,
-    loads,
     quantize,
     sample_every,
     sample_steps,
 )
 from runner.ci.golden_compare import compare
+from runner.ci.golden_read import loads
 from runner.ci.regression import parse_tolerance_options
 from runner.errors import UsageError
 

@@ -15,7 +15,8 @@ from pathlib import Path
 
 import pytest
 
-from runner.ci.golden import MAX_SAMPLES, BaselineError, dumps, loads
+from runner.ci.golden import BaselineError, dumps
+from runner.ci.golden_read import MAX_SAMPLES, loads
 
 from .test_golden_format import recording
 

@@ -75,7 +75,7 @@ def _dart(sim: Backend, pair: Pair) -> tuple[float, float]:
 
 def _mujoco(sim: Backend, pair: Pair) -> tuple[float, float]:
     """The compiled model's explicit contact pair for the two geoms, else the geoms' own (equal) parameters:
-    friction[0] is mu; the normal solref's damping term is -(1 + e)/h (backends/mujoco/_model.py)."""
+    friction[0] is mu; the normal solref's damping term is -(1 + e)/h (backends/mujoco/_geoms.py)."""
     m = sim._m  # type: ignore[attr-defined]
     ga, gb = (m.geom(f"geom:{name}").id for name in pair)
     h = m.opt.timestep

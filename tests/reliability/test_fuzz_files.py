@@ -47,8 +47,9 @@ from reports.audio import decode_wav, mix_sounds
 from reports.build import ReportError, write_report
 from reports.inspect import summary_text
 from reports.trace_reader import SoundRecord, read_trace
-from runner.ci.golden import Tolerances, dumps, loads, read_golden
+from runner.ci.golden import Tolerances, dumps
 from runner.ci.golden_compare import compare
+from runner.ci.golden_read import loads, read_golden
 from runner.ci.regression import comparison_lines
 from runner.compile.program import build_program
 from runner.errors import ExitCode

@@ -20,7 +20,9 @@ from mcap.reader import make_reader
 from mcap.writer import Writer
 
 from reports import trace_format as tf
-from reports.trace_reader import MAX_CHUNK_BYTES, MAX_TRACE_NAMES, TraceReadError, read_trace
+from reports.trace_checks import MAX_TRACE_NAMES
+from reports.trace_reader import TraceReadError, read_trace
+from reports.trace_records import MAX_CHUNK_BYTES
 from tests.trace.test_trace import write_trace
 
 
