@@ -390,6 +390,7 @@ class OdeBackend(Backend):
 
     def _reset_body(self, body: int, pos: Vec3, quat: Quat, lin_vel: Vec3, ang_vel: Vec3) -> None:
         self._place(body, pos, quat, lin_vel, ang_vel)
+        self._joint_dynamics.forget()
 
     def _place(self, body: int, pos: Vec3, quat: Quat, lin_vel: Vec3, ang_vel: Vec3) -> None:
         """Put the body FRAME at ``pos``/``quat`` with its origin moving at ``lin_vel`` (the OdeBody is its COM)."""
