@@ -36,7 +36,7 @@ from ..types import CompiledWorld, JointKind
 from ._build import JointHandle
 
 #: ODE 0.13.1's parameter numbers (include/ode/common.h, D_ALL_PARAM_NAMES): OdeLMotorJoint has only the
-#: numbered setParam. Checked against OdeAMotorJoint's named setters in tests/backends/test_ode_armature.py.
+#: numbered setParam (checked by a one-step momentum balance in tests/backends/test_ode_joint_dynamics.py).
 PARAM_VEL, PARAM_FMAX, PARAM_CFM = 2, 5, 8
 _ONE_DOF = (JointKind.HINGE, JointKind.SLIDER)
 
@@ -67,7 +67,8 @@ class _Spring:
     handle: JointHandle
     stiffness: float
     rest: float
-    angle: float = 0.0  # a hinge's unwrapped angle at the last read
+    last: float = 0.0  # a hinge's angle as ODE read it last (0 at the start), in (-pi, pi]
+    turns: int = 0  # whole turns ODE's angle wrapped since the start
 
 
 class JointDynamics:
@@ -99,9 +100,10 @@ class JointDynamics:
         for spring in self.springs:
             joint = spring.handle.joint
             if spring.handle.spec.kind is JointKind.HINGE:
-                turned = joint.getAngle() - spring.angle
-                spring.angle += turned - 2.0 * math.pi * round(turned / (2.0 * math.pi))
-                joint.addTorque(-spring.stiffness * (spring.angle - spring.rest))
+                angle = float(joint.getAngle())
+                spring.turns -= round((angle - spring.last) / (2.0 * math.pi))  # a jump across +-pi: a wrap
+                spring.last = angle
+                joint.addTorque(-spring.stiffness * (angle + 2.0 * math.pi * spring.turns - spring.rest))
             else:
                 joint.addForce(-spring.stiffness * (joint.getPosition() - spring.rest))
 
