@@ -40,6 +40,7 @@ from . import _native
 from ._build import JointHandle, axis_arg, build_scene, destroy_scene, panda_quat, set_motor
 from ._contacts import Collider
 from ._imported import read_imported
+from ._joint_dynamics import JointDynamics, check_joint_dynamics
 from ._options import OdeOptions, check_resting_stack, check_stack
 
 _ROTATIONAL = (JointKind.HINGE, JointKind.UNIVERSAL)
@@ -65,12 +66,13 @@ def _inertia_along(body: Any, handle: JointHandle) -> float:
 
 
 def _effective_inertia(handle: JointHandle) -> float:
-    """1 / (1/I1 + 1/I2) of the joint's two bodies along its coordinate (the environment: 1/I2 = 0)."""
+    """1 / (1/I1 + 1/I2) of the joint's two bodies along its coordinate (the environment: 1/I2 = 0), plus the
+    joint's armature (its row adds a to the coordinate's inertia: 1 / J (M + a J^T J)^-1 J^T = 1 / J M^-1 J^T + a)."""
     inverse = 1.0 / _inertia_along(handle.body, handle)
     other = handle.joint.getBody(1)
     if other is not None and not other.isEmpty():
         inverse += 1.0 / _inertia_along(other, handle)
-    return 1.0 / inverse
+    return 1.0 / inverse + handle.spec.dynamics.armature
 
 
 def _has_friction(world: CompiledWorld) -> bool:
@@ -89,10 +91,12 @@ class OdeBackend(Backend):
 
     name = "ode"
     engine_distribution = "panda3d"
-    #: everything but what only an engine building a robot from its model file runs (MJCF on MuJoCo), and
-    #: armature (ODE has no inertia on a joint coordinate; adding it to a body would change its other axes)
-    #: no armature, no mimic: ODE has no inertia on a joint coordinate and no gear joint (docs/backends/ode.md)
-    capabilities = frozenset(Capability) - MODEL_FILE_CAPABILITIES - {Capability.JOINT_ARMATURE, Capability.JOINT_MIMIC}
+    #: everything but what only an engine building a robot from its model file runs (MJCF on MuJoCo), except
+    #: joint springs, and no mimic (ODE has no gear joint). Armature is one more velocity row with CFM h / a
+    #: on the joint's coordinate, springs a joint torque each step (_joint_dynamics; docs/backends/ode.md)
+    capabilities = (
+        frozenset(Capability) - (MODEL_FILE_CAPABILITIES - {Capability.JOINT_STIFFNESS}) - {Capability.JOINT_MIMIC}
+    )
     #: panda3d builds ODE with dSINGLE: every state is a float32 (dGetConfiguration says "ODE_single_precision")
     precision = Precision.FLOAT32
     Options: ClassVar[type[BackendOptions]] = OdeOptions
@@ -106,6 +110,7 @@ class OdeBackend(Backend):
 
     @classmethod
     def check_world(cls, world: CompiledWorld, options: BackendOptions) -> None:
+        check_joint_dynamics(world)
         check_stack(stacks(world).landing)
         free = _free_stacks(world)
         check_resting_stack(free.tallest, free.landing, _has_friction(world))
@@ -134,6 +139,7 @@ class OdeBackend(Backend):
             step=world.dt / world.substeps,
             impact_cfm=self.options.impact_cfm,
         )
+        self._joint_dynamics = JointDynamics(self._scene.world, self._scene.joints, world.dt / world.substeps)
         self._fudge = [j.joint.getParamFudgeFactor(*axis_arg(j)) if j.feedback else 1.0 for j in self._scene.joints]
         n = len(world.bodies)
         self._dynamic = [i for i, b in enumerate(world.bodies) if b.motion is Motion.DYNAMIC]
@@ -198,6 +204,8 @@ class OdeBackend(Backend):
                 body = scene.bodies[i]
                 body.addForce(*acc[:3])  # type: ignore[union-attr]
                 body.addTorque(*acc[3:])  # type: ignore[union-attr]
+            if self._joint_dynamics:  # armature rows' targets and springs' forces from the substep's start
+                self._joint_dynamics.before_step()
             if not joints:
                 stepper(h)
             else:
@@ -382,6 +390,7 @@ class OdeBackend(Backend):
 
     def _reset_body(self, body: int, pos: Vec3, quat: Quat, lin_vel: Vec3, ang_vel: Vec3) -> None:
         self._place(body, pos, quat, lin_vel, ang_vel)
+        self._joint_dynamics.forget()
 
     def _place(self, body: int, pos: Vec3, quat: Quat, lin_vel: Vec3, ang_vel: Vec3) -> None:
         """Put the body FRAME at ``pos``/``quat`` with its origin moving at ``lin_vel`` (the OdeBody is its COM)."""
@@ -399,6 +408,7 @@ class OdeBackend(Backend):
 
     def _close(self) -> None:
         _native.detach()
+        self._joint_dynamics.destroy()
         destroy_scene(self._scene)
 
 

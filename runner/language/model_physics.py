@@ -231,7 +231,7 @@ class Dynamics(Strict):
     armature: NonNegFloat | None = Field(
         None,
         description="Inertia added to the coordinate (a rotor's reflected inertia), kg (slider) or kg m^2 "
-        "(hinge), on the engines that declare `joint:armature` (MuJoCo, PyBullet, DART, Drake; ODE refuses it).",
+        "(hinge), on the engines that declare `joint:armature` (MuJoCo, PyBullet, DART, Drake, ODE).",
     )
     effort: PositiveFloat | None = Field(
         None,

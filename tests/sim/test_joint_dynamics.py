@@ -31,9 +31,9 @@ tolerances are the step's error (dt = h; the engines integrate with semi-implici
   motor reaches its rate within a step (MuJoCo's motor row leaves 1e-4 of the change per step, gone after a
   few), so after 0.2 s the rate is 2 rad/s to the solver's rounding (relative 1e-5 covers float32).
 * **Armature** (MuJoCo's dof_armature, PyBullet's geared rotor: a wheel on a hinge through its centre, damping
-  c, spun at w0): w = w0 e^(-c t / (I + armature)); ODE refuses `joint:armature` before the run (DART: its
-  implicit joint inertia, backends/dart/_armature.py; Drake: its joint actuator's rotor inertia,
-  backends/drake/_joint_dynamics.py).
+  c, spun at w0): w = w0 e^(-c t / (I + armature)) (DART: its implicit joint inertia, backends/dart/_armature.py;
+  Drake: its joint actuator's rotor inertia, backends/drake/_joint_dynamics.py; ODE: one more velocity row with
+  CFM h / armature, backends/ode/_joint_dynamics.py); an engine without `joint:armature` refuses it before the run.
 """
 
 from __future__ import annotations
