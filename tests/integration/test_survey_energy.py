@@ -29,8 +29,10 @@ from pathlib import Path
 
 import pytest
 
-from backends.registry import is_installed
+from backends.registry import create_backend, is_installed
+from runner.compile.program import build_program
 from runner.language.mjcf import load_mjcf
+from runner.survey.cases import load_survey_scenario
 from runner.survey.models import ModelFile
 from runner.survey.run import run_survey
 from runner.survey.table import RAN
@@ -83,9 +85,19 @@ def test_a_file_with_contacts_disabled_has_no_collision_shapes(tmp_path: Path) -
     assert any('<flag contact="disable"/>' in note and "line 2" in note for note in off.notes), off.notes
 
 
-def test_dm_control_reacher_has_no_collision_shapes_as_on_mujoco() -> None:
-    desc = load_mjcf(_suite() / "reacher.xml")
-    assert all(not link.shapes for link in desc.links)
+@pytest.mark.parametrize("engine", ["mujoco", "pybullet", "dart"])
+def test_dm_control_reacher_has_no_collision_shapes_on_any_engine(engine: str) -> None:
+    """The description has none, and each engine, read back, built none (MuJoCo from the file, its flag kept)."""
+    if not is_installed(engine):
+        pytest.skip(f"{engine} is not installed")
+    file = _suite() / "reacher.xml"
+    assert all(not link.shapes for link in load_mjcf(file).links)
+    world = build_program(load_survey_scenario(ModelFile(file, file.name, "mjcf"), SECONDS)).world
+    with create_backend(engine, world) as sim:
+        imported = sim.imported_model()
+    assert imported is not None
+    built = {body.name: body.shapes for body in imported.bodies if body.name.startswith("model.")}
+    assert built and not any(built.values()), built
 
 
 @pytest.mark.parametrize("engine", ["dart", "pybullet", "mujoco"])
