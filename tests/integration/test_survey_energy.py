@@ -18,7 +18,7 @@ survey's 2 ms) within it.
 * pusher and thrower (pybullet_data) on PyBullet: their links of 1e-9 to 1e-6 kg are geared to 0.04 or 0.75
   kg m^2 armature rotors (backends/pybullet/_rotors.py), and Bullet's one sweep over the gear rows left the
   joints slipping from their rotors (thrower's first step: 0.031 and -0.082 rad/s, rotors still); with
-  ``ROTOR_SWEEPS`` sweeps pusher runs. Thrower then runs until its ball lands in the fingertip cage at 0.052 s
+  ``ROTOR_SWEEPS`` sweeps (worlds with a light gear, ``LIGHT_GEAR``) pusher runs. Thrower then runs until its ball lands in the fingertip cage at 0.052 s
   (a contact on 2e-9 kg links geared to 0.75 kg m^2 rotors: 1.2 J from nothing, whatever the sweeps or
   iterations; without armature it runs), so its test stops before.
 """
