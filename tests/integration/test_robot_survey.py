@@ -50,7 +50,7 @@ def survey(request: pytest.FixtureRequest, tmp_path_factory: pytest.TempPathFact
 #: Engines known to run under 90 % of the MJCF corpus (45 files, 0.5 s, -j 1). MuJoCo runs all 45 since MJCF's
 #: legacy dialect is upgraded before MuJoCo's compiler reads a file (runner.language.mjcf_legacy: before, MuJoCo 4
 #: refused 8 of pybullet_data's files, and 37, 82 %, was the most any engine could run). Measured: MuJoCo 45,
-#: PyBullet 30, DART 26, Drake 32 (armature and springs mapped), ODE 15; the rest are refused up front by name
+#: PyBullet 31, DART 27, Drake 32 (armature and springs mapped), ODE 17; the rest are refused up front by name
 #: (armature and springs on ODE, tendons, equality, fluid, a ball joint's dynamics, a capsule against a cylinder
 #: on ODE) or stopped by the energy watchdog (docs/robots.md, "MJCF as MuJoCo reads it"). Each engine here is an
 #: expected miss until it reaches the target; reaching it fails the test, so that this list goes.
