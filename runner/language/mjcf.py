@@ -459,7 +459,7 @@ def load_mjcf(file: Path) -> ModelDesc:
 def _contacts_disabled(model: Any, mujoco: Any) -> bool:
     """`<option><flag contact="disable"/>`: MuJoCo detects no contact at all in the file's model (dm_control's
     reacher, pendulum, cartpole, point_mass, swimmer), so none of its geoms is a collision shape on any engine,
-    whichever options the scenario runs with (MuJoCo's backend keeps the flag with its own options too). It is
+    with the scenario's options (MuJoCo's backend then zeroes their contype and conaffinity, backends/mujoco). It is
     part of the model: without it reacher's arm starts 0.06 m deep in its target sphere and root cylinder, with
     contact normals no joint can move along (docs/robots.md, "MJCF as MuJoCo reads it")."""
     return bool(int(model.opt.disableflags) & int(mujoco.mjtDisableBit.mjDSBL_CONTACT))

@@ -18,20 +18,26 @@ survey's 2 ms) within it.
 * pusher and thrower (pybullet_data) on PyBullet: their links of 1e-9 to 1e-6 kg are geared to 0.04 or 0.75
   kg m^2 armature rotors (backends/pybullet/_rotors.py), and Bullet's one sweep over the gear rows left the
   joints slipping from their rotors (thrower's first step: 0.031 and -0.082 rad/s, rotors still); with
-  ``ROTOR_SWEEPS`` sweeps (worlds with a light gear, ``LIGHT_GEAR``) pusher runs. Thrower then runs until its ball lands in the fingertip cage at 0.052 s
-  (a contact on 2e-9 kg links geared to 0.75 kg m^2 rotors: 1.2 J from nothing, whatever the sweeps or
-  iterations; without armature it runs), so its test stops before.
+  ``ROTOR_SWEEPS`` sweeps (worlds with a light gear, ``LIGHT_GEAR``) pusher runs. Thrower then runs until its
+  ball lands in the fingertip cage at 0.052 s (a contact on 2e-9 kg links geared to 0.75 kg m^2 rotors: 1.2 J
+  from nothing, whatever the sweeps or iterations; without armature it runs), so its test stops before.
+* The contact-disable flag is the file's: on MuJoCo, which kept it for the whole world, a box the scenario puts
+  beside reacher fell through the ground; now the file's geoms are collision-free there and the flag cleared.
 """
 
 from __future__ import annotations
 
+import shutil
 from pathlib import Path
 
 import pytest
 
 from backends.registry import create_backend, is_installed
+from reports.trace_reader import read_trace
 from runner.compile.program import build_program
+from runner.language.load import load_scenario
 from runner.language.mjcf import load_mjcf
+from runner.sim.run import run_loaded
 from runner.survey.cases import load_survey_scenario
 from runner.survey.models import ModelFile
 from runner.survey.run import run_survey
@@ -115,3 +121,31 @@ def test_throwers_geared_wrist_holds_on_pybullet_until_its_ball_lands() -> None:
     """25 steps (0.05 s): the ball lands in the fingertip cage at 0.052 s (module docstring)."""
     kind, text = _cell(_pybullet_mjcf() / "thrower.xml", "pybullet", 0.05)
     assert kind == RAN, text
+
+
+#: a box resting on the ground settles within this of its half height (the resting-height tolerance the
+#: engines' contact mappings are held to: docs/backends/dart.md, ERROR_ALLOWANCE, "2e-3 m and up")
+REST = 2e-3
+BOX_BESIDE_REACHER = """schema_version: 1
+scenario: box-beside-reacher
+world: {gravity: [0, 0, -9.81], dt: 0.002, duration: 0.5}
+bodies:
+  ground: {plane: {}, motion: static}
+  box: {box: [0.1, 0.1, 0.1], mass: 1, pos: [1, 0, 0.06]}
+robots:
+  model: {mjcf: reacher.xml, pos: [0, 0, 0.05]}
+"""
+
+
+@pytest.mark.parametrize("engine", ["mujoco", "pybullet", "dart"])
+def test_the_scenarios_own_bodies_still_touch_beside_a_file_without_contacts(tmp_path: Path, engine: str) -> None:
+    """The flag is the file's: on MuJoCo it held for the whole world, and the box fell through the ground."""
+    if not is_installed(engine):
+        pytest.skip(f"{engine} is not installed")
+    suite = _suite()
+    shutil.copy(suite / "reacher.xml", tmp_path)
+    shutil.copytree(suite / "common", tmp_path / "common")
+    (tmp_path / "box.yaml").write_text(BOX_BESIDE_REACHER)
+    result = run_loaded(load_scenario(tmp_path / "box.yaml"), engine, tmp_path / "out")
+    assert result.status == "passed" and result.trace is not None, result.failure
+    assert abs(read_trace(result.trace).bodies["box"].pos[-1][2] - 0.05) <= REST
