@@ -2,7 +2,8 @@
 
 ``body_mass``, ``body_inertia`` (principal moments), the COM from ``xipos`` after ``mj_kinematics`` on a copy of
 the data (the backend's own MjData is not touched), collidable geoms per body (``geom_bodyid`` with a
-non-zero ``contype`` or ``conaffinity``), ``jnt_type``, ``xaxis``, ``jnt_range`` where ``jnt_limited``,
+non-zero ``contype`` or ``conaffinity``; none with `<flag contact="disable"/>`), ``jnt_type``, ``xaxis``,
+``jnt_range`` where ``jnt_limited``,
 ``dof_damping``, ``dof_frictionloss`` and ``jnt_actfrcrange`` where ``jnt_actfrclimited`` (MuJoCo has no
 velocity limit). For an MJCF robot built from its file these are MuJoCo's own reading of the file.
 """
@@ -28,6 +29,8 @@ def read_imported(m: Any, d: Any, world: CompiledWorld, layout: Any, sign: np.nd
     data.qpos[:] = d.qpos
     mujoco.mj_kinematics(m, data)
     collides = (m.geom_contype != 0) | (m.geom_conaffinity != 0)
+    if int(m.opt.disableflags) & int(mujoco.mjtDisableBit.mjDSBL_CONTACT):  # the file's <flag contact="disable"/>
+        collides[:] = False
     bodies: list[ImportedBody] = []
     for i, spec in enumerate(world.bodies):
         if spec.motion is not Motion.DYNAMIC:

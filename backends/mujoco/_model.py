@@ -189,6 +189,7 @@ def build(world: CompiledWorld, opts: MujocoOptions, h: float) -> Layout:
         if native is not None:
             if not world.model_options:
                 _native.set_geom_surfaces(native, default, SOLIMP)
+                _native.drop_contact_flag(native)
             top = _native.attach(native, spec)
         if native is None or not world.model_options:
             _set_options(top, world, h)

@@ -18,6 +18,9 @@ from __future__ import annotations
 import math
 from typing import Any
 
+import numpy as np
+
+from ..geometry import quat_matrices
 from ..types import CompiledWorld, JointKind
 from ._build import Layout
 
@@ -25,6 +28,22 @@ from ._build import Layout
 _IDLE = 1e-9
 #: the gear's force bound: the constraint, not a motor (far above any force a scenario produces)
 _GEAR_FORCE = 1e12
+#: Bullet's Gauss-Seidel sweeps over the non-contact rows (``numNonContactInnerIterations``, 1 by default) in a
+#: world with a light geared joint (below). A gear row's effective mass is 1 / (1/M_jj + 1/a), M_jj the joint's
+#: own inertia without armature (what it carries, about its axis); where a >> M_jj, neighbouring gears are coupled
+#: through the links' joint-space inertia almost as strongly as each is to its own rotor, and one sweep leaves
+#: them slipping: after pybullet_data's thrower's first step under gravity (a/M_jj up to 2.3e9: links of 1.7e-9
+#: to 2.8e-8 kg, 0.75 kg m^2 rotors) its forearm-roll and wrist-roll joints turned at 0.031 and -0.082 rad/s while
+#: their rotors stayed below 5e-6 rad/s (the watchdog read the 2.9 mJ the rotors should then carry as a gain).
+#: More outer iterations do not help (1 to 5000 gave the same rates); inner sweeps do: measured on that step,
+#: 0.031 rad/s at 1 sweep, 0.014 at 10, 0.0019 at 30 (0.905 per sweep), below 5e-6 at 100.
+ROTOR_SWEEPS = 100
+#: a/M_jj above which a geared joint is light. The sweeps are not free where contacts abound (humanoid_CMU,
+#: a/M_jj <= 329, landing: 158 ms per step at 100 sweeps, 8.7 at 1), so only a world with such a joint gets them.
+#: Measured a/M_jj (MuJoCo's mass matrix): ran with one sweep ant 124, humanoid_CMU 329, pybullet_data's reacher
+#: 5.6e3; slipped pusher 9.9e7 (its object and target slides) and thrower 2.3e9. 1e6 lies between, 2.5 decades
+#: from each.
+LIGHT_GEAR = 1e6
 
 
 def _across(gravity: tuple[float, float, float]) -> list[float]:
@@ -40,8 +59,9 @@ def _across(gravity: tuple[float, float, float]) -> list[float]:
 
 def add_rotors(p: Any, c: int, world: CompiledWorld, layout: Layout, rates: dict[int, float]) -> list[int]:
     """One geared rotor multibody per slider or hinge with armature; ``rates``: each joint's start rate in
-    PyBullet's coordinate. Returns the rotors' body ids."""
-    rotors = []
+    PyBullet's coordinate. Returns the rotors' body ids; with a light one (armature above
+    :data:`LIGHT_GEAR` times the joint's own inertia), the solver sweeps the gears :data:`ROTOR_SWEEPS` times."""
+    rotors, geared = [], []
     for k, spec in enumerate(world.joints):
         armature, handle = spec.dynamics.armature, layout.joints[k]
         if armature <= 0.0 or spec.kind not in (JointKind.HINGE, JointKind.SLIDER) or handle.dofs != 1:
@@ -75,7 +95,33 @@ def add_rotors(p: Any, c: int, world: CompiledWorld, layout: Layout, rates: dict
                                   [0.0, 0.0, 0.0], physicsClientId=c)  # fmt: skip
         p.changeConstraint(gear, gearRatio=-1.0, maxForce=_GEAR_FORCE, physicsClientId=c)
         rotors.append(uid)
+        geared.append((k, spec))
+    if any(spec.dynamics.armature > LIGHT_GEAR * own_inertia(world, layout, p, c, k) for k, spec in geared):
+        p.setPhysicsEngineParameter(numNonContactInnerIterations=ROTOR_SWEEPS, physicsClientId=c)
     return rotors
+
+
+def own_inertia(world: CompiledWorld, layout: Layout, p: Any, c: int, k: int) -> float:
+    """M_jj of joint ``k`` at the start: the mass (slider) or the moment about the axis (hinge) of everything the
+    joint moves (its link and the links below it in PyBullet's tree), as the mass matrix's diagonal entry."""
+    handle, spec = layout.joints[k], world.joints[k]
+    below = {handle.link}
+    for link in range(handle.link + 1, p.getNumJoints(handle.uid, physicsClientId=c)):  # parents come first
+        if p.getJointInfo(handle.uid, link, physicsClientId=c)[16] in below:
+            below.add(link)
+    axis, anchor = np.asarray(spec.axis, float), np.asarray(spec.anchor, float)
+    total = 0.0
+    for i, body in enumerate(world.bodies):
+        if layout.uid[i] != handle.uid or layout.link[i] not in below:
+            continue
+        if spec.kind is JointKind.SLIDER:
+            total += body.mass
+            continue
+        turn = quat_matrices(body.quat)
+        arm = np.asarray(body.pos, float) + turn @ np.asarray(body.com, float) - anchor
+        across = arm - (arm @ axis) * axis
+        total += float(axis @ turn @ body.inertia_tensor() @ turn.T @ axis) + body.mass * float(across @ across)
+    return total
 
 
 #: ERP of a mimic's gear (Bullet multiplies it by the solver's own, 0.2 for multibodies): the position error

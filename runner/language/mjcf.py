@@ -6,8 +6,9 @@ MuJoCo computes them exactly. So whatever MuJoCo accepts is read (a file MuJoCo 
 message and line), and the compiled model is mapped into the engine-neutral description:
 
 - every body a link (the world body is the static link `worldbody`), its mass, centre of mass and inertia
-  as MuJoCo computed them; every geom that can collide (contype or conaffinity non-zero) a shape: primitives
-  as they are, an ellipsoid and a mesh as a convex hull (docs/robots.md, MJCF);
+  as MuJoCo computed them; every geom that can collide (contype or conaffinity non-zero, and the file's
+  `<flag contact>` not disabled) a shape: primitives as they are, an ellipsoid and a mesh as a convex hull
+  (docs/robots.md, MJCF);
 - every joint (hinge, slide, ball, free); a body without a joint is welded to its parent;
 - body pairs MuJoCo never lets touch (contype/conaffinity of all their geoms, `<exclude>`) are excluded;
 - actuators are listed (the robot's controllable joints);
@@ -334,6 +335,7 @@ def load_mjcf(file: Path) -> ModelDesc:
     lines = _lines(tree)
     bodies, joint_names = _names(model, file, lines)
     _check_compiled(model, file, bodies, lines)
+    touchless = _contacts_disabled(model, mujoco)
     links = []
     for b in range(model.nbody):
         rot = np.zeros(9)
@@ -342,8 +344,8 @@ def load_mjcf(file: Path) -> ModelDesc:
         tensor = r @ np.diag(model.body_inertia[b]) @ r.T
         shapes = []
         for g in range(model.body_geomadr[b], model.body_geomadr[b] + model.body_geomnum[b]):
-            if not (model.geom_contype[g] or model.geom_conaffinity[g]):
-                continue  # a visual geom: it never touches anything
+            if touchless or not (model.geom_contype[g] or model.geom_conaffinity[g]):
+                continue  # a visual geom (or contacts off in the file): it never touches anything
             shape = geom_shape(model, g, mujoco)
             if shape is None:
                 continue
@@ -369,6 +371,9 @@ def load_mjcf(file: Path) -> ModelDesc:
     start: list[tuple[str, float]] = []
     notes: list[str] = list(legacy.notes) if legacy is not None else []
     found = read_needs(model, mujoco, tree, bodies, joint_names, lines)
+    if touchless:
+        notes.append(f'`<flag contact="disable"/>` (line {_first_line(tree, "flag")}): the file\'s geoms touch '
+                     "nothing, as MuJoCo runs it (its shapes are drawn, not collided)")  # fmt: skip
     for b in range(1, model.nbody):
         parent = bodies[int(model.body_parentid[b])]
         line = lines.get(("body", bodies[b]), 0)
@@ -408,6 +413,15 @@ def load_mjcf(file: Path) -> ModelDesc:
         start=tuple(start),
         upgraded=(legacy.text, legacy.includes) if legacy is not None else None,
     )
+
+
+def _contacts_disabled(model: Any, mujoco: Any) -> bool:
+    """`<option><flag contact="disable"/>`: MuJoCo detects no contact at all in the file's model (dm_control's
+    reacher, pendulum, cartpole, point_mass, swimmer), so none of its geoms is a collision shape on any engine,
+    with the scenario's options (MuJoCo's backend then zeroes their contype and conaffinity, backends/mujoco). It is
+    part of the model: without it reacher's arm starts 0.06 m deep in its target sphere and root cylinder, with
+    contact normals no joint can move along (docs/robots.md, "MJCF as MuJoCo reads it")."""
+    return bool(int(model.opt.disableflags) & int(mujoco.mjtDisableBit.mjDSBL_CONTACT))
 
 
 def _sites(model: Any, bodies: list[str], joints: set[str]) -> list[FrameDesc]:
