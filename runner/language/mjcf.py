@@ -39,7 +39,7 @@ import numpy as np
 from backends.types import NO_DYNAMICS, JointDynamics, Mesh, PlacedShape, Shape, ShapeKind
 from runner.language.mesh_limits import check_mesh_file
 from runner.language.mjcf_legacy import Upgraded, upgrade
-from runner.language.mjcf_needs import read_needs
+from runner.language.mjcf_needs import first_line, read_needs
 from runner.language.model_names import check_names
 from runner.language.model_numbers import check_mjcf_numbers, check_number, check_vertices
 from runner.language.robot_desc import (
@@ -372,7 +372,7 @@ def load_mjcf(file: Path) -> ModelDesc:
     notes: list[str] = list(legacy.notes) if legacy is not None else []
     found = read_needs(model, mujoco, tree, bodies, joint_names, lines)
     if touchless:
-        notes.append(f'`<flag contact="disable"/>` (line {_first_line(tree, "flag")}): the file\'s geoms touch '
+        notes.append(f'`<flag contact="disable"/>` (line {first_line(tree, "flag")}): the file\'s geoms touch '
                      "nothing, as MuJoCo runs it (its shapes are drawn, not collided)")  # fmt: skip
     for b in range(1, model.nbody):
         parent = bodies[int(model.body_parentid[b])]

@@ -231,7 +231,7 @@ def _equalities(model: Any, mujoco: Any, tree: Any, joints: list[str], tendons: 
                            f"simulated: {', '.join(inactive)}")  # fmt: skip
 
 
-def _first_line(tree: Any, tag: str) -> int:
+def first_line(tree: Any, tag: str) -> int:
     found = next(iter(tree.getroot().iter(tag)), None)
     return (found.sourceline or 0) if found is not None else 0
 
@@ -252,7 +252,7 @@ def read_needs(model: Any, mujoco: Any, tree: Any, bodies: list[str], joints: li
             found.need("body:massless", f"body `{bodies[b]}` moves but has no mass", lines.get(("body", bodies[b]), 0))
     for j in range(model.njnt):  # damping and friction loss of hinges and slides are every engine's (the runner's)
         dof, name = int(model.jnt_dofadr[j]), joints[j]
-        line = lines.get(("joint", name), _first_line(tree, "joint"))
+        line = lines.get(("joint", name), first_line(tree, "joint"))
         if int(model.jnt_type[j]) in (0, 1) and _has_dynamics(model, j):
             found.need("joint:ball-dynamics", f"joint `{name}`'s damping, friction loss, armature or stiffness", line)
         elif model.dof_armature[dof] > 0:
@@ -260,12 +260,12 @@ def read_needs(model: Any, mujoco: Any, tree: Any, bodies: list[str], joints: li
         if int(model.jnt_type[j]) in _SCALAR and model.jnt_stiffness[j] > 0:
             found.need("joint:stiffness", f"joint `{name}`'s stiffness", line)
     if any(model.jnt_limited[j] and int(model.jnt_type[j]) == 1 for j in range(model.njnt)):
-        found.need("joint:ball-range", "a ball joint's range", _first_line(tree, "joint"))
+        found.need("joint:ball-range", "a ball joint's range", first_line(tree, "joint"))
     tendons = [model.tendon(t).name or f"tendon_{t}" for t in range(model.ntendon)]
     _equalities(model, mujoco, tree, joints, tendons, found)
     _tendons(model, mujoco, tree, tendons, found)
     if model.npair:
-        found.need("collision:explicit-pairs", "<contact><pair>", _first_line(tree, "pair"))
+        found.need("collision:explicit-pairs", "<contact><pair>", first_line(tree, "pair"))
     if model.opt.density or model.opt.viscosity or np.any(model.opt.wind != 0):
-        found.need("world:fluid", "<option> density, viscosity or wind", _first_line(tree, "option"))
+        found.need("world:fluid", "<option> density, viscosity or wind", first_line(tree, "option"))
     return found
