@@ -80,7 +80,7 @@ from collections.abc import Sequence
 from types import TracebackType
 from typing import TYPE_CHECKING, Any, ClassVar
 
-from ._kit.chains import chained
+from ._kit.chains import LIGHT, chained
 from ._kit.motion import KinematicPose, KinematicTrack, OneStepForces
 from ._kit.options import BackendOptions
 from .contract_checks import held_by_joints
@@ -127,6 +127,9 @@ class Backend(OptionalContract, abc.ABC):
     #: True: the adapter gives the engine each joint's ``JointSpec.dynamics.damping`` itself (its own joint
     #: damping), and the runner's motor carries only the friction loss (runner.sim.joint_dynamics).
     native_damping: ClassVar[bool] = False
+    #: the mass and inertia of the light bodies that chain several joints of one body, as a fraction of the
+    #: body's (backends/_kit/chains.py: the error it costs and why ODE takes more)
+    chain_light: ClassVar[float] = LIGHT
 
     def __init__(self, world: CompiledWorld) -> None:
         self.world = self.engine_world(world)
@@ -169,7 +172,7 @@ class Backend(OptionalContract, abc.ABC):
         (MuJoCo runs a body's joints natively)."""
         if not world.joint_chains or MODEL_FILE_CAPABILITIES <= cls.capabilities:
             return world
-        return chained(world)
+        return chained(world, cls.chain_light)
 
     @classmethod
     def world_batch(cls) -> type[WorldBatch] | None:

@@ -18,7 +18,11 @@ because ODE keeps its state in single precision and solves every joint's constra
 inverse masses: a mass ratio of ``1/LIGHT`` loses ``log10(1/LIGHT)`` of its 7 digits. Measured on a two-hinge
 pendulum against MuJoCo (which runs the file's joints natively), 1 s at h = 1 ms: at 1e-6 ODE gained 8 mJ in
 10 ms (the energy watchdog stopped it); at 1e-4 ODE stays within 4.5e-5 rad, PyBullet and DART within 1.4e-6;
-at 1e-2 all drift by 1.4e-4 rad (tests/backends/test_joint_chains.py checks the bound).
+at 1e-2 all drift by 1.4e-4 rad (tests/backends/test_joint_chains.py checks the bound). ODE takes 1e-3
+(``Backend.chain_light``): at 1e-4 its float32 LDLT factorisation meets a zero pivot on dm_control's
+humanoid_CMU within 20 ms and on humanoid within 2 s ("d[i] != 0" in _dLDLTRemove, the process aborted), at
+3e-4 humanoid_CMU blows up, at 1e-3 and 1e-2 both run 2 s with walker, cheetah and hopper; the bound grows
+with it (a relative 2e-3 for a 3-joint chain), still below ODE's own float32 and ERP errors there.
 
 The intermediate bodies come after the world's own (the runner never sees them: the base class reports the
 world's bodies only); they have no shapes, so they are in no contact.
@@ -32,7 +36,8 @@ import numpy as np
 
 from ..types import BodySpec, CompiledWorld, JointKind, JointSpec, Motion, Shape, ShapeKind, Vec3
 
-#: each intermediate body's mass and inertia as a fraction of the body's (module docstring: the cost)
+#: each intermediate body's mass and inertia as a fraction of the body's (module docstring: the cost); an
+#: engine may ask for more (``Backend.chain_light``: ODE's float32 LCP, module docstring)
 LIGHT = 1e-4
 
 
@@ -64,8 +69,8 @@ def _frame_velocity(
     return _vec(v), _vec(w)
 
 
-def light_copy(body: BodySpec, name: str, lin_vel: Vec3, ang_vel: Vec3) -> BodySpec:
-    """The intermediate body: the body's frame, ``LIGHT`` of its mass and inertia, no shapes, no visuals."""
+def light_copy(body: BodySpec, name: str, lin_vel: Vec3, ang_vel: Vec3, light: float = LIGHT) -> BodySpec:
+    """The intermediate body: the body's frame, ``light`` of its mass and inertia, no shapes, no visuals."""
     return replace(
         body,
         name=name,
@@ -73,16 +78,17 @@ def light_copy(body: BodySpec, name: str, lin_vel: Vec3, ang_vel: Vec3) -> BodyS
         shape=Shape(ShapeKind.COMPOUND),
         shapes=(),
         visuals=(),
-        mass=LIGHT * body.mass,
-        inertia=(LIGHT * body.inertia[0], LIGHT * body.inertia[1], LIGHT * body.inertia[2]),
+        mass=light * body.mass,
+        inertia=(light * body.inertia[0], light * body.inertia[1], light * body.inertia[2]),
         lin_vel=lin_vel,
         ang_vel=ang_vel,
     )
 
 
-def chained(world: CompiledWorld) -> CompiledWorld:
-    """``world`` with every group of :attr:`CompiledWorld.joint_chains` made a chain through light bodies,
-    appended after the world's bodies; the joints keep their order and names (only their two bodies change)."""
+def chained(world: CompiledWorld, light: float = LIGHT) -> CompiledWorld:
+    """``world`` with every group of :attr:`CompiledWorld.joint_chains` made a chain through light bodies
+    (``light`` of the body's mass and inertia), appended after the world's bodies; the joints keep their
+    order and names (only their two bodies change)."""
     if not world.joint_chains:
         return world
     bodies = {b.name: b for b in world.bodies}
@@ -106,7 +112,7 @@ def chained(world: CompiledWorld) -> CompiledWorld:
                 name += "'"
             taken.add(name)
             lin, ang = _frame_velocity(parent, chain[: k + 1], rates, at)
-            extra.append(light_copy(body, name, lin, ang))
+            extra.append(light_copy(body, name, lin, ang, light))
             joints[index[joint.name]] = replace(joint, body=name, other=previous)
             previous = name
     return replace(world, bodies=world.bodies + tuple(extra), joints=tuple(joints), joint_chains=())

@@ -99,6 +99,9 @@ class OdeBackend(Backend):
     )
     #: panda3d builds ODE with dSINGLE: every state is a float32 (dGetConfiguration says "ODE_single_precision")
     precision = Precision.FLOAT32
+    #: light bodies of a joint chain at 1e-3 of their body (1e-4 elsewhere): ODE's float32 LDLT meets a zero
+    #: pivot at 1e-4 on dm_control's humanoids (backends/_kit/chains.py)
+    chain_light: ClassVar[float] = 1e-3
     Options: ClassVar[type[BackendOptions]] = OdeOptions
     #: panda3d turns a failed C++ assertion (nassert) into AssertionError; ODE's own fatal errors abort.
     engine_errors: ClassVar[tuple[type[BaseException], ...]] = (AssertionError,)
