@@ -4,16 +4,14 @@
 ``createCollisionShape`` it has no ``vertices`` argument (pybullet 3.2.7: "'vertices' is an invalid keyword
 argument"). For an OBJ file, PhysicsServerCommandProcessor's ``processCreateCollisionShapeCommand`` reads
 it with Bullet's tinyobjloader (no cache) and adds, per OBJ object, one btConvexHullShape of the vertices
-its faces name (``addPoint`` each, then ``optimizeConvexHull``, the default 1 mm margin) to the compound at
-the child's frame, as it does for vertices given in memory. So each hull goes in as a file whose faces
-name every vertex.
+its faces name (``addPoint`` each, then ``optimizeConvexHull``) to the compound at the child's frame, as it
+does for vertices given in memory. So each hull goes in as a file whose faces name every vertex.
 
 Precision: tinyobjloader keeps a vertex as ``(float)atof(text)``. The text is Python's shortest round-trip
 repr, so ``atof`` gives back the double exactly and the cast rounds it once to the nearest float32: a
-coordinate moves by at most 2^-24 of its magnitude. Each hull is written about the centre of its bounding
-box, the centre going into the child's frame (a double), so the bound is 2^-24 of the hull's half extent
-along that axis (3.0e-8 m for a hull 1 m across), whatever the hull's distance from the body's origin.
-A hull that is a body's only shape keeps its vertices exactly (``createCollisionShape(vertices=...)``).
+coordinate moves by at most 2^-24 of its magnitude, and not at all when it is a float32 already (an STL
+mesh's, at scale 1). Bullet then snaps every hull, from a file or from memory alike, to a grid of 1/10216 of
+its extent per axis (docs/backends/pybullet.md, "Robots"), which is 1.6e3 times coarser.
 
 The files live only for the one call that reads them (DIRECT mode: the server runs in this process and has
 read them when the call returns), in a fresh temporary folder of their own, so concurrent runs never share
@@ -69,8 +67,7 @@ def check_compound(spec: BodySpec) -> None:
 
 
 def compound_shape(p: Any, c: int, placed: tuple[PlacedShape, ...], offset: Vec3) -> int:
-    """The shapes at their poses in a link frame whose origin is at ``offset`` in the body frame; each hull
-    written about its centre, which moves into the child's frame."""
+    """The shapes at their poses in a link frame whose origin is at ``offset`` in the body frame."""
     cols: dict[str, list[Any]] = {k: [] for k in ("type", "half", "radius", "length", "file", "pos", "orn")}
     with ExitStack() as stack:
         hulls = any(s.shape.kind is ShapeKind.CONVEX for s in placed)
@@ -86,10 +83,7 @@ def compound_shape(p: Any, c: int, placed: tuple[PlacedShape, ...], offset: Vec3
                 geom = p.GEOM_CAPSULE if kind is ShapeKind.CAPSULE else p.GEOM_CYLINDER
                 radius, length = shape.radius, shape.length
             elif kind is ShapeKind.CONVEX:  # check_compound refused a triangle mesh
-                mesh = mesh_of(shape)
-                middle = centre(mesh)
-                geom, file = p.GEOM_MESH, _write_hull(folder / f"hull-{index:02d}.obj", mesh, middle)
-                pos = _add(pos, quat_rotate(quat, middle))
+                geom, file = p.GEOM_MESH, _write_hull(folder / f"hull-{index:02d}.obj", mesh_of(shape))
             else:  # a plane: the 2 km box of _build._shape
                 geom, half = p.GEOM_BOX, [PLANE_HALF_SIZE] * 3
                 pos = _add(pos, quat_rotate(quat, (0.0, 0.0, -PLANE_HALF_SIZE)))
@@ -110,17 +104,11 @@ def compound_shape(p: Any, c: int, placed: tuple[PlacedShape, ...], offset: Vec3
         )
 
 
-def centre(mesh: Mesh) -> Vec3:
-    """The centre of the mesh's bounding box (the hull's origin in its file)."""
-    xs, ys, zs = zip(*mesh.vertices, strict=True)
-    return ((min(xs) + max(xs)) / 2, (min(ys) + max(ys)) / 2, (min(zs) + max(zs)) / 2)
-
-
-def obj_text(mesh: Mesh, origin: Vec3) -> str:
-    """The hull's vertices about ``origin`` as OBJ text, with faces that name every vertex: tinyobjloader's
-    hull takes only the points its faces name, and their shape does not matter (Bullet rebuilds the hull)."""
+def obj_text(mesh: Mesh) -> str:
+    """The hull's vertices as OBJ text, with faces that name every vertex: tinyobjloader's hull takes only
+    the points its faces name, and their shape does not matter (Bullet rebuilds the hull)."""
     n = len(mesh.vertices)
-    lines = ["v " + " ".join(repr(float(v[k] - origin[k])) for k in range(3)) for v in mesh.vertices]
+    lines = ["v " + " ".join(repr(float(x)) for x in v) for v in mesh.vertices]
     lines += [f"f {i + 1} {(i + 1) % n + 1} {(i + 2) % n + 1}" for i in range(0, n, 3)]
     return "\n".join(lines) + "\n"
 
@@ -138,8 +126,8 @@ def _hull_folder() -> Iterator[Path]:
         yield Path(name)
 
 
-def _write_hull(path: Path, mesh: Mesh, origin: Vec3) -> str:
-    path.write_text(obj_text(mesh, origin), encoding="ascii")
+def _write_hull(path: Path, mesh: Mesh) -> str:
+    path.write_text(obj_text(mesh), encoding="ascii")
     return str(path)
 
 
