@@ -66,8 +66,9 @@ def _shape(p: Any, c: int, shape: Shape, offset: Vec3 = ORIGIN, quat: Quat = IDE
 
 
 def _mesh(p: Any, shape: Shape, kw: dict[str, Any]) -> int:
-    """A convex hull (btConvexHullShape of exactly these vertices: they already are the hull, so Bullet's
-    optimizeConvexHull keeps every one) or, with the faces, a static triangle mesh (btBvhTriangleMeshShape)."""
+    """A convex hull (btConvexHullShape of these vertices, which Bullet's optimizeConvexHull puts on a grid of
+    1/10216 of the hull's extent per axis: docs/backends/pybullet.md) or, with the faces, a static triangle
+    mesh (btBvhTriangleMeshShape)."""
     mesh = mesh_of(shape)
     vertices = [list(v) for v in mesh.vertices]
     if shape.kind is ShapeKind.CONVEX:
