@@ -17,11 +17,13 @@ The files live only for the one call that reads them (DIRECT mode: the server ru
 read them when the call returns), in a fresh temporary folder of their own, so concurrent runs never share
 a file and nothing is left behind, also on an error. pybullet.c reads the path as ASCII and Bullet copies
 it into 1,024-byte buffers (one without a check), so a longer or non-ASCII temporary folder is refused,
-naming ``TMPDIR``.
+naming ``TMPDIR``; ``atof`` follows the C locale, which Python leaves at "C" unless something sets it, so
+one whose decimal point is not ``.`` is refused too.
 """
 
 from __future__ import annotations
 
+import locale
 import tempfile
 from collections.abc import Iterator
 from contextlib import ExitStack, contextmanager
@@ -116,6 +118,11 @@ def obj_text(mesh: Mesh) -> str:
 @contextmanager
 def _hull_folder() -> Iterator[Path]:
     """A fresh temporary folder for one compound's hull files, removed on leaving (also on an error)."""
+    if locale.localeconv()["decimal_point"] != ".":  # atof would stop at each number's point
+        raise UnsupportedFeature(
+            "Backend `pybullet` builds a compound's convex hulls from files whose numbers Bullet reads in the "
+            "process's C locale, and its LC_NUMERIC does not write a decimal point as `.`."
+        )
     with tempfile.TemporaryDirectory(prefix="scenario-pybullet-hulls-") as name:
         probe = str(Path(name) / "hull-00.obj")
         if not probe.isascii() or len(probe.encode()) > _MAX_PATH:

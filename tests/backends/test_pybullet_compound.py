@@ -11,6 +11,7 @@ are dropped. The checks read the built hull back with ``getMeshData`` (the child
 
 from __future__ import annotations
 
+import locale
 import tempfile
 from pathlib import Path
 
@@ -130,6 +131,16 @@ def test_a_temporary_folder_bullet_cannot_read_is_refused(tmp_path: Path, monkey
     with pytest.raises(UnsupportedFeature, match="TMPDIR"):
         _built_hull(_icosphere(), ZERO, w.IDENTITY)
     assert list(folder.iterdir()) == []
+
+
+def test_a_locale_with_a_decimal_comma_is_refused(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Bullet reads the numbers with the C library's atof, which follows LC_NUMERIC: under a decimal comma it
+    would read 0.15 as 0. This machine has no such locale (`locale -a`: C, C.utf8, POSIX), so the C library's
+    answer is replaced by one with a comma; the build is refused, not made of zeros."""
+    conv = dict(locale.localeconv(), decimal_point=",")
+    monkeypatch.setattr(locale, "localeconv", lambda: conv)
+    with pytest.raises(UnsupportedFeature, match="LC_NUMERIC"):
+        _built_hull(_icosphere(), ZERO, w.IDENTITY)
 
 
 def _boxes(n: int) -> BodySpec:
