@@ -16,17 +16,11 @@ from typing import Any
 
 from ..errors import UnsupportedFeature
 from ..geometry import quat_conj, quat_mul, quat_rotate
-from ..types import BodySpec, CompiledWorld, JointKind, JointSpec, Motion, PlacedShape, Quat, Shape, ShapeKind, Vec3
+from ..types import BodySpec, CompiledWorld, JointKind, JointSpec, Motion, Quat, Shape, ShapeKind, Vec3
+from ._compound import PLANE_HALF_SIZE, check_compound, compound_shape, mesh_of, xyzw
 
 ORIGIN: Vec3 = (0.0, 0.0, 0.0)
-#: Half size of the box that stands in for a static plane (its top face is the plane).
-PLANE_HALF_SIZE = 1000.0
 IDENTITY: Quat = (1.0, 0.0, 0.0, 0.0)
-
-
-def xyzw(q: tuple[float, float, float, float]) -> list[float]:
-    """(w, x, y, z) -> PyBullet's [x, y, z, w]."""
-    return [q[1], q[2], q[3], q[0]]
 
 
 @dataclass
@@ -72,11 +66,10 @@ def _shape(p: Any, c: int, shape: Shape, offset: Vec3 = ORIGIN, quat: Quat = IDE
 
 
 def _mesh(p: Any, shape: Shape, kw: dict[str, Any]) -> int:
-    """A convex hull (btConvexHullShape of exactly these vertices: they already are the hull, so Bullet's
-    optimizeConvexHull keeps every one) or, with the faces, a static triangle mesh (btBvhTriangleMeshShape)."""
-    mesh = shape.mesh
-    if mesh is None:
-        raise UnsupportedFeature(f"Backend `pybullet`: a {shape.kind.value} shape without a mesh.")
+    """A convex hull (btConvexHullShape of these vertices, which Bullet's optimizeConvexHull puts on a grid of
+    1/10216 of the hull's extent per axis: docs/backends/pybullet.md) or, with the faces, a static triangle
+    mesh (btBvhTriangleMeshShape)."""
+    mesh = mesh_of(shape)
     vertices = [list(v) for v in mesh.vertices]
     if shape.kind is ShapeKind.CONVEX:
         return int(p.createCollisionShape(p.GEOM_MESH, vertices=vertices, **kw))
@@ -95,59 +88,16 @@ def _collision(p: Any, c: int, spec: BodySpec, offset: Vec3 = ORIGIN) -> int:
     if len(placed) == 1:
         one = placed[0]
         return _shape(p, c, one.shape, _add(offset, one.pos), one.quat)
-    _check_compound(spec)
-    return _compound(p, c, spec.shapes, offset)
-
-
-def _check_compound(spec: BodySpec) -> None:
-    placed = spec.shapes
-    if spec.shape.kind is not ShapeKind.COMPOUND or len(placed) < 2:
-        return
-    meshes = [s for s in placed if s.shape.kind in (ShapeKind.CONVEX, ShapeKind.TRIMESH)]
-    if meshes:  # createCollisionShapeArray takes primitives and mesh files, not vertices
-        raise UnsupportedFeature(
-            f"Backend `pybullet` cannot build body `{spec.name}`: a compound of {len(placed)} shapes with a "
-            f"mesh among them (PyBullet builds meshes from vertices only as a link's single shape)."
-        )
+    check_compound(spec)
+    return compound_shape(p, c, spec.shapes, offset)
 
 
 def check(world: CompiledWorld) -> None:
     """Refuse what :func:`build` would refuse, from the world alone (no engine call): joints PyBullet cannot
-    build, loops of joints, compounds with a mesh among their shapes."""
+    build, loops of joints, compounds of more shapes than PyBullet holds."""
     _trees(world)
     for spec in world.bodies:
-        _check_compound(spec)
-
-
-def _compound(p: Any, c: int, placed: tuple[PlacedShape, ...], offset: Vec3) -> int:
-    """Several primitives as one btCompoundShape (createCollisionShapeArray)."""
-    cols: dict[str, list[Any]] = {k: [] for k in ("type", "half", "radius", "length", "pos", "orn")}
-    for one in placed:
-        shape, pos, quat = one.shape, _add(offset, one.pos), one.quat
-        half, radius, length, kind = [0.0] * 3, 0.0, 0.0, shape.kind
-        if kind is ShapeKind.BOX:
-            geom, half = p.GEOM_BOX, [s / 2 for s in shape.size]
-        elif kind is ShapeKind.SPHERE:
-            geom, radius = p.GEOM_SPHERE, shape.radius
-        elif kind in (ShapeKind.CAPSULE, ShapeKind.CYLINDER):
-            geom = p.GEOM_CAPSULE if kind is ShapeKind.CAPSULE else p.GEOM_CYLINDER
-            radius, length = shape.radius, shape.length
-        else:  # a plane: the 2 km box of _shape
-            geom, half = p.GEOM_BOX, [PLANE_HALF_SIZE] * 3
-            pos = _add(pos, quat_rotate(quat, (0.0, 0.0, -PLANE_HALF_SIZE)))
-        for key, value in zip(cols, (geom, half, radius, length, list(pos), xyzw(quat)), strict=True):
-            cols[key].append(value)
-    return int(
-        p.createCollisionShapeArray(
-            shapeTypes=cols["type"],
-            halfExtents=cols["half"],
-            radii=cols["radius"],
-            lengths=cols["length"],
-            collisionFramePositions=cols["pos"],
-            collisionFrameOrientations=cols["orn"],
-            physicsClientId=c,
-        )
-    )
+        check_compound(spec)
 
 
 def _add(a: Vec3, b: Vec3) -> Vec3:

@@ -9,6 +9,7 @@ pairs; ``shape:trimesh`` (ODE, DART) is checked on the others to be refused up f
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from pathlib import Path
 
@@ -241,6 +242,48 @@ def test_thin_convex_plate_holds_a_box(backend_name: str, backend_cls: type[Back
             sim.step()
         s = sim.body_states()
     assert s.pos[1, 2] == pytest.approx(0.051, abs=tol("resting_height", backend_name))
+
+
+#: A tetrahedron with a flat 0.2 m triangle for a bottom, its vertices given off the shape's origin (by OFF).
+_TETRA = ((-0.1, -0.1, -0.1), (0.1, -0.1, -0.1), (0.0, 0.1, -0.1), (0.0, 0.0, 0.1))
+_OFF = (0.03, 0.02, 0.05)
+
+
+def test_compound_of_a_box_and_a_hull_rests_on_both(backend_name: str, backend_cls: type[Backend]) -> None:
+    """A frame carrying, 0.3-0.35 m below it, a 0.2 m cube at x = +0.4 and a convex hull at x = -0.4: a
+    tetrahedron whose vertices sit off its shape's origin (by _OFF) and whose shape is turned 90 degrees about
+    z, both bottoms at 0.4 m below the frame (the compound PyBullet once refused: a mesh among other shapes,
+    as bike.urdf's and microtaur.urdf's links). Dropped from 1 cm, it rests level with the frame at 0.4 m
+    (``hull_resting_height``), on the ground alone, with contact points on the ground plane under each shape:
+    under the cube's square and under the tetrahedron's triangle (its corners, turned, at (-0.3, -0.1), (-0.3, 0.1)
+    and (-0.5, 0)), so each of the two shapes carries part of the weight."""
+    require(backend_cls, Capability.SHAPE_COMPOUND)
+    require(backend_cls, Capability.SHAPE_CONVEX)
+    require(backend_cls, Capability.CONTACT_POINTS)
+    turned = quat_from_axis_angle((0.0, 0.0, 1.0), math.pi / 2)
+    vertices = tuple((x + _OFF[0], y + _OFF[1], z + _OFF[2]) for x, y, z in _TETRA)
+    hull = Mesh(vertices=vertices, faces=((0, 2, 1), (0, 1, 3), (1, 2, 3), (2, 0, 3)), source="tetrahedron")
+    back = quat_rotate(turned, _OFF)  # the shape's origin sits so that the tetrahedron's centre is at x = -0.4
+    shapes = (
+        PlacedShape(Shape(ShapeKind.BOX, size=(0.2, 0.2, 0.2)), pos=(0.4, 0.0, -0.3)),
+        PlacedShape(Shape(ShapeKind.CONVEX, mesh=hull), pos=(-0.4 - back[0], -back[1], -0.3 - back[2]), quat=turned),
+    )
+    frame = _compound("frame", shapes, (0.0, 0.0, 0.41), 2.0, (0.1, 0.1, 0.1))
+    world = dataclasses.replace(_robot_world("box-and-hull", [w.ground(), frame], steps=100), contact_points=True)
+    with make_backend(backend_name, world) as sim:
+        for _ in range(100):
+            sim.step()
+        s, touching, points = sim.body_states(), sim.contacts(), sim.contact_points()
+    eps = tol("hull_resting_height", backend_name)
+    assert s.pos[1] == pytest.approx((0.0, 0.0, 0.4), abs=eps)
+    # level: each bottom within eps of the ground, 0.8 m apart, tilts it at most 2 eps / 0.8 rad: 1 - w = tilt^2 / 8
+    assert abs(s.quat[1][0]) == pytest.approx(1.0, abs=(2 * eps / 0.8) ** 2 / 8)
+    assert [(c.a, c.b) for c in touching] == [(0, 1)]
+    assert all(abs(pt.pos[2]) <= eps for pt in points), points
+    under_box = [pt for pt in points if 0.3 - eps <= pt.pos[0] <= 0.5 + eps and abs(pt.pos[1]) <= 0.1 + eps]
+    under_hull = [pt for pt in points if -0.5 - eps <= pt.pos[0] <= -0.3 + eps and abs(pt.pos[1]) <= 0.1 + eps]
+    assert len(under_box) + len(under_hull) == len(points), points
+    assert sum(pt.force for pt in under_box) > 0 and sum(pt.force for pt in under_hull) > 0, points
 
 
 # --- collision:exclude-pairs ----------------------------------------------------------------------
