@@ -4,7 +4,11 @@ each unmodified on a ground plane under gravity (`scenario robots survey`, docs/
 on every installed engine.
 
 The target, per engine: at least 90 % of the models run to the end; every other cell is refused before
-the run with what is missing named; none crashes (exit 70, a signal) and none fails at t = 0.
+the run with what is missing named; none crashes (exit 70, a signal) and none fails at t = 0. The issue
+states it over the whole survey (pybullet_data's URDFs and MJCFs and dm_control's suite, 140 models):
+`test_at_least_90_percent_of_the_whole_survey_run_on_each_engine`; each corpus's share is held apart too
+(the MJCF corpus is where the engines other than MuJoCo miss: fluid forces, an acting tendon, a coupling
+of three joints have no counterpart there).
 
 Cost: the survey's cases are loading (meshes and their hulls) and building the world more than stepping,
 so ``SECONDS`` of simulated time (0.5 s, 250 steps at the survey's dt = 2 ms) is enough for the energy
@@ -37,14 +41,24 @@ CORPORA = {
 }
 
 
+#: each corpus's survey, run once per test session (the per-corpus and the whole-survey tests share them)
+_SURVEYED: dict[str, Survey] = {}
+
+
+def _surveyed(corpus: str, tmp_path_factory: pytest.TempPathFactory) -> Survey:
+    if corpus not in _SURVEYED:
+        paths, exclude = CORPORA[corpus]
+        models = find_models(paths, exclude)
+        assert len(models) >= (90 if corpus == "urdf" else 40)  # the corpus is there (pybullet_data, dm_control)
+        done = run_survey(models, ENGINES, SECONDS, jobs=2)
+        (tmp_path_factory.mktemp("survey") / f"{corpus}.md").write_text(markdown(done))
+        _SURVEYED[corpus] = done
+    return _SURVEYED[corpus]
+
+
 @pytest.fixture(scope="module", params=sorted(CORPORA))
 def survey(request: pytest.FixtureRequest, tmp_path_factory: pytest.TempPathFactory) -> Survey:
-    paths, exclude = CORPORA[str(request.param)]
-    models = find_models(paths, exclude)
-    assert len(models) >= (90 if request.param == "urdf" else 40)  # the corpus is there (pybullet_data, dm_control)
-    done = run_survey(models, ENGINES, SECONDS, jobs=2)
-    (tmp_path_factory.mktemp("survey") / f"{request.param}.md").write_text(markdown(done))
-    return done
+    return _surveyed(str(request.param), tmp_path_factory)
 
 
 #: Engines known to run under 90 % of the MJCF corpus (45 files, 0.5 s, -j 1). MuJoCo runs all 45 since MJCF's
@@ -60,6 +74,28 @@ MJCF_BELOW_TARGET = frozenset(ENGINES) - {"mujoco"}
 #: Engines known to run under 90 % of the URDF corpus: none. Drake was (51 of 95, 40 refused for `shape:convex`)
 #: until issue 32 mapped convex hulls: measured 91 of 95 since (docs/robots.md, "The survey").
 URDF_BELOW_TARGET: frozenset[str] = frozenset()
+
+
+#: Engines known to run under 90 % of the whole survey (140 models: 95 URDF, 45 MJCF; 0.5 s). Measured, ran of
+#: 140 (URDF + MJCF): PyBullet 128 (91 + 37), MuJoCo 136 (91 + 45), Drake 130 (91 + 39) meet it; DART 120 (89 +
+#: 31: `<mimic>` refused, its contact impulses not seeing the armature stop 5 MJCF models on the energy watchdog)
+#: and ODE 120 (87 + 33: `<mimic>` refused, LCP failures on laikago's mesh feet and ant) miss it
+#: (docs/robots.md, "The survey"). Reaching the target fails the test, so that this list goes.
+WHOLE_BELOW_TARGET = frozenset({"dart", "ode"}) & frozenset(ENGINES)
+
+
+@pytest.mark.parametrize("engine", ENGINES)
+def test_at_least_90_percent_of_the_whole_survey_run_on_each_engine(
+    engine: str, tmp_path_factory: pytest.TempPathFactory
+) -> None:
+    surveys = [_surveyed(corpus, tmp_path_factory) for corpus in sorted(CORPORA)]
+    ran = sum(s.totals(engine)[RAN] for s in surveys)
+    models = sum(sum(s.totals(engine).values()) for s in surveys)
+    met = ran >= TARGET * models
+    if engine in WHOLE_BELOW_TARGET:
+        assert not met, f"{engine} runs {ran} of {models} models: drop it from WHOLE_BELOW_TARGET"
+        pytest.xfail(f"issue 28 open: {engine} runs {ran} of {models} models (WHOLE_BELOW_TARGET)")
+    assert met, f"{engine} runs {ran} of {models} models\n" + "\n".join(markdown(s) for s in surveys)
 
 
 @pytest.mark.parametrize("engine", ENGINES)
