@@ -239,6 +239,7 @@ def compile_world(model: Scenario, name: str, robots: Mapping[str, ModelDesc] | 
         models=parts.models,
         joint_chains=parts.chains,
         couplings=parts.couplings,
+        fluid=parts.fluid,
         model_options=model.world.options == "model",
         contact_points=model.trace.contact_points,
         reaction_joints=reaction_joints(model, [j.name for j in (*joints, *parts.joints)]),
