@@ -45,12 +45,13 @@ def box_sides(mass: float, moments: tuple[float, float, float]) -> np.ndarray:
 
 
 class FluidForces:
-    """The fluid's wrench on every dynamic body with mass, computed from the states at a step's start."""
+    """The fluid's wrench on every dynamic body with mass, computed from the states at a step's start; none
+    where the engine runs the file's fluid itself (``native``: MuJoCo)."""
 
-    def __init__(self, world: CompiledWorld, fluid: Fluid | None) -> None:
-        self.fluid = fluid if fluid is not None else Fluid()
+    def __init__(self, world: CompiledWorld, native: bool) -> None:
+        self.fluid = world.fluid if world.fluid is not None else Fluid()
         moving = [i for i, b in enumerate(world.bodies) if b.motion is Motion.DYNAMIC and b.mass >= MIN_VALUE]
-        self.bodies = np.asarray(moving if fluid is not None else [], dtype=np.int64)
+        self.bodies = np.asarray(moving if world.fluid is not None and not native else [], dtype=np.int64)
         specs = [world.bodies[i] for i in self.bodies]
         self.sides = np.array([box_sides(b.mass, b.inertia) for b in specs]).reshape(-1, 3)
         self.com = np.array([b.com for b in specs], dtype=float).reshape(-1, 3)
@@ -61,8 +62,9 @@ class FluidForces:
 
     @property
     def adds_energy(self) -> bool:
-        """A wind can push bodies (do work on them); without one the forces only take energy away."""
-        return bool(self) and any(self.fluid.wind)
+        """A wind can push bodies (do work on them), whoever computes the forces; without one they only take
+        energy away."""
+        return any(self.fluid.wind)
 
     def wrenches(self, states: BodyStates) -> tuple[np.ndarray, np.ndarray]:
         """(K, 3) world forces at the centres of mass and (K, 3) world torques of :attr:`bodies`."""

@@ -137,8 +137,7 @@ class Session(SessionInputs):
         self.energy = EnergyWatch(self.world, backend.name, program.joint_zeros)
         # the MJCF file's fluid: MuJoCo runs it from the file (its <option>, with either options), the runner
         # everywhere else
-        native_fluid = MODEL_FILE_CAPABILITIES <= backend.capabilities
-        self.fluid = FluidForces(self.world, None if native_fluid else self.world.fluid)
+        self.fluid = FluidForces(self.world, native=MODEL_FILE_CAPABILITIES <= backend.capabilities)
 
     # --- what conditions and assertions read ------------------------------------------------------
     @property
@@ -353,6 +352,8 @@ class Session(SessionInputs):
                 self.drives.applied = {}  # the last command ended: the joint's force is its motor's again
             if self.fluid:
                 self._fluid_forces()
+            if self.fluid.adds_energy:
+                self.energy.driven()  # a wind's work is not booked: the check starts afresh after this step
             for i, f in self.forces.items():
                 self.backend.apply_force(i, tuple(f[:3]), tuple(f[3:]))
             self.forces.clear()

@@ -150,15 +150,13 @@ class SessionInputs:
         acc[3:] += np.asarray(torque, float) * scale
 
     def _fluid_forces(self) -> None:
-        """The fluid's forces from the step's start, added to the step's forces. Drag without wind only takes
-        energy away: the energy check goes on (a wind's work is not booked: it starts afresh, as for a force)."""
+        """The fluid's forces from the step's start, added to the step's forces (not through :meth:`add_force`: drag
+        only takes energy away, and the energy check goes on; a wind turns it off in the step loop)."""
         forces, torques = self.fluid.wrenches(self.snapshot.bodies)
         for i, force, torque in zip(self.fluid.bodies.tolist(), forces, torques, strict=True):
             acc = self.forces.setdefault(i, np.zeros(6))
             acc[:3] += force
             acc[3:] += torque
-        if self.fluid.adds_energy:
-            self.energy.driven()
 
     def hold_force(self, command: B.ApplyCommand, at: float) -> None:
         steps = self.held.start(self.body_index[command.body], command)
