@@ -41,6 +41,7 @@ import pytest
 
 from backends.registry import KNOWN_BACKENDS, get_backend, is_installed
 from reports.trace_reader import read_trace
+from runner.errors import ScenarioValidationError
 from runner.language.load import load_scenario
 from runner.sim.run import run_loaded
 
@@ -187,3 +188,49 @@ def test_a_spinning_box_slows_down_as_the_fluid_drags_it(tmp_path: Path, engine:
     assert gap <= bound, (engine, gap, bound)
     assert angvel[-1, 2] < 0.5 * W0  # it did slow down (w(0.5 s) = 3.3 rad/s)
     _check_mj_step(tmp_path, engine, options, angvel, angular=True, spin=W0)
+
+
+def _trace(tmp_path: Path, text: str, engine: str, body: str) -> tuple[np.ndarray, np.ndarray]:
+    (tmp_path / "own.yaml").write_text(text)
+    result = run_loaded(load_scenario(tmp_path / "own.yaml", None), engine, tmp_path / f"own-{engine}")
+    assert result.status == "passed" and result.trace is not None, result
+    trace = read_trace(result.trace)
+    return trace.times, trace.bodies[body].vel
+
+
+@pytest.mark.parametrize("engine", ENGINES)
+def test_the_scenarios_fluid_drags_its_own_bodies(tmp_path: Path, engine: str) -> None:
+    """`world.fluid` without any model: a hand-written ball (ODE's sphere inertia, 2 m r^2 / 5, the MJCF ball's)
+    sinks at the viscous terminal velocity, as above; MuJoCo gets the fluid as its `<option>`."""
+    viscosity = 5.0
+    times, vel = _trace(tmp_path, f"schema_version: 1\nscenario: own\nworld: {{dt: {H}, duration: 1.0, gravity: "
+                        f"[0, 0, {-G}], fluid: {{viscosity: {viscosity}}}}}\n"
+                        f"bodies:\n  ball: {{sphere: {R}, mass: {M}, pos: [0, 0, 1]}}\n", engine, "ball")  # fmt: skip
+    c = 3 * math.pi * viscosity * D_BALL / M
+    terminal = M * G / (3 * math.pi * viscosity * D_BALL)
+    steps = len(times) - 1
+    bound = terminal * (1 / (1 + H * c)) ** steps + _rounding(engine, steps, terminal)
+    assert abs(-vel[-1, 2] - terminal) <= bound, (engine, float(vel[-1, 2]), terminal, bound)
+
+
+@pytest.mark.parametrize("engine", ENGINES)
+def test_a_still_fluid_in_the_scenario_replaces_the_files(tmp_path: Path, engine: str) -> None:
+    """`world.fluid: {}` (no density, no viscosity) over the MJCF ball's viscous `<option>`: no drag on any engine
+    (MuJoCo's option zeroed too), so the ball falls freely, v_n = -g n h in a semi-implicit Euler step."""
+    (tmp_path / "fluid.xml").write_text(BALL.format(h=H, g=f"0 0 {-G}", viscosity=5.0, density=0, wind="0 0 0",
+                                                    r=R, m=M))  # fmt: skip
+    text = (f"schema_version: 1\nscenario: own\nworld: {{dt: {H}, duration: 0.2, gravity: [0, 0, {-G}], fluid: {{}}}}\n"
+            "robots:\n  r: {mjcf: fluid.xml}\n")  # fmt: skip
+    times, vel = _trace(tmp_path, text, engine, "r.ball")
+    steps = len(times) - 1
+    assert np.all(np.abs(vel[:, 2] + G * times) <= _rounding(engine, steps, G * times[-1])), engine
+
+
+def test_the_models_own_options_take_no_fluid_from_the_scenario(tmp_path: Path) -> None:
+    (tmp_path / "fluid.xml").write_text(BALL.format(h=H, g=f"0 0 {-G}", viscosity=5.0, density=0, wind="0 0 0",
+                                                    r=R, m=M))  # fmt: skip
+    (tmp_path / "own.yaml").write_text(f"schema_version: 1\nscenario: own\nworld: {{dt: {H}, duration: 0.2, gravity: "
+                                       f"[0, 0, {-G}], options: model, fluid: {{viscosity: 1}}}}\n"
+                                       "robots:\n  r: {mjcf: fluid.xml}\n")  # fmt: skip
+    with pytest.raises(ScenarioValidationError, match=r"own.yaml:3:\d+: world.fluid: with `options: model` the fluid"):
+        load_scenario(tmp_path / "own.yaml", None)
