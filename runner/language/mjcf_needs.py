@@ -288,5 +288,9 @@ def _fluid(model: Any, mujoco: Any, tree: Any, bodies: list[str], lines: dict[tu
             found.need("world:fluid-ellipsoid", f"geom `{geom}` of body `{bodies[b]}`: fluidshape=\"ellipsoid\" "
                        "(MuJoCo's per-geom fluid model)", line)  # fmt: skip
     wind = model.opt.wind
-    return Fluid(float(model.opt.density), float(model.opt.viscosity), (float(wind[0]), float(wind[1]),
-                                                                        float(wind[2])))  # fmt: skip
+    fluid = Fluid(float(model.opt.density), float(model.opt.viscosity), (float(wind[0]), float(wind[1]),
+                                                                         float(wind[2])))  # fmt: skip
+    found.notes.append(f"fluid (`<option>`, line {first_line(tree, 'option')}): density {fluid.density:g} kg/m^3, "
+                       f"viscosity {fluid.viscosity:g} Pa s, wind {list(fluid.wind)} m/s, MuJoCo's inertia-box model "
+                       "on every dynamic body, every engine (docs/semantics.md, \"Fluid forces\")")  # fmt: skip
+    return fluid

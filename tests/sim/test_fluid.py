@@ -40,9 +40,12 @@ import numpy as np
 import pytest
 
 from backends.registry import KNOWN_BACKENDS, get_backend, is_installed
+from backends.types import BodyStates
 from reports.trace_reader import read_trace
+from runner.compile.program import build_program
 from runner.errors import ScenarioValidationError
 from runner.language.load import load_scenario
+from runner.sim.fluid import FluidForces
 from runner.sim.run import run_loaded
 
 mujoco = pytest.importorskip("mujoco", reason="engine not installed: pip install 'physics-scenarios[mujoco]'")
@@ -234,3 +237,44 @@ def test_the_models_own_options_take_no_fluid_from_the_scenario(tmp_path: Path) 
                                        "robots:\n  r: {mjcf: fluid.xml}\n")  # fmt: skip
     with pytest.raises(ScenarioValidationError, match=r"own.yaml:3:\d+: world.fluid: with `options: model` the fluid"):
         load_scenario(tmp_path / "own.yaml", None)
+
+
+def test_the_runners_wrench_is_mujocos_passive_force(tmp_path: Path) -> None:
+    """One body with its centre of mass off its frame and its principal axes turned (two geoms), moving and
+    turning in all directions in a fluid with density, viscosity and wind: the runner's force at the centre
+    of mass and torque (runner.sim.fluid, from the description the engines get) are MuJoCo's own
+    `qfrc_passive` for the same state (the free joint's force, and its torque about the body's origin in the
+    body's axes), to rounding (1e-12 of the largest component: the same few dozen double operations in another
+    order): the formulas, the box, the axes and the wind are MuJoCo's. The moments are
+    distinct, so the principal axes are the same up to order and sign whichever way they are found."""
+    (tmp_path / "fluid.xml").write_text("""<mujoco>
+  <option density="800" viscosity="0.3" wind="0.4 -1.1 0.25"/>
+  <worldbody>
+    <body name="b" pos="0.1 0.2 1" euler="10 20 30">
+      <freejoint/>
+      <geom type="box" size="0.2 0.05 0.03" pos="0.05 0.02 0" euler="0 0 25" mass="2" contype="0" conaffinity="0"/>
+      <geom type="capsule" fromto="0 0 0 0.1 0.1 0.2" size="0.03" mass="0.7" contype="0" conaffinity="0"/>
+    </body>
+  </worldbody>
+</mujoco>
+""")
+    (tmp_path / "s.yaml").write_text("schema_version: 1\nscenario: wrench\nworld: {dt: 0.002, duration: 0.01}\n"
+                                     "robots:\n  r: {mjcf: fluid.xml}\n")  # fmt: skip
+    world = build_program(load_scenario(tmp_path / "s.yaml", None)).world
+    model = mujoco.MjModel.from_xml_path(str(tmp_path / "fluid.xml"))
+    data = mujoco.MjData(model)
+    data.qvel[:] = [0.7, -0.4, 1.3, 2.1, -3.2, 1.7]  # the origin's velocity (world), the angular one (body axes)
+    mujoco.mj_forward(model, data)
+    rot = data.xmat[1].reshape(3, 3)
+    index = world.body_index("r.b")
+    rows = np.zeros((len(world.bodies), 13))
+    rows[:, 3] = 1.0
+    rows[index] = [*data.xpos[1], *data.xquat[1], *data.qvel[:3], *(rot @ data.qvel[3:])]
+    fluid = FluidForces(world, native=False)
+    assert fluid.bodies.tolist() == [index]
+    forces, torques = fluid.wrenches(BodyStates.from_rows(rows))
+    arm = data.xipos[1] - data.xpos[1]  # the centre of mass from the body's origin, world
+    torque_origin = rot.T @ (torques[0] + np.cross(arm, forces[0]))
+    scale = float(np.max(np.abs(data.qfrc_passive)))
+    assert np.allclose(forces[0], data.qfrc_passive[:3], rtol=0, atol=1e-12 * scale), (forces[0], data.qfrc_passive)
+    assert np.allclose(torque_origin, data.qfrc_passive[3:], rtol=0, atol=1e-12 * scale), data.qfrc_passive
