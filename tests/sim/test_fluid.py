@@ -39,7 +39,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from backends.registry import KNOWN_BACKENDS, get_backend, is_installed
+from backends.errors import UnsupportedFeature
+from backends.registry import KNOWN_BACKENDS, check_capabilities, get_backend, is_installed
 from backends.types import BodyStates
 from reports.trace_reader import read_trace
 from runner.compile.program import build_program
@@ -278,3 +279,20 @@ def test_the_runners_wrench_is_mujocos_passive_force(tmp_path: Path) -> None:
     scale = float(np.max(np.abs(data.qfrc_passive)))
     assert np.allclose(forces[0], data.qfrc_passive[:3], rtol=0, atol=1e-12 * scale), (forces[0], data.qfrc_passive)
     assert np.allclose(torque_origin, data.qfrc_passive[3:], rtol=0, atol=1e-12 * scale), data.qfrc_passive
+
+
+@pytest.mark.parametrize("engine", ENGINES)
+def test_the_per_geom_ellipsoid_model_is_mujocos_alone(tmp_path: Path, engine: str) -> None:
+    """A geom's `fluidshape="ellipsoid"` (MuJoCo's per-geom model, not the inertia box) is refused before the run
+    on every engine but MuJoCo, naming the capability, the geom and its line."""
+    (tmp_path / "fluid.xml").write_text(BALL.format(h=H, g=f"0 0 {-G}", viscosity=5.0, density=0, wind="0 0 0", r=R,
+                                                    m=M).replace('<geom type="sphere"', '<geom name="shell" '
+                                                                 'fluidshape="ellipsoid" type="sphere"'))  # fmt: skip
+    (tmp_path / "s.yaml").write_text(f"schema_version: 1\nscenario: ellipsoid\nworld: {{dt: {H}, duration: 0.01}}\n"
+                                     "robots:\n  r: {mjcf: fluid.xml}\n")  # fmt: skip
+    world = build_program(load_scenario(tmp_path / "s.yaml", None)).world
+    if engine == "mujoco":
+        check_capabilities(get_backend(engine), world)
+        return
+    with pytest.raises(UnsupportedFeature, match=r"world:fluid-ellipsoid .*fluid.xml:6: geom `shell` of body `ball`"):
+        check_capabilities(get_backend(engine), world)
