@@ -145,7 +145,10 @@ class Capability(str, enum.Enum):
     CONSTRAINT_EQUALITY = "constraint:equality"  # MJCF <equality>
     CONSTRAINT_TENDON = "constraint:tendon"  # MJCF <tendon>
     COLLISION_EXPLICIT_PAIRS = "collision:explicit-pairs"  # MJCF <contact><pair>
-    WORLD_FLUID = "world:fluid"  # MJCF <option density viscosity wind>
+    #: MJCF <option density viscosity wind>, MuJoCo's inertia-box model (CompiledWorld.fluid): run by MuJoCo from the
+    #: file, by the runner's forces before each step on every other engine (runner.sim.fluid)
+    WORLD_FLUID = "world:fluid"
+    WORLD_FLUID_ELLIPSOID = "world:fluid-ellipsoid"  # MJCF geoms' fluidshape="ellipsoid" (MuJoCo's per-geom model)
     #: an MJCF actuator the scenario drives that the runner's force law cannot reproduce (a site, body or tendon
     #: transmission, activation dynamics): the engine must run the file's actuator itself (Backend.set_control)
     ACTUATOR_NATIVE = "actuator:native"
@@ -181,7 +184,7 @@ MODEL_FILE_CAPABILITIES: frozenset[Capability] = frozenset(
         Capability.CONSTRAINT_EQUALITY,
         Capability.CONSTRAINT_TENDON,
         Capability.COLLISION_EXPLICIT_PAIRS,
-        Capability.WORLD_FLUID,
+        Capability.WORLD_FLUID_ELLIPSOID,
         Capability.ACTUATOR_NATIVE,
     }
 )
@@ -355,6 +358,16 @@ class PairSurface:
 
 
 @dataclass(frozen=True)
+class Fluid:
+    """The medium MuJoCo's inertia-box fluid model puts the world's bodies in (MJCF `<option density viscosity
+    wind>`; docs/semantics.md, "Fluid forces"): kg/m^3, Pa s, m/s in the world frame."""
+
+    density: float = 0.0
+    viscosity: float = 0.0
+    wind: Vec3 = (0.0, 0.0, 0.0)
+
+
+@dataclass(frozen=True)
 class ModelFile:
     """A robot whose model file an engine may build from itself (MJCF on MuJoCo): its bodies and joints are
     also in ``CompiledWorld.bodies``/``joints`` (for every other engine, and for the names), listed here in
@@ -412,6 +425,9 @@ class CompiledWorld:
     reaction_joints: tuple[str, ...] = ()
     #: joints held at a multiple of another's position (URDF `<mimic>`; capability ``joint:mimic``)
     couplings: tuple[JointCoupling, ...] = ()
+    #: the medium every dynamic body with mass is in (an MJCF robot's `<option density viscosity>`; capability
+    #: ``world:fluid``); None: none
+    fluid: Fluid | None = None
 
     def body_index(self, name: str) -> int:
         for i, body in enumerate(self.bodies):
@@ -466,6 +482,8 @@ class CompiledWorld:
             need.add(Capability.JOINT_SEVERAL_PER_BODY)
         if self.couplings:
             need.add(Capability.JOINT_MIMIC)
+        if self.fluid is not None:
+            need.add(Capability.WORLD_FLUID)
         for model in self.models:
             need.update(model.needs)
         if self.contact_points:

@@ -35,7 +35,7 @@ import numpy as np
 
 from ..errors import EngineFailure, UnsupportedFeature
 from ..geometry import quat_conj, quat_mul, quat_rotate
-from ..types import BodySpec, CompiledWorld, JointKind, Motion
+from ..types import BodySpec, CompiledWorld, Fluid, JointKind, Motion
 from . import _native
 from ._filters import add_excludes
 from ._geoms import IMPEDANCE, SOLIMP, ContactParams, add_geoms, add_pairs, contact_params
@@ -237,6 +237,8 @@ def _set_options(spec: Any, world: CompiledWorld, h: float) -> None:
     spec.option.tolerance = 1e-10  # motors settle to 1e-6 of their target rate (default 1e-8: 2e-4)
     spec.option.disableflags |= mujoco.mjtDisableBit.mjDSBL_AUTORESET  # a blow-up must surface
     spec.option.disableflags |= mujoco.mjtDisableBit.mjDSBL_FILTERPARENT  # joined pairs are excluded instead
+    fluid = world.fluid if world.fluid is not None else Fluid()  # the scenario's or the file's (CompiledWorld.fluid)
+    spec.option.density, spec.option.viscosity, spec.option.wind = fluid.density, fluid.viscosity, list(fluid.wind)
 
 
 #: Arena (MjData's contacts, constraints and scratch stack) when MuJoCo's default cannot be allocated:

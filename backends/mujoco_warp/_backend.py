@@ -111,6 +111,7 @@ class MujocoWarpBackend(MujocoBackend):
         Capability.CONSTRAINT_TENDON,
         Capability.CONSTRAINT_EQUALITY,
         Capability.WORLD_FLUID,
+        Capability.WORLD_FLUID_ELLIPSOID,
         Capability.COLLISION_EXPLICIT_PAIRS,
     }
     Options: ClassVar[type[BackendOptions]] = MujocoWarpOptions

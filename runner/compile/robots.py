@@ -18,6 +18,7 @@ from backends.geometry import IDENTITY, quat_mul, quat_rotate
 from backends.types import (
     BodySpec,
     Capability,
+    Fluid,
     JointCoupling,
     JointDynamics,
     JointKind,
@@ -62,6 +63,7 @@ class RobotParts:
     models: tuple[ModelFile, ...] = ()  # the MJCF robots, for an engine that builds them from the file
     chains: tuple[tuple[str, ...], ...] = ()  # joints moving one body together, in order (MJCF)
     couplings: tuple[JointCoupling, ...] = ()  # URDF <mimic> joints
+    fluid: Fluid | None = None  # the first MJCF robot's medium (CompiledWorld.fluid)
 
 
 def _placement(robot: Robot) -> tuple[tuple[float, float, float], tuple[float, float, float, float]]:
@@ -247,8 +249,9 @@ def compile_robots(
     everyone = list(others) + [b.name for b in bodies]
     surfaces = tuple(PairSurface(link, other, s) for link, s in link_surfaces for other in everyone if other != link)
     unique = tuple(dict.fromkeys((a, b) if a <= b else (b, a) for a, b in excluded))
+    fluid = next((robots[name].fluid for name in model.robots if robots[name].fluid is not None), None)
     return RobotParts(
-        tuple(bodies), tuple(joints), unique, surfaces, group, tuple(models), tuple(chains), tuple(couplings)
+        tuple(bodies), tuple(joints), unique, surfaces, group, tuple(models), tuple(chains), tuple(couplings), fluid
     )
 
 

@@ -14,6 +14,7 @@ from backends.types import (
     NO_DYNAMICS,
     BodySpec,
     CompiledWorld,
+    Fluid,
     JointKind,
     JointSpec,
     Motion,
@@ -182,6 +183,17 @@ def _unit(v: Sequence[float]) -> tuple[float, float, float]:
     return (v[0] / n, v[1] / n, v[2] / n)
 
 
+def _fluid(model: Scenario, robots: Fluid | None) -> Fluid | None:
+    """The scenario's `world.fluid`, which replaces the robots' (an MJCF `<option>`); None where it has neither
+    density nor viscosity (MuJoCo computes no fluid force then, wind or not)."""
+    given = model.world.fluid
+    if given is None:
+        return robots
+    if given.density > 0 or given.viscosity > 0:
+        return Fluid(given.density, given.viscosity, given.wind)
+    return None
+
+
 def compile_world(model: Scenario, name: str, robots: Mapping[str, ModelDesc] | None = None) -> CompiledWorld:
     """The world; ``robots`` holds the model of every entry of ``model.robots`` (runner.language.robots)."""
     instances = expand_bodies(model)
@@ -239,6 +251,7 @@ def compile_world(model: Scenario, name: str, robots: Mapping[str, ModelDesc] | 
         models=parts.models,
         joint_chains=parts.chains,
         couplings=parts.couplings,
+        fluid=_fluid(model, parts.fluid),
         model_options=model.world.options == "model",
         contact_points=model.trace.contact_points,
         reaction_joints=reaction_joints(model, [j.name for j in (*joints, *parts.joints)]),

@@ -17,8 +17,10 @@ message and line), and the compiled model is mapped into the engine-neutral desc
   backends/_kit/chains.py);
 - tendons and equalities (runner.language.mjcf_needs): a tendon without a force of its own is inert (a note);
   an equality that couples two hinges or slides linearly is a mimic (``JointDesc.mimic``, `joint:mimic`);
+- `<option density viscosity wind>`: MuJoCo's inertia-box fluid model (:attr:`ModelDesc.fluid`), run by the
+  runner's forces where MuJoCo is not the engine (runner.sim.fluid);
 - what only an engine that reads the file itself can run (a tendon that acts, any other `<equality>`, a ball
-  joint's dynamics, explicit contact pairs, a massless moving body, fluid forces) is recorded in
+  joint's dynamics, explicit contact pairs, a massless moving body, per-geom ellipsoid fluid forces) is recorded in
   :attr:`ModelDesc.needs` as capabilities, with what needs it at its line: MuJoCo, which builds the robot from
   the file (backends/mujoco), runs it; another engine refuses it before the run. Armature and stiffness are
   named there too (`joint:armature`, `joint:stiffness`), so that an engine without them refuses at their line.
@@ -412,6 +414,7 @@ def load_mjcf(file: Path) -> ModelDesc:
         frames=tuple(_sites(model, bodies, set(joint_names))),
         start=tuple(start),
         upgraded=(legacy.text, legacy.includes) if legacy is not None else None,
+        fluid=found.fluid,
     )
 
 

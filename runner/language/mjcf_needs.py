@@ -39,6 +39,7 @@ from typing import Any
 
 import numpy as np
 
+from backends.types import Fluid
 from runner.language.robot_desc import MimicDesc, ModelNeed
 
 _SCALAR = (2, 3)  # mjJNT_SLIDE, mjJNT_HINGE
@@ -52,6 +53,7 @@ class ModelConstraints:
 
     mimics: dict[str, MimicDesc] = field(default_factory=dict)
     notes: list[str] = field(default_factory=list)
+    fluid: Fluid | None = None  # the medium of MuJoCo's inertia-box fluid model (None: no fluid forces)
     _first: dict[str, tuple[str, int, int]] = field(default_factory=dict)  # capability -> (what, line, count)
 
     def need(self, capability: str, what: str, line: int) -> None:
@@ -266,6 +268,29 @@ def read_needs(model: Any, mujoco: Any, tree: Any, bodies: list[str], joints: li
     _tendons(model, mujoco, tree, tendons, found)
     if model.npair:
         found.need("collision:explicit-pairs", "<contact><pair>", first_line(tree, "pair"))
-    if model.opt.density or model.opt.viscosity or np.any(model.opt.wind != 0):
-        found.need("world:fluid", "<option> density, viscosity or wind", first_line(tree, "option"))
+    found.fluid = _fluid(model, mujoco, tree, bodies, lines, found)
     return found
+
+
+def _fluid(model: Any, mujoco: Any, tree: Any, bodies: list[str], lines: dict[tuple[str, str], int],
+           found: ModelConstraints) -> Fluid | None:  # fmt: skip
+    """The file's medium when MuJoCo's fluid forces act (mj_fluid: density or viscosity above 0, and passive
+    forces not all disabled; wind alone moves nothing); a geom's `fluidshape="ellipsoid"` (MuJoCo's per-geom
+    model, which replaces the inertia box for its body) is `world:fluid-ellipsoid`, MuJoCo's alone."""
+    off = int(mujoco.mjtDisableBit.mjDSBL_SPRING) | int(mujoco.mjtDisableBit.mjDSBL_DAMPER)
+    if not (model.opt.density > 0 or model.opt.viscosity > 0) or int(model.opt.disableflags) & off == off:
+        return None
+    for g in range(model.ngeom):
+        b = int(model.geom_bodyid[g])
+        if model.geom_fluid[g][0] > 0 and model.body_mass[b] > 0:
+            geom = model.geom(g).name or f"geom_{g}"
+            line = lines.get(("geom", geom), first_line(tree, "geom"))
+            found.need("world:fluid-ellipsoid", f"geom `{geom}` of body `{bodies[b]}`: fluidshape=\"ellipsoid\" "
+                       "(MuJoCo's per-geom fluid model)", line)  # fmt: skip
+    wind = model.opt.wind
+    fluid = Fluid(float(model.opt.density), float(model.opt.viscosity), (float(wind[0]), float(wind[1]),
+                                                                         float(wind[2])))  # fmt: skip
+    found.notes.append(f"fluid (`<option>`, line {first_line(tree, 'option')}): density {fluid.density:g} kg/m^3, "
+                       f"viscosity {fluid.viscosity:g} Pa s, wind {list(fluid.wind)} m/s, MuJoCo's inertia-box model "
+                       "on every dynamic body, every engine (docs/semantics.md, \"Fluid forces\")")  # fmt: skip
+    return fluid

@@ -22,6 +22,17 @@ from runner.language.model_base import (
 from runner.language.model_inertia import Inertia, moments_list_schema
 
 
+class FluidMedium(Strict):
+    """MuJoCo's inertia-box fluid model (docs/semantics.md, "Fluid forces"): every dynamic body with mass is
+    dragged by it, on every engine."""
+
+    density: NonNegFloat = Field(0.0, description="kg/m^3: quadratic drag (air 1.2, water 1000).")
+    viscosity: NonNegFloat = Field(0.0, description="Pa s: linear (Stokes) drag (air 1.8e-5, water 1e-3).")
+    wind: Vec3 = Field((0.0, 0.0, 0.0), description="m/s, world frame: the fluid's velocity.")
+
+    _v = field_validator("wind", mode="before")(finite_vec)
+
+
 class World(Strict):
     gravity: Vec3 = Field((0.0, 0.0, -9.81), description="m/s^2, world frame (Z up).")
     dt: PositiveFloat = Field(description="The scenario step in seconds (the lab uses 0.04).")
@@ -33,6 +44,11 @@ class World(Strict):
         "its geoms' contact parameters; MuJoCo steps it with its own mj_step), as MuJoCo runs the file; `dt` / "
         "`substeps` and `gravity` must equal the model's (docs/robots.md). `scenario`: the scenario's "
         "semantics (ODE's), the default.",
+    )
+    fluid: FluidMedium | None = Field(
+        None,
+        description="The fluid every dynamic body is in (MuJoCo's inertia-box model, on every engine); it "
+        "replaces an MJCF robot's `<option density viscosity wind>`. Default: the MJCF robot's, else none.",
     )
     budget: PositiveFloat | None = Field(
         None,

@@ -14,7 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
-from backends.types import NO_DYNAMICS, JointDynamics, PlacedShape, Quat, Rgba, Vec3
+from backends.types import NO_DYNAMICS, Fluid, JointDynamics, PlacedShape, Quat, Rgba, Vec3
 
 #: `@pybullet_data/...`: the models shipped inside the pybullet wheel (pybullet_data.getDataPath()).
 PYBULLET_DATA = "@pybullet_data"
@@ -171,6 +171,8 @@ class ModelDesc:
     #: MJCF in the legacy dialect: the text MuJoCo 4 reads and the files its `<include>`s name (as written,
     #: absolute path), runner.language.mjcf_legacy; None: the file as it is
     upgraded: tuple[str, tuple[tuple[str, str], ...]] | None = None
+    #: MJCF `<option density viscosity wind>` when MuJoCo's inertia-box fluid model acts (runner.language.mjcf_needs)
+    fluid: Fluid | None = None
 
     def keyframe(self, name: str) -> KeyframeDesc | None:
         return next((key for key in self.keyframes if key.name == name), None)

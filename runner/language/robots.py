@@ -151,6 +151,9 @@ def model_options_issues(model: Scenario, positions: Positions, descs: dict[str,
                                 f"{len(mjcf)} MJCF and {len(model.robots) - len(mjcf)} other robots")]  # fmt: skip
     _, desc = mjcf[0]
     issues = []
+    if model.world.fluid is not None:
+        issues.append(positions.issue(("world", "fluid"), "with `options: model` the fluid is the model's "
+                                      "`<option density viscosity wind>`; leave `fluid` out"))  # fmt: skip
     step = model.world.dt / model.world.substeps
     if desc.timestep is not None and abs(step - desc.timestep) > 1e-12 * desc.timestep:
         issues.append(positions.issue(("world", "dt"), f"with `options: model` the engine step dt / substeps "

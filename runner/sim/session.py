@@ -5,8 +5,8 @@ Per step k, from t_k = k*dt to t_{k+1}:
     Panda3D's handler throws them) and timed inputs, to their handlers;
  2. step intervals to t_{k+1}: kinematic bodies get the pose they must have at the end of this step;
  3. give the engine each kinematic body's pose *and* velocity over the step; apply one-step forces, held
-    forces and joint commands' torques (runner.sim.drives, runner.sim.actuators); motor targets were set by
-    the handlers;
+    forces, joint commands' torques (runner.sim.drives, runner.sim.actuators) and the fluid's forces
+    (runner.sim.fluid); motor targets were set by the handlers;
  4. physics step (with substeps if set);
  5. read states; detect contacts and collision-solid overlaps at t_{k+1};
  6. turn them into in / again / out events, then evaluate the condition triggers (runner.sim.conditions),
@@ -25,7 +25,7 @@ import numpy as np
 
 from backends.base import Backend
 from backends.errors import EngineFailure
-from backends.types import Capability
+from backends.types import MODEL_FILE_CAPABILITIES, Capability
 from runner import interrupts
 from runner.compile.program import Program
 from runner.sim.actions import run_actions
@@ -37,6 +37,7 @@ from runner.sim.collisions import EventHandler, SolidTraverser, quat_matrices
 from runner.sim.conditions import ConditionTriggers, HandlerGate, JointZeros, with_zeros
 from runner.sim.drives import Drives, initial_drives
 from runner.sim.energy import EnergyWatch
+from runner.sim.fluid import FluidForces
 from runner.sim.held import HeldForces
 from runner.sim.intervals import IntervalManager
 from runner.sim.joint_dynamics import JointFriction, driven_joints, native_joints
@@ -134,6 +135,9 @@ class Session(SessionInputs):
         )
         # energy from nowhere: exit 3 (runner.sim.energy)
         self.energy = EnergyWatch(self.world, backend.name, program.joint_zeros)
+        # the MJCF file's fluid: MuJoCo runs it from the file (its <option>, with either options), the runner
+        # everywhere else
+        self.fluid = FluidForces(self.world, native=MODEL_FILE_CAPABILITIES <= backend.capabilities)
 
     # --- what conditions and assertions read ------------------------------------------------------
     @property
@@ -346,6 +350,10 @@ class Session(SessionInputs):
                 self._command_joints()
             elif self.drives.applied:
                 self.drives.applied = {}  # the last command ended: the joint's force is its motor's again
+            if self.fluid:
+                self._fluid_forces()
+            if self.fluid.adds_energy:
+                self.energy.driven()  # a wind's work is not booked: the check starts afresh after this step
             for i, f in self.forces.items():
                 self.backend.apply_force(i, tuple(f[:3]), tuple(f[3:]))
             self.forces.clear()

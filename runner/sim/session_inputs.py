@@ -19,6 +19,7 @@ from runner.language.hpr import hpr_to_quat, quat_to_hpr
 from runner.sim.actuators import Actuators
 from runner.sim.drives import Drives
 from runner.sim.energy import EnergyWatch
+from runner.sim.fluid import FluidForces
 from runner.sim.held import HeldForces
 from runner.sim.joint_dynamics import JointFriction
 from runner.sim.kinematics import KinematicTable
@@ -46,6 +47,7 @@ class SessionInputs:
     energy: EnergyWatch
     forces: dict[int, np.ndarray]
     held: HeldForces
+    fluid: FluidForces
     playing_sounds: dict[str, float]
     sound_starts: list[tuple[float, str]]
     sound_stops: list[tuple[float, str]]
@@ -146,6 +148,15 @@ class SessionInputs:
         self.energy.driven()  # a force's work is not booked: the energy check starts afresh after this step
         acc[:3] += np.asarray(force, float) * scale
         acc[3:] += np.asarray(torque, float) * scale
+
+    def _fluid_forces(self) -> None:
+        """The fluid's forces from the step's start, added to the step's forces (not through :meth:`add_force`: drag
+        only takes energy away, and the energy check goes on; a wind turns it off in the step loop)."""
+        forces, torques = self.fluid.wrenches(self.snapshot.bodies)
+        for i, force, torque in zip(self.fluid.bodies.tolist(), forces, torques, strict=True):
+            acc = self.forces.setdefault(i, np.zeros(6))
+            acc[:3] += force
+            acc[3:] += torque
 
     def hold_force(self, command: B.ApplyCommand, at: float) -> None:
         steps = self.held.start(self.body_index[command.body], command)
