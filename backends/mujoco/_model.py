@@ -192,6 +192,7 @@ def build(world: CompiledWorld, opts: MujocoOptions, h: float) -> Layout:
                 _native.drop_contact_flag(native)
             top = _native.attach(native, spec)
         if native is None or not world.model_options:
+            _native.clear_flags(top)
             _set_options(top, world, h)
         model = _compile(top, len(world.bodies))
     if native is not None:

@@ -142,16 +142,25 @@ def set_geom_surfaces(native: NativeModel, params: Any, solimp: list[float]) -> 
 
 
 def drop_contact_flag(native: NativeModel) -> None:
-    """The file's `<flag contact="disable"/>` under the scenario's options: its own geoms touch nothing
-    (contype = conaffinity = 0, as the description has no shape for them on every engine), and the flag is
-    cleared, so that the scenario's bodies still touch one another (MuJoCo's flag holds for the whole world:
-    a box beside dm_control's reacher fell through the ground, 1.17 m below it after 0.5 s)."""
-    bit = int(mujoco.mjtDisableBit.mjDSBL_CONTACT)
-    if not int(native.spec.option.disableflags) & bit:
+    """The file's `<flag contact="disable"/>` (or `constraint="disable"`) under the scenario's options: its own
+    geoms touch nothing (contype = conaffinity = 0, as the description has no shape for them on every engine);
+    the flag itself is cleared with the file's other flags (:func:`clear_flags`), so that the scenario's bodies
+    still touch one another (MuJoCo's flag holds for the whole world: a box beside dm_control's reacher fell
+    through the ground, 1.17 m below it after 0.5 s)."""
+    off = int(mujoco.mjtDisableBit.mjDSBL_CONTACT) | int(mujoco.mjtDisableBit.mjDSBL_CONSTRAINT)
+    if not int(native.spec.option.disableflags) & off:
         return
-    native.spec.option.disableflags = int(native.spec.option.disableflags) & ~bit
     for geom in native.spec.geoms:
         geom.contype, geom.conaffinity = 0, 0
+
+
+def clear_flags(spec: Any) -> None:
+    """Under the scenario's options, the file's `<flag>` settings are not the world's: MuJoCo's flags hold for
+    every body of the model (the scenario's too), and the other engines have none of them (dm_control's finger
+    disables gravity: it fell on PyBullet and floated on MuJoCo). The backend's own flags are set after this;
+    what of a file's flags is the model's (contacts off) is read into the description (runner.language.mjcf)."""
+    spec.option.disableflags = 0
+    spec.option.enableflags = 0
 
 
 def scale_total_mass(model: mujoco.MjModel, native: NativeModel) -> None:

@@ -373,9 +373,7 @@ def load_mjcf(file: Path) -> ModelDesc:
     start: list[tuple[str, float]] = []
     notes: list[str] = list(legacy.notes) if legacy is not None else []
     found = read_needs(model, mujoco, tree, bodies, joint_names, lines)
-    if touchless:
-        notes.append(f'`<flag contact="disable"/>` (line {first_line(tree, "flag")}): the file\'s geoms touch '
-                     "nothing, as MuJoCo runs it (its shapes are drawn, not collided)")  # fmt: skip
+    notes.extend(_flag_notes(model, mujoco, first_line(tree, "flag")))
     for b in range(1, model.nbody):
         parent = bodies[int(model.body_parentid[b])]
         line = lines.get(("body", bodies[b]), 0)
@@ -419,12 +417,37 @@ def load_mjcf(file: Path) -> ModelDesc:
 
 
 def _contacts_disabled(model: Any, mujoco: Any) -> bool:
-    """`<option><flag contact="disable"/>`: MuJoCo detects no contact at all in the file's model (dm_control's
-    reacher, pendulum, cartpole, point_mass, swimmer), so none of its geoms is a collision shape on any engine,
-    with the scenario's options (MuJoCo's backend then zeroes their contype and conaffinity, backends/mujoco). It is
-    part of the model: without it reacher's arm starts 0.06 m deep in its target sphere and root cylinder, with
+    """`<option><flag contact="disable"/>` (or `constraint="disable"`, which turns contacts off with every other
+    constraint): MuJoCo detects no contact at all in the file's model (dm_control's reacher, pendulum, cartpole,
+    point_mass, swimmer; acrobot, lqr, fish), so none of its geoms is a collision shape on any engine, with the
+    scenario's options (MuJoCo's backend then zeroes their contype and conaffinity, backends/mujoco). It is part
+    of the model: without it reacher's arm starts 0.06 m deep in its target sphere and root cylinder, with
     contact normals no joint can move along (docs/robots.md, "MJCF as MuJoCo reads it")."""
-    return bool(int(model.opt.disableflags) & int(mujoco.mjtDisableBit.mjDSBL_CONTACT))
+    off = int(mujoco.mjtDisableBit.mjDSBL_CONTACT) | int(mujoco.mjtDisableBit.mjDSBL_CONSTRAINT)
+    return bool(int(model.opt.disableflags) & off)
+
+
+#: `<flag>` settings read as part of the model (the rest are simulation options: MuJoCo's own with `options:
+#: model`, not applied with the scenario's options, where the world's gravity and the engine's solver act)
+_MODEL_FLAGS = ("contact", "constraint")
+
+
+def _flag_notes(model: Any, mujoco: Any, line: int) -> list[str]:
+    """What the file's `<flag>` disable settings become (docs/robots.md, "MJCF as MuJoCo reads it")."""
+    flags = int(model.opt.disableflags)
+    named = [n.removeprefix("mjDSBL_").lower() for n in dir(mujoco.mjtDisableBit) if n.startswith("mjDSBL_")]
+    off = sorted(n for n in named if flags & int(getattr(mujoco.mjtDisableBit, f"mjDSBL_{n.upper()}")))
+    out = []
+    kept = [n for n in off if n in _MODEL_FLAGS]
+    if kept:
+        out.append(f"`<flag {kept[0]}=\"disable\"/>` (line {line}): the file's geoms touch nothing, as MuJoCo runs "
+                   "it (its shapes are drawn, not collided)")  # fmt: skip
+    rest = [n for n in off if n not in _MODEL_FLAGS and n not in ("autoreset", "filterparent")]
+    if rest:
+        out.append("with the scenario's options, the file's " + ", ".join(f'`<flag {n}="disable"/>`' for n in rest)
+                   + f" (line {line}) not applied: the world's gravity and the engine's own solver act (MuJoCo "
+                   "runs them with `world: {options: model}`)")  # fmt: skip
+    return out
 
 
 def _sites(model: Any, bodies: list[str], joints: set[str]) -> list[FrameDesc]:
