@@ -39,6 +39,7 @@ from ..types import (
 from . import _native
 from ._build import JointHandle, axis_arg, build_scene, destroy_scene, panda_quat, set_motor
 from ._contacts import Collider
+from ._held import raise_held_inertia
 from ._imported import read_imported
 from ._joint_dynamics import JointDynamics, check_joint_dynamics
 from ._options import OdeOptions, check_resting_stack, check_stack
@@ -110,6 +111,11 @@ class OdeBackend(Backend):
     @classmethod
     def engine_label(cls) -> str:
         return _native.label()
+
+    @classmethod
+    def engine_world(cls, world: CompiledWorld) -> CompiledWorld:
+        """The base's world, with the inertia of bodies that joints hold still raised (``_held``: float32)."""
+        return raise_held_inertia(super().engine_world(world))
 
     @classmethod
     def check_world(cls, world: CompiledWorld, options: BackendOptions) -> None:
