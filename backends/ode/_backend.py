@@ -43,6 +43,7 @@ from ._held import raise_held_inertia
 from ._imported import read_imported
 from ._joint_dynamics import JointDynamics, check_joint_dynamics
 from ._options import OdeOptions, check_resting_stack, check_stack
+from ._ranges import check_ranges
 
 _ROTATIONAL = (JointKind.HINGE, JointKind.UNIVERSAL)
 
@@ -120,6 +121,7 @@ class OdeBackend(Backend):
     @classmethod
     def check_world(cls, world: CompiledWorld, options: BackendOptions) -> None:
         check_joint_dynamics(world)
+        check_ranges(world, cls.chain_light)
         check_stack(stacks(world).landing)
         free = _free_stacks(world)
         check_resting_stack(free.tallest, free.landing, _has_friction(world))
