@@ -39,9 +39,11 @@ from ..types import (
 from . import _native
 from ._build import JointHandle, axis_arg, build_scene, destroy_scene, panda_quat, set_motor
 from ._contacts import Collider
+from ._held import raise_held_inertia
 from ._imported import read_imported
 from ._joint_dynamics import JointDynamics, check_joint_dynamics
 from ._options import OdeOptions, check_resting_stack, check_stack
+from ._ranges import check_ranges
 
 _ROTATIONAL = (JointKind.HINGE, JointKind.UNIVERSAL)
 
@@ -112,8 +114,14 @@ class OdeBackend(Backend):
         return _native.label()
 
     @classmethod
+    def engine_world(cls, world: CompiledWorld) -> CompiledWorld:
+        """The base's world, with the inertia of bodies that joints hold still raised (``_held``: float32)."""
+        return raise_held_inertia(super().engine_world(world))
+
+    @classmethod
     def check_world(cls, world: CompiledWorld, options: BackendOptions) -> None:
         check_joint_dynamics(world)
+        check_ranges(world, cls.chain_light)
         check_stack(stacks(world).landing)
         free = _free_stacks(world)
         check_resting_stack(free.tallest, free.landing, _has_friction(world))
