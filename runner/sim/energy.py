@@ -57,6 +57,7 @@ WINDOW_STEPS = 25
 #: a slow motion's integrator error above the window's maximum: 2a/(1+a) with a = pi/25, < 0.223
 GAIN_FRACTION = 0.25
 _ROUNDING = 4 * float(np.finfo(float).eps)
+_NONE = np.zeros(0)  # no joint stores energy
 #: (3, 9): w -> its cross-product matrix, row-major ([w]x r = w x r), as one product for a whole array
 _SKEW = np.zeros((3, 9))
 _SKEW[2, 1], _SKEW[1, 2], _SKEW[2, 3], _SKEW[0, 5], _SKEW[1, 6], _SKEW[0, 7] = -1, 1, 1, -1, -1, 1
@@ -156,6 +157,7 @@ class EnergyWatch:
         (program.joint_zeros): the readings checked are those, so each spring's rest moves with them."""
         self.backend = backend
         self.names = [b.name for b in world.bodies]
+        self.joint_names = [j.name for j in world.joints]
         self.index = np.array([i for i, b in enumerate(world.bodies) if b.motion is Motion.DYNAMIC], dtype=int)
         first = int(self.index[0]) if self.index.size else 0
         contiguous = self.index.size and self.index[-1] - first == self.index.size - 1
@@ -189,12 +191,14 @@ class EnergyWatch:
         self.floor = float(self.mass.sum()) * g2 * world.dt * (WINDOW_STEPS * world.dt)
         self.work = 0.0  # booked motor work so far (J)
         self._driven = True  # the first state is the first reference
-        self._window: deque[tuple[float, np.ndarray]] = deque(maxlen=WINDOW_STEPS + 1)
+        #: (total, each body's energy, each stored joint's rotor and spring energy) of the window's steps
+        self._window: deque[tuple[float, np.ndarray, np.ndarray]] = deque(maxlen=WINDOW_STEPS + 1)
         self._totals: deque[float] = deque(maxlen=WINDOW_STEPS + 1)  # the window's totals, for a C-level max
         self._k_peak = 0.0  # the largest kinetic energy since the check (re)started
         self._reference = 0.0
         self._reference_at = 0.0
         self._reference_bodies = np.zeros(0)
+        self._reference_joints = np.zeros(0)
 
     def driven(self) -> None:
         """Something did work of unknown amount during this step: the next check starts afresh."""
@@ -213,12 +217,14 @@ class EnergyWatch:
             self.work += work * self.dt
         kinetic, energy = self._energy(states)
         total = float(np.add.reduce(energy)) - self.work
+        stored = _NONE
         if self.stored.size:
             rate, stretch = joints.velocity[self.stored], joints.position[self.stored] - self.springref
             joint_kinetic = 0.5 * self.armature * rate * rate
-            total += float(np.nansum(joint_kinetic + 0.5 * self.stiffness * stretch * stretch))
+            stored = joint_kinetic + 0.5 * self.stiffness * stretch * stretch
+            total += float(np.nansum(stored))
             kinetic = np.append(kinetic, np.nansum(joint_kinetic))
-        entry = (total, energy)
+        entry = (total, energy, stored)
         k_now = float(np.add.reduce(kinetic))
         if self._driven:
             self._driven = False
@@ -227,6 +233,7 @@ class EnergyWatch:
             self._totals.clear()
             self._totals.append(total)
             self._reference, self._reference_at, self._reference_bodies = total, t, energy
+            self._reference_joints = stored
             self._k_peak = k_now
             return
         if k_now > self._k_peak:
@@ -235,7 +242,7 @@ class EnergyWatch:
         if rise > 0.0:
             bound = self.bound(energy)
             if rise > bound:
-                self._raise(t, rise, bound, energy)
+                self._raise(t, rise, bound, energy, stored)
         self._window.append(entry)
         self._totals.append(total)
         top = max(reversed(self._totals))  # the window's largest energy (newest first)
@@ -243,17 +250,28 @@ class EnergyWatch:
             back = next(k for k, e in enumerate(reversed(self._totals)) if e == top)
             self._reference, self._reference_at = top, t - back * self.dt
             self._reference_bodies = self._window[-1 - back][1]
+            self._reference_joints = self._window[-1 - back][2]
 
     def bound(self, energy: np.ndarray) -> float:
         """The rise allowed now (J): integrator error on the motion, position correction at rest, rounding."""
         return GAIN_FRACTION * self._k_peak + self.floor + _ROUNDING * len(energy) * float(np.abs(energy).sum())
 
-    def _raise(self, t: float, rise: float, bound: float, energy: np.ndarray) -> None:
+    def _raise(self, t: float, rise: float, bound: float, energy: np.ndarray, stored: np.ndarray) -> None:
+        """Name the body, or the joint's rotor and spring (armature, stiffness), whose energy rose most."""
         gains = energy - self._reference_bodies
         k = int(np.argmax(gains))
-        name = self.names[int(self.index[k])]
+        name, what, gain = self.names[int(self.index[k])], "body", float(gains[k])
+        if stored.size and self._reference_joints.size == stored.size:
+            joint_gains = stored - self._reference_joints
+            j = int(np.argmax(joint_gains))
+            if joint_gains[j] > gain:
+                name, what, gain = (
+                    self.joint_names[int(self.stored[j])],
+                    "the rotor and spring of joint",
+                    float(joint_gains[j]),
+                )
         raise EnergyGain(
-            f"energy gain: body `{name}` gained {gains[k]:.4g} J at t = {t:.4f} s on {self.backend} (the bodies' "
+            f"energy gain: {what} `{name}` gained {gain:.4g} J at t = {t:.4f} s on {self.backend} (the bodies' "
             f"energy rose {rise:.4g} J above its level at t = {self._reference_at:.4f} s with no work done on "
             f'them, beyond the bound of {bound:.4g} J; docs/semantics.md, "Energy watchdog")',
             backend=self.backend,

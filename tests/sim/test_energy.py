@@ -199,3 +199,17 @@ def test_a_rotor_s_energy_given_to_the_bodies_is_no_gain(armature: float, tmp_pa
     fresh.check(DT, states(0.0), joints(0.0))
     with pytest.raises(EnergyGain):
         fresh.check(2 * DT, states(body_rate), joints(0.0))  # the same energy from nowhere
+
+
+def test_a_gain_in_a_joints_rotor_names_the_joint(tmp_path: Path) -> None:
+    """When the energy that rose is a rotor's (1/2 a qdot^2 of a joint with armature), the message names the
+    joint, not the body that rose most (which rose less, or fell: DART's cheetah read "body `fthigh` gained
+    -0.1603 J"). The wheel stays at rest; the rotor alone goes from rest to 5 J, above the 0.48 J floor."""
+    path = tmp_path / "rotor.yaml"
+    path.write_text(ROTOR.replace("{a}", "0.5"))
+    world = build_program(load_scenario(path, None)).world
+    rest = BodyStates(np.array([[0.0, 0.0, 1.0]]), np.array([[1.0, 0.0, 0.0, 0.0]]), np.zeros((1, 3)), np.zeros((1, 3)))
+    watch = EnergyWatch(world, "fake")
+    watch.check(DT, rest, JointStates(np.zeros(1), np.zeros(1), np.zeros(1)))
+    with pytest.raises(EnergyGain, match=r"^energy gain: the rotor and spring of joint `axle` gained 5 J"):
+        watch.check(2 * DT, rest, JointStates(np.zeros(1), np.array([math.sqrt(2 * 5.0 / 0.5)]), np.zeros(1)))
