@@ -9,16 +9,18 @@ tests/backends/test_mimic.py's pair: the ratio 1 to 4e-10, 6.2e-3 rad at the fas
 feeds back into the next step (two equal fingers swap rates each step).
 
 The row ``v_f' - m v_l' = (m q_l + c - q_f) / h`` that a rigid coupling asks for is DART's own with the offset
-``c + m h u`` and ``u = v_l'``. ``v_l'`` depends on ``u`` (the impulse moves the leader), affinely while the
-step's set of active constraints stays, so :meth:`Mimics.step` finds the fixed point ``u = v_l'(u)`` with
-Newton steps on trial engine steps from the saved state (two trials and the kept step when affine), then keeps
-that step: the follower then ends each step at ``m q_l' + c`` to rounding. dartpy 6.20 allows no constraint
-written in Python (``ConstraintBase`` has no constructor, ``ConstraintInfo`` is not bound).
+``c + h u`` at ``u = m v_l'``. ``v_l'`` depends on ``u`` (the impulse moves the leader), affinely while the step's
+set of active constraints stays, so :meth:`Mimics.step` solves for the ``u`` of every coupling that leaves each
+coupling's rate residual at zero, by Newton steps on trial engine steps from the saved state (two trials and the
+kept step when affine), and keeps that step: the follower then ends each step at ``m q_l' + c`` to rounding.
+dartpy 6.20 allows no constraint written in Python (``ConstraintBase`` has no constructor, ``ConstraintInfo`` is
+not bound).
 
 Refused up front: two couplings in one joint tree (their rows share one LCP whose matrix, row = follower's rate,
-impulse = the pair, is not symmetric; DART's Dantzig solver then leaves rows unsolved: xarm6_with_gripper's five
-fingers on one leader ended a step at 0.11 to 0.26 rad/s for 0.22 asked, and threw the arm to 1e4 m/s in 6 ms),
-and a follower with a motor or friction loss (its actuator is the coupling's).
+impulse = the pair, is not symmetric: with DART's coupler alone, xarm6_with_gripper's five fingers on one leader
+ended a step at 0.11 to 0.26 rad/s for 0.22 asked and threw the arm to 1e4 m/s in 6 ms; with the offsets solved
+they held to rounding for 27 steps, then at 0.054 s no offsets made a consistent step, the trials' slope matrix
+singular, cond 3e15), and a follower with a motor or friction loss (its actuator is the coupling's).
 """
 
 from __future__ import annotations
@@ -96,11 +98,6 @@ class Mimics:
             ratio, offset = coupling.engine_terms(follower.sign, leader.sign)
             _couple(follower.joint, leader.joint, ratio, offset)
             self._pairs.append((follower.joint, leader.joint, ratio, offset))
-        self._leaders: list[Any] = []
-        for _, leader, _, _ in self._pairs:
-            if all(leader is not known for known in self._leaders):
-                self._leaders.append(leader)
-        self._which = [next(k for k, x in enumerate(self._leaders) if x is pair[1]) for pair in self._pairs]
 
     def step(self, world: Any, issue: Callable[[], None], h: float) -> None:
         """One engine step (``issue`` sets the step's commands and forces, which World.step() clears)."""
@@ -111,6 +108,8 @@ class Mimics:
         skeletons = [world.getSkeleton(i) for i in range(world.getNumSkeletons())]
         saved = [(s.getPositions(), s.getVelocities()) for s in skeletons]
         start = world.getTime()
+        # each coupling's rate asked of the step: v_f' - m v_l' = (m q_l + c - q_f) / h, from the start
+        asked = np.array([(m * lead.getPosition(0) + c - f.getPosition(0)) / h for f, lead, m, c in self._pairs])
 
         def restore() -> None:
             for skeleton, (q, v) in zip(skeletons, saved, strict=True):
@@ -119,26 +118,32 @@ class Mimics:
             world.setTime(start)
 
         def trial(u: np.ndarray) -> np.ndarray:
-            for (follower, leader, ratio, offset), k in zip(self._pairs, self._which, strict=True):
-                _couple(follower, leader, ratio, offset + ratio * h * float(u[k]))
+            """The couplings' rate residuals after a step with each coupler's offset shifted by h u."""
+            for (follower, leader, ratio, offset), shift in zip(self._pairs, u, strict=True):
+                _couple(follower, leader, ratio, offset + h * float(shift))
             issue()
             world.step()
-            return np.array([leader.getVelocity(0) for leader in self._leaders])
+            ends = [f.getVelocity(0) - m * lead.getVelocity(0) for f, lead, m, _ in self._pairs]
+            return np.array(ends) - asked
 
-        n = len(self._leaders)
+        n = len(self._pairs)
         u, slope = np.zeros(n), np.empty((n, n))
-        rates = trial(u)
-        if not rates.any():  # the leaders end the step at rest with the offsets as they are: kept
-            return
-        for _ in range(ITERATIONS):
+        residual = trial(u)
+        scale = max(1.0, float(np.max(np.abs(asked))))
+        for attempt in range(ITERATIONS + 1):
+            if float(np.max(np.abs(residual))) <= TOLERANCE * max(scale, float(np.max(np.abs(u)))):
+                return  # the step just taken holds every coupling: kept
+            if attempt == ITERATIONS:
+                break
             restore()
-            for k in range(n):  # the leaders' rates against the offsets, on the piece that u lies on
+            for k in range(n):  # the residuals against each offset, on the piece that u lies on
                 nudged = u.copy()
                 nudged[k] += 1.0
-                slope[:, k] = trial(nudged) - rates
+                slope[:, k] = trial(nudged) - residual
                 restore()
-            u = u + np.linalg.solve(np.eye(n) - slope, rates - u)
-            rates = trial(u)  # kept when it is the fixed point
-            if float(np.max(np.abs(rates - u))) <= TOLERANCE * max(1.0, float(np.max(np.abs(u)))):
-                return
+            try:
+                u = u - np.linalg.solve(slope, residual)
+            except np.linalg.LinAlgError:
+                break
+            residual = trial(u)
         raise RuntimeError(f"DART's mimic coupling found no consistent step at t = {start:.6g} s")
