@@ -19,8 +19,9 @@ not bound).
 Refused up front: two couplings in one joint tree (their rows share one LCP whose matrix, row = follower's rate,
 impulse = the pair, is not symmetric: with DART's coupler alone, xarm6_with_gripper's five fingers on one leader
 ended a step at 0.11 to 0.26 rad/s for 0.22 asked and threw the arm to 1e4 m/s in 6 ms; with the offsets solved
-they held to rounding for 27 steps, then at 0.054 s no offsets made a consistent step, the trials' slope matrix
-singular, cond 3e15), and a follower with a motor or friction loss (its actuator is the coupling's).
+they held to rounding for 27 steps, then at 0.054 s, with 16 contact points in the step, no offsets made a
+consistent step: the trials' slope matrix singular, cond 3e15), and a follower with a motor or friction loss (its
+actuator is the coupling's).
 """
 
 from __future__ import annotations
