@@ -42,6 +42,7 @@ from ._build import BodyHandle, JointHandle, build, place_free
 from ._build import check as check_build
 from ._gate import BounceGate
 from ._imported import read_imported
+from ._mimic import Mimics, check_mimics
 from ._options import MAX_CONE_MU, MAX_CONE_STACK, DartOptions
 from ._reads import state_readers
 
@@ -63,6 +64,7 @@ class DartBackend(Backend):
         | {Capability.CONTACT_POINTS, Capability.JOINT_STIFFNESS}
         | {Capability.JOINT_ARMATURE}  # in DART's implicit joint inertia (_armature)
         | {Capability.JOINT_REACTION}  # getWrenchToChildBodyNode
+        | {Capability.JOINT_MIMIC}  # DART's coupler with the offset that makes its row exact (_mimic)
     )
     Options: ClassVar[type[BackendOptions]] = DartOptions
     #: joint damping is DART's own (GenericJoint's damping coefficient, integrated implicitly): DART's servo
@@ -84,6 +86,7 @@ class DartBackend(Backend):
             _friction_model(world, options.friction)  # `friction: cone` above the solver's mu is refused
         check_build(world)  # the joint trees: loops, joint kinds, planes (no engine call)
         check_armature(world)  # armature with a motor or friction loss (DART's servo does not see it)
+        check_mimics(world)  # one coupling per joint tree, no motor on a follower (_mimic)
 
     def _build(self) -> None:
         world = self.world
@@ -99,6 +102,7 @@ class DartBackend(Backend):
         self._bodies: list[BodyHandle] = built.bodies
         self._joints: list[JointHandle] = built.joints
         self._armature = add_armature(built.joints, world.dt / self._engine_steps)
+        self._mimics = Mimics(world, built.joints)
         self._coefficients = built.coefficients
         self._free = [i for i, h in enumerate(self._bodies) if h.free]
         self._free_at = _rows(self._free)
@@ -184,21 +188,9 @@ class DartBackend(Backend):
         self._substep_contacts.start()
         for _ in range(n):
             # World.step() clears commands and external forces: re-issue them for every engine step.
-            for _, handle in servos:
-                handle.joint.setCommand(0, handle.sign * handle.vel)
-            for i, pose in self.kinematic.items():
-                self._bodies[i].root.setCommands(np.concatenate([pose.ang_vel, pose.lin_vel]))
-            for i, acc in self.forces.items():
-                body = self._bodies[i]
-                if body.com is None:
-                    body.node.addExtForce(acc[:3])
-                else:  # at the centre of mass (an offset in the body frame), the force in the world frame
-                    body.node.addExtForce(acc[:3], body.com, False, True)
-                body.node.addExtTorque(acc[3:])
-            hold_armature(self._armature)
             if self._surface_conflict or self._thresholds:
                 self._match_touching_pairs(quiet=not self._surface_conflict and self._quiet(h))
-            self._dart.step()
+            self._mimics.step(self._dart, self._issue_inputs, h)
             self._velocities = None
             applied = np.zeros(len(self._joints))
             for j, handle in servos:
@@ -215,6 +207,21 @@ class DartBackend(Backend):
         for i, pose in self.kinematic.items():
             pos, quat = pose.at(dt)
             place_free(self._bodies[i].root, pos, quat, pose.lin_vel, pose.ang_vel)
+
+    def _issue_inputs(self) -> None:
+        """The step's commands, forces and armature torques (World.step() clears them)."""
+        for _, handle in self._servos:
+            handle.joint.setCommand(0, handle.sign * handle.vel)
+        for i, pose in self.kinematic.items():
+            self._bodies[i].root.setCommands(np.concatenate([pose.ang_vel, pose.lin_vel]))
+        for i, acc in self.forces.items():
+            body = self._bodies[i]
+            if body.com is None:
+                body.node.addExtForce(acc[:3])
+            else:  # at the centre of mass (an offset in the body frame), the force in the world frame
+                body.node.addExtForce(acc[:3], body.com, False, True)
+            body.node.addExtTorque(acc[3:])
+        hold_armature(self._armature)
 
     def _watch_reactions(self) -> list[tuple[Any, Any, float, Any]]:
         """Per joint of ``world.reaction_joints``: (the DART joint, its child node, +1 when that is the joint's

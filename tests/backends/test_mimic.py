@@ -13,6 +13,10 @@ Tolerances:
 * PyBullet: the gear is the solver's only row (no contact, no limit, the motors at fmax 0), which one
   Gauss-Seidel sweep solves exactly, and positions integrate the constrained rates: tracking within
   rounding, n eps |q| for n steps;
+* DART: its coupler's row is the follower's rate alone; the backend solves each step for the offset that makes
+  it the coupling's own row (backends/dart/_mimic.py) and keeps a step only when it leaves the follower within
+  POSITION_TOLERANCE of its place; the next step's row removes that error in full (DART's coupler reduces
+  errors at 1 per step), so the gap stays under that plus PyBullet's bound;
 * MuJoCo: a joint equality is soft. With solref (-K, -B) = (-erp/h^2, -1/h) and impedance d, the constraint
   coordinate r obeys r'' = (1 - d) a0 - d B r' - d^2 K r, a0 its acceleration were it released (each arm a
   free pendulum: |a0| <= g (m_b r_b / I_b + |m| m_a r_a / I_a)): statically |r| = (1 - d) |a0| / (d^2 K), and
@@ -102,6 +106,10 @@ def _tracking_bound(engine: str) -> float:
     if engine == "drake":
         eps = 0.1**2 / (4 * math.pi**2)
         bound += 2.0 * eps / (1.0 - eps) * _free_acceleration() * H**2
+    if engine == "dart":
+        from backends.dart._mimic import POSITION_TOLERANCE
+
+        bound += POSITION_TOLERANCE
     return bound
 
 
@@ -131,6 +139,23 @@ def test_an_engine_without_mimic_refuses_it_up_front(tmp_path: Path, engine: str
     (tmp_path / "pair.yaml").write_text(SCENARIO)
     with pytest.raises(UnsupportedFeature, match=rf"joint:mimic.*`{engine}`"):
         run_loaded(load_scenario(tmp_path / "pair.yaml"), engine, tmp_path / engine)
+
+
+@pytest.mark.skipif(not (is_installed("pybullet") and is_installed("dart")), reason="pybullet_data, DART")
+def test_dart_refuses_two_mimics_in_one_tree_up_front(tmp_path: Path) -> None:
+    """xarm6_with_gripper: five fingers mimic one joint. DART's coupler rows of one tree share an LCP whose
+    matrix is not symmetric (row: the follower's rate; impulse: on both joints), which its solver leaves
+    unsolved (docs/backends/dart.md, "Mimic joints"): refused before the run, naming both joints."""
+    (tmp_path / "xarm.yaml").write_text(
+        """schema_version: 1
+scenario: xarm
+world: {gravity: [0, 0, -9.81], dt: 0.002, duration: 0.1}
+robots:
+  arm: {urdf: "@pybullet_data/xarm/xarm6_with_gripper.urdf", fixed: true}
+"""
+    )
+    with pytest.raises(UnsupportedFeature, match=r"`dart` holds one joint:mimic per joint tree: `arm\.\w+` and"):
+        run_loaded(load_scenario(tmp_path / "xarm.yaml"), "dart", tmp_path / "out")
 
 
 @pytest.mark.skipif(not is_installed("pybullet"), reason="pybullet_data ships with pybullet")

@@ -294,8 +294,8 @@ def test_on_mujoco_the_pair_is_the_files_own_equality(tmp_path: Path) -> None:
 
 
 def _tracking_bound(engine: str) -> float:
-    """test_mimic's bounds: PyBullet's gear solved exactly (rounding), Drake's SAP coupler, MuJoCo the file's
-    own soft equality (above)."""
+    """test_mimic's bounds: PyBullet's gear and DART's coupler with its solved offset exact (rounding), Drake's
+    SAP coupler, MuJoCo the file's own soft equality (above)."""
     bound = ROUNDING + round(T / H) * get_backend(engine).precision.eps * 4.0
     if engine == "drake":
         eps = 0.1**2 / (4 * math.pi**2)
