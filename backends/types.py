@@ -414,6 +414,8 @@ class CompiledWorld:
     #: joints that move one body together, each group in the file's order (MJCF: several joints in one body):
     #: the same ``body`` and ``other``; joint k+1 turns or slides about its axis as joints 1..k left it
     joint_chains: tuple[tuple[str, ...], ...] = ()
+    #: the light bodies an engine's world chains those joints through (backends/_kit/chains.py; none before)
+    chain_bodies: frozenset[str] = frozenset()
     #: True: the model file's own options rule (MJCF `<option>`, its geoms' contact parameters, MuJoCo's own
     #: mj_step); the scenario's dt and gravity equal the model's (`world.options: model`, docs/robots.md)
     model_options: bool = False

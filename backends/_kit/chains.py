@@ -115,4 +115,5 @@ def chained(world: CompiledWorld, light: float = LIGHT) -> CompiledWorld:
             extra.append(light_copy(body, name, lin, ang, light))
             joints[index[joint.name]] = replace(joint, body=name, other=previous)
             previous = name
-    return replace(world, bodies=world.bodies + tuple(extra), joints=tuple(joints), joint_chains=())
+    return replace(world, bodies=world.bodies + tuple(extra), joints=tuple(joints), joint_chains=(),
+                   chain_bodies=frozenset(b.name for b in extra))  # fmt: skip

@@ -121,7 +121,7 @@ class OdeBackend(Backend):
     @classmethod
     def check_world(cls, world: CompiledWorld, options: BackendOptions) -> None:
         check_joint_dynamics(world)
-        check_ranges(world, cls.chain_light)
+        check_ranges(world)
         check_stack(stacks(world).landing)
         free = _free_stacks(world)
         check_resting_stack(free.tallest, free.landing, _has_friction(world))

@@ -33,21 +33,6 @@ from ..types import BodySpec, CompiledWorld, Motion
 from ._held import FLOAT32_EPS, held_bodies
 
 
-def chain_bodies(world: CompiledWorld, light: float) -> frozenset[str]:
-    """The light bodies of joint chains (backends/_kit/chains.py's ``light_copy``): dynamic, without shapes,
-    at the pose of a body with ``1 / light`` times their mass and inertia."""
-    at: dict[tuple[float, ...], list[BodySpec]] = {}
-    for b in world.bodies:
-        at.setdefault((*b.pos, *b.quat), []).append(b)
-    return frozenset(
-        d.name
-        for d in world.bodies
-        if d.motion is Motion.DYNAMIC and not d.shapes
-        and any(b is not d and d.mass == light * b.mass and d.inertia == tuple(light * i for i in b.inertia)
-                for b in at[(*d.pos, *d.quat)])
-    )  # fmt: skip
-
-
 def _groups(world: CompiledWorld, bodies: set[str]) -> dict[str, str]:
     """Each body's group: the bodies that joints between dynamic bodies connect (a chain's light bodies join
     their two neighbours), by union-find; the representative of each."""
@@ -65,10 +50,10 @@ def _groups(world: CompiledWorld, bodies: set[str]) -> dict[str, str]:
     return {n: root(n) for n in bodies}
 
 
-def check_ranges(world: CompiledWorld, light: float) -> None:
+def check_ranges(world: CompiledWorld) -> None:
     """Refuse a jointed body whose mass or smallest principal inertia is below FLOAT32_EPS of its group's
     heaviest mass or largest principal inertia (module docstring)."""
-    skip = chain_bodies(world, light) | held_bodies(world)
+    skip = world.chain_bodies | held_bodies(world)
     jointed = {j.body for j in world.joints} | {j.other for j in world.joints if j.other is not None}
     by_name = {b.name: b for b in world.bodies}
     checked = {n for n in jointed if n in by_name and by_name[n].motion is Motion.DYNAMIC and n not in skip}

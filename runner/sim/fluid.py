@@ -21,20 +21,11 @@ from __future__ import annotations
 
 import numpy as np
 
+from backends.geometry import quat_matrices
 from backends.types import BodyStates, CompiledWorld, Fluid, Motion
 
 #: MuJoCo's mjMINVAL: the floor of a box side's square (times m / 6) and of a body's mass
 MIN_VALUE = 1e-15
-
-
-def _matrices(q: np.ndarray) -> np.ndarray:
-    """(N, 3, 3) rotation matrices of (N, 4) unit (w, x, y, z) quaternions."""
-    w, x, y, z = q[:, 0], q[:, 1], q[:, 2], q[:, 3]
-    return np.stack([
-        np.stack([1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)], axis=-1),
-        np.stack([2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)], axis=-1),
-        np.stack([2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)], axis=-1),
-    ], axis=-2)  # fmt: skip
 
 
 def box_sides(mass: float, moments: tuple[float, float, float]) -> np.ndarray:
@@ -50,26 +41,23 @@ class FluidForces:
 
     def __init__(self, world: CompiledWorld, native: bool) -> None:
         self.fluid = world.fluid if world.fluid is not None else Fluid()
+        #: a wind can push bodies (do work on them), whoever computes the forces; without one they only take
+        #: energy away (decided once: the step loop asks every step)
+        self.adds_energy = any(self.fluid.wind)
         moving = [i for i, b in enumerate(world.bodies) if b.motion is Motion.DYNAMIC and b.mass >= MIN_VALUE]
         self.bodies = np.asarray(moving if world.fluid is not None and not native else [], dtype=np.int64)
         specs = [world.bodies[i] for i in self.bodies]
         self.sides = np.array([box_sides(b.mass, b.inertia) for b in specs]).reshape(-1, 3)
         self.com = np.array([b.com for b in specs], dtype=float).reshape(-1, 3)
-        self.axes = _matrices(np.array([b.inertia_quat for b in specs], dtype=float).reshape(-1, 4))
+        self.axes = quat_matrices(np.array([b.inertia_quat for b in specs], dtype=float).reshape(-1, 4))
 
     def __bool__(self) -> bool:
         return len(self.bodies) > 0
 
-    @property
-    def adds_energy(self) -> bool:
-        """A wind can push bodies (do work on them), whoever computes the forces; without one they only take
-        energy away."""
-        return any(self.fluid.wind)
-
     def wrenches(self, states: BodyStates) -> tuple[np.ndarray, np.ndarray]:
         """(K, 3) world forces at the centres of mass and (K, 3) world torques of :attr:`bodies`."""
         i = self.bodies
-        frames = _matrices(np.asarray(states.quat[i], dtype=float))
+        frames = quat_matrices(np.asarray(states.quat[i], dtype=float))
         omega = np.asarray(states.ang_vel[i], dtype=float)
         arm = np.einsum("nij,nj->ni", frames, self.com)
         v_com = np.asarray(states.lin_vel[i], dtype=float) + np.cross(omega, arm)

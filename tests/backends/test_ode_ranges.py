@@ -19,7 +19,7 @@ dm_control = pytest.importorskip("dm_control")
 from backends.errors import UnsupportedFeature  # noqa: E402
 from backends.ode import OdeBackend  # noqa: E402
 from backends.ode._options import OdeOptions  # noqa: E402
-from backends.ode._ranges import FLOAT32_EPS, chain_bodies  # noqa: E402
+from backends.ode._ranges import FLOAT32_EPS  # noqa: E402
 from backends.types import CompiledWorld  # noqa: E402
 from runner.compile.program import build_program  # noqa: E402
 from runner.survey.cases import load_survey_scenario  # noqa: E402
@@ -70,7 +70,7 @@ def test_chain_light_bodies_and_held_bodies_are_left_out() -> None:
     below 2^-23: the mapping's own bodies, measured in backends/_kit/chains.py, so it runs. pusher's target and
     object (4e-10 and 1.3e-8 kg on sliders, held still: _held) are not compared either."""
     cmu = _engine_world(str(SUITE / "humanoid_CMU.xml"))
-    light = chain_bodies(cmu, OdeBackend.chain_light)
+    light = cmu.chain_bodies
     assert "model.lthumb (after joint model.lthumbrz)" in light
     assert all(" (after joint " in name for name in light)  # chains.py's names: every one found is a light body
     assert len(light) == len(cmu.bodies) - len(build_program(load_survey_scenario(
