@@ -17,7 +17,7 @@ from typing import Any
 from ..errors import UnsupportedFeature
 from ..geometry import quat_conj, quat_mul, quat_rotate
 from ..types import BodySpec, CompiledWorld, JointKind, JointSpec, Motion, Quat, Shape, ShapeKind, Vec3
-from ._compound import PLANE_HALF_SIZE, check_compound, compound_shape, mesh_of, xyzw
+from ._compound import PLANE_HALF_SIZE, add, check_compound, compound_shape, mesh_of, xyzw
 
 ORIGIN: Vec3 = (0.0, 0.0, 0.0)
 IDENTITY: Quat = (1.0, 0.0, 0.0, 0.0)
@@ -87,7 +87,7 @@ def _collision(p: Any, c: int, spec: BodySpec, offset: Vec3 = ORIGIN) -> int:
         return -1
     if len(placed) == 1:
         one = placed[0]
-        return _shape(p, c, one.shape, _add(offset, one.pos), one.quat)
+        return _shape(p, c, one.shape, add(offset, one.pos), one.quat)
     check_compound(spec)
     return compound_shape(p, c, spec.shapes, offset)
 
@@ -98,10 +98,6 @@ def check(world: CompiledWorld) -> None:
     _trees(world)
     for spec in world.bodies:
         check_compound(spec)
-
-
-def _add(a: Vec3, b: Vec3) -> Vec3:
-    return (a[0] + b[0], a[1] + b[1], a[2] + b[2])
 
 
 def has_offset(spec: BodySpec) -> bool:
@@ -273,7 +269,7 @@ def _build_tree(
         cols["shape"].append(_collision(p, c, spec, (offset[0], offset[1], offset[2])))
         cols["pos"].append(_to_frame(p_origin, p_quat, pivot))
         cols["orn"].append(xyzw(quat_mul(quat_conj(p_quat), spec.quat)))
-        cols["ipos"].append(list(_add((offset[0], offset[1], offset[2]), spec.com)))
+        cols["ipos"].append(list(add((offset[0], offset[1], offset[2]), spec.com)))
         cols["iorn"].append(xyzw(spec.inertia_quat))
         cols["parent"].append(0 if par is None or par == root else link_of[par] + 1)
         cols["type"].append(getattr(p, _LINK_TYPE[joint.kind.value]))

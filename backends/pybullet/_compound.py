@@ -76,7 +76,7 @@ def compound_shape(p: Any, c: int, placed: tuple[PlacedShape, ...], offset: Vec3
         hulls = any(s.shape.kind is ShapeKind.CONVEX for s in placed)
         folder = stack.enter_context(_hull_folder()) if hulls else Path()  # the folder only holds hulls
         for index, one in enumerate(placed):
-            shape, pos, quat = one.shape, _add(offset, one.pos), one.quat
+            shape, pos, quat = one.shape, add(offset, one.pos), one.quat
             half, radius, length, file, kind = [0.0] * 3, 0.0, 0.0, "", shape.kind
             if kind is ShapeKind.BOX:
                 geom, half = p.GEOM_BOX, [s / 2 for s in shape.size]
@@ -89,7 +89,7 @@ def compound_shape(p: Any, c: int, placed: tuple[PlacedShape, ...], offset: Vec3
                 geom, file = p.GEOM_MESH, _write_hull(folder / f"hull-{index:02d}.obj", mesh_of(shape))
             else:  # a plane: the 2 km box of _build._shape
                 geom, half = p.GEOM_BOX, [PLANE_HALF_SIZE] * 3
-                pos = _add(pos, quat_rotate(quat, (0.0, 0.0, -PLANE_HALF_SIZE)))
+                pos = add(pos, quat_rotate(quat, (0.0, 0.0, -PLANE_HALF_SIZE)))
             for key, value in zip(cols, (geom, half, radius, length, file, list(pos), xyzw(quat)), strict=True):
                 cols[key].append(value)
         return int(  # lists, not tuples: pybullet.c reads fileNames and the frames with PyList_GET_ITEM
@@ -139,5 +139,5 @@ def _write_hull(path: Path, mesh: Mesh) -> str:
     return str(path)
 
 
-def _add(a: Vec3, b: Vec3) -> Vec3:
+def add(a: Vec3, b: Vec3) -> Vec3:
     return (a[0] + b[0], a[1] + b[1], a[2] + b[2])
