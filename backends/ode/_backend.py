@@ -99,6 +99,9 @@ class OdeBackend(Backend):
     capabilities = (
         frozenset(Capability) - (MODEL_FILE_CAPABILITIES - {Capability.JOINT_STIFFNESS}) - {Capability.JOINT_MIMIC}
     )
+    #: joint damping is ODE's own implicit row (CFM 1 / c, target 0, unbounded; _joint_dynamics): the runner's
+    #: motor carries only the friction loss (its bound c |qdot| made Dantzig fail steps on pybullet_data's ant)
+    native_damping: ClassVar[bool] = True
     #: panda3d builds ODE with dSINGLE: every state is a float32 (dGetConfiguration says "ODE_single_precision")
     precision = Precision.FLOAT32
     #: light bodies of a joint chain at 1e-3 of their body (1e-4 elsewhere): ODE's float32 LDLT meets a zero
@@ -169,7 +172,7 @@ class OdeBackend(Backend):
         self._states: BodyStates | None = None  # fresh states, dropped by anything that moves a body
 
     def _imported_model(self) -> ImportedModel:
-        return read_imported(self.world, self._scene)
+        return read_imported(self.world, self._scene, self._joint_dynamics)
 
     def _settings(self) -> dict[str, Any]:
         o = self.options

@@ -5,9 +5,9 @@ The OdeBody sits at the centre of mass (``dBodySetMass`` wants it there), so ``g
 the world; ``getMass().getInertialTensor()`` is the tensor about it. A body's shapes are the geoms of the
 space attached to it (a cylinder's capsule stand-in, ``_colliders``, left out). Per joint: its type,
 ``getAxis`` (world; a universal joint's ``getAxis1``) and
-``getParamLoStop``/``HiStop`` (ODE's +-dInfinity: no stop). ODE has no joint damping, friction, effort or
-velocity parameter (panda3d exposes no ``dJointSetDamping``; the motor's FMax is the runner's command):
-those are None.
+``getParamLoStop``/``HiStop`` (ODE's +-dInfinity: no stop). Damping is the adapter's implicit row's
+(``_joint_dynamics``: c = 1 / CFM - a / h from the row's CFM; 0 without one). ODE has no joint friction, effort
+or velocity parameter (the motor's FMax is the runner's command): those are None.
 """
 
 from __future__ import annotations
@@ -18,6 +18,7 @@ from .._kit.imported import body, principal, stops, unit
 from ..types import CompiledWorld, ImportedBody, ImportedJoint, ImportedModel, JointKind, Motion
 from ._build import Scene, axis_arg
 from ._colliders import CAT_PRISM
+from ._joint_dynamics import JointDynamics
 
 
 def _geoms_per_body(space: Any, bodies: list[Any]) -> list[int]:
@@ -34,7 +35,7 @@ def _geoms_per_body(space: Any, bodies: list[Any]) -> list[int]:
     return count
 
 
-def read_imported(world: CompiledWorld, scene: Scene) -> ImportedModel:
+def read_imported(world: CompiledWorld, scene: Scene, dynamics: JointDynamics) -> ImportedModel:
     shapes = _geoms_per_body(scene.space, scene.bodies)
     out: list[ImportedBody] = []
     for i, spec in enumerate(world.bodies):
@@ -56,7 +57,7 @@ def read_imported(world: CompiledWorld, scene: Scene) -> ImportedModel:
         arg = axis_arg(handle)
         lo, hi = stops(float(joint.getParamLoStop(*arg)), float(joint.getParamHiStop(*arg)))
         joints.append(ImportedJoint(joint_spec.name, _kind(joint), unit((axis[0], axis[1], axis[2])), lo, hi,
-                                    None, None, None, None))  # fmt: skip
+                                    dynamics.damping(handle), None, None, None))  # fmt: skip
     return ImportedModel("ode", tuple(out), tuple(joints))
 
 

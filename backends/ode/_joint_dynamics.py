@@ -15,6 +15,13 @@ decoupling c x axis on both bodies, c half the line between their centres: then 
 ODE's slider position while the bodies turn together; ``dJointGetSliderPositionRate`` omits that term, so the
 rate is computed here). Its own CFM replaces the world's (``normal_cfm``); dParamFMax is dInfinity.
 
+**Damping** c (``OdeBackend.native_damping``): the same row carries it implicitly. With target 0 and CFM 1 / c a
+row has J v_new = -lambda / c, i.e. lambda = -c qdot_new exactly (MuJoCo's implicit damping, DART's): unbounded,
+so no bounded row of the LCP depends on it, as the runner's motor with dParamFMax = c |qdot| did (on pybullet_data's
+ant, armature 1 and damping 1, that bound made Dantzig fail a step, "LCP internal error, s <= 0"). With both a
+and c the forces add, -a (qdot_new - qdot_old) / h - c qdot_new, one row: CFM = h / (a + c h) and the target
+a qdot_old / (a + c h) (a damped rotor: qdot_new = qdot_old / (1 + c h / (I + a)) with no other force).
+
 **Stiffness** k towards springref (counted from the start, where ODE's joint position is 0): the force
 -k (q - springref) from the position at the start of each engine step (MuJoCo's Euler step takes its passive
 force so), handed to ODE as ``dJointAddHingeTorque`` / ``dJointAddSliderForce``: J^T f for the joint's own
@@ -42,7 +49,8 @@ _ONE_DOF = (JointKind.HINGE, JointKind.SLIDER)
 
 
 def check_joint_dynamics(world: CompiledWorld) -> None:
-    """Refuse armature or stiffness on a joint other than a slider or hinge (a universal joint's) up front."""
+    """Refuse armature or stiffness on a joint other than a slider or hinge (a universal joint's) up front (the
+    runner's joint dynamics damp sliders and hinges only, so damping elsewhere is no concern of this row)."""
     for spec in world.joints:
         if (spec.dynamics.armature > 0.0 or spec.dynamics.stiffness > 0.0) and spec.kind not in _ONE_DOF:
             raise UnsupportedFeature(
@@ -53,11 +61,13 @@ def check_joint_dynamics(world: CompiledWorld) -> None:
 
 @dataclass
 class _Rotor:
-    """The armature row of one joint: its motor joint and whether the joint is a slider between two bodies."""
+    """The armature-and-damping row of one joint: its motor joint and whether the joint is a slider between two
+    bodies; ``share`` is a / (a + c h), the part of the armature's target the row aims at (1: no damping)."""
 
     handle: JointHandle
     motor: Any  # OdeAMotorJoint | OdeLMotorJoint
     slider_pair: bool
+    share: float = 1.0
     #: a slider pair's row geometry (axis, p1, p2) at the last step's start; None: none yet (or a body was reset)
     previous: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
 
@@ -72,7 +82,8 @@ class _Spring:
 
 
 class JointDynamics:
-    """Armature rows and springs of a scene's sliders and hinges; ``before_step`` readies each engine step."""
+    """Armature-and-damping rows and springs of a scene's sliders and hinges; ``before_step`` readies each engine
+    step."""
 
     def __init__(self, world: OdeWorld, handles: list[JointHandle], h: float) -> None:
         self.h = h
@@ -82,8 +93,8 @@ class JointDynamics:
             dyn = handle.spec.dynamics
             if handle.spec.kind not in _ONE_DOF:
                 continue
-            if dyn.armature > 0.0:
-                self.rotors.append(_rotor(world, handle, dyn.armature, h))
+            if dyn.armature > 0.0 or dyn.damping > 0.0:
+                self.rotors.append(_rotor(world, handle, dyn.armature, dyn.damping, h))
             if dyn.stiffness > 0.0:
                 self.springs.append(_Spring(handle, dyn.stiffness, dyn.springref))
 
@@ -91,12 +102,14 @@ class JointDynamics:
         return bool(self.rotors or self.springs)
 
     def before_step(self) -> None:
-        """Each armature row's target: the coordinate's rate now; each spring's force from the position now."""
+        """Each row's target: a / (a + c h) of the coordinate's rate now; each spring's force from the position
+        now."""
         for rotor in self.rotors:
+            target = rotor.share * _target(rotor, self.h) if rotor.share > 0.0 else 0.0
             if rotor.handle.spec.kind is JointKind.HINGE:
-                rotor.motor.setParamVel(0, _target(rotor, self.h))
+                rotor.motor.setParamVel(0, target)
             else:
-                rotor.motor.setParam(PARAM_VEL, _target(rotor, self.h))
+                rotor.motor.setParam(PARAM_VEL, target)
         for spring in self.springs:
             joint = spring.handle.joint
             if spring.handle.spec.kind is JointKind.HINGE:
@@ -106,6 +119,15 @@ class JointDynamics:
                 joint.addTorque(-spring.stiffness * (angle + 2.0 * math.pi * spring.turns - spring.rest))
             else:
                 joint.addForce(-spring.stiffness * (joint.getPosition() - spring.rest))
+
+    def damping(self, handle: JointHandle) -> float:
+        """The joint's damping as ODE holds it, c = 1 / CFM - a / h from its row's CFM (0: no damping in a row)."""
+        for rotor in self.rotors:
+            if rotor.handle is handle and rotor.share < 1.0:
+                hinge = handle.spec.kind is JointKind.HINGE
+                cfm = float(rotor.motor.getParamCFM(0) if hinge else rotor.motor.getParam(PARAM_CFM))
+                return 1.0 / cfm - handle.spec.dynamics.armature / self.h
+        return 0.0
 
     def forget(self) -> None:
         """A body was put somewhere new: the last step's geometry says nothing of the next one's."""
@@ -118,8 +140,9 @@ class JointDynamics:
         self.rotors = []
 
 
-def _rotor(world: OdeWorld, handle: JointHandle, armature: float, h: float) -> _Rotor:
-    """The unbounded velocity row with CFM h / a on the joint's coordinate (see the module's docstring)."""
+def _rotor(world: OdeWorld, handle: JointHandle, armature: float, damping: float, h: float) -> _Rotor:
+    """The unbounded velocity row with CFM h / (a + c h) on the joint's coordinate (see the module's docstring)."""
+    cfm = h / (armature + damping * h)
     joint, other = handle.joint, handle.joint.getBody(1)
     two = other is not None and not other.isEmpty()
     axis = joint.getAxis()  # the world axis now, from the first body: stored in its frame as the joint's
@@ -129,16 +152,16 @@ def _rotor(world: OdeWorld, handle: JointHandle, armature: float, h: float) -> _
         motor.setMode(0)  # dAMotorUser: the axes as given
         motor.setNumAxes(1)
         motor.setAxis(0, 1, axis)
-        motor.setParamCFM(0, h / armature)
+        motor.setParamCFM(0, cfm)
         motor.setParamFMax(0, math.inf)
     else:
         motor = OdeLMotorJoint(world)
         motor.attach(handle.body, other if two else None)
         motor.setNumAxes(1)
         motor.setAxis(0, 1, axis)
-        motor.setParam(PARAM_CFM, h / armature)
+        motor.setParam(PARAM_CFM, cfm)
         motor.setParam(PARAM_FMAX, math.inf)
-    return _Rotor(handle, motor, two and handle.spec.kind is JointKind.SLIDER)
+    return _Rotor(handle, motor, two and handle.spec.kind is JointKind.SLIDER, armature / (armature + damping * h))
 
 
 def _target(rotor: _Rotor, h: float) -> float:

@@ -14,7 +14,7 @@ step. The motor is a velocity constraint towards rest whose force is bounded by 
 
 docs/semantics.md ("Joint dynamics") states the rules: the combination with a motor or a servo (the motor
 wins), the effort and velocity limits (:func:`runner.compile.joints.capped`), and why MuJoCo running an
-MJCF file keeps MuJoCo's own damping and friction loss for the file's joints, and DART its own damping.
+MJCF file keeps MuJoCo's own damping and friction loss for the file's joints, and DART and ODE their own damping.
 """
 
 from __future__ import annotations
