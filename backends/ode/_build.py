@@ -33,6 +33,7 @@ from panda3d.ode import (
     OdeSimpleSpace,
     OdeSliderJoint,
     OdeSphereGeom,
+    OdeTriMeshGeom,
     OdeUniversalJoint,
     OdeWorld,
 )
@@ -86,6 +87,9 @@ class Scene:
     #: per body with a COM offset: where its COM sits in its frame (the OdeBody is at the COM)
     offsets: dict[int, FrameOffset] = field(default_factory=dict)
     meshes: dict[int, Any] = field(default_factory=dict)  # id(Mesh) -> OdeTriMeshData, kept alive
+    #: hash(geom.getId()) of the shapes' triangle-mesh geoms (hulls, static meshes; no prism stand-in): their
+    #: pairs keep at most four contacts (_manifold)
+    mesh_geoms: frozenset[int] = frozenset()
 
 
 def panda_quat(q: tuple[float, float, float, float]) -> Quat:
@@ -227,6 +231,7 @@ def build_scene(world: CompiledWorld, options: OdeOptions) -> Scene:
     geom_body: list[int] = []  # per geom: its body's index
     offsets: dict[int, FrameOffset] = {}
     meshes: dict[int, Any] = {}
+    mesh_geoms: set[int] = set()
     prisms = Prisms(world, meshes)
     for index, spec in enumerate(world.bodies):
         robot = is_robot_body(spec)
@@ -260,6 +265,7 @@ def build_scene(world: CompiledWorld, options: OdeOptions) -> Scene:
         for geom in body_geoms:
             geom.setCategoryBits(BitMask32(category))
             geom.setCollideBits(BitMask32(collide))
+        mesh_geoms.update(hash(g.getId()) for g in body_geoms if isinstance(g, OdeTriMeshGeom))
         body_geoms += prisms.add(space, index, spec, body_geoms, body)  # capsule-cylinder (_colliders)
         bodies.append(body)
         geoms.extend(body_geoms)
@@ -287,6 +293,7 @@ def build_scene(world: CompiledWorld, options: OdeOptions) -> Scene:
         excluded=_excluded(world),
         offsets=offsets,
         meshes=meshes,
+        mesh_geoms=frozenset(mesh_geoms),
     )
 
 

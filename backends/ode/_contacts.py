@@ -10,6 +10,7 @@ Two ways, selected by the ``collide`` option, that make the same contact joints:
   per pair (ODE's primitive colliders make at most 12 here, box-cylinder).
 * ``callback``: the lab's pattern, ``space.collide`` with a Python near-callback, ``OdeUtil.collide``
   (150 contacts at most) and an ``OdeContactJoint`` per contact, mode ``dContactBounce | dContactApprox1``.
+  A pair with a triangle-mesh geom keeps four of its contacts (``_manifold``), so worlds with meshes use it.
 
 ``dContactApprox1`` makes ODE bound friction by mu times the normal force (a Coulomb coefficient, the
 scenario language's meaning) instead of by mu newtons. Each bound holds for one friction row, and ODE's
@@ -55,6 +56,7 @@ from panda3d.ode import (
 from .._kit import contact_point, group_by_pair, sorted_points
 from ..types import Contact, ContactPoint, Surface
 from ._build import MAX_SURFACE_CLASSES, Scene
+from ._manifold import reduce_contacts
 
 CALLBACK_MAX_CONTACTS = 150  # PyODE's ode.collide() default, as the lab calls it
 _MODE = OdeSurfaceParameters.MFContactBounce | OdeSurfaceParameters.MFContactApprox1
@@ -114,7 +116,9 @@ class Collider:
         # autoCollide's table is indexed by a byte, and its mode has no dContactFDir1 nor a per-contact CFM:
         # the callback then.
         # Excluded pairs need the callback too: autoCollide contacts every pair the category bits allow.
-        auto = classes <= MAX_SURFACE_CLASSES and not self._slipping and not impact_cfm and not scene.excluded
+        # Mesh pairs keep four contacts (_manifold), which only the callback can choose.
+        auto = (classes <= MAX_SURFACE_CLASSES and not self._slipping and not impact_cfm and not scene.excluded
+                and not scene.mesh_geoms)  # fmt: skip
         self.mode = mode if auto else "callback"
         self._auto = self.mode == "auto"
         self._event_set: str | None = None  # the collision event last given to the space ("": none)
@@ -267,6 +271,9 @@ class Collider:
         entry = OdeUtil.collide(geom1, geom2, CALLBACK_MAX_CONTACTS)
         if entry.getNumContacts() == 0:
             return
+        meshes = scene.mesh_geoms
+        if meshes and (hash(geom1.getId()) in meshes or hash(geom2.getId()) in meshes):
+            entry = reduce_contacts(entry)  # four, as the other engines keep of a hull (_manifold)
         key = (scene.surface_class[i], scene.surface_class[j])
         params = self._params[key]
         body1, body2 = scene.bodies[i], scene.bodies[j]
