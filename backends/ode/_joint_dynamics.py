@@ -105,7 +105,9 @@ class JointDynamics:
         """Each row's target: a / (a + c h) of the coordinate's rate now; each spring's force from the position
         now."""
         for rotor in self.rotors:
-            target = rotor.share * _target(rotor, self.h) if rotor.share > 0.0 else 0.0
+            if rotor.share == 0.0:  # damping alone: the target stays 0 (_rotor)
+                continue
+            target = rotor.share * _target(rotor, self.h)
             if rotor.handle.spec.kind is JointKind.HINGE:
                 rotor.motor.setParamVel(0, target)
             else:
@@ -154,6 +156,7 @@ def _rotor(world: OdeWorld, handle: JointHandle, armature: float, damping: float
         motor.setAxis(0, 1, axis)
         motor.setParamCFM(0, cfm)
         motor.setParamFMax(0, math.inf)
+        motor.setParamVel(0, 0.0)  # damping alone aims at rest; with armature, before_step sets it
     else:
         motor = OdeLMotorJoint(world)
         motor.attach(handle.body, other if two else None)
@@ -161,6 +164,7 @@ def _rotor(world: OdeWorld, handle: JointHandle, armature: float, damping: float
         motor.setAxis(0, 1, axis)
         motor.setParam(PARAM_CFM, cfm)
         motor.setParam(PARAM_FMAX, math.inf)
+        motor.setParam(PARAM_VEL, 0.0)
     return _Rotor(handle, motor, two and handle.spec.kind is JointKind.SLIDER, armature / (armature + damping * h))
 
 
