@@ -39,7 +39,8 @@ def test_odes_trimesh_plane_collider_repeats_each_touching_vertex() -> None:
     """The cause, in ODE itself: the hull box resting on the plane collides with more contacts than corners,
     at only its four bottom corners (a vertex once per triangle around it: 18 contacts in ODE 0.13.1)."""
     world, _ = _hull_on_the_ground()
-    with OdeBackend(world) as sim:
+    sim = OdeBackend(world)
+    with sim:
         for _ in range(100):
             sim.step()
         scene = sim._scene
