@@ -56,7 +56,7 @@ from runner.language.robot_desc import (
     resolved,
     vec,
 )
-from runner.language.urdf import parse_xml
+from runner.language.urdf_xml import parse_xml
 from runner.language.visuals import mjcf_visuals, within_budget
 
 _JOINTS = {0: "free", 1: "ball", 2: "slider", 3: "hinge"}  # mjtJoint

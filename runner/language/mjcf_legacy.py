@@ -30,7 +30,7 @@ from typing import Any
 
 from runner.language.mjcf_global import to_local
 from runner.language.robot_desc import ModelFileError, resolved
-from runner.language.urdf import xml_bytes
+from runner.language.urdf_xml import xml_bytes
 
 LEGACY = "legacy MJCF"
 #: the grid spacing given to a plane without one (MuJoCo draws its grid with it; no step reads it)
