@@ -35,7 +35,7 @@ from runner.language.urdf_xml import xml_bytes
 LEGACY = "legacy MJCF"
 #: the grid spacing given to a plane without one (MuJoCo draws its grid with it; no step reads it)
 PLANE_GRID = 1.0
-#: included files followed when collecting the names a file defines (as runner.language.mjcf.MAX_INCLUDES)
+#: included files followed when collecting the names a file defines (as runner.language.mjcf_checks.MAX_INCLUDES)
 MAX_INCLUDES = 64
 
 

@@ -231,7 +231,7 @@ def _mjcf_colour(model: Any, g: int) -> Rgba:
 
 def mjcf_visuals(model: Any, body: int, mujoco: Any, geom_shape: GeomShape) -> tuple[PlacedShape, ...]:
     """The geoms of MuJoCo body ``body`` that MuJoCo's viewer draws by default, in the body frame;
-    ``geom_shape``: the MJCF reader's shape of a primitive geom (runner.language.mjcf.geom_shape)."""
+    ``geom_shape``: the MJCF reader's shape of a primitive geom (runner.language.mjcf_collision.geom_shape)."""
     out = []
     first = int(model.body_geomadr[body])
     for g in range(first, first + int(model.body_geomnum[body])):
