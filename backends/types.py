@@ -4,6 +4,10 @@ A :class:`CompiledWorld` is what a backend is built from: every name resolved, e
 computed, every pose in the world frame with quaternions in (w, x, y, z) order, every joint frame and
 every contact surface per body pair known. Backends never see YAML.
 
+This module holds the compiled world and re-exports the rest of the vocabulary, so that ``backends.types`` is
+the one import: ``basic_types`` (vectors, kinds, precision), ``capabilities``, ``joint_specs`` and
+``readings`` (states, contacts, the imported model).
+
 Conventions (ODE's, see docs/semantics.md):
 
 * SI units; angles in radians; the world is Z-up and right-handed.
@@ -45,171 +49,45 @@ must honour:
 
 from __future__ import annotations
 
-import enum
 import math
-from collections.abc import Callable, Mapping
+from collections.abc import Mapping
 from dataclasses import dataclass, field
-from functools import partial
-from typing import Any, NamedTuple
+from typing import Any
 
 import numpy as np
 
+from .basic_types import IDENTITY_QUAT, JointKind, Motion, Precision, Quat, Rgba, ShapeKind, Vec3
+from .capabilities import (
+    ALL_SHAPES,
+    MODEL_FILE_CAPABILITIES,
+    OUTPUT_CAPABILITIES,
+    RIGID_BODY_CAPABILITIES,
+    ROBOT_CAPABILITIES,
+    SENSING_CAPABILITIES,
+    UNMAPPED_CAPABILITIES,
+    Capability,
+)
 from .geometry import quat_matrices
-
-Vec3 = tuple[float, float, float]
-Quat = tuple[float, float, float, float]  # (w, x, y, z)
-Rgba = tuple[float, float, float, float]
-
-
-class Motion(str, enum.Enum):
-    STATIC = "static"  # never moves (ODE: a geom without a body)
-    KINEMATIC = "kinematic"  # moved by the runner, with velocity, unaffected by forces
-    DYNAMIC = "dynamic"  # simulated
-
-
-class ShapeKind(str, enum.Enum):
-    BOX = "box"
-    SPHERE = "sphere"
-    CAPSULE = "capsule"
-    CYLINDER = "cylinder"
-    PLANE = "plane"
-    COMPOUND = "compound"  # the body's shapes are BodySpec.shapes, at local poses
-    CONVEX = "convex"  # Shape.mesh: a convex hull
-    TRIMESH = "trimesh"  # Shape.mesh: a triangle mesh, static bodies only
-
-
-class JointKind(str, enum.Enum):
-    SLIDER = "slider"
-    HINGE = "hinge"
-    BALL = "ball"
-    FIXED = "fixed"
-    UNIVERSAL = "universal"
-
-
-class Precision(str, enum.Enum):
-    """The floating-point format an engine keeps its state in (positions, velocities, masses, forces).
-
-    Each step rounds every stored number to it, so a state carries rounding that grows with the number
-    of steps: docs/semantics.md ("Rounding") bounds it by ``n * eps * scale`` and the expressions' name
-    ``eps`` gives an assertion the running engine's :attr:`eps`."""
-
-    FLOAT32 = "float32"
-    FLOAT64 = "float64"
-
-    @property
-    def eps(self) -> float:
-        """Machine epsilon: the gap between 1 and the next number (2^-23 for float32, 2^-52 for float64)."""
-        return 2.0**-23 if self is Precision.FLOAT32 else 2.0**-52
-
-
-class Capability(str, enum.Enum):
-    """What a backend can do. The runner checks a world's needs against these before a run starts."""
-
-    SHAPE_BOX = "shape:box"
-    SHAPE_SPHERE = "shape:sphere"
-    SHAPE_CAPSULE = "shape:capsule"
-    SHAPE_CYLINDER = "shape:cylinder"
-    SHAPE_PLANE = "shape:plane"
-    SHAPE_COMPOUND = "shape:compound"  # several shapes (or none) at local poses in the body frame
-    SHAPE_CONVEX = "shape:convex"  # convex hulls of meshes
-    SHAPE_TRIMESH = "shape:trimesh"  # triangle meshes on static bodies
-    COM_OFFSET = "body:com-offset"  # the centre of mass or principal axes away from the body frame
-    COLLISION_FILTER = "collision:exclude-pairs"  # CompiledWorld.excluded_pairs never touch
-    JOINT_SLIDER = "joint:slider"
-    JOINT_HINGE = "joint:hinge"
-    JOINT_BALL = "joint:ball"
-    JOINT_FIXED = "joint:fixed"
-    JOINT_UNIVERSAL = "joint:universal"
-    JOINT_BETWEEN_BODIES = "joint:between-bodies"  # joints whose `other` is a body, not the environment
-    JOINT_LIMITS = "joint:limits"
-    JOINT_STOP_BOUNCE = "joint:stop-bounce"  # stops with restitution (JointSpec.stop_bounce > 0)
-    JOINT_STOP_SOFTNESS = "joint:stop-softness"  # spring-damper stops (JointSpec.stop_stiffness)
-    JOINT_MOTOR = "joint:motor"
-    CONTACT_BOUNCE = "contact:bounce"  # a contact surface with restitution (Surface.bounce > 0)
-    KINEMATIC = "motion:kinematic"
-    SUBSTEPS = "world:substeps"
-    #: Bodies collide: contact points, normal forces, friction and restitution. Every engine declares it; the
-    #: contract suite's contact tests require it. It is not among a world's needs (required_capabilities):
-    #: the runner's fake backend, and the minimal engine of tests/outside_engine, run floors without it.
-    CONTACTS = "world:contacts"
-    # What a model file may hold that only an engine building the robot from the file itself runs
-    # (MuJoCo for MJCF, CompiledWorld.models): MODEL_FILE_CAPABILITIES. Several joints per body are every
-    # adapter's: the base class builds them as a chain of light bodies (backends/_kit/chains.py).
-    JOINT_SEVERAL_PER_BODY = "joint:several-per-body"  # CompiledWorld.joint_chains: one body moved by several joints
-    JOINT_ARMATURE = "joint:armature"  # JointDynamics.armature: rotor inertia added to the joint's coordinate
-    JOINT_MIMIC = "joint:mimic"  # CompiledWorld.couplings: a joint held at multiplier x its leader + offset
-    JOINT_STIFFNESS = "joint:stiffness"  # JointDynamics.stiffness: a spring on the coordinate towards springref
-    JOINT_BALL_RANGE = "joint:ball-range"  # a ball joint's cone limit
-    JOINT_BALL_DYNAMICS = "joint:ball-dynamics"  # damping, friction loss, armature or stiffness of a ball/free joint
-    BODY_MASSLESS = "body:massless"  # a moving body without mass (MuJoCo: its subtree carries the inertia)
-    CONSTRAINT_EQUALITY = "constraint:equality"  # MJCF <equality>
-    CONSTRAINT_TENDON = "constraint:tendon"  # MJCF <tendon>
-    COLLISION_EXPLICIT_PAIRS = "collision:explicit-pairs"  # MJCF <contact><pair>
-    #: MJCF <option density viscosity wind>, MuJoCo's inertia-box model (CompiledWorld.fluid): run by MuJoCo from the
-    #: file, by the runner's forces before each step on every other engine (runner.sim.fluid)
-    WORLD_FLUID = "world:fluid"
-    WORLD_FLUID_ELLIPSOID = "world:fluid-ellipsoid"  # MJCF geoms' fluidshape="ellipsoid" (MuJoCo's per-geom model)
-    #: an MJCF actuator the scenario drives that the runner's force law cannot reproduce (a site, body or tendon
-    #: transmission, activation dynamics): the engine must run the file's actuator itself (Backend.set_control)
-    ACTUATOR_NATIVE = "actuator:native"
-    # What a run reads beyond states and contact pairs (OUTPUT_CAPABILITIES).
-    CONTACT_POINTS = "contacts:points"  # Backend.contact_points(): each touching point, its normal and force
-    # Sensing: what a scenario may read that only the engine knows (CompiledWorld.reaction_joints)
-    JOINT_REACTION = "joint:reaction"  # Backend.joint_reactions(): the wrench a joint applies to its body
-
-
-#: Capabilities that no adapter maps to its engine yet (the stop bounce and softness of the language): no
-#: backend may declare them until its mapping exists and is tested, so a scenario using them is refused up
-#: front with the capability message.
-UNMAPPED_CAPABILITIES: frozenset[Capability] = frozenset({Capability.JOINT_STOP_BOUNCE, Capability.JOINT_STOP_SOFTNESS})
-#: What robot models (URDF, MJCF) need beyond hand-written bodies (docs/robots.md). Every adapter declares
-#: all but ``shape:trimesh``, which ODE and DART declare too; a scenario needing one its backend lacks is
-#: refused up front with the capability message.
-ROBOT_CAPABILITIES: frozenset[Capability] = frozenset(
-    {
-        Capability.SHAPE_COMPOUND,
-        Capability.SHAPE_CONVEX,
-        Capability.SHAPE_TRIMESH,
-        Capability.COM_OFFSET,
-        Capability.COLLISION_FILTER,
-    }
-)
-#: What only an engine that builds a robot from its model file runs (MuJoCo, for MJCF; docs/robots.md).
-MODEL_FILE_CAPABILITIES: frozenset[Capability] = frozenset(
-    {
-        Capability.JOINT_STIFFNESS,
-        Capability.JOINT_BALL_RANGE,
-        Capability.JOINT_BALL_DYNAMICS,
-        Capability.BODY_MASSLESS,
-        Capability.CONSTRAINT_EQUALITY,
-        Capability.CONSTRAINT_TENDON,
-        Capability.COLLISION_EXPLICIT_PAIRS,
-        Capability.WORLD_FLUID_ELLIPSOID,
-        Capability.ACTUATOR_NATIVE,
-    }
-)
-#: Every primitive shape; and everything but universal joints and the robot capabilities (what the pybullet,
-#: mujoco and dart adapters offer).
-ALL_SHAPES: frozenset[Capability] = frozenset(
-    c for c in Capability if c.value.startswith("shape:") and c not in ROBOT_CAPABILITIES
-)
-#: Reads an adapter implements beyond the contract's mandatory ones; each adapter names those it has, so a
-#: new adapter (built from ``RIGID_BODY_CAPABILITIES``) refuses them up front until it implements them.
-OUTPUT_CAPABILITIES: frozenset[Capability] = frozenset({Capability.CONTACT_POINTS})
-#: Sensing capabilities: each adapter adds the ones it implements by name (a new adapter has none until it does).
-SENSING_CAPABILITIES: frozenset[Capability] = frozenset({Capability.JOINT_REACTION})
-RIGID_BODY_CAPABILITIES: frozenset[Capability] = (
-    frozenset(Capability)
-    - OUTPUT_CAPABILITIES
-    - {Capability.JOINT_UNIVERSAL, Capability.JOINT_ARMATURE, Capability.JOINT_MIMIC}
-    - SENSING_CAPABILITIES
-    - UNMAPPED_CAPABILITIES
-    - ROBOT_CAPABILITIES
-    - MODEL_FILE_CAPABILITIES
+from .joint_specs import NO_DYNAMICS, JointCoupling, JointDynamics, JointSpec, Motor
+from .readings import (
+    BodyStates,
+    Contact,
+    ContactPoint,
+    ImportedBody,
+    ImportedJoint,
+    ImportedModel,
+    JointStates,
+    new_contact,
 )
 
-
-IDENTITY_QUAT: Quat = (1.0, 0.0, 0.0, 0.0)
+__all__ = [
+    "ALL_SHAPES", "IDENTITY_QUAT", "MODEL_FILE_CAPABILITIES", "NO_DYNAMICS", "OUTPUT_CAPABILITIES",
+    "RIGID_BODY_CAPABILITIES", "ROBOT_CAPABILITIES", "SENSING_CAPABILITIES", "UNMAPPED_CAPABILITIES", "BodySpec",
+    "BodyStates", "Capability", "CompiledWorld", "Contact", "ContactPoint", "Fluid", "ImportedBody", "ImportedJoint",
+    "ImportedModel", "JointCoupling", "JointDynamics", "JointKind", "JointSpec", "JointStates", "Mesh", "ModelFile",
+    "Motion", "Motor", "PairSurface", "PlacedShape", "Precision", "Quat", "Rgba", "Shape", "ShapeKind", "Surface",
+    "Vec3", "new_contact",
+]  # fmt: skip
 
 
 @dataclass(frozen=True)
@@ -252,37 +130,6 @@ class Surface:
 
 
 @dataclass(frozen=True)
-class Motor:
-    vel: float
-    fmax: float
-
-
-@dataclass(frozen=True)
-class JointDynamics:
-    """A joint's own dynamics (docs/semantics.md, "Joint dynamics"), in the joint coordinate's units (hinge:
-    N m, rad; slider: N, m). Damping and friction loss are realised by the runner with the joint's velocity
-    motor (``runner.sim.joint_dynamics``): every engine with ``joint:motor`` runs them. Effort and velocity
-    limits cap what the runner commands that motor. Armature and stiffness are the adapter's
-    (``joint:armature``, ``joint:stiffness``)."""
-
-    damping: float = 0.0  # N m s/rad or N s/m: a force -damping * rate
-    frictionloss: float = 0.0  # N m or N: dry friction, the force that holds the joint still up to this bound
-    armature: float = 0.0  # kg m^2 or kg: inertia added to the coordinate (a rotor's reflected inertia)
-    stiffness: float = 0.0  # N m/rad or N/m: a spring force -stiffness * (position - springref)
-    springref: float = 0.0  # where the spring is relaxed, in the coordinate measured from the start
-    effort: float | None = None  # the largest force a motor or servo may apply (caps fmax); None: no cap
-    velocity: float | None = None  # the largest rate a motor or servo may command; None: no cap
-
-    @property
-    def dissipative(self) -> bool:
-        """Whether the runner drives the joint's motor for damping or friction loss."""
-        return self.damping > 0 or self.frictionloss > 0
-
-
-NO_DYNAMICS = JointDynamics()
-
-
-@dataclass(frozen=True)
 class BodySpec:
     name: str
     motion: Motion
@@ -310,44 +157,6 @@ class BodySpec:
     def placed_shapes(self) -> tuple[PlacedShape, ...]:
         """The body's collision shapes at their local poses (one, at the origin, for a primitive body)."""
         return self.shapes if self.shape.kind is ShapeKind.COMPOUND else (PlacedShape(self.shape),)
-
-
-@dataclass(frozen=True)
-class JointSpec:
-    name: str
-    kind: JointKind
-    body: str
-    other: str | None  # None: the environment (the static world)
-    axis: Vec3 = (1.0, 0.0, 0.0)  # world frame, unit (slider, hinge; universal: first axis)
-    axis2: Vec3 | None = None  # universal: second axis, world frame, unit
-    anchor: Vec3 = (0.0, 0.0, 0.0)  # world frame (hinge, ball, universal)
-    lo: float | None = None  # stops: metres (slider) or radians (hinge), from the start pose
-    hi: float | None = None
-    #: restitution of the stops, 0..1 (ODE dParamBounce); 0: no bounce
-    stop_bounce: float = 0.0
-    #: a soft stop as a spring-damper (N/m or N m/rad; N s/m or N m s/rad), ODE's dParamStopERP/CFM with
-    #: ERP = h k / (h k + c) and CFM = 1 / (h k + c) for a step h; None: rigid (the engine's default stop)
-    stop_stiffness: float | None = None
-    stop_damping: float | None = None
-    motor: Motor | None = None  # initial motor; the runner may change it with set_motor
-    dynamics: JointDynamics = NO_DYNAMICS
-
-
-@dataclass(frozen=True)
-class JointCoupling:
-    """A joint whose position is its leader's, scaled and shifted (URDF `<mimic>`): ``joint`` = ``multiplier`` x
-    ``leader`` + ``offset``, both positions counted from the start as every JointSpec's (so ``offset`` is 0
-    when the start already satisfies it). Both are sliders or hinges; capability ``joint:mimic``."""
-
-    joint: str  # the follower's CompiledWorld joint name
-    leader: str
-    multiplier: float
-    offset: float = 0.0  # m or rad
-
-    def engine_terms(self, follower_sign: float, leader_sign: float) -> tuple[float, float]:
-        """(ratio, offset) of the coupling in an engine's coordinates ``e = sign * q`` of each joint:
-        e_joint = ratio * e_leader + offset."""
-        return self.multiplier * follower_sign * leader_sign, follower_sign * self.offset
 
 
 @dataclass(frozen=True)
@@ -491,107 +300,3 @@ class CompiledWorld:
         if self.contact_points:
             need.add(Capability.CONTACT_POINTS)
         return frozenset(need)
-
-
-@dataclass(frozen=True)
-class ImportedBody:
-    """A body as the engine holds it once built (:meth:`backends.base.Backend.imported_model`), read back from
-    the engine: what it will simulate, whatever the world asked for."""
-
-    name: str  # the CompiledWorld body's name
-    mass: float  # kg
-    inertia: Vec3  # principal moments about the COM (kg m^2), ascending (the axes are not compared)
-    com: Vec3  # the centre of mass in the body frame (m)
-    shapes: int  # collision shapes the engine built for the body
-
-
-@dataclass(frozen=True)
-class ImportedJoint:
-    """A joint as the engine holds it once built, in the world joint's coordinate (counted from the start, its
-    sign), read back from the engine. ``None``: the engine holds no such value (no stop on that side, no own
-    damping or friction parameter, no limit it enforces by itself); what the runner realises instead (its
-    motor's damping and friction loss, its caps on effort and velocity) is not the engine's and is not here."""
-
-    name: str  # the CompiledWorld joint's name
-    kind: JointKind  # the engine's joint type, mapped to ours
-    axis: Vec3 | None  # world frame, unit, at the start (slider, hinge; universal: first axis); None: no axis
-    lo: float | None  # stops: metres or radians from the start
-    hi: float | None
-    damping: float | None  # the engine's own joint damping (N m s/rad or N s/m)
-    frictionloss: float | None  # the engine's own dry joint friction (N m or N)
-    effort: float | None  # a force limit the engine enforces by itself (N m or N)
-    velocity: float | None  # a rate limit the engine enforces by itself (rad/s or m/s)
-
-
-@dataclass(frozen=True)
-class ImportedModel:
-    """What an engine built, read back before any step: every dynamic body and every joint, in
-    ``CompiledWorld`` order (static bodies carry no mass in any engine and are left out)."""
-
-    backend: str
-    bodies: tuple[ImportedBody, ...]
-    joints: tuple[ImportedJoint, ...]
-    #: where a value is the adapter's rather than the engine's (e.g. ODE keeps the COM at the body's origin,
-    #: so the COM offset is the adapter's frame), one line each
-    notes: tuple[str, ...] = ()
-
-
-@dataclass
-class BodyStates:
-    """States of every body in ``CompiledWorld.bodies`` order, world frame."""
-
-    pos: np.ndarray  # (N, 3)
-    quat: np.ndarray  # (N, 4), w x y z
-    lin_vel: np.ndarray  # (N, 3)
-    ang_vel: np.ndarray  # (N, 3)
-
-    @classmethod
-    def from_rows(cls, rows: np.ndarray) -> BodyStates:
-        """Views of an (N, 13) array whose rows are pos, quat (w x y z), lin_vel, ang_vel."""
-        return cls(rows[:, 0:3], rows[:, 3:7], rows[:, 7:10], rows[:, 10:13])
-
-    def rows(self) -> np.ndarray:
-        """One (N, 13) float64 array: each row pos, quat (w x y z), lin_vel, ang_vel."""
-        return np.hstack((self.pos, self.quat, self.lin_vel, self.ang_vel)).astype(np.float64, copy=False)
-
-
-@dataclass
-class JointStates:
-    """States of every joint in ``CompiledWorld.joints`` order (NaN where a value does not exist)."""
-
-    position: np.ndarray  # (M,) slider m / hinge rad; NaN for ball and fixed
-    velocity: np.ndarray  # (M,)
-    motor_force: np.ndarray  # (M,) force or torque the motor applied in the last step; 0 if none
-
-
-class Contact(NamedTuple):
-    """Touching bodies after the last step (indices into ``CompiledWorld.bodies``, ``a < b``).
-
-    A named tuple rather than a frozen dataclass: adapters make one per touching pair per step, and a
-    named tuple is built about 2.5 times faster (0.5 us against 1.2 us).
-    """
-
-    a: int
-    b: int
-    points: int  # number of contact points with distance <= 0
-    depth: float  # largest penetration depth, >= 0
-    normal_force: float  # summed normal force in N; NaN if the engine cannot say
-
-
-class ContactPoint(NamedTuple):
-    """One contact point of a touching pair (``a < b``, indices into ``CompiledWorld.bodies``) in the last
-    engine step of the last scenario step (``Backend.contact_points()``; docs/semantics.md, "Contact points").
-    """
-
-    a: int
-    b: int
-    pos: Vec3  # world frame, m: where the engine places the point (between the two surfaces)
-    normal: Vec3  # unit, world frame, pointing from body a to body b: a pushes b along +normal
-    depth: float  # penetration, m (>= 0 when touching)
-    force: float  # normal force, N, >= 0: the impulse along the normal in that engine step / its length
-
-
-#: ``Contact`` from a (a, b, points, depth, normal_force) tuple without ``NamedTuple.__new__``'s Python
-#: frame (``Contact._make`` minus its length check): for adapters that build one per pair per step.
-#: The fields must already be plain ``int`` and ``float``.
-new_contact: Callable[[tuple[int, int, int, float, float]], Contact] = partial(tuple.__new__, Contact)

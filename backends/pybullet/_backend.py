@@ -28,21 +28,20 @@ from ..types import (
     Contact,
     ContactPoint,
     ImportedModel,
-    JointKind,
     JointStates,
-    Motion,
     Precision,
     Quat,
-    ShapeKind,
     Vec3,
 )
-from ._build import PLANE_HALF_SIZE, Layout, build, initial_rate, xyzw
+from ._build import PLANE_HALF_SIZE, Layout, build, xyzw
 from ._build import check as check_build
+from ._dynamics import set_body_dynamics, set_joint_dynamics
 from ._frames import InertialFrames
 from ._impacts import ImpactErp
 from ._imported import read_imported
 from ._options import PyBulletOptions, check_stack, solver_iterations
-from ._reads import ROW, ContactReader, base_rows
+from ._reactions import ReactionSensors
+from ._reads import ROW, ContactReader, JointReader, base_rows
 from ._rotors import add_mimics, add_rotors
 from ._springs import Springs
 from ._surfaces import FRICTION_CLAMP, SurfaceFit, fit_surfaces
@@ -50,18 +49,11 @@ from ._surfaces import FRICTION_CLAMP, SurfaceFit, fit_surfaces
 _flat = chain.from_iterable
 
 _NAME = "pybullet"
-#: PyBullet clamps joint rates and free bases' speeds to 100 by default; ODE has no such limit.
-_MAX_JOINT_VELOCITY = 1e6
 #: Bullet keeps contact points up to this distance apart (default 0.02 m). Restitution is lost when a
 #: point exists more than about one step before impact [checked: a sphere dropped 0.5 m at dt 0.001
 #: rebounds to 0.0000 of its height at 0.02, 0.27 at 0.001]. ODE makes contacts only when touching.
 #: NB: Bullet keeps this in a process-wide global, so every instance sets the same value.
 CONTACT_BREAKING_THRESHOLD = 0.001
-#: Collision margin of a body with convex hulls. PyBullet gives a hull built from vertices a 1 mm margin
-#: that Bullet adds OUTSIDE the vertices (primitives keep theirs inside): a hull box rested 0.99 mm high
-#: [checked]. Margin 0 rests at -1.0e-5 m but on 1 contact point (it rocks, as on GEOM_PLANE); 1e-4 keeps
-#: 4 points and rests at +1.5e-5 m, the primitive box's -1.4e-5 m in size [checked, dt 0.01].
-HULL_MARGIN = 1e-4
 #: restitutionVelocityThreshold = bounce_vel + this * |g| * h (see PyBulletBackend._build_world).
 _GRAVITY_MARGIN = 1.5
 #: The quaternion's columns in a state row, in (w, x, y, z) order.
@@ -139,88 +131,18 @@ class PyBulletBackend(Backend):
             physicsClientId=c,
         )
         layout = self._layout
-        # PyBullet pitfall [checked]: a changeDynamics call on a link that also sets linearDamping,
-        # angularDamping or activationState applies its other parameters to the base instead (and
-        # drops joint limits). These three are per multibody anyway: set them alone, on the base.
-        for uid in sorted(set(layout.uid)):
-            for key, value in (
-                ("linearDamping", 0.0),
-                ("angularDamping", 0.0),
-                ("activationState", p.ACTIVATION_STATE_DISABLE_SLEEPING),
-            ):
-                p.changeDynamics(uid, -1, physicsClientId=c, **{key: value})
-        for i, spec in enumerate(world.bodies):
-            uid, link = layout.uid[i], layout.link[i]
-            extra: dict[str, Any] = {}
-            if spec.motion is Motion.DYNAMIC:
-                extra["localInertiaDiagonal"] = list(spec.inertia)
-            p.changeDynamics(
-                uid,
-                link,
-                restitution=self._fit.restitution[i],
-                lateralFriction=self._fit.friction[i],
-                physicsClientId=c,
-                **extra,
-            )
-            # alone: combined with other parameters it misroutes them, like the damping. On a base it lifts
-            # Bullet's 100 m/s cap on free bodies [checked: 2000 N for 0.04 s on 0.5 kg gave 100.0, now 160.0]
-            p.changeDynamics(uid, link, maxJointVelocity=_MAX_JOINT_VELOCITY, physicsClientId=c)
-            if any(one.shape.kind is ShapeKind.CONVEX for one in spec.placed_shapes()):  # alone, as above
-                p.changeDynamics(uid, link, collisionMargin=HULL_MARGIN, physicsClientId=c)
-            if link < 0:  # the COM's velocity (the body's origin's, given, plus omega x arm)
-                lin = self._frames.to_inertial(i, spec.pos, spec.quat, spec.lin_vel, spec.ang_vel)[2]
-                p.resetBaseVelocity(uid, list(lin), list(spec.ang_vel), physicsClientId=c)
-        rates: dict[int, float] = {}
-        for k, joint in enumerate(world.joints):
-            handle = layout.joints[k]
-            if joint.kind is JointKind.BALL:  # PyBullet holds spherical links with a default motor
-                p.setJointMotorControlMultiDof(
-                    handle.uid,
-                    handle.link,
-                    p.POSITION_CONTROL,
-                    targetPosition=[0.0, 0.0, 0.0, 1.0],
-                    force=[0.0, 0.0, 0.0],
-                    physicsClientId=c,
-                )
-            if handle.dofs != 1:
-                continue
-            motor = joint.motor
-            self._set_motor(k, motor.vel if motor else 0.0, motor.fmax if motor else 0.0)
-            if joint.lo is not None or joint.hi is not None:  # in its own call: never with damping
-                lo = joint.lo if joint.lo is not None else -math.inf
-                hi = joint.hi if joint.hi is not None else math.inf
-                lo, hi = (lo, hi) if handle.sign > 0 else (-hi, -lo)
-                p.changeDynamics(
-                    handle.uid,
-                    handle.link,
-                    jointLowerLimit=max(lo, -1e30),
-                    jointUpperLimit=min(hi, 1e30),
-                    physicsClientId=c,
-                )
-            rate = initial_rate(world, joint)
-            rates[k] = handle.sign * rate
-            if rate:  # a link's initial velocity is its joint rate (ball and fixed children inherit)
-                p.resetJointState(handle.uid, handle.link, 0.0, handle.sign * rate, physicsClientId=c)
+        set_body_dynamics(c, world, layout, self._fit, self._frames)
+        rates = set_joint_dynamics(c, world, layout, self._set_motor)
         add_rotors(p, c, world, layout, rates)  # joint armature: a rotor geared to the joint (_rotors)
         add_mimics(p, c, world, layout)  # URDF <mimic>: a gear between the two joints (_rotors)
         self._springs = Springs(world, layout)  # joint stiffness: the spring's torque each engine step (_springs)
         bases = [i for i in range(len(world.bodies)) if layout.link[i] < 0]
         self._base_uids = [layout.uid[i] for i in bases]
         self._base_rows = None if bases == list(range(len(world.bodies))) else bases  # None: every body, in order
-        self._motor_joints = [k for k, h in enumerate(layout.joints) if h.dofs == 1]
-        uids = sorted({layout.joints[k].uid for k in self._motor_joints})
-        #: per multibody, its 1-dof joints' links, for one getJointStates call each; then the world joints
-        #: those rows are, and their signs
-        self._joint_reads = [(u, [layout.joints[k].link for k in self._motor_joints if layout.joints[k].uid == u])
-                             for u in uids]  # fmt: skip
-        order = [k for u in uids for k in self._motor_joints if layout.joints[k].uid == u]
-        self._joint_order = np.array(order, dtype=np.int64)
-        self._joint_sign = np.array([layout.joints[k].sign for k in order], dtype=float)
-        #: every joint read, in world order (a robot of hinges and sliders): the read's columns are the arrays
-        self._every_joint = order == list(range(len(world.joints)))
+        self._joint_reader = JointReader(len(world.joints), layout)
         self._motor_mean = SubstepMean(len(world.joints))
-        self._watched = self._watch_reactions()
-        self._reaction_mean = SubstepMean(6 * len(self._watched))
+        self._sensors = ReactionSensors(c, world, layout)  # joint reactions (_reactions)
+        self._reaction_mean = SubstepMean(6 * len(self._sensors))
         self._times = substep_times(world.dt, world.substeps)
         self._substep_contacts = SubstepContacts(world.substeps)
         lut = np.full((max(layout.uid) + 1, max(layout.link) + 2), -1, dtype=np.int64)
@@ -236,8 +158,8 @@ class PyBulletBackend(Backend):
 
     def _step(self) -> None:
         c, n = self._c, self.world.substeps
-        motors = n > 1 and bool(self._motor_joints)  # the substeps' motor torques, for their mean
-        if n == 1 and not (self.forces or self.kinematic or self._impacts.active or self._watched or self._springs):
+        motors = n > 1 and bool(self._joint_reader.one_dof)  # the substeps' motor torques, for their mean
+        if n == 1 and not (self.forces or self.kinematic or self._impacts.active or self._sensors or self._springs):
             p.stepSimulation(c)
         else:
             self._step_with_inputs(c, n, motors)
@@ -248,7 +170,7 @@ class PyBulletBackend(Backend):
         """The substeps with one-step forces, kinematic bodies, motor torques or contacts to collect."""
         if motors:
             self._motor_mean.start()
-        if self._watched:
+        if self._sensors:
             self._reaction_mean.start()
         if n > 1:
             self._substep_contacts.start()
@@ -263,63 +185,15 @@ class PyBulletBackend(Backend):
             if self.kinematic:
                 self._follow_track(t)
             if motors:
-                self._motor_mean.add(self._motor_torques())
-            if self._watched:
-                self._reaction_mean.add(self._reactions_now())
+                self._motor_mean.add(self._joint_reader.motor_torques(c))
+            if self._sensors:
+                self._reaction_mean.add(self._sensors.now())
             if n > 1:
                 self._substep_contacts.add(self._contact_reader(p.getContactPoints(physicsClientId=c)))
         if motors:
             self._motor_mean.finish()
-        if self._watched:
+        if self._sensors:
             self._reaction_mean.finish()
-
-    def _watch_reactions(self) -> list[tuple[int, int, float, int, int, tuple[float, ...], bool]]:
-        """A force/torque sensor on each joint of ``world.reaction_joints``, reporting in world axes about the
-        joint's pivot (the child link's frame origin: jointFeedbackMode world space | joint frame); per joint
-        (multibody, link, +1 when the link is the joint's first body else -1, the first body's multibody and
-        link, the joint's axis in the link frame for a motor's torque (empty without one), whether it is a
-        slider). The sensor leaves out what a joint's motor applies along its axis: added from its applied
-        torque (getJointState's fourth value, the coordinate's force). Only when the scenario reads a
-        reaction: the mode is the client's, the sensors cost a pass."""
-        names = self.world.reaction_joints
-        if not names:
-            return []
-        c, layout = self._c, self._layout
-        p.setPhysicsEngineParameter(
-            jointFeedbackMode=p.JOINT_FEEDBACK_IN_WORLD_SPACE | p.JOINT_FEEDBACK_IN_JOINT_FRAME, physicsClientId=c
-        )
-        index = {j.name: k for k, j in enumerate(self.world.joints)}
-        out = []
-        for name in names:
-            k = index[name]
-            handle = layout.joints[k]
-            first = self.world.body_index(self.world.joints[k].body)
-            p.enableJointForceTorqueSensor(handle.uid, handle.link, True, physicsClientId=c)
-            axis = tuple(p.getJointInfo(handle.uid, handle.link, physicsClientId=c)[13]) if handle.dofs == 1 else ()
-            slider = self.world.joints[k].kind is JointKind.SLIDER
-            out.append((handle.uid, handle.link, handle.sign, layout.uid[first], layout.link[first], axis, slider))
-        return out
-
-    def _reactions_now(self) -> list[float]:
-        """The watched joints' wrenches on their first bodies after this engine step: force, and torque about
-        the first body's centre of mass (moved from the pivot: tau_c = tau_p + (pivot - c) x F)."""
-        c, out = self._c, []  # type: tuple[int, list[float]]
-        for uid, link, sign, body_uid, body_link, axis, slider in self._watched:
-            state = p.getJointState(uid, link, physicsClientId=c)
-            frame = p.getLinkState(uid, link, physicsClientId=c)
-            pivot, wrench = np.asarray(frame[4]), np.array(state[2])
-            if axis:  # the motor's force or torque along the axis (the link frame's orientation: frame[5])
-                turn = np.asarray(p.getMatrixFromQuaternion(frame[5], physicsClientId=c)).reshape(3, 3)
-                along = state[3] * (turn @ np.asarray(axis))
-                wrench[0:3] += along if slider else 0.0
-                wrench[3:6] += 0.0 if slider else along
-            if body_link < 0:
-                com = np.asarray(p.getBasePositionAndOrientation(body_uid, physicsClientId=c)[0])
-            else:
-                com = np.asarray(p.getLinkState(body_uid, body_link, physicsClientId=c)[0])
-            force, torque = sign * np.asarray(wrench[:3]), sign * np.asarray(wrench[3:])
-            out.extend((*force, *(torque + np.cross(pivot - com, force))))
-        return out
 
     def _joint_reactions(self) -> np.ndarray:
         return self._reaction_mean.mean.reshape(-1, 6).copy()
@@ -345,13 +219,6 @@ class PyBulletBackend(Backend):
                 com = p.getLinkState(uid, link, computeForwardKinematics=1, physicsClientId=c)[0]
             p.applyExternalForce(uid, link, ft[:3].tolist(), com, p.WORLD_FRAME, physicsClientId=c)
             p.applyExternalTorque(uid, link, ft[3:].tolist(), p.WORLD_FRAME, physicsClientId=c)
-
-    def _motor_torques(self) -> np.ndarray:
-        out = np.zeros(len(self.world.joints))
-        for k in self._motor_joints:
-            h = self._layout.joints[k]
-            out[k] = h.sign * p.getJointState(h.uid, h.link, physicsClientId=self._c)[3]
-        return out
 
     # --- reading --------------------------------------------------------------------------------
 
@@ -389,19 +256,7 @@ class PyBulletBackend(Backend):
         )
 
     def _joint_states(self) -> JointStates:
-        m, c = len(self.world.joints), self._c
-        if self._joint_reads:  # one getJointStates per multibody: (q, qd, reaction forces, applied torque)
-            states = [s for uid, links in self._joint_reads for s in p.getJointStates(uid, links, physicsClientId=c)]
-            rows = np.fromiter(_flat((s[0], s[1], s[3]) for s in states), np.float64, 3 * len(states))
-            rows = rows.reshape(-1, 3) * self._joint_sign[:, None]
-            if self._every_joint:
-                pos, vel, force = np.ascontiguousarray(rows.T)  # three contiguous rows: the same numbers
-            else:
-                pos, vel, force = np.full(m, np.nan), np.full(m, np.nan), np.zeros(m)
-                order = self._joint_order
-                pos[order], vel[order], force[order] = rows[:, 0], rows[:, 1], rows[:, 2]
-        else:
-            pos, vel, force = np.full(m, np.nan), np.full(m, np.nan), np.zeros(m)
+        pos, vel, force = self._joint_reader.states(self._c)
         if self.world.substeps > 1 and self.steps:
             force = self._motor_mean.mean.copy()  # the mean over the step's substeps
         return JointStates(position=pos, velocity=vel, motor_force=force)

@@ -22,6 +22,7 @@ import pybullet as p
 
 from .._kit.contacts import NUMPY_FROM, contact_point, group_by_pair, sorted_points
 from ..types import Contact, ContactPoint
+from ._build import Layout
 
 #: One base's row: position (3), orientation x y z w (4), linear (3) and angular (3) velocity.
 ROW = 13
@@ -84,3 +85,48 @@ class ContactReader:
                 out.append(contact_point(lut[cp[1]][cp[3] + 1], lut[cp[2]][cp[4] + 1], mid, (-n[0], -n[1], -n[2]),
                                          -cp[8], cp[9]))  # fmt: skip
         return sorted_points(out)
+
+
+class JointReader:
+    """The 1-dof joints (sliders, hinges) read in world joint order and sign: position, rate and the force their
+    motor applied, with one ``getJointStates`` call per multibody; NaN (force 0) for every other joint."""
+
+    def __init__(self, joints: int, layout: Layout) -> None:
+        self._m, self._layout = joints, layout
+        #: the world joints PyBullet holds as one degree of freedom (motors, stops and reads are theirs)
+        self.one_dof = [k for k, h in enumerate(layout.joints) if h.dofs == 1]
+        uids = sorted({layout.joints[k].uid for k in self.one_dof})
+        #: per multibody, its 1-dof joints' links, for one getJointStates call each; then the world joints
+        #: those rows are, and their signs
+        self._reads = [(u, [layout.joints[k].link for k in self.one_dof if layout.joints[k].uid == u])
+                       for u in uids]  # fmt: skip
+        order = [k for u in uids for k in self.one_dof if layout.joints[k].uid == u]
+        self._order = np.array(order, dtype=np.int64)
+        self._sign = np.array([layout.joints[k].sign for k in order], dtype=float)
+        #: every joint read, in world order (a robot of hinges and sliders): the read's columns are the arrays
+        self._every_joint = order == list(range(joints))
+
+    def states(self, c: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(position, velocity, motor force) of every world joint now."""
+        m = self._m
+        if self._reads:  # one getJointStates per multibody: (q, qd, reaction forces, applied torque)
+            states = [s for uid, links in self._reads for s in p.getJointStates(uid, links, physicsClientId=c)]
+            rows = np.fromiter(_flat((s[0], s[1], s[3]) for s in states), np.float64, 3 * len(states))
+            rows = rows.reshape(-1, 3) * self._sign[:, None]
+            if self._every_joint:
+                pos, vel, force = np.ascontiguousarray(rows.T)  # three contiguous rows: the same numbers
+            else:
+                pos, vel, force = np.full(m, np.nan), np.full(m, np.nan), np.zeros(m)
+                order = self._order
+                pos[order], vel[order], force[order] = rows[:, 0], rows[:, 1], rows[:, 2]
+        else:
+            pos, vel, force = np.full(m, np.nan), np.full(m, np.nan), np.zeros(m)
+        return pos, vel, force
+
+    def motor_torques(self, c: int) -> np.ndarray:
+        """The force or torque each 1-dof joint's motor applied in the last engine step (0 for the others)."""
+        out = np.zeros(self._m)
+        for k in self.one_dof:
+            h = self._layout.joints[k]
+            out[k] = h.sign * p.getJointState(h.uid, h.link, physicsClientId=c)[3]
+        return out

@@ -43,7 +43,7 @@ from runner.compile.robot_start import (
 from runner.compile.surfaces import compiled_surface
 from runner.language.hpr import hpr_to_quat
 from runner.language.model import Scenario
-from runner.language.model_behaviour import ControlAction
+from runner.language.model_actions import ControlAction
 from runner.language.model_physics import Limits
 from runner.language.model_robots import Robot
 from runner.language.model_walk import all_actions

@@ -28,7 +28,7 @@ from runner.compile.robot_start import mimic_starts, start_values
 from runner.compile.robots import compile_robots
 from runner.compile.sensed import reaction_joints
 from runner.compile.surfaces import compiled_surface
-from runner.language import model_behaviour as B
+from runner.language import model_actions as Act
 from runner.language.hpr import hpr_to_quat
 from runner.language.model import Scenario
 from runner.language.model_inertia import principal_inertia
@@ -173,8 +173,8 @@ def joint_zeros(
 def motor_targets(model: Scenario) -> frozenset[str]:
     """The joints a `motor` action, or a `drive` action in velocity mode, drives."""
     actions = [a for a, _ in all_actions(model)]
-    return frozenset(a.motor.joint for a in actions if isinstance(a, B.MotorAction)) | frozenset(
-        a.drive.joint for a in actions if isinstance(a, B.DriveAction) and a.drive.mode == "velocity"
+    return frozenset(a.motor.joint for a in actions if isinstance(a, Act.MotorAction)) | frozenset(
+        a.drive.joint for a in actions if isinstance(a, Act.DriveAction) and a.drive.mode == "velocity"
     )
 
 

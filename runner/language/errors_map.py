@@ -8,8 +8,8 @@ from typing import Any
 from pydantic import BaseModel, ValidationError
 
 from runner.errors import Issue
+from runner.language.model_actions import ACTION_TAGS
 from runner.language.model_assertions import ASSERTION_TAGS
-from runner.language.model_behaviour import ACTION_TAGS
 from runner.language.model_walk import keys_at
 from runner.language.yaml_source import Path, Positions
 

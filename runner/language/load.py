@@ -1,16 +1,15 @@
 """Load a scenario file: YAML -> variant -> overrides -> parameters -> validated model -> checks.
 
 Every problem becomes a :class:`ScenarioValidationError` naming file:line:column, the field, what was
-expected and what was found. Nothing here runs user text: parameters are substituted as whole values.
+expected and what was found. Nothing here runs user text: parameters are substituted as whole values
+(runner.language.scenario_edits, with `--set` and the variant's changes).
 """
 
 from __future__ import annotations
 
 import copy
-import difflib
 import hashlib
 import os
-import re
 import stat
 from collections import ChainMap, OrderedDict
 from dataclasses import dataclass, field, replace
@@ -27,20 +26,11 @@ from runner.language.model_base import Strict
 from runner.language.refs import check_references
 from runner.language.robot_desc import ModelDesc
 from runner.language.robots import load_robots
+from runner.language.scenario_edits import SubstitutionBudget, apply_overrides, apply_variant, substitute
+from runner.language.scenario_edits import parse_overrides as parse_overrides  # re-exported: the commands' import
 from runner.language.times import time_context
-from runner.language.yaml_source import (
-    COMMAND_LINE,
-    MAX_FILE_BYTES,
-    MAX_TEXT,
-    Path,
-    Positions,
-    format_path,
-    load_value,
-    load_yaml,
-)
+from runner.language.yaml_source import MAX_FILE_BYTES, Positions, load_yaml
 
-_PARAM = re.compile(r"^\$\{([A-Za-z_][A-Za-z0-9_]*)\}$")
-_PARAM_ANYWHERE = re.compile(r"\$\{([A-Za-z_][A-Za-z0-9_]*)\}")
 BASE_CASE = "base"
 
 
@@ -118,127 +108,6 @@ def _parsed(text: str, file: str, share_variants: bool = False) -> tuple[Any, Po
     return copy.deepcopy(data), positions  # the tables hold tuples: copying the dicts is enough
 
 
-def parse_overrides(items: list[str]) -> tuple[tuple[str, Any], ...]:
-    """`--set key=value` items; the value is read as a YAML scalar or flow collection (plain data only).
-    A refused item is an issue naming the argument."""
-    out = []
-    issues = []
-    for item in items:
-        key, sep, value = item.partition("=")
-        if not sep or not key.strip():
-            issues.append(Issue(COMMAND_LINE, 0, 0, f"--set {item}", "expected KEY=VALUE, e.g. world.dt=0.01"))
-            continue
-        try:
-            parsed = load_value(value)
-        except ValueError as exc:
-            issues.append(Issue(COMMAND_LINE, 0, 0, f"--set {item[:80]}", str(exc)))
-            continue
-        out.append((key.strip(), parsed))
-    if issues:
-        raise ScenarioValidationError(issues)
-    return tuple(out)
-
-
-#: Maps of user-chosen names: a dotted path may replace one of their entries, never create one (a typo in
-#: `--set params.cont=3` must not add a parameter nobody reads).
-NAME_MAPS: dict[tuple[str, ...], str] = {
-    ("params",): "parameter",
-    ("state",): "state variable",
-    ("bodies",): "body",
-    ("joints",): "joint",
-    ("robots",): "robot",
-    ("sounds",): "sound",
-    ("intervals",): "interval",
-    ("triggers",): "trigger",
-    ("on",): "handler",
-    ("variants",): "variant",
-    ("collisions", "nodes"): "collision node",
-}
-
-
-class _SetError(Exception):
-    """A dotted path that cannot be set; the caller locates it."""
-
-
-def _set_path(data: dict[str, Any], dotted: str, value: Any) -> Path:
-    parts: list[str | int] = [int(p) if p.isascii() and p.isdigit() else p for p in dotted.split(".")]
-    if any(p == "" for p in parts):
-        raise _SetError(f"expected a dotted path such as world.dt, found `{dotted}`")
-    node: Any = data
-    for i, part in enumerate(parts):
-        kind = NAME_MAPS.get(tuple(str(p) for p in parts[:i]))
-        if kind is not None and isinstance(node, dict) and part not in node:
-            raise _SetError(_unknown_name(kind, str(part), [str(k) for k in node], _NOT_DECLARED))
-        last = i == len(parts) - 1
-        if isinstance(node, dict):
-            if last:
-                node[part] = value
-            else:
-                node = node.setdefault(part, {})
-        elif isinstance(node, list) and isinstance(part, int) and part < len(node):
-            if last:
-                node[part] = value
-            else:
-                node = node[part]
-        else:
-            where = format_path(tuple(parts[:i])) or "the top"
-            if isinstance(node, list) and isinstance(part, int):
-                problem = f"is a list of {len(node)} items, which has no index {part}"
-            elif isinstance(node, list):
-                problem = "is a list, not a mapping"
-            else:
-                problem = f"is {node!r}"[:60] + ", not a mapping"
-            raise _SetError(f"cannot set `{dotted}`: `{where}` {problem}")
-    return tuple(parts)
-
-
-def _unknown_name(kind: str, name: str, known: list[str], note: str = "") -> str:
-    close = difflib.get_close_matches(name, known, n=1, cutoff=0.6)
-    hint = f"did you mean `{close[0]}`?" if close else f"declared: {', '.join(sorted(known)) or 'none'}"
-    return f"unknown {kind} `{name}`{note}; {hint}"
-
-
-_NOT_DECLARED = " (a dotted path replaces a value, it does not declare one)"
-
-
-class _Budget:
-    """Characters that parameter substitution may still produce (MAX_TEXT minus the document's own text)."""
-
-    def __init__(self, used: int) -> None:
-        self.left = MAX_TEXT - used
-
-    def take(self, size: int, path: Path, positions: Positions) -> None:
-        self.left -= size
-        if self.left < 0:
-            message = (
-                f"parameter substitution makes the document hold more than {MAX_TEXT} characters of text; "
-                "refused (a long parameter used many times?)"
-            )
-            raise ScenarioValidationError([positions.issue(path, message)])
-
-
-def _substitute(
-    value: Any, params: dict[str, Any], path: Path, positions: Positions, issues: list[Issue], budget: _Budget
-) -> Any:
-    if isinstance(value, dict):
-        return {k: _substitute(v, params, path + (k,), positions, issues, budget) for k, v in value.items()}
-    if isinstance(value, list):
-        return [_substitute(v, params, path + (i,), positions, issues, budget) for i, v in enumerate(value)]
-    if isinstance(value, str) and "${" in value:
-        whole = _PARAM.match(value)
-        names = _PARAM_ANYWHERE.findall(value)
-        missing = [n for n in names if n not in params]
-        if missing:
-            issues.append(positions.issue(path, _unknown_name("parameter", missing[0], list(params))))
-            return value
-        if whole:
-            budget.take(len(str(params[whole.group(1)])), path, positions)
-            return params[whole.group(1)]
-        budget.take(sum(len(str(params[n])) for n in names), path, positions)  # checked before it is built
-        return _PARAM_ANYWHERE.sub(lambda m: str(params[m.group(1)]), value)
-    return value
-
-
 def variant_names(path: FsPath) -> list[str]:
     _, data, _ = read_source(path)
     variants = data.get("variants")
@@ -257,7 +126,7 @@ def load_scenario(
     if early:  # `--set variants.x...` changes a variant before it is applied
         if "variants" in data:
             data["variants"] = copy.deepcopy(data["variants"])
-        _apply_overrides(data, early, positions)
+        apply_overrides(data, early, positions)
     variants = data.get("variants") if isinstance(data.get("variants"), dict) else {}
     chosen = variant if variant not in (None, BASE_CASE) else None
     if chosen is not None:
@@ -266,13 +135,13 @@ def load_scenario(
             raise ScenarioValidationError(
                 [positions.issue(("variants",), f"unknown variant `{chosen}`; this file has: {names}", at_key=True)]
             )
-        _apply_variant(data, variants[chosen], ("variants", chosen), positions)
+        apply_variant(data, variants[chosen], ("variants", chosen), positions)
     # after the variant: `--set` beats a variant's `set:` for the same path
-    _apply_overrides(data, [(k, v) for k, v in overrides if k.split(".")[0] != "variants"], positions)
+    apply_overrides(data, [(k, v) for k, v in overrides if k.split(".")[0] != "variants"], positions)
     data.pop("variants", None)
     params = data.get("params") if isinstance(data.get("params"), dict) else {}
     issues: list[Issue] = []
-    data = _substitute(data, params, (), positions, issues, _Budget(positions.text_size))
+    data = substitute(data, params, (), positions, issues, SubstitutionBudget(positions.text_size))
     if issues:
         raise ScenarioValidationError(issues)
     try:
@@ -297,16 +166,6 @@ def load_scenario(
     )
 
 
-def _apply_overrides(data: dict[str, Any], overrides: list[tuple[str, Any]], positions: Positions) -> None:
-    for key, value in overrides:
-        argument = f"--set {key}"
-        try:
-            target = _set_path(data, key, value)
-        except _SetError as exc:
-            raise ScenarioValidationError([Issue(COMMAND_LINE, 0, 0, argument, str(exc))]) from None
-        positions.overridden[target] = argument
-
-
 class _VariantsSection(Strict):
     """The `variants` section alone, checked as the scenario checks it."""
 
@@ -329,19 +188,19 @@ def _checked_variants(
         _VARIANTS.move_to_end(key)
         return hit
     data, positions = _parsed(text, str(path))
-    _apply_overrides(data, list(overrides), positions)
+    apply_overrides(data, list(overrides), positions)
     section = data.get("variants")
     found: tuple[dict[str, Any], list[Issue]] = ({}, [])
     if section is not None:
         params = data.get("params") if isinstance(data.get("params"), dict) else {}
         issues: list[Issue] = []
-        section = _substitute(section, params, ("variants",), positions, issues, _Budget(positions.text_size))
+        section = substitute(section, params, ("variants",), positions, issues, SubstitutionBudget(positions.text_size))
         if issues:
             found = ({}, issues)
         else:
             whole = {"variants": section}
             base = {k: v for k, v in data.items() if k != "variants"}
-            context = time_context(_substitute(base, params, (), positions, [], _Budget(positions.text_size)))
+            context = time_context(substitute(base, params, (), positions, [], SubstitutionBudget(positions.text_size)))
             try:
                 found = (_VariantsSection.model_validate(whole, context=context).variants, [])
             except ValidationError as exc:
@@ -350,32 +209,6 @@ def _checked_variants(
     while len(_VARIANTS) > 64:
         _VARIANTS.popitem(last=False)
     return found
-
-
-def _apply_variant(data: dict[str, Any], variant: Any, vpath: Path, positions: Positions) -> None:
-    if not isinstance(variant, dict):
-        return  # the model validation reports it
-    issues = []
-    for key, value in (variant.get("set") or {}).items() if isinstance(variant.get("set"), dict) else []:
-        try:
-            target = _set_path(data, str(key), copy.deepcopy(value))
-        except _SetError as exc:
-            issues.append(positions.issue(vpath + ("set", key), str(exc), at_key=True))
-            continue
-        positions.remap(vpath + ("set", key), target, value)
-    if issues:
-        raise ScenarioValidationError(issues)
-    if "inputs" in variant and variant["inputs"] is not None:
-        data["inputs"] = copy.deepcopy(variant["inputs"])
-        positions.remap(vpath + ("inputs",), ("inputs",), variant["inputs"])
-    extra = variant.get("assertions") or []
-    if isinstance(extra, list) and extra:
-        current = data.get("assertions")
-        base: list[Any] = current if isinstance(current, list) else []
-        offset = len(base)
-        data["assertions"] = [*base, *copy.deepcopy(extra)]
-        for i in range(len(extra)):
-            positions.remap(vpath + ("assertions", i), ("assertions", offset + i), extra[i])
 
 
 def load_all(

@@ -30,12 +30,12 @@ from typing import Any
 
 from runner.language.mjcf_global import to_local
 from runner.language.robot_desc import ModelFileError, resolved
-from runner.language.urdf import xml_bytes
+from runner.language.urdf_xml import xml_bytes
 
 LEGACY = "legacy MJCF"
 #: the grid spacing given to a plane without one (MuJoCo draws its grid with it; no step reads it)
 PLANE_GRID = 1.0
-#: included files followed when collecting the names a file defines (as runner.language.mjcf.MAX_INCLUDES)
+#: included files followed when collecting the names a file defines (as runner.language.mjcf_checks.MAX_INCLUDES)
 MAX_INCLUDES = 64
 
 

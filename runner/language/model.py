@@ -6,18 +6,10 @@ from typing import Annotated, Any, Literal
 
 from pydantic import Field
 
+from runner.language.model_actions import Action, IntervalId, StateValue
 from runner.language.model_assertions import Assertion
 from runner.language.model_base import SCHEMA_VERSION, EventName, Name, Strict, Surface
-from runner.language.model_behaviour import (
-    Action,
-    Collisions,
-    Handler,
-    Input,
-    IntervalDef,
-    IntervalId,
-    StateValue,
-    Trigger,
-)
+from runner.language.model_behaviour import Collisions, Handler, Input, IntervalDef, Trigger
 from runner.language.model_physics import Body, Joint, PairSurface, World
 from runner.language.model_robots import Robot
 

@@ -6,8 +6,8 @@ from typing import TYPE_CHECKING, Annotated, Any, Literal, Union
 
 from pydantic import Discriminator, Field, Tag, model_validator
 
+from runner.language.model_actions import tag_of
 from runner.language.model_base import EventName, Expr, Name, NonNegFloat, PartName, Seconds, Strict, TimeOrEnd, Window
-from runner.language.model_behaviour import tag_of
 
 Tolerance = Annotated[float, Field(ge=0, allow_inf_nan=False)] | Expr | dict[str, Annotated[float, Field(ge=0)] | Expr]
 Number = float | Expr  # a number, or an expression evaluated when the assertion is checked

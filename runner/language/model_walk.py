@@ -10,9 +10,10 @@ from typing import TYPE_CHECKING, Any
 
 from pydantic import BaseModel
 
+from runner.language import model_actions as Act
 from runner.language import model_behaviour as B
+from runner.language.model_actions import ACTION_TAGS, tag_of
 from runner.language.model_assertions import ASSERTION_TAGS, _assertion_tag
-from runner.language.model_behaviour import ACTION_TAGS, tag_of
 from runner.language.yaml_source import Path
 
 if TYPE_CHECKING:
@@ -92,7 +93,7 @@ def _has(container: Any, part: Any) -> bool:
 def walk_actions(actions: list[Any], path: Path) -> Iterator[tuple[Any, Path]]:
     for i, action in enumerate(actions):
         yield action, path + (i,)
-        if isinstance(action, B.IfAction):
+        if isinstance(action, Act.IfAction):
             yield from walk_actions(action.then, path + (i, "then"))
             yield from walk_actions(action.else_, path + (i, "else"))
 

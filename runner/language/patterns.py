@@ -6,7 +6,7 @@ import re
 from collections import OrderedDict
 
 from runner.language.model import Scenario, Variant
-from runner.language.model_behaviour import SendAction
+from runner.language.model_actions import SendAction
 
 #: Tokens supported: from/into node name, from/into solid tangible ('t'; every solid here is tangible),
 #: into is a CollisionNode solid ('c') or physics geometry ('g').

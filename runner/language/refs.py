@@ -10,8 +10,8 @@ from typing import Any
 import numpy as np
 
 from runner.errors import Issue, ScenarioValidationError
+from runner.language import model_actions as Act
 from runner.language import model_assertions as A
-from runner.language import model_behaviour as B
 from runner.language.expressions import ExpressionError, compile_expression
 from runner.language.model import Scenario
 from runner.language.model_physics import Drive
@@ -207,11 +207,11 @@ def check_references(  # noqa: C901
 
 
 _INTERVAL_ACTIONS: dict[type, str] = {
-    B.StartAction: "start",
-    B.PauseAction: "pause",
-    B.ResumeAction: "resume",
-    B.FinishAction: "finish",
-    B.LoopAction: "loop",
+    Act.StartAction: "start",
+    Act.PauseAction: "pause",
+    Act.ResumeAction: "resume",
+    Act.FinishAction: "finish",
+    Act.LoopAction: "loop",
 }
 
 
@@ -222,32 +222,32 @@ def _check_actions(
         kind = _INTERVAL_ACTIONS.get(type(action))
         if kind is not None and getattr(action, kind) not in model.intervals:
             bad(path + (kind,), _unknown("interval", getattr(action, kind), model.intervals))
-        if isinstance(action, B.SetAction | B.CalcAction):
-            field = "set" if isinstance(action, B.SetAction) else "calc"
+        if isinstance(action, Act.SetAction | Act.CalcAction):
+            field = "set" if isinstance(action, Act.SetAction) else "calc"
             for var in getattr(action, field):
                 if var not in model.state:
                     bad(path + (field, var), _unknown("state variable", var, model.state), True)
-        if isinstance(action, B.PlaySoundAction | B.StopSoundAction):
-            field = "play_sound" if isinstance(action, B.PlaySoundAction) else "stop_sound"
+        if isinstance(action, Act.PlaySoundAction | Act.StopSoundAction):
+            field = "play_sound" if isinstance(action, Act.PlaySoundAction) else "stop_sound"
             ref = getattr(action, field)
             if ref not in model.sounds:
                 bad(path + (field,), _unknown("sound", ref, model.sounds))
-        if isinstance(action, B.MotorAction):
+        if isinstance(action, Act.MotorAction):
             check_motor(model, bad, path, action.motor.joint, robots)
-        if isinstance(action, B.DriveAction):
+        if isinstance(action, Act.DriveAction):
             check_motor(model, bad, path, action.drive.joint, robots, "drive")
-        if isinstance(action, B.ControlAction):
+        if isinstance(action, Act.ControlAction):
             names = [f"{r}.{a.name}" for r, desc in robots.items() for a in desc.actuators]
             if action.control.actuator not in names:
                 bad(path + ("control", "actuator"), _unknown("actuator (MJCF <actuator>)", action.control.actuator,
                                                              names))  # fmt: skip
-        if isinstance(action, B.ForceAction | B.ImpulseAction | B.ApplyAction):
-            field = "force" if isinstance(action, B.ForceAction) else "impulse"
-            field = "apply" if isinstance(action, B.ApplyAction) else field
+        if isinstance(action, Act.ForceAction | Act.ImpulseAction | Act.ApplyAction):
+            field = "force" if isinstance(action, Act.ForceAction) else "impulse"
+            field = "apply" if isinstance(action, Act.ApplyAction) else field
             cmd = getattr(action, field)
             if cmd.body not in body_names:
                 bad(path + (field, "body"), _unknown("body", cmd.body, body_names))
-        if isinstance(action, B.ResetAction):
+        if isinstance(action, Act.ResetAction):
             ref = action.reset if isinstance(action.reset, str) else action.reset.body
             held = {b for j in model.joints.values() for b in j.bodies} | set(jointed_links(robots))
             if ref not in body_names:
@@ -259,16 +259,16 @@ def _check_actions(
 def expressions_in(model: Scenario) -> Iterator[tuple[str, Path]]:
     """Every expression text in the scenario, with where it is."""
     for action, path in all_actions(model):
-        if isinstance(action, B.IfAction):
+        if isinstance(action, Act.IfAction):
             yield action.if_, path + ("if",)
-        if isinstance(action, B.CalcAction):
+        if isinstance(action, Act.CalcAction):
             for var, text in action.calc.items():
                 yield text, path + ("calc", var)
-        if isinstance(action, B.ApplyAction) and action.apply.until is not None:
+        if isinstance(action, Act.ApplyAction) and action.apply.until is not None:
             yield action.apply.until, path + ("apply", "until")
-        if isinstance(action, B.DriveAction):
+        if isinstance(action, Act.DriveAction):
             yield from drive_expressions(action.drive, path + ("drive",))
-        if isinstance(action, B.ControlAction) and isinstance(action.control.ctrl, str):
+        if isinstance(action, Act.ControlAction) and isinstance(action.control.ctrl, str):
             yield action.control.ctrl, path + ("control", "ctrl")
     for jname, joint in model.joints.items():
         if joint.drive is not None:

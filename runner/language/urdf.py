@@ -11,313 +11,20 @@ from __future__ import annotations
 
 import io
 import math
-import re
-from collections.abc import Iterator
 from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from backends.types import NO_DYNAMICS, JointDynamics, Mesh, PlacedShape, Rgba, Shape, ShapeKind
-from runner.language.mesh_limits import check_mesh_counts, check_mesh_file
-from runner.language.model_names import check_names
-from runner.language.model_numbers import check_urdf_numbers, check_vertices
-from runner.language.robot_desc import (
-    JointDesc,
-    LinkDesc,
-    MimicDesc,
-    ModelDesc,
-    ModelFileError,
-    quat_from_matrix,
-    resolve_package,
-    vec,
-)
+from backends.types import PlacedShape, Rgba, Shape, ShapeKind
+from runner.language.model_numbers import check_urdf_numbers
+from runner.language.robot_desc import JointDesc, LinkDesc, ModelDesc, ModelFileError, quat_from_matrix, vec
+from runner.language.urdf_joints import joint_dynamics, joint_limits, joint_motion, joint_starts, parents_first
 from runner.language.urdf_rules import merge_massless_fixed, usable_inertia
+from runner.language.urdf_shapes import collision_shape, mesh_scale
+from runner.language.urdf_xml import KINDS, check_structure, find_capsules, mesh_file_lines, parse_xml, yourdfpy_text
 from runner.language.visuals import urdf_visuals, within_budget
-
-_KINDS = {
-    "revolute": "hinge",
-    "continuous": "hinge",
-    "prismatic": "slider",
-    "fixed": "fixed",
-    "spherical": "ball",  # pybullet's extension (humanoid.urdf): a ball joint at the child's origin
-    "floating": "free",  # no joint: the child is a free body, as pybullet and MuJoCo load it
-}
-
-
-def xml_bytes(file: Path) -> bytes:
-    """The file's bytes with the quirks pybullet's loader reads past blanked (each byte replaced by a space, so
-    lines and columns stay): every XML declaration (pybullet_data declares `version="0.0"`, which XML
-    parsers refuse, and two files declare it after a comment or a blank line), and NUL bytes (humanoid.urdf
-    ends with one: "Extra content at the end of the document"). docs/robots.md lists them."""
-
-    try:
-        raw = file.read_bytes()
-    except OSError as exc:
-        raise ModelFileError(file, 0, f"cannot read the model file: {exc.strerror}") from None
-    blanked = re.sub(rb"<\?xml\s[^>]*\?>", lambda m: b" " * len(m.group(0)), raw.replace(b"\x00", b" "))
-    return blanked
-
-
-def parse_xml(file: Path) -> Any:
-    """The lxml tree, or the file and line of the first syntax error."""
-    from lxml import etree
-
-    parser = etree.XMLParser(remove_comments=True, resolve_entities=False, no_network=True)
-    try:
-        return etree.ElementTree(etree.fromstring(xml_bytes(file), parser))
-    except etree.XMLSyntaxError as exc:
-        line, column = exc.position if exc.position else (exc.lineno or 0, 0)
-        raise ModelFileError(file, line or 0, f"malformed XML: {exc.msg}", column=column or 0) from None
-
-
-#: collision geometry pybullet reads and no engine here simulates, by its tag
-_REFUSED_GEOMETRY = {
-    "plane": "pybullet's implicit <plane> (the scenario's `plane` body is the ground)",
-    "cdf": "pybullet's signed-distance field <cdf>",
-}
-_XACRO = re.compile(r"\$\((?!optenv\s)|\$\{")
-
-
-def _check_geometry(tree: Any, file: Path) -> None:
-    """Every collision <geometry> is one the loaders read (other elements in a <geometry>, such as the
-    <material> racecar.urdf puts there, are read past, as pybullet does), and no xacro expression is left
-    (but `$(optenv ...)`)."""
-    for geometry in tree.getroot().iterfind("link/collision/geometry"):
-        for shape in geometry:
-            if isinstance(shape.tag, str) and shape.tag in _REFUSED_GEOMETRY:
-                what = _REFUSED_GEOMETRY[shape.tag]
-                raise ModelFileError(file, shape.sourceline or 0, f"geometry {what} is not simulated here")
-    for element in tree.getroot().iter():
-        for key, value in element.attrib.items():
-            if _XACRO.search(value):
-                raise ModelFileError(
-                    file, element.sourceline or 0, f"`{key}` holds a xacro expression {value!r}: run xacro first",
-                    near=value,
-                )  # fmt: skip
-
-
-def _yourdfpy_text(file: Path) -> bytes:
-    """What yourdfpy reads: the file as pybullet reads it. <capsule> becomes <cylinder> (made a capsule again
-    from the tree), `$(optenv NAME default)` (xacro, left in husky.urdf) the variable or its default, and
-    numbers as pybullet's reader takes them (:func:`_numbers`)."""
-    import os
-
-    text = re.sub(rb"<(/?)capsule\b", rb"<\1cylinder", xml_bytes(file))
-
-    def optenv(m: re.Match[bytes]) -> bytes:
-        return os.environ.get(m.group(1).decode(), m.group(2).decode()).encode()
-
-    text = re.sub(rb"\$\(optenv\s+(\S+)\s*([^)]*)\)", optenv, text)
-    return re.sub(rb'="([-+0-9.eE,\s]*)"', lambda m: b'="' + _numbers(m.group(1)) + b'"', text)
-
-
-_NUMBER = re.compile(rb"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?")
-
-
-def _numbers(value: bytes) -> bytes:
-    """A list of numbers as pybullet's reader takes it: commas are separators, and each item is its longest
-    leading number (strtod: biped2d_pybullet.urdf writes `-1.57.`); an item with none is left to fail."""
-    items = value.replace(b",", b" ").split()
-    out = []
-    for item in items:
-        found = _NUMBER.match(item)
-        out.append(found.group(0) if found else item)
-    return b" ".join(out)
-
-
-def _lines(tree: Any, tag: str) -> dict[str, int]:
-    return {e.get("name"): e.sourceline or 0 for e in tree.getroot().iter(tag) if e.get("name")}
-
-
-def _check_structure(tree: Any, file: Path) -> tuple[dict[str, int], dict[str, int]]:
-    """Names and references, with the line of each problem; returns the links' and joints' lines."""
-
-    root = tree.getroot()
-    if root.tag != "robot":
-        raise ModelFileError(file, root.sourceline or 0, f"expected a <robot> URDF document, found <{root.tag}>")
-    for kind in ("link", "joint"):
-        check_names(file, kind, [(e.get("name"), e.sourceline or 0) for e in root.findall(kind)])
-    links, joints = _lines(tree, "link"), _lines(tree, "joint")
-    if not links:
-        soft = root.find("deformable")
-        if soft is not None:
-            what = "a deformable body (pybullet's <deformable>), which no engine here simulates"
-            raise ModelFileError(file, soft.sourceline or 0, what)
-        raise ModelFileError(file, root.sourceline or 0, "the model has no <link>")
-    _check_geometry(tree, file)
-    children: dict[str, str] = {}
-    for joint in root.iter("joint"):
-        line = joint.sourceline or 0
-        if joint.getparent() is not root:
-            continue  # a <transmission>'s joint reference
-        kind = joint.get("type", "")
-        if kind not in _KINDS:
-            raise ModelFileError(
-                file,
-                line,
-                f"joint `{joint.get('name')}` has type `{kind}`, which no engine here simulates"
-                f"{' (a planar joint: motion in a plane, on none of the four engines)' if kind == 'planar' else ''}"
-                f"; supported: {', '.join(_KINDS)}",
-            )
-        for end in ("parent", "child"):
-            element = joint.find(end)
-            ref = element.get("link") if element is not None else None
-            if ref is None:
-                raise ModelFileError(file, line, f"joint `{joint.get('name')}` has no <{end} link=...>")
-            if ref not in links:
-                where = element.sourceline or line
-                raise ModelFileError(
-                    file,
-                    where,
-                    f"joint `{joint.get('name')}` names {end} link `{ref}`, which the model does not define",
-                    near=f"<{end}",
-                )
-        child = joint.find("child").get("link")
-        if child in children:
-            raise ModelFileError(file, line, f"link `{child}` is the child of two joints (`{children[child]}` too)")
-        children[child] = str(joint.get("name"))
-    roots = [name for name in links if name not in children]
-    if len(roots) != 1:
-        raise ModelFileError(file, root.sourceline or 0, f"expected one root link, found {roots or 'none (a loop)'}")
-    return links, joints
-
-
-def _capsules(tree: Any) -> set[tuple[str, int]]:
-    """(link, index of its <collision>) of every capsule: pybullet's extension, radius and length (the
-    cylinder between the two half-spheres' centres) along the local z, as our capsule."""
-    found = set()
-    for link in tree.getroot().iter("link"):
-        for k, collision in enumerate(link.findall("collision")):
-            if collision.find("geometry/capsule") is not None:
-                found.add((str(link.get("name")), k))
-    return found
-
-
-def _mesh_lines(tree: Any) -> dict[str, int]:
-    return {e.get("filename"): e.sourceline or 0 for e in tree.getroot().iter("mesh") if e.get("filename")}
-
-
-def load_mesh(path: Path, scale: tuple[float, float, float], file: Path, line: int, hull: bool, near: str = "") -> Mesh:
-    """The mesh file's triangles (scaled), or their convex hull; a file beyond the mesh limits is refused
-    before it is read (runner.language.mesh_limits), a vertex not finite or beyond +-1e9 m after."""
-    import trimesh
-
-    check_mesh_file(path, file, line, near)
-    try:
-        loaded = trimesh.load(str(path), force="mesh", process=False)  # processing drops NaN vertices unseen
-    except Exception as exc:  # noqa: BLE001 - trimesh raises many types for unreadable files; all mean "bad mesh"
-        raise ModelFileError(file, line, f"cannot read the mesh {path.name}: {exc}", near=near) from None
-    if not isinstance(loaded, trimesh.Trimesh) or len(loaded.faces) == 0:
-        raise ModelFileError(file, line, f"the mesh {path.name} holds no triangles", near=near)
-    check_vertices(np.asarray(loaded.vertices) * np.asarray(scale, dtype=float), file, line, path.name)
-    loaded.process()  # vertices merged, degenerate faces dropped: as trimesh.load(process=True)
-    check_mesh_counts(len(loaded.faces), len(loaded.vertices), path, file, line, near)
-    loaded.apply_scale(np.asarray(scale, dtype=float))
-    if hull:
-        loaded = loaded.convex_hull  # qhull, through trimesh: every vertex of the hull, none moved
-    vertices = tuple(vec(v) for v in np.asarray(loaded.vertices, dtype=float))
-    faces = tuple((int(a), int(b), int(c)) for a, b, c in np.asarray(loaded.faces))
-    return Mesh(vertices=vertices, faces=faces, source=path.name)
-
-
-def _shape(geometry: Any, file: Path, package_root: Path | None, mesh_lines: dict[str, int], hull: bool) -> Shape:
-    g = geometry
-    if g.box is not None:
-        return Shape(ShapeKind.BOX, size=vec(g.box.size))
-    if g.sphere is not None:
-        return Shape(ShapeKind.SPHERE, radius=float(g.sphere.radius))
-    if g.cylinder is not None:
-        c = g.cylinder
-        return Shape(ShapeKind.CYLINDER, radius=float(c.radius), length=float(c.length))
-    mesh = g.mesh
-    line = mesh_lines.get(mesh.filename, 0)
-    target = resolve_package(mesh.filename, package_root, file, line)
-    scale = mesh_scale(mesh.scale, file, line)
-    kind = ShapeKind.CONVEX if hull else ShapeKind.TRIMESH
-    return Shape(kind, mesh=load_mesh(target, scale, file, line, hull, near=mesh.filename))
-
-
-def mesh_scale(scale: Any, file: Path, line: int) -> tuple[float, float, float]:
-    """`scale` as the loaders read it: none is 1; one number scales every axis; three are x, y, z; pybullet
-    reads the first three of more (pybullet_data's racecar writes `scale="1 1 1 1"`)."""
-    if scale is None:
-        return (1.0, 1.0, 1.0)
-    values = np.atleast_1d(np.asarray(scale, dtype=float)).ravel()
-    if values.size == 1:
-        values = np.repeat(values, 3)
-    if values.size < 3 or not np.all(np.isfinite(values[:3])):
-        raise ModelFileError(file, line, f"mesh scale {list(values)} is not 1 or 3 numbers", near="scale")
-    return vec(values[:3])
-
-
-def _start(lo: float | None, hi: float | None) -> float:
-    """Where a joint starts: 0, clamped into its limits (a1, aliengo and kuka_iiwa/model_vr_limits put 0
-    outside them; pybullet leaves such a joint outside and its stop then throws the robot)."""
-    if lo is None or hi is None:
-        return 0.0
-    return float(min(max(0.0, lo), hi))
-
-
-def _limits(joint: Any) -> tuple[float | None, float | None]:
-    """A revolute or prismatic joint's limits as the file gives them; lower > upper is no limit (pybullet's
-    convention: cube_no_rotation.urdf)."""
-    lo = hi = None
-    if joint.type in ("revolute", "prismatic") and joint.limit is not None:
-        lo, hi = joint.limit.lower, joint.limit.upper
-    if lo is not None and hi is not None and lo > hi:
-        return None, None
-    return lo, hi
-
-
-def _starts(joints: list[Any], file: Path, lines: dict[str, int]) -> tuple[dict[str, float], dict[str, MimicDesc]]:
-    """Each joint's start (:func:`_start`; 0 for a `<mimic>` joint, which the compiler starts where its
-    leader puts it: runner.compile.robot_start.mimic_starts) and each `<mimic>` in the description's
-    coordinates (a leader started inside its limits counts from there, so the offset takes in multiplier x
-    that start). A mimic naming a joint the model lacks, itself, a joint that is not revolute, continuous or
-    prismatic, or a loop of mimics is refused at its line (``lines``: the <mimic> element's, by joint)."""
-    by_name = {j.name: j for j in joints}
-    followed = {j.name: j for j in joints if j.mimic is not None}
-    starts = {j.name: 0.0 if j.name in followed else _start(*_limits(j)) for j in joints}
-    scalar = ("revolute", "continuous", "prismatic")
-    mimics = {}
-    for name, joint in followed.items():
-        line, leader = lines.get(name, 0), joint.mimic.joint
-        what = f"joint `{name}`: <mimic joint={leader!r}>"
-        if leader not in by_name or leader == name:
-            why = "names itself" if leader == name else "names a joint the model does not define"
-            raise ModelFileError(file, line, f"{what} {why}", near="<mimic")
-        if joint.type not in scalar or by_name[leader].type not in scalar:
-            raise ModelFileError(file, line, f"{what}: both joints must be revolute, continuous or prismatic "
-                                 f"(they are {joint.type} and {by_name[leader].type})", near="<mimic")  # fmt: skip
-        m = 1.0 if joint.mimic.multiplier is None else float(joint.mimic.multiplier)
-        c = 0.0 if joint.mimic.offset is None else float(joint.mimic.offset)
-        if not (math.isfinite(m) and math.isfinite(c)):
-            raise ModelFileError(file, line, f"{what}: multiplier {m} and offset {c} must be finite", near="<mimic")
-        chain, at = [name], leader
-        while at in followed:  # a loop of mimics has no joint to start from
-            if at in chain:
-                loop = " -> ".join([*chain, at])
-                raise ModelFileError(file, line, f"joint `{name}`: its <mimic> joints form a loop ({loop})",
-                                     near="<mimic")  # fmt: skip
-            chain.append(at)
-            at = followed[at].mimic.joint
-        mimics[name] = MimicDesc(leader, m, m * starts[leader] + c)
-    return starts, mimics
-
-
-def _motion(kind: str, axis: np.ndarray, q: float) -> np.ndarray:
-    """The joint's own motion by ``q`` (rad or m) along its unit ``axis``, as a 4x4 matrix."""
-    out = np.eye(4)
-    if q == 0.0:
-        return out
-    if kind == "prismatic":
-        out[:3, 3] = axis * q
-        return out
-    k = np.array([[0, -axis[2], axis[1]], [axis[2], 0, -axis[0]], [-axis[1], axis[0], 0]])
-    out[:3, :3] = np.eye(3) + math.sin(q) * k + (1 - math.cos(q)) * (k @ k)  # Rodrigues
-    return out
 
 
 def _default_mass(link: LinkDesc) -> LinkDesc:
@@ -342,43 +49,6 @@ def _color(link: Any, materials: dict[str, Rgba]) -> Rgba | None:
     return None
 
 
-def _dynamics(joint: Any, kind: str, file: Path, line: int) -> JointDynamics:
-    """`<dynamics damping friction>` and `<limit effort velocity>` of a hinge or slider (docs/semantics.md,
-    "Joint dynamics"); `friction` is dry joint friction (friction loss). An effort or velocity of 0 (or none)
-    is no limit, as the loaders read it (many files write 0 for "not stated")."""
-    if kind not in ("hinge", "slider"):
-        return NO_DYNAMICS
-    dyn, limit = joint.dynamics, joint.limit
-    values = {
-        "damping": dyn.damping if dyn is not None else None,
-        "friction": dyn.friction if dyn is not None else None,
-        "effort": limit.effort if limit is not None else None,
-        "velocity": limit.velocity if limit is not None else None,
-    }
-    for what, value in values.items():
-        if value is not None and not (math.isfinite(float(value)) and float(value) >= 0):
-            raise ModelFileError(file, line, f"joint `{joint.name}`: {what} {value} is not a number >= 0", near=what)
-    number = {k: float(v) if v is not None else 0.0 for k, v in values.items()}
-    return JointDynamics(
-        damping=number["damping"],
-        frictionloss=number["friction"],
-        effort=number["effort"] or None,
-        velocity=number["velocity"] or None,
-    )
-
-
-def _walk(root: str, joints: list[Any]) -> Iterator[Any]:
-    """Joints parents first."""
-    by_parent: dict[str, list[Any]] = {}
-    for joint in joints:
-        by_parent.setdefault(joint.parent, []).append(joint)
-    stack = [root]
-    while stack:
-        for joint in by_parent.get(stack.pop(), []):
-            yield joint
-            stack.append(joint.child)
-
-
 def load_urdf(file: Path, package_root: Path | None, static_root: bool, static_triangles: bool) -> ModelDesc:
     """Parse ``file``; links' frames by forward kinematics at the zero configuration (model frame). The
     meshes of a static root are its triangles when ``static_triangles``, else (and for every moving link)
@@ -386,12 +56,12 @@ def load_urdf(file: Path, package_root: Path | None, static_root: bool, static_t
     import yourdfpy
 
     tree = parse_xml(file)
-    link_lines, joint_lines = _check_structure(tree, file)
+    link_lines, joint_lines = check_structure(tree, file)
     check_urdf_numbers(tree, file)
-    capsules = _capsules(tree)
-    mesh_lines = _mesh_lines(tree)
+    capsules = find_capsules(tree)
+    mesh_lines = mesh_file_lines(tree)
     try:
-        urdf = yourdfpy.URDF.load(io.BytesIO(_yourdfpy_text(file)), build_scene_graph=False, load_meshes=False)
+        urdf = yourdfpy.URDF.load(io.BytesIO(yourdfpy_text(file)), build_scene_graph=False, load_meshes=False)
     except Exception as exc:  # noqa: BLE001 - yourdfpy raises ValueError/TypeError/AttributeError on bad values
         raise ModelFileError(file, 0, f"cannot read the URDF: {exc}") from None
     robot = urdf.robot
@@ -403,23 +73,23 @@ def load_urdf(file: Path, package_root: Path | None, static_root: bool, static_t
     notes: list[str] = []
     mimic_lines = {j.get("name"): j.find("mimic").sourceline or 0 for j in tree.getroot().iterfind("joint")
                    if j.find("mimic") is not None}  # fmt: skip
-    starts, mimics = _starts(list(robot.joints), file, {**joint_lines, **mimic_lines})
-    for joint in _walk(root, list(robot.joints)):
+    starts, mimics = joint_starts(list(robot.joints), file, {**joint_lines, **mimic_lines})
+    for joint in parents_first(root, list(robot.joints)):
         at_joint = frames[joint.parent] @ np.asarray(joint.origin if joint.origin is not None else np.eye(4))
-        kind = _KINDS[joint.type]
+        kind = KINDS[joint.type]
         axis = np.asarray(joint.axis if joint.axis is not None else (1.0, 0.0, 0.0), dtype=float)
         if kind in ("hinge", "slider") and np.linalg.norm(axis) < 1e-12:
             raise ModelFileError(file, joint_lines.get(joint.name, 0), f"joint `{joint.name}` has a zero axis")
         unit = axis / max(float(np.linalg.norm(axis)), 1e-300)
         world_axis = at_joint[:3, :3] @ unit
-        lo, hi = _limits(joint)
+        lo, hi = joint_limits(joint)
         start = starts[joint.name]
         if start != 0.0:
             notes.append(f"joint `{joint.name}`: 0 is outside its limits [{lo:g}, {hi:g}]; it starts at {start:g}, "
                          "and its position counts from there")  # fmt: skip
             lo = None if lo is None else float(lo) - start
             hi = None if hi is None else float(hi) - start
-        frame = at_joint @ _motion(joint.type, unit, start)
+        frame = at_joint @ joint_motion(joint.type, unit, start)
         frames[joint.child] = frame
         descs.append(
             JointDesc(
@@ -432,7 +102,7 @@ def load_urdf(file: Path, package_root: Path | None, static_root: bool, static_t
                 None if lo is None else float(lo),
                 None if hi is None else float(hi),
                 joint_lines.get(joint.name, 0),
-                _dynamics(joint, kind, file, joint_lines.get(joint.name, 0)),
+                joint_dynamics(joint, kind, file, joint_lines.get(joint.name, 0)),
                 mimics.get(joint.name),
             )
         )
@@ -458,7 +128,7 @@ def load_urdf(file: Path, package_root: Path | None, static_root: bool, static_t
         shapes = []
         for k, collision in enumerate(link.collisions):
             pos, quat = _pose(np.asarray(collision.origin) if collision.origin is not None else np.eye(4))
-            shape = _shape(collision.geometry, file, package_root, mesh_lines, hull)
+            shape = collision_shape(collision.geometry, file, package_root, mesh_lines, hull)
             if (link.name, k) in capsules:
                 shape = Shape(ShapeKind.CAPSULE, radius=shape.radius, length=shape.length)
             shapes.append(PlacedShape(shape, pos, quat))
@@ -474,8 +144,9 @@ def load_urdf(file: Path, package_root: Path | None, static_root: bool, static_t
                 tuple(shapes),
                 _color(link, materials),
                 line,
-                urdf_visuals(link, elements.get(link.name), file, materials, package_root, mesh_cache, notes,
-                             mesh_scale),
+                urdf_visuals(
+                    link, elements.get(link.name), file, materials, package_root, mesh_cache, notes, mesh_scale
+                ),
             )
         )
     links, descs, tools = merge_massless_fixed(root, links, descs)

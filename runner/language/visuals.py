@@ -165,7 +165,7 @@ def urdf_visuals(link: Any, element: Any, file: Path, materials: dict[str, Rgba]
     """The `<visual>`s of one yourdfpy link (``element``: its lxml `<link>`, for lines and capsules), in the link
     frame. A visual whose geometry nothing draws (an empty `<geometry>`) is left out; one whose mesh cannot be
     read is left out with a note (pybullet loads such a model and warns; it changes no dynamics).
-    ``scale_of``: the URDF reader's mesh scale rule (runner.language.urdf.mesh_scale)."""
+    ``scale_of``: the URDF reader's mesh scale rule (runner.language.urdf_shapes.mesh_scale)."""
 
     elements = element.findall("visual") if element is not None else []
     out = []
@@ -231,7 +231,7 @@ def _mjcf_colour(model: Any, g: int) -> Rgba:
 
 def mjcf_visuals(model: Any, body: int, mujoco: Any, geom_shape: GeomShape) -> tuple[PlacedShape, ...]:
     """The geoms of MuJoCo body ``body`` that MuJoCo's viewer draws by default, in the body frame;
-    ``geom_shape``: the MJCF reader's shape of a primitive geom (runner.language.mjcf.geom_shape)."""
+    ``geom_shape``: the MJCF reader's shape of a primitive geom (runner.language.mjcf_collision.geom_shape)."""
     out = []
     first = int(model.body_geomadr[body])
     for g in range(first, first + int(model.body_geomnum[body])):

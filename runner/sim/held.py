@@ -15,7 +15,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from runner.language.model_behaviour import ApplyCommand
+from runner.language.model_actions import ApplyCommand
 
 
 @dataclass

@@ -14,7 +14,7 @@ from backends.base import Backend
 from backends.types import CompiledWorld, Motion
 from runner.compile.joints import capped
 from runner.compile.program import Program
-from runner.language import model_behaviour as B
+from runner.language import model_actions as Act
 from runner.language.hpr import hpr_to_quat, quat_to_hpr
 from runner.sim.actuators import Actuators
 from runner.sim.drives import Drives
@@ -109,7 +109,7 @@ class SessionInputs:
         k = self.joint_index[joint]
         self.backend.set_motor(k, *capped(vel, fmax, self.world.joints[k].dynamics))
 
-    def set_drive(self, command: B.DriveCommand) -> None:
+    def set_drive(self, command: Act.DriveCommand) -> None:
         """A joint's command from now on: velocity mode is its motor; position and torque mode turn the motor
         off and hand the engine a torque before every step (runner.sim.drives)."""
         if command.vel is not None:
@@ -120,7 +120,7 @@ class SessionInputs:
             self.motors[command.joint] = (0.0, 0.0)
             self.backend.set_motor(self.joint_index[command.joint], 0.0, 0.0)
 
-    def set_control(self, command: B.ControlCommand) -> None:
+    def set_control(self, command: Act.ControlCommand) -> None:
         """An MJCF actuator's `ctrl` from now on (runner.sim.actuators)."""
         self.actuators.set(command.actuator, command.ctrl)
 
@@ -158,12 +158,12 @@ class SessionInputs:
             acc[:3] += force
             acc[3:] += torque
 
-    def hold_force(self, command: B.ApplyCommand, at: float) -> None:
+    def hold_force(self, command: Act.ApplyCommand, at: float) -> None:
         steps = self.held.start(self.body_index[command.body], command)
         how = f"for {steps} steps" if steps is not None else f"until `{command.until}`"
         self.log(at, "debug", f"apply on `{command.body}`: held {how}", "handler")
 
-    def reset(self, command: B.ResetCommand) -> None:
+    def reset(self, command: Act.ResetCommand) -> None:
         """The lab's reset: a dynamic body teleported with new velocities, a kinematic one moved to a pose."""
         index = self.body_index[command.body]
         body = self.world.bodies[index]

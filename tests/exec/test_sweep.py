@@ -14,8 +14,10 @@ from pathlib import Path
 import pytest
 
 from reports.trace_reader import read_trace
-from runner.cli.commands.sweep import check_metrics, final_values, parse_params, plot, split_values
+from runner.cli.commands.sweep import parse_params, split_values
 from runner.cli.main import main
+from runner.cli.sweep_metrics import check_metrics, final_values
+from runner.cli.sweep_table import plot
 from runner.errors import UsageError
 from runner.language.load import load_scenario
 from runner.sim.run import run_loaded

@@ -9,7 +9,7 @@ import math
 import numpy as np
 import pytest
 
-from runner.language.model_behaviour import ApplyCommand
+from runner.language.model_actions import ApplyCommand
 from runner.sim.held import HeldForces
 
 STILL = np.array([[1.0, 0.0, 0.0, 0.0]])
