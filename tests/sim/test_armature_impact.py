@@ -14,7 +14,8 @@ creates the armature's share of momentum from nothing.
 DART fails it (strict xfail, measured): its constraint impulses use the explicit projected articulated inertia,
 which the armature emulation (its implicit damping term, backends/dart/_armature.py) does not reach, so the
 block ends at the common speed of m_b and m (0.5 m/s for 1 and 1 kg: the counted momentum is 1.5 instead of 1)
-and the rod at 1.358 rad/s, near the plastic 1.348 of I alone (the counted angular momentum 0.663 instead of 0.5). That is what stops five MJCF models and dm_control's dog on DART in the
+and the rod at 1.358 rad/s, near the plastic 1.348 of I alone (the counted angular momentum
+0.663 instead of 0.5). That is what stops five MJCF models and dm_control's dog on DART in the
 robot survey (docs/backends/dart.md, "Joint dynamics").
 
 Tolerance: ODE is single precision; one step's rounding is at most 2^-23 of the momentum, so ``STEPS x 2^-23``
