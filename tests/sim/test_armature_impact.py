@@ -11,12 +11,12 @@ counted all the same: Drake's contact sets the ball spinning at 0.099 rad/s, 1e-
 An engine whose contact impulses see the joint without its armature conserves ``m`` (or ``I``) instead and
 creates the armature's share of momentum from nothing.
 
-DART fails it (strict xfail, measured): its constraint impulses use the explicit projected articulated inertia,
-which the armature emulation (its implicit damping term, backends/dart/_armature.py) does not reach, so the
-block ends at the common speed of m_b and m (0.5 m/s for 1 and 1 kg: the counted momentum is 1.5 instead of 1)
-and the rod at 1.358 rad/s, near the plastic 1.348 of I alone (the counted angular momentum
-0.663 instead of 0.5). That is what stops five MJCF models and dm_control's dog on DART in the
-robot survey (docs/backends/dart.md, "Joint dynamics").
+DART's constraint solver uses the explicit projected articulated inertia, which its armature emulation (the
+implicit damping term, backends/dart/_armature.py) does not reach; backends/dart/_impacts.py re-sizes each step's
+impulse through ``M + A`` (exact for one frictionless contact, as here). Before it, the block ended at the common
+speed of m_b and m (0.5 m/s: the counted momentum 1.5 instead of 1) and the rod at 1.358 rad/s, near the plastic
+1.348 of I alone (counted angular momentum 0.663 instead of 0.5): what stopped five MJCF models and dm_control's
+dog on DART in the robot survey (docs/backends/dart.md, "Joint dynamics").
 
 Tolerance: ODE is single precision; one step's rounding is at most 2^-23 of the momentum, so ``STEPS x 2^-23``
 (3.6e-5 relative) bounds what the run can accumulate; the others are double precision and far inside it. An
@@ -38,12 +38,6 @@ from runner.sim.run import run_loaded
 pytestmark = pytest.mark.slow
 H, STEPS = 0.001, 300
 TOLERANCE = STEPS * 2.0**-23
-#: measured on DART 6.20 (module docstring)
-DART_MISS = (
-    "DART's constraint impulses do not see the armature (the explicit projected inertia): counted with a, the "
-    "slider's momentum ends at 1.5 and the hinge's angular momentum at 0.663, from 1 and 0.5 (docs/backends/dart.md, "
-    "'Joint dynamics')"
-)
 ENGINES = [
     n
     for n, e in KNOWN_BACKENDS.items()
@@ -99,10 +93,7 @@ def _momenta(tmp_path: Path, engine: str, case: str) -> tuple[float, float]:
 
 
 @pytest.mark.parametrize("case", sorted(CASES))
-@pytest.mark.parametrize(
-    "engine",
-    [pytest.param(e, marks=[pytest.mark.xfail(strict=True, reason=DART_MISS)] if e == "dart" else []) for e in ENGINES],
-)
+@pytest.mark.parametrize("engine", ENGINES)
 def test_an_impact_sees_the_joints_armature(tmp_path: Path, engine: str, case: str) -> None:
     before, after = _momenta(tmp_path, engine, case)
     assert abs(after - before) <= TOLERANCE * abs(before), (engine, case, before, after)
