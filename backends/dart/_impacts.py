@@ -39,6 +39,8 @@ class ArmatureImpacts:
     def __init__(self, skeletons: Iterable[Any], joints: Sequence[Any]) -> None:
         """``skeletons``: the world's mobile skeletons; ``joints``: the built JointHandles."""
         self._skeletons = {s.getName(): s for s in skeletons if s.getNumDofs() > 0}
+        #: the coordinates the solver moves (a kinematic root's, commanded, keeps its rate)
+        self._dynamic = {n: _dynamic_dofs(s) for n, s in self._skeletons.items()}
         armature: dict[str, np.ndarray] = {}
         for handle in joints:
             a = handle.spec.dynamics.armature
@@ -75,8 +77,11 @@ class ArmatureImpacts:
             skeleton = self._skeletons[name]
             start, mass = self._start[name]
             dv = np.asarray(skeleton.getVelocityChanges(), dtype=float)
+            free = self._dynamic[name]
             impulse = mass @ dv
-            moved = np.linalg.solve(mass + np.diag(self._armature.get(name, np.zeros(len(dv)))), impulse)
+            armature = self._armature.get(name, np.zeros(len(dv)))
+            moved = np.zeros(len(dv))
+            moved[free] = np.linalg.solve(mass[np.ix_(free, free)] + np.diag(armature[free]), impulse[free])
             power += float(impulse @ dv)
             inert += float(impulse @ moved)
             parts.append((skeleton, start, dv, moved))
@@ -88,6 +93,16 @@ class ArmatureImpacts:
             skeleton.setPositions(start)
             skeleton.setVelocities(velocities)
             skeleton.integratePositions(h)
+
+
+def _dynamic_dofs(skeleton: Any) -> np.ndarray:
+    """The indices of the skeleton's coordinates that are not kinematic (VELOCITY, LOCKED, ACCELERATION)."""
+    out = []
+    for j in range(skeleton.getNumJoints()):
+        joint = skeleton.getJoint(j)
+        if not joint.isKinematic():
+            out += [joint.getIndexInSkeleton(k) for k in range(joint.getNumDofs())]
+    return np.array(sorted(out), dtype=np.intp)
 
 
 def _groups(hit: set[str], pairs: Iterable[tuple[str, str]]) -> list[set[str]]:
