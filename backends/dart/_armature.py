@@ -17,8 +17,9 @@ kg m^2 with a = 0.03 under 0.2 N m spins up at tau / (I + a) = 2.5 rad/s^2 to 4e
 
 What it does not reach: DART's constraint impulses (contacts, stops, the servo that realises motors and
 friction loss) use the explicit projected inertia, without the implicit terms, so an impulse on the joint's
-coordinate sees the joint without its armature, as it sees it without its damping's implicit term
-(docs/backends/dart.md, "Joint dynamics").
+coordinate sees the joint without its armature, as it sees it without its damping's implicit term. Contacts and
+stops are re-sized through the armature after each step (_impacts); the servo, whose impulse sits at its bound,
+is refused with armature (:func:`check_armature`; docs/backends/dart.md, "Joint dynamics").
 """
 
 from __future__ import annotations

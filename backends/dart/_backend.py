@@ -41,6 +41,7 @@ from ._armature import add_armature, check_armature, hold_armature
 from ._build import BodyHandle, JointHandle, build, place_free
 from ._build import check as check_build
 from ._gate import BounceGate
+from ._impacts import ArmatureImpacts
 from ._imported import read_imported
 from ._mimic import Mimics, check_mimics
 from ._options import MAX_CONE_MU, MAX_CONE_STACK, DartOptions
@@ -103,6 +104,8 @@ class DartBackend(Backend):
         self._joints: list[JointHandle] = built.joints
         self._armature = add_armature(built.joints, world.dt / self._engine_steps)
         self._mimics = Mimics(world, built.joints)
+        moving = [h.skeleton for h, b in zip(self._bodies, world.bodies, strict=True) if b.motion is not Motion.STATIC]
+        self._impacts = ArmatureImpacts({id(s): s for s in moving}.values(), built.joints)
         self._coefficients = built.coefficients
         self._free = [i for i, h in enumerate(self._bodies) if h.free]
         self._free_at = _rows(self._free)
@@ -190,7 +193,9 @@ class DartBackend(Backend):
             # World.step() clears commands and external forces: re-issue them for every engine step.
             if self._surface_conflict or self._thresholds:
                 self._match_touching_pairs(quiet=not self._surface_conflict and self._quiet(h))
+            self._impacts.before()
             self._mimics.step(self._dart, self._issue_inputs, h)
+            self._impacts.after(h, self._touching_skeletons)
             self._velocities = None
             applied = np.zeros(len(self._joints))
             for j, handle in servos:
@@ -207,6 +212,12 @@ class DartBackend(Backend):
         for i, pose in self.kinematic.items():
             pos, quat = pose.at(dt)
             place_free(self._bodies[i].root, pos, quat, pose.lin_vel, pose.ang_vel)
+
+    def _touching_skeletons(self) -> list[tuple[str, str]]:
+        """The pairs of skeletons (by name) in contact in the last engine step."""
+        name = [h.skeleton.getName() for h in self._bodies]
+        pairs = self._reader.pairs(self._dart.getLastCollisionResult().getContacts())
+        return [(name[a], name[b]) for a, b in pairs]
 
     def _issue_inputs(self) -> None:
         """The step's commands, forces and armature torques (World.step() clears them)."""
