@@ -42,6 +42,7 @@ from ._contacts import Collider
 from ._held import raise_held_inertia
 from ._imported import read_imported
 from ._joint_dynamics import JointDynamics, check_joint_dynamics
+from ._mimic import Mimics
 from ._options import OdeOptions, check_resting_stack, check_stack
 from ._ranges import check_ranges
 
@@ -94,11 +95,9 @@ class OdeBackend(Backend):
     name = "ode"
     engine_distribution = "panda3d"
     #: everything but what only an engine building a robot from its model file runs (MJCF on MuJoCo), except
-    #: joint springs, and no mimic (ODE has no gear joint). Armature is one more velocity row with CFM h / a
-    #: on the joint's coordinate, springs a joint torque each step (_joint_dynamics; docs/backends/ode.md)
-    capabilities = (
-        frozenset(Capability) - (MODEL_FILE_CAPABILITIES - {Capability.JOINT_STIFFNESS}) - {Capability.JOINT_MIMIC}
-    )
+    #: joint springs. Armature is one more velocity row with CFM h / a on the joint's coordinate, springs a joint
+    #: torque each step (_joint_dynamics), a mimic the force pair solved for each step (_mimic; docs/backends/ode.md)
+    capabilities = frozenset(Capability) - (MODEL_FILE_CAPABILITIES - {Capability.JOINT_STIFFNESS})
     #: panda3d builds ODE with dSINGLE: every state is a float32 (dGetConfiguration says "ODE_single_precision")
     precision = Precision.FLOAT32
     #: light bodies of a joint chain at 1e-3 of their body (1e-4 elsewhere): ODE's float32 LDLT meets a zero
@@ -151,6 +150,7 @@ class OdeBackend(Backend):
             impact_cfm=self.options.impact_cfm,
         )
         self._joint_dynamics = JointDynamics(self._scene.world, self._scene.joints, world.dt / world.substeps)
+        self._mimics = Mimics(world, self._scene, _effective_inertia)
         self._fudge = [j.joint.getParamFudgeFactor(*axis_arg(j)) if j.feedback else 1.0 for j in self._scene.joints]
         n = len(world.bodies)
         self._dynamic = [i for i, b in enumerate(world.bodies) if b.motion is Motion.DYNAMIC]
@@ -211,13 +211,10 @@ class OdeBackend(Backend):
         for sub, t in enumerate(self._times):
             report = every or sub == n - 1
             collider.collide(report=report, forces=pushed)  # the friction directions predict the slip
-            for i, acc in forces:
-                body = scene.bodies[i]
-                body.addForce(*acc[:3])  # type: ignore[union-attr]
-                body.addTorque(*acc[3:])  # type: ignore[union-attr]
             if self._joint_dynamics:  # armature rows' targets and springs' forces from the substep's start
                 self._joint_dynamics.before_step()
             if not joints:
+                self._issue(forces)
                 stepper(h)
             else:
                 limits = [self._limit(j) for j in joints]
@@ -225,7 +222,11 @@ class OdeBackend(Backend):
                     if limits[k]:
                         self._fudge_away(k, j, limits[k], h)
                 frames = [self._frame(j) for j in joints]
-                stepper(h)
+                if self._mimics:  # trial steps from this state, the last one kept (_mimic)
+                    self._mimics.step(lambda: self._issue(forces), stepper, h, self.steps * world.dt + t - h)
+                else:
+                    self._issue(forces)
+                    stepper(h)
                 self._motor_mean.add([self._motor(k, j, limits[k], frames[k]) for k, j in enumerate(joints)])
             if reactions:  # dJointFeedback: the force on body 1 and the torque about its centre of mass
                 self._reaction_mean.add([v for fb in reactions for a in (fb.getForce1(), fb.getTorque1()) for v in a])
@@ -240,6 +241,16 @@ class OdeBackend(Backend):
             self._reaction_mean.finish()
         self._states = None
         self._messages.extend(_native.take())
+
+    def _issue(self, forces: list[tuple[int, Any]]) -> None:
+        """The substep's forces on the bodies and the springs' on their joints (ODE clears them after each step)."""
+        bodies = self._scene.bodies
+        for i, acc in forces:
+            body = bodies[i]
+            body.addForce(*acc[:3])  # type: ignore[union-attr]
+            body.addTorque(*acc[3:])  # type: ignore[union-attr]
+        if self._joint_dynamics:
+            self._joint_dynamics.add_forces()
 
     def _follow_track(self, t: float) -> None:
         """Put each kinematic body where its velocity takes it ``t`` after the step began."""
@@ -388,6 +399,8 @@ class OdeBackend(Backend):
 
     def _drain_messages(self) -> list[str]:
         self._messages.extend(_native.take())
+        self._messages.extend(self._mimics.messages)
+        self._mimics.messages.clear()
         out, self._messages = self._messages, []
         return out
 
