@@ -45,6 +45,7 @@ from ._joint_dynamics import JointDynamics, check_joint_dynamics
 from ._mimic import Mimics
 from ._options import OdeOptions, check_resting_stack, check_stack
 from ._ranges import check_ranges
+from ._welded import lend_welded_inertia
 
 _ROTATIONAL = (JointKind.HINGE, JointKind.UNIVERSAL)
 
@@ -114,8 +115,9 @@ class OdeBackend(Backend):
 
     @classmethod
     def engine_world(cls, world: CompiledWorld) -> CompiledWorld:
-        """The base's world, with the inertia of bodies that joints hold still raised (``_held``: float32)."""
-        return raise_held_inertia(super().engine_world(world))
+        """The base's world, with the inertia of bodies that joints hold still raised (``_held``) and inertia lent to
+        light bodies welded to a parent (``_welded``): float32."""
+        return lend_welded_inertia(raise_held_inertia(super().engine_world(world)))
 
     @classmethod
     def check_world(cls, world: CompiledWorld, options: BackendOptions) -> None:

@@ -21,9 +21,11 @@ targets are set once and the springs' forces, computed once, are added again for
 forces are (ODE clears its accumulators after each ``dWorldStep``).
 
 Tolerance (float32, ``dSINGLE``): a kept step leaves each follower within the float32 resolution of the
-coordinates the coupling compares, ``eps32 (s_f + |m| s_l)`` with eps32 = 2^-23 and ``s`` a coordinate's
-magnitude as ODE computes it: a hinge's angle from unit quaternions (``max(1 rad, |q|)``), a slider's position
-from its bodies' world positions (the larger |p|, m). Closer than that no coordinate can be read or set. A
+coordinates the coupling compares, ``r_f + |m| r_l``. A hinge's angle is twice the half-angle of the relative
+quaternion ``q1* q2``, whose components ODE sums from four float32 products of unit quaternions (about 2 eps32
+each, eps32 = 2^-23): it resolves to :data:`HINGE_RESOLUTION` eps32 x max(1 rad, |q|). A slider's position is
+the axis times the difference of its bodies' world positions, three components rounded at eps32 |p| summed:
+:data:`SLIDER_RESOLUTION` eps32 x the larger |p| (m). Closer than that no coordinate can be read or set. A
 trial's rates are float32 too (``eps32 |v|``), which the step's h makes far smaller than that bound.
 
 A coupling that contacts or stops lock (the slope singular) keeps the least-squares step on the rest; one
@@ -48,8 +50,10 @@ from ._joint_dynamics import motor_row_rate
 
 #: Newton steps at most per engine step (an affine step needs one)
 ITERATIONS = 8
-#: float32's epsilon: the resolution of ODE's coordinates relative to their magnitude
+#: float32's epsilon
 EPS32 = 2.0**-23
+#: a hinge angle's and a slider position's float32 resolution in eps32 of their magnitude (module docstring)
+HINGE_RESOLUTION, SLIDER_RESOLUTION = 4.0, 3.0
 #: the slope's relative resolution: each column comes from two float32 trials nudged by sqrt(eps32) of the
 #: rates' scale, so directions below this fraction of the largest singular value are rounding (locked couplings)
 RCOND = math.sqrt(EPS32)
@@ -83,12 +87,13 @@ def _coordinate(handle: JointHandle, angles: dict[str, _Angle]) -> float:
     return float(handle.joint.getPosition())
 
 
-def _magnitude(handle: JointHandle, q: float) -> float:
-    """The magnitude ODE computes the coordinate from (module docstring, "Tolerance")."""
+def resolution(handle: JointHandle, q: float) -> float:
+    """The coordinate's float32 resolution as ODE computes it (module docstring, "Tolerance")."""
     if handle.spec.kind is JointKind.HINGE:
-        return max(1.0, abs(q))
+        return HINGE_RESOLUTION * EPS32 * max(1.0, abs(q))
     bodies = [handle.joint.getBody(0), handle.joint.getBody(1)]
-    return max(abs(q), *(b.getPosition().length() for b in bodies if b is not None and not b.isEmpty()))
+    size = max(abs(q), *(b.getPosition().length() for b in bodies if b is not None and not b.isEmpty()))
+    return SLIDER_RESOLUTION * EPS32 * size
 
 
 def _push(handle: JointHandle, force: float) -> None:
@@ -131,7 +136,7 @@ class Mimics:
         asked = (ratios * leads + np.array([c.offset for c in couplings]) - follows) / h
         tolerance = np.array(
             [
-                EPS32 * (_magnitude(c.follower, qf) + abs(c.ratio) * _magnitude(c.leader, ql))
+                resolution(c.follower, qf) + abs(c.ratio) * resolution(c.leader, ql)
                 for c, qf, ql in zip(couplings, follows, leads, strict=True)
             ]
         )
