@@ -9,11 +9,13 @@ one nudged trial per coupling, and ``u -= slope^-1 r`` reach the root in one New
 change of active set. Every trial starts from the step's start (``trial`` restores the engine's state itself);
 the kept step is the last trial taken.
 
-A slope whose singular values fall below ``rcond`` of its largest (a coupled joint that contacts or stops lock,
-so that no ``u`` moves its residual) is inverted in the least-squares sense on its resolved directions
-(``numpy.linalg.lstsq``): the other couplings are still solved, and the locked one keeps the smallest residual
-the step allows. If no trial meets the tolerance, the trial with the smallest residual (relative to each
-coupling's tolerance) is taken again and returned with ``held`` False: the caller raises or warns.
+The slope is taken per nudge and per the rate change each nudge is expected to make (``nudge`` gives both), so
+that a free coupling's column is of order 1 whatever the units. Its singular values below ``rcond`` (a coupled
+joint that contacts or stops lock, so that no ``u`` moves its residual) are left out: the step is the
+least-squares one on the resolved directions (the minimum-norm change): the locked term stays, the others make
+the residuals as small as they can. If no trial meets the tolerance, the trial with
+the smallest residual (relative to each coupling's tolerance) is taken again and returned with ``held`` False:
+the caller raises or warns.
 """
 
 from __future__ import annotations
@@ -31,39 +33,48 @@ class CoupledStep:
     terms: np.ndarray
     residual: np.ndarray
     held: bool
-    slope: np.ndarray | None  # the last slope measured (None: none was needed), for the next step's first try
+    slope: np.ndarray | None  # the last slope (None: none was needed), for the next step's first try
 
 
 def solve_coupled_step(
     trial: Callable[[np.ndarray], np.ndarray],
     start: np.ndarray,
-    nudge: Callable[[np.ndarray], np.ndarray],
+    nudge: Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]],
     tolerance: np.ndarray,
     h: float,
     iterations: int,
     rcond: float,
     slope: np.ndarray | None = None,
+    remeasure: bool = True,
 ) -> CoupledStep:
     """Take the engine step whose terms hold every coupling: ``h |r_k| <= tolerance_k`` (module docstring).
 
     ``trial(u)`` restores the step's start, takes the step with the terms ``u`` and returns the rate residuals.
     ``start``: the first terms tried; ``nudge(r)``: each term's finite-difference step for a slope measured where
-    the residuals are ``r``; ``slope``: a slope from an earlier step, tried for the first Newton step only (then
-    each Newton step measures its own).
+    the residuals are ``r``, and the change of its coupling's rate residual it is expected to make; ``slope``: a
+    slope from an earlier step, tried first. ``remeasure``: each later Newton step measures its own slope (n more
+    trials); else the slope is carried by Broyden's update from the trials themselves (one trial per Newton
+    step), and measured only when none is known or two Newton steps in a row fail to halve the residual.
     """
     u = np.array(start, dtype=float)
     residual = trial(u)
     best = (_score(residual, tolerance, h), u.copy())
-    measured = slope is None
+    measure = slope is None
+    stalls = 0
     for _ in range(iterations):
         if _held(residual, tolerance, h):
             return CoupledStep(u, residual, True, slope)
-        scale = nudge(residual)
-        if measured or slope is None:
-            slope = _measure(trial, u, residual, scale)
-        measured = True
-        u = u - scale * _newton_step(slope * scale, residual, rcond)
-        residual = trial(u)
+        steps, rates = nudge(residual)
+        if measure or slope is None or stalls >= 2:
+            slope, stalls = _measure(trial, u, residual, steps), 0
+        measure = remeasure
+        scale = steps / rates
+        change = -scale * _newton_step(slope * scale, residual, rcond)
+        new = trial(u + change)
+        if not remeasure and float(change @ change) > 0.0:  # Broyden: the slope that explains this trial
+            slope = slope + np.outer(new - residual - slope @ change, change) / float(change @ change)
+        stalls = stalls + 1 if np.max(np.abs(new)) > 0.5 * np.max(np.abs(residual)) else 0
+        u, residual = u + change, new
         score = _score(residual, tolerance, h)
         if score < best[0]:
             best = (score, u.copy())
@@ -99,12 +110,13 @@ def _measure(
 
 
 def _newton_step(slope: np.ndarray, residual: np.ndarray, rcond: float) -> np.ndarray:
-    """``slope^-1 residual`` (the slope per nudge: its columns comparable whatever each term's unit), or on a
-    slope singular to ``rcond`` its least-squares solution on the resolved directions (the minimum-norm change:
-    the locked couplings' terms are left where they are)."""
+    """``slope^-1 residual`` (the slope per expected rate change: a free coupling's column of order 1), or, where
+    singular values fall below ``rcond``, the least-squares solution on the others (the minimum-norm change: the
+    locked couplings' terms are left where they are)."""
     if not np.all(np.isfinite(slope)):
         return np.zeros_like(residual)
-    values = np.linalg.svd(slope, compute_uv=False)
-    if values[-1] > rcond * values[0]:
+    left, values, right = np.linalg.svd(slope)
+    if values[-1] > rcond:
         return np.linalg.solve(slope, residual)
-    return np.linalg.lstsq(slope, residual, rcond=rcond)[0]
+    kept = values > rcond
+    return right[kept].T @ ((left[:, kept].T @ residual) / values[kept])

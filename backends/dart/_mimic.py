@@ -44,8 +44,8 @@ ITERATIONS = 8
 #: how far (rad or m) a kept step may leave a follower from its place, h x its rate residual: far under the
 #: trace's rounding (1e-9), over the residual's own rounding (1.7e-13 rad/s x h at Franka Panda's fingers)
 POSITION_TOLERANCE = 1e-12
-#: singular values of the slope (rate residual per unit of offset rate, 1 when the leader is free) below this
-#: fraction of the largest are a locked coupling: double precision trials resolve far more (1e-13 rad/s)
+#: singular values of the slope (rate residual per unit of offset rate, 1 when the leader is free) below this are
+#: a locked coupling: double precision trials resolve far more (1e-13 rad/s)
 RCOND = 1e-12
 
 
@@ -151,8 +151,9 @@ class Mimics:
             return np.array(ends) - asked
 
         n = len(self._pairs)
+        ones = np.ones(n)  # an offset rate of 1 moves the residual by 1 while the leader is free
         solved = solve_coupled_step(
-            trial, np.zeros(n), lambda _: np.ones(n), np.full(n, POSITION_TOLERANCE), h, ITERATIONS, RCOND
+            trial, np.zeros(n), lambda _: (ones, ones), np.full(n, POSITION_TOLERANCE), h, ITERATIONS, RCOND
         )
         if not solved.held:
             raise RuntimeError(f"DART's mimic coupling found no consistent step at t = {start:.6g} s")

@@ -45,7 +45,6 @@ from ._joint_dynamics import JointDynamics, check_joint_dynamics
 from ._mimic import Mimics
 from ._options import OdeOptions, check_resting_stack, check_stack
 from ._ranges import check_ranges
-from ._welded import lend_welded_inertia
 
 _ROTATIONAL = (JointKind.HINGE, JointKind.UNIVERSAL)
 
@@ -115,9 +114,8 @@ class OdeBackend(Backend):
 
     @classmethod
     def engine_world(cls, world: CompiledWorld) -> CompiledWorld:
-        """The base's world, with the inertia of bodies that joints hold still raised (``_held``) and inertia lent to
-        light bodies welded to a parent (``_welded``): float32."""
-        return lend_welded_inertia(raise_held_inertia(super().engine_world(world)))
+        """The base's world, with the inertia of bodies that joints hold still raised (``_held``: float32)."""
+        return raise_held_inertia(super().engine_world(world))
 
     @classmethod
     def check_world(cls, world: CompiledWorld, options: BackendOptions) -> None:
@@ -242,6 +240,9 @@ class OdeBackend(Backend):
         if reactions:
             self._reaction_mean.finish()
         self._states = None
+        if self._mimics.messages:  # ODE's messages of the kept steps and the couplings' warnings, in order
+            self._messages.extend(self._mimics.messages)
+            self._mimics.messages.clear()
         self._messages.extend(_native.take())
 
     def _issue(self, forces: list[tuple[int, Any]]) -> None:
@@ -401,8 +402,6 @@ class OdeBackend(Backend):
 
     def _drain_messages(self) -> list[str]:
         self._messages.extend(_native.take())
-        self._messages.extend(self._mimics.messages)
-        self._mimics.messages.clear()
         out, self._messages = self._messages, []
         return out
 

@@ -28,7 +28,10 @@ the axis times the difference of its bodies' world positions, three components r
 :data:`SLIDER_RESOLUTION` eps32 x the larger |p| (m). Closer than that no coordinate can be read or set. A
 trial's rates are float32 too (``eps32 |v|``), which the step's h makes far smaller than that bound.
 
-A coupling that contacts or stops lock (the slope singular) keeps the least-squares step on the rest; one
+A step in which ODE reports that its LCP solver failed ("LCP internal error") is not iterated on: its rates
+are no affine function of the force, and each further ``dWorldStep`` on that edge risks ODE's abort on a zero
+pivot (xarm6_with_gripper aborted so in a slope's trial); the trial taken is kept and the log says so once per
+coupling. A coupling that contacts or stops lock (the slope singular) keeps the least-squares step on the rest; one
 not held to tolerance after :data:`ITERATIONS` Newton steps keeps the trial with the smallest residual, and
 the run's log says so once per coupling (``messages``), with the residual.
 """
@@ -45,6 +48,7 @@ from panda3d.ode import OdeBody, OdeUtil
 
 from .._kit.coupling_solve import solve_coupled_step
 from ..types import CompiledWorld, JointKind
+from . import _native
 from ._build import JointHandle, Scene
 from ._joint_dynamics import motor_row_rate
 
@@ -54,9 +58,14 @@ ITERATIONS = 8
 EPS32 = 2.0**-23
 #: a hinge angle's and a slider position's float32 resolution in eps32 of their magnitude (module docstring)
 HINGE_RESOLUTION, SLIDER_RESOLUTION = 4.0, 3.0
-#: the slope's relative resolution: each column comes from two float32 trials nudged by sqrt(eps32) of the
-#: rates' scale, so directions below this fraction of the largest singular value are rounding (locked couplings)
-RCOND = math.sqrt(EPS32)
+#: a slope's nudge changes its coupling's rate by sqrt(eps32) of the rates' scale: two float32 trials then
+#: measure the slope to sqrt(eps32)
+NUDGE = math.sqrt(EPS32)
+#: what ODE's ``dMessage`` says when its LCP solver fails in a step (lcp.cpp): then no iteration follows
+LCP_FAILED = "LCP internal error"
+#: a coupling whose nudge moves the residuals by less than this fraction of what its joints' own bodies predict
+#: is locked (contacts or stops take the force): left out of the Newton step
+LOCKED = 1e-3
 
 
 @dataclass
@@ -145,6 +154,8 @@ class Mimics:
             (b.getPosition(), Quat(b.getQuaternion()), b.getLinearVel(), b.getAngularVel()) for b in self._bodies
         ]
         seed = OdeUtil.randGetSeed()
+        self.messages.extend(_native.take())  # what ODE said before the step's trials
+        said: list[str] = []  # what ODE said in the last trial: the kept step's messages
 
         def trial(u: np.ndarray) -> np.ndarray:
             for body, (pos, quat, lin, ang) in zip(self._bodies, saved, strict=True):
@@ -158,18 +169,30 @@ class Mimics:
                 _push(c.follower, float(force))
                 _push(c.leader, -c.ratio * float(force))
             stepper(h)
+            said[:] = _native.take()
+            if any(LCP_FAILED in line for line in said):
+                raise _Unsolved
             rates = [motor_row_rate(c.follower) - c.ratio * motor_row_rate(c.leader) for c in couplings]
             return np.array(rates) - asked
 
         inverse_inertia = np.array([self._inverse_inertia(c) for c in couplings])
 
-        def nudge(residual: np.ndarray) -> np.ndarray:
+        def nudge(residual: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
             """Each term's nudge: it changes its coupling's rate by sqrt(eps32) of the rates' scale, or by the
             miss if that is larger (the slope then measured on the piece the correction lands on)."""
-            rate = np.maximum(np.abs(residual), RCOND * np.maximum(1.0, speed))
-            return rate / (h * inverse_inertia)
+            rate = np.maximum(np.abs(residual), NUDGE * np.maximum(1.0, speed))
+            return rate / (h * inverse_inertia), rate
 
-        solved = solve_coupled_step(trial, self._terms, nudge, tolerance, h, ITERATIONS, RCOND, self._slope)
+        try:
+            solved = solve_coupled_step(
+                trial, self._terms, nudge, tolerance, h, ITERATIONS, LOCKED, self._slope, remeasure=False
+            )
+        except _Unsolved:  # the trial just taken is ODE's step, as it would be without the solve
+            self.messages.extend(said)
+            self._slope = None
+            self._warn(None, tolerance, h, t)
+            return
+        self.messages.extend(said)
         self._terms, self._slope = solved.terms, solved.slope
         if not solved.held:
             self._warn(solved.residual, tolerance, h, t)
@@ -178,14 +201,25 @@ class Mimics:
         """The coupling coordinate's inverse inertia from its joints' own bodies: the nudge's scale only."""
         return 1.0 / self._inertia(coupling.follower) + coupling.ratio**2 / self._inertia(coupling.leader)
 
-    def _warn(self, residual: np.ndarray, tolerance: np.ndarray, h: float, t: float) -> None:
-        for c, r, tol in zip(self._couplings, residual, tolerance, strict=True):
-            if c.warned or h * abs(r) <= tol:
+    def _warn(self, residual: np.ndarray | None, tolerance: np.ndarray, h: float, t: float) -> None:
+        """Say once per coupling that a step did not hold it (``residual`` None: ODE's LCP failed in the step)."""
+        for k, c in enumerate(self._couplings):
+            if c.warned or (residual is not None and h * abs(residual[k]) <= tolerance[k]):
                 continue
             c.warned = True
+            why = (
+                "ODE's LCP solver failed in the step (its message above), so no force holds it there: the trial "
+                "taken was kept"
+                if residual is None
+                else f"a step leaves it {h * abs(residual[k]):.3g} from its place (float32 tolerance "
+                f"{tolerance[k]:.3g}); contacts or stops lock the coupled joints, and the step closest to the "
+                "coupling was kept"
+            )
             self.messages.append(
-                f"joint:mimic `{c.follower.spec.name}` (of `{c.leader.spec.name}`) not held at t = {t:.6g} s: a step "
-                f"leaves it {h * abs(r):.3g} from its place (float32 tolerance {tol:.3g}); contacts or stops lock "
-                "the coupled joints, and the step closest to the coupling was kept (said once per coupling)"
+                f"joint:mimic `{c.follower.spec.name}` (of `{c.leader.spec.name}`) not held at t = {t:.6g} s: {why} "
+                "(said once per coupling)"
             )
 
+
+class _Unsolved(Exception):
+    """ODE reported that its LCP solver failed in a trial: that step's rates are no affine function of the force."""

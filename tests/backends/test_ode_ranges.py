@@ -10,7 +10,6 @@ from __future__ import annotations
 from dataclasses import replace
 from pathlib import Path
 
-import numpy as np
 import pytest
 
 pytest.importorskip("panda3d.ode")
@@ -18,7 +17,6 @@ pytest.importorskip("pybullet_data")
 dm_control = pytest.importorskip("dm_control")
 
 from backends.errors import UnsupportedFeature  # noqa: E402
-from backends.geometry import quat_matrices, quat_rotate  # noqa: E402
 from backends.ode import OdeBackend  # noqa: E402
 from backends.ode._options import OdeOptions  # noqa: E402
 from backends.ode._ranges import FLOAT32_EPS  # noqa: E402
@@ -80,41 +78,3 @@ def test_chain_light_bodies_and_held_bodies_are_left_out() -> None:
     _check(cmu)
     _check(_engine_world("@pybullet_data/mjcf/pusher.xml"))
 
-
-def _composite_inertia(world: CompiledWorld, names: tuple[str, ...]) -> np.ndarray:
-    """The bodies' inertia tensor about their common centre of mass, world axes (parallel axes)."""
-    bodies = [b for b in world.bodies if b.name in names]
-    coms = [np.add(b.pos, quat_rotate(b.quat, b.com)) for b in bodies]
-    mass = sum(b.mass for b in bodies)
-    centre = sum(b.mass * c for b, c in zip(bodies, coms, strict=True)) / mass
-    total = np.zeros((3, 3))
-    for b, c in zip(bodies, coms, strict=True):
-        r = quat_matrices(b.quat)
-        d = c - centre
-        total += r @ b.inertia_tensor() @ r.T + b.mass * ((d @ d) * np.eye(3) - np.outer(d, d))
-    return total
-
-
-def test_a_light_body_welded_to_its_parent_borrows_inertia_the_pair_keeps() -> None:
-    """manipulator's and stacker's "pinch site" (1e-6 kg, 1e-12 kg m^2, jointless: welded to the hand) is
-    2.1e-9 of the upper arm's inertia, below 2^-23. Welded, hand and pinch site are one rigid body: the hand
-    lends it d x identity (backends/ode/_welded.py), which leaves the pair's composite inertia unchanged to
-    rounding (1e-15 of the hand's moments) and its masses and centres untouched; the range check then passes."""
-    for name in ("manipulator.xml", "stacker.xml"):
-        (model,) = find_models([str(SUITE / name)])
-        compiled = build_program(load_survey_scenario(model, 0.5)).world
-        world = OdeBackend.engine_world(compiled)
-        before = {b.name: b for b in compiled.bodies}
-        after = {b.name: b for b in world.bodies}
-        site, hand = after["model.pinch site"], after["model.hand"]
-        assert min(before["model.pinch site"].inertia) == 1e-12
-        largest = max(max(b.inertia) for b in world.bodies if b.mass > 0)
-        assert min(site.inertia) >= FLOAT32_EPS * largest
-        assert (site.mass, site.com, hand.mass, hand.com) == (
-            before["model.pinch site"].mass, before["model.pinch site"].com,
-            before["model.hand"].mass, before["model.hand"].com,
-        )  # fmt: skip
-        pair = ("model.pinch site", "model.hand")
-        tensor = _composite_inertia(world, pair)
-        assert np.allclose(tensor, _composite_inertia(compiled, pair), rtol=0, atol=1e-15 * max(hand.inertia))
-        _check(world)
