@@ -41,7 +41,7 @@ def test_an_affine_step_is_solved_by_one_newton_step_and_the_last_trial_is_kept(
     assert len(step.trials) == 4  # the first, two nudges, the Newton step
     assert np.array_equal(step.trials[-1], solved.terms)
     assert np.allclose(solved.terms, np.linalg.solve(step.slope, -step.r0), rtol=1e-12, atol=0)
-    assert np.allclose(solved.slope, step.slope, rtol=1e-12, atol=1e-12)
+    assert solved.slope is not None and np.allclose(solved.slope, step.slope, rtol=1e-12, atol=1e-12)
 
 
 def test_a_known_slope_is_tried_first() -> None:
