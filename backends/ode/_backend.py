@@ -16,7 +16,7 @@ from typing import Any, ClassVar
 import numpy as np
 from panda3d.core import Datagram
 from panda3d.core import Quat as PandaQuat
-from panda3d.ode import OdeJointFeedback
+from panda3d.ode import OdeJointFeedback, OdeUtil
 
 from .._kit import BackendOptions, KinematicPose, SubstepContacts, SubstepMean, substep_times
 from .._kit.stacks import Stacks, stacks
@@ -139,6 +139,9 @@ class OdeBackend(Backend):
     def _build_scene(self) -> None:
         world = self.world
         self._stacks = stacks(world)  # the registry refused columns too tall first (check_world)
+        # quickstep reorders its rows with dRandInt, whose seed is the process's: a fresh process's (0) for each
+        # world, so a scenario run twice in one process gives the same trace
+        OdeUtil.randSetSeed(0)
         self._scene = build_scene(world, self.options)
         self._collider = Collider(
             self._scene,
