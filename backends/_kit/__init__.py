@@ -7,6 +7,8 @@
 * :mod:`.surfaces`: per-body friction and restitution for engines that combine two bodies' values by a rule
   (:class:`~.surfaces.Blend`) instead of taking ODE's per-pair surface;
 * :mod:`.stacks`: the tallest column a world starts with, for the engines' stacking limits.
+* :mod:`.coupling_solve`: one engine step that holds joint couplings (``joint:mimic``), by Newton steps on
+  trial steps from the step's start (DART's coupler offsets, ODE's force pairs).
 
 The contract itself (checks, error translation, calls after close) is :class:`backends.base.Backend`.
 Nothing here imports an engine.

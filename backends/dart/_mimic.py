@@ -11,8 +11,9 @@ feeds back into the next step (two equal fingers swap rates each step).
 The row ``v_f' - m v_l' = (m q_l + c - q_f) / h`` that a rigid coupling asks for is DART's own with the offset
 ``c + h u`` at ``u = m v_l'``. ``v_l'`` depends on ``u`` (the impulse moves the leader), affinely while the step's
 set of active constraints stays, so :meth:`Mimics.step` solves for the ``u`` of every coupling that leaves each
-coupling's rate residual at zero, by Newton steps on trial engine steps from the saved state (two trials and the
-kept step when affine), and keeps that step: the follower then ends each step at ``m q_l' + c`` to rounding.
+coupling's rate residual at zero with the kit's Newton loop on trial engine steps from the saved state
+(backends/_kit/coupling_solve.py: two trials and the kept step when affine), and keeps that step: the follower
+then ends each step at ``m q_l' + c`` to rounding.
 dartpy 6.20 allows no constraint written in Python (``ConstraintBase`` has no constructor, ``ConstraintInfo`` is
 not bound).
 
@@ -32,6 +33,7 @@ from typing import Any
 import dartpy as dart
 import numpy as np
 
+from .._kit.coupling_solve import solve_coupled_step
 from ..errors import UnsupportedFeature
 from ..types import CompiledWorld
 from . import _trees
@@ -42,6 +44,9 @@ ITERATIONS = 8
 #: how far (rad or m) a kept step may leave a follower from its place, h x its rate residual: far under the
 #: trace's rounding (1e-9), over the residual's own rounding (1.7e-13 rad/s x h at Franka Panda's fingers)
 POSITION_TOLERANCE = 1e-12
+#: singular values of the slope (rate residual per unit of offset rate, 1 when the leader is free) below this are
+#: a locked coupling: double precision trials resolve far more (1e-13 rad/s)
+RCOND = 1e-12
 
 
 def check_mimics(world: CompiledWorld) -> None:
@@ -136,7 +141,8 @@ class Mimics:
             world.setTime(start)
 
         def trial(u: np.ndarray) -> np.ndarray:
-            """The couplings' rate residuals after a step with each coupler's offset shifted by h u."""
+            """The couplings' rate residuals after a step from the start with each coupler's offset shifted by h u."""
+            restore()
             for (follower, leader, ratio, offset), shift in zip(self._pairs, u, strict=True):
                 _couple(follower, leader, ratio, offset + h * float(shift))
             issue()
@@ -145,22 +151,9 @@ class Mimics:
             return np.array(ends) - asked
 
         n = len(self._pairs)
-        u, slope = np.zeros(n), np.empty((n, n))
-        residual = trial(u)
-        for attempt in range(ITERATIONS + 1):
-            if h * float(np.max(np.abs(residual))) <= POSITION_TOLERANCE:
-                return  # the step just taken holds every coupling: kept
-            if attempt == ITERATIONS:
-                break
-            restore()
-            for k in range(n):  # the residuals against each offset, on the piece that u lies on
-                nudged = u.copy()
-                nudged[k] += 1.0
-                slope[:, k] = trial(nudged) - residual
-                restore()
-            try:
-                u = u - np.linalg.solve(slope, residual)
-            except np.linalg.LinAlgError:
-                break
-            residual = trial(u)
-        raise RuntimeError(f"DART's mimic coupling found no consistent step at t = {start:.6g} s")
+        ones = np.ones(n)  # an offset rate of 1 moves the residual by 1 while the leader is free
+        solved = solve_coupled_step(
+            trial, np.zeros(n), lambda _: (ones, ones), np.full(n, POSITION_TOLERANCE), h, ITERATIONS, RCOND
+        )
+        if not solved.held:
+            raise RuntimeError(f"DART's mimic coupling found no consistent step at t = {start:.6g} s")

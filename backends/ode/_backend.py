@@ -16,7 +16,7 @@ from typing import Any, ClassVar
 import numpy as np
 from panda3d.core import Datagram
 from panda3d.core import Quat as PandaQuat
-from panda3d.ode import OdeJointFeedback
+from panda3d.ode import OdeJointFeedback, OdeUtil
 
 from .._kit import BackendOptions, KinematicPose, SubstepContacts, SubstepMean, substep_times
 from .._kit.stacks import Stacks, stacks
@@ -42,6 +42,7 @@ from ._contacts import Collider
 from ._held import raise_held_inertia
 from ._imported import read_imported
 from ._joint_dynamics import JointDynamics, check_joint_dynamics
+from ._mimic import Mimics
 from ._options import OdeOptions, check_resting_stack, check_stack
 from ._ranges import check_ranges
 
@@ -94,11 +95,9 @@ class OdeBackend(Backend):
     name = "ode"
     engine_distribution = "panda3d"
     #: everything but what only an engine building a robot from its model file runs (MJCF on MuJoCo), except
-    #: joint springs, and no mimic (ODE has no gear joint). Armature is one more velocity row with CFM h / a
-    #: on the joint's coordinate, springs a joint torque each step (_joint_dynamics; docs/backends/ode.md)
-    capabilities = (
-        frozenset(Capability) - (MODEL_FILE_CAPABILITIES - {Capability.JOINT_STIFFNESS}) - {Capability.JOINT_MIMIC}
-    )
+    #: joint springs. Armature is one more velocity row with CFM h / a on the joint's coordinate, springs a joint
+    #: torque each step (_joint_dynamics), a mimic the force pair solved for each step (_mimic; docs/backends/ode.md)
+    capabilities = frozenset(Capability) - (MODEL_FILE_CAPABILITIES - {Capability.JOINT_STIFFNESS})
     #: joint damping is ODE's own implicit row (CFM 1 / c, target 0, unbounded; _joint_dynamics): the runner's
     #: motor carries only the friction loss (its bound c |qdot| made Dantzig fail steps on pybullet_data's ant)
     native_damping: ClassVar[bool] = True
@@ -143,6 +142,9 @@ class OdeBackend(Backend):
     def _build_scene(self) -> None:
         world = self.world
         self._stacks = stacks(world)  # the registry refused columns too tall first (check_world)
+        # quickstep reorders its rows with dRandInt, whose seed is the process's: a fresh process's (0) for each
+        # world, so a scenario run twice in one process gives the same trace
+        OdeUtil.randSetSeed(0)
         self._scene = build_scene(world, self.options)
         self._collider = Collider(
             self._scene,
@@ -154,6 +156,7 @@ class OdeBackend(Backend):
             impact_cfm=self.options.impact_cfm,
         )
         self._joint_dynamics = JointDynamics(self._scene.world, self._scene.joints, world.dt / world.substeps)
+        self._mimics = Mimics(world, self._scene, _effective_inertia)
         self._fudge = [j.joint.getParamFudgeFactor(*axis_arg(j)) if j.feedback else 1.0 for j in self._scene.joints]
         n = len(world.bodies)
         self._dynamic = [i for i, b in enumerate(world.bodies) if b.motion is Motion.DYNAMIC]
@@ -214,13 +217,10 @@ class OdeBackend(Backend):
         for sub, t in enumerate(self._times):
             report = every or sub == n - 1
             collider.collide(report=report, forces=pushed)  # the friction directions predict the slip
-            for i, acc in forces:
-                body = scene.bodies[i]
-                body.addForce(*acc[:3])  # type: ignore[union-attr]
-                body.addTorque(*acc[3:])  # type: ignore[union-attr]
             if self._joint_dynamics:  # armature rows' targets and springs' forces from the substep's start
                 self._joint_dynamics.before_step()
             if not joints:
+                self._issue(forces)
                 stepper(h)
             else:
                 limits = [self._limit(j) for j in joints]
@@ -228,7 +228,11 @@ class OdeBackend(Backend):
                     if limits[k]:
                         self._fudge_away(k, j, limits[k], h)
                 frames = [self._frame(j) for j in joints]
-                stepper(h)
+                if self._mimics:  # trial steps from this state, the last one kept (_mimic)
+                    self._mimics.step(lambda: self._issue(forces), stepper, h, self.steps * world.dt + t - h)
+                else:
+                    self._issue(forces)
+                    stepper(h)
                 self._motor_mean.add([self._motor(k, j, limits[k], frames[k]) for k, j in enumerate(joints)])
             if reactions:  # dJointFeedback: the force on body 1 and the torque about its centre of mass
                 self._reaction_mean.add([v for fb in reactions for a in (fb.getForce1(), fb.getTorque1()) for v in a])
@@ -242,7 +246,20 @@ class OdeBackend(Backend):
         if reactions:
             self._reaction_mean.finish()
         self._states = None
+        if self._mimics.messages:  # ODE's messages of the kept steps and the couplings' warnings, in order
+            self._messages.extend(self._mimics.messages)
+            self._mimics.messages.clear()
         self._messages.extend(_native.take())
+
+    def _issue(self, forces: list[tuple[int, Any]]) -> None:
+        """The substep's forces on the bodies and the springs' on their joints (ODE clears them after each step)."""
+        bodies = self._scene.bodies
+        for i, acc in forces:
+            body = bodies[i]
+            body.addForce(*acc[:3])  # type: ignore[union-attr]
+            body.addTorque(*acc[3:])  # type: ignore[union-attr]
+        if self._joint_dynamics:
+            self._joint_dynamics.add_forces()
 
     def _follow_track(self, t: float) -> None:
         """Put each kinematic body where its velocity takes it ``t`` after the step began."""

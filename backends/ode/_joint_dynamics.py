@@ -79,6 +79,7 @@ class _Spring:
     rest: float
     last: float = 0.0  # a hinge's angle as ODE read it last (0 at the start), in (-pi, pi]
     turns: int = 0  # whole turns ODE's angle wrapped since the start
+    force: float = 0.0  # N or N m, from the position at the step's start
 
 
 class JointDynamics:
@@ -102,8 +103,9 @@ class JointDynamics:
         return bool(self.rotors or self.springs)
 
     def before_step(self) -> None:
-        """Each row's target: a / (a + c h) of the coordinate's rate now; each spring's force from the position
-        now."""
+        """Each armature or damping row's target: a / (a + c h) of the coordinate's rate now; each spring's force
+        from the position now (applied by :meth:`add_forces`, once per ``dWorldStep``: ODE clears its force
+        accumulators after each)."""
         for rotor in self.rotors:
             if rotor.share == 0.0:  # damping alone: the target stays 0 (_rotor)
                 continue
@@ -118,9 +120,17 @@ class JointDynamics:
                 angle = float(joint.getAngle())
                 spring.turns -= round((angle - spring.last) / (2.0 * math.pi))  # a jump across +-pi: a wrap
                 spring.last = angle
-                joint.addTorque(-spring.stiffness * (angle + 2.0 * math.pi * spring.turns - spring.rest))
+                spring.force = -spring.stiffness * (angle + 2.0 * math.pi * spring.turns - spring.rest)
             else:
-                joint.addForce(-spring.stiffness * (joint.getPosition() - spring.rest))
+                spring.force = -spring.stiffness * (joint.getPosition() - spring.rest)
+
+    def add_forces(self) -> None:
+        """The springs' forces of :meth:`before_step` on their joints (a trial step of ``_mimic`` adds them again)."""
+        for spring in self.springs:
+            if spring.handle.spec.kind is JointKind.HINGE:
+                spring.handle.joint.addTorque(spring.force)
+            else:
+                spring.handle.joint.addForce(spring.force)
 
     def damping(self, handle: JointHandle) -> float:
         """The joint's damping as ODE holds it, c = 1 / CFM - a / h from its row's CFM (0: no damping in a row)."""
@@ -205,3 +215,18 @@ def _row_rate(geometry: tuple[np.ndarray, np.ndarray, np.ndarray], dv: np.ndarra
     """J v of a slider pair's row with the geometry (axis, p1, p2), dv = v1 - v2, sw = w1 + w2."""
     axis, p1, p2 = geometry
     return float(axis @ dv + np.cross(0.5 * (p2 - p1), axis) @ sw)
+
+
+def motor_row_rate(handle: JointHandle) -> float:
+    """J v of the joint's motor row, whose J^T f is what ``dJointAddHingeTorque`` / ``dJointAddSliderForce`` apply:
+    a hinge's ``getAngleRate``; a slider's rate with the linear torque decoupling of a slider between two bodies
+    (``_row_rate``), the exact rate of ODE's slider position while the bodies turn together."""
+    joint = handle.joint
+    if handle.spec.kind is JointKind.HINGE:
+        return float(joint.getAngleRate())
+    b1, b2 = joint.getBody(0), joint.getBody(1)
+    if b2 is None or b2.isEmpty():
+        return float(joint.getPositionRate())
+    geometry = (np.array(joint.getAxis(), float), np.array(b1.getPosition(), float), np.array(b2.getPosition(), float))
+    dv = np.array(b1.getLinearVel(), float) - np.array(b2.getLinearVel(), float)
+    return _row_rate(geometry, dv, np.array(b1.getAngularVel(), float) + np.array(b2.getAngularVel(), float))

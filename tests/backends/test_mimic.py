@@ -26,8 +26,19 @@ Tolerances:
   relaxation time h, beta 0.1): regularisation R = eps w with eps = beta^2 / (4 pi^2), and the impulse aims at
   removing the error g over h + relaxation time = 2h, so g' = g / 2 + eps (a0 h^2 + ...) per step settles below
   2 eps a0 h^2 / (1 - eps), monotonically from 0 (each joint is its own tree here: w is exact);
+* ODE: a force pair (+u on the follower, -m u on the leader) solved for each step (backends/ode/_mimic.py); a
+  kept step leaves the follower within its float32 tolerance of its place, the two angles' resolution
+  4 eps32 max(1, |q|) each (the follower's, |m| times the leader's; |q| < 4 here), and reading the two float32
+  angles adds as much again. ODE advances a body's
+  quaternion by w h / 2 and renormalises, turning it by 2 atan(h w / 2) = h w - (h w)^3 / 12 + ...: with the
+  rates held at v_f = m v_l the follower's angle misses m times the leader's by |m^3 - m| (h v)^3 / 12 in a
+  step (the next step's error reduction 1 removes it: it does not add up), v at most sqrt(2 dV / J) with dV the
+  largest drop of the two centres of mass (2 r each): 12.4 rad/s here;
 * the leader: a follower off its place by r changes the torque on the leader by at most |m| m_b g r_b |r|,
-  so q drifts by at most that / J x T^2 / 2 from the reference.
+  so q drifts by at most that / J x T^2 / 2 from the reference. ODE steps each arm as a free body held by the
+  hinge's rows (maximal coordinates, ERP 0.2, CFM 1e-5, the quaternion step above), a first-order method other
+  than the joint-space Euler of the reference (both O(h) from the truth): its own distance from the joint-space
+  reference is taken from the same arm released without its coupling, on ODE in the same test.
 
 The coupling's own size: the leader released alone falls to 0.593 rad at 0.2 s, coupled to 0.438 (the
 reference); so a run ignoring the mimic fails both checks by orders of magnitude.
@@ -94,18 +105,26 @@ def _run(tmp_path: Path, engine: str) -> Trace:
     return read_trace(result.trace)
 
 
-def _tracking_bound(engine: str) -> float:
+def _tracking_bound(engine: str, a0: float, vmax: float, magnitude: float, multiplier: float = M) -> float:
+    """How far the follower may be from ``multiplier`` x leader + offset (module docstring): ``a0`` the coupling
+    coordinate's acceleration were it released, ``vmax`` the leader's largest rate, ``magnitude`` the largest
+    |q| of either joint."""
     steps = round(T / H)
-    bound = ROUNDING + steps * get_backend(engine).precision.eps * 4.0  # |q| < 4 rad over the run
+    if engine == "ode":
+        from backends.ode._mimic import EPS32, HINGE_RESOLUTION
+
+        held = HINGE_RESOLUTION * EPS32 * (1.0 + abs(multiplier)) * max(1.0, magnitude)  # a kept step's tolerance
+        return ROUNDING + 2.0 * held + abs(multiplier**3 - multiplier) * (H * vmax) ** 3 / 12.0
+    bound = ROUNDING + steps * get_backend(engine).precision.eps * magnitude
     if engine == "mujoco":
         from backends.mujoco._geoms import IMPEDANCE
         from backends.mujoco._options import MujocoOptions
 
         d, stiffness = IMPEDANCE, MujocoOptions().erp / H**2
-        bound += 2.0 * (1.0 - d) * _free_acceleration() / (d * d * stiffness)
+        bound += 2.0 * (1.0 - d) * a0 / (d * d * stiffness)
     if engine == "drake":
         eps = 0.1**2 / (4 * math.pi**2)
-        bound += 2.0 * eps / (1.0 - eps) * _free_acceleration() * H**2
+        bound += 2.0 * eps / (1.0 - eps) * a0 * H**2
     if engine == "dart":
         from backends.dart._mimic import POSITION_TOLERANCE
 
@@ -118,19 +137,100 @@ def _free_acceleration() -> float:
     return G * (MB * RB / IB + abs(M) * MA * RA / IA)
 
 
+def _fastest() -> float:
+    """The leader's largest rate: sqrt(2 dV / J), dV the largest drop of both centres of mass (2 r each)."""
+    return math.sqrt(2.0 * G * (MA * 2 * RA + MB * 2 * RB) / J)
+
+
+def _maximal_coordinates_gap(tmp_path: Path, engine: str) -> float:
+    """ODE only (module docstring): the leader released without its coupling, against the joint-space Euler
+    reference of that one pendulum (J = I_a, torque m_a g r_a cos q)."""
+    if engine != "ode":
+        return 0.0
+    alone = tmp_path / "alone"
+    alone.mkdir()
+    (alone / "mimic_pair.urdf").write_text(MODEL.read_text().replace('<mimic joint="lead" multiplier="-0.5" '
+                                                                    'offset="0.2"/>', ""))
+    (alone / "pair.yaml").write_text(SCENARIO)
+    result = run_loaded(load_scenario(alone / "pair.yaml"), engine, alone / engine)
+    assert result.status == "passed" and result.trace is not None, result.failure
+    lead = read_trace(result.trace).joints["r.lead"].position
+    q, v, out = 0.0, 0.0, [0.0]
+    for _ in range(round(T / H)):
+        v += H * MA * G * RA * math.cos(q) / IA
+        q += H * v
+        out.append(q)
+    return float(np.max(np.abs(lead - np.array(out)[: len(lead)])))
+
+
 @pytest.mark.parametrize("engine", [e for e in INSTALLED if _declares(e)])
 def test_a_mimic_joint_follows_its_leader(tmp_path: Path, engine: str) -> None:
     trace = _run(tmp_path, engine)
     lead, follow = trace.joints["r.lead"].position, trace.joints["r.follow"].position
     assert lead[0] == 0.0 and follow[0] == pytest.approx(C, abs=ROUNDING)  # started where its leader puts it
-    track = _tracking_bound(engine)
+    track = _tracking_bound(engine, _free_acceleration(), _fastest(), 4.0)  # |q| < 4 rad over the run
     gap = float(np.max(np.abs(follow - (M * lead + C))))
     assert gap <= track, (engine, gap, track)
     reference = _reference()
     drift = abs(M) * MB * G * RB * (track - ROUNDING) / J * T * T / 2 + 2 * ROUNDING
+    drift += _maximal_coordinates_gap(tmp_path, engine)
     off = float(np.max(np.abs(lead - reference[: len(lead)])))
     assert off <= drift, (engine, off, drift)
     assert float(np.ptp(lead)) > 2.0  # it swung through most of a half turn: not a still comparison
+
+
+AXES = Path(__file__).parent / "models" / "mimic_axes.urdf"
+GEAR, TAU = 2.0, 0.06  # mimic_axes.urdf's multiplier; the torque on the leader (N m)
+IA_AXIS, IB_AXIS = 0.02, 0.01  # each wheel's inertia about its own hinge, through its centre of mass
+J_AXIS = IA_AXIS + GEAR**2 * IB_AXIS  # 0.06 kg m^2: the leader turns at TAU / J_AXIS = 1 rad/s^2
+AXES_SCENARIO = f"""schema_version: 1
+scenario: mimic-axes
+world: {{gravity: [0, 0, 0], dt: {H}, duration: {T}}}
+robots:
+  r:
+    urdf: mimic_axes.urdf
+    fixed: true
+    joints:
+      lead: {{drive: {{torque: {TAU}}}}}
+"""
+
+
+@pytest.mark.parametrize("engine", [e for e in INSTALLED if _declares(e)])
+def test_a_torque_on_the_leader_turns_both_at_tau_over_the_coupled_inertia(tmp_path: Path, engine: str) -> None:
+    """Two wheels on parallel hinges through their centres of mass, no gravity: `follow` = 2 x `lead`, a torque
+    tau on `lead`. The coupling's force pair (+u on the follower, -m u on the leader) does not change the
+    momentum P = I_a v_l + m I_b v_f, so P = tau t whatever u (a coupling that pushed only the follower, or
+    were not two-way, breaks it); with the coupling held, the leader turns at tau / (I_a + m^2 I_b) (1 rad/s^2,
+    against 3 alone). Each wheel turns about a principal axis through its centre of mass: no centripetal,
+    gyroscopic or constraint term, so every engine's step is joint-space semi-implicit Euler, v_n = n h a and
+    q_n = h^2 a n (n + 1) / 2. Tolerances: P from the trace's rates (1e-9 each) and n eps of the largest
+    momentum for n steps of rounding; the leader moves by -(m I_b / J) times the follower's miss of its place
+    (J q_l = sum of h P - m I_b (q_f - m q_l)), that miss bounded as in the gravity test (its a0: |m| tau / I_a,
+    the follower free), plus n eps |q| of rounding and on ODE the quaternion step's deficit (h w)^3 / 12 a step
+    on the leader's own angle (module docstring)."""
+    (tmp_path / "mimic_axes.urdf").write_bytes(AXES.read_bytes())
+    (tmp_path / "axes.yaml").write_text(AXES_SCENARIO)
+    result = run_loaded(load_scenario(tmp_path / "axes.yaml"), engine, tmp_path / engine)
+    assert result.status == "passed", result.failure
+    assert result.trace is not None
+    trace = read_trace(result.trace)
+    lead, follow = trace.joints["r.lead"], trace.joints["r.follow"]
+    steps, eps, a = round(T / H), get_backend(engine).precision.eps, TAU / J_AXIS
+    n = np.arange(len(lead.position))
+    time = n * H
+    momentum = IA_AXIS * lead.velocity + GEAR * IB_AXIS * follow.velocity
+    largest = TAU * T
+    assert float(np.max(np.abs(momentum - TAU * time))) <= ROUNDING * (IA_AXIS + GEAR * IB_AXIS) + steps * eps * largest
+    vmax, qmax = a * T, GEAR * a * T * T  # the follower's angle: m a T^2 / 2 at most, within 2x
+    track = _tracking_bound(engine, GEAR * TAU / IA_AXIS, vmax, qmax, GEAR)
+    assert float(np.max(np.abs(follow.position - GEAR * lead.position))) <= track
+    reference = H * H * a * n * (n + 1) / 2
+    bound = GEAR * IB_AXIS / J_AXIS * track + ROUNDING + steps * eps * max(1.0, qmax)
+    if engine == "ode":
+        bound += steps * (H * vmax) ** 3 / 12.0
+    off = float(np.max(np.abs(lead.position - reference)))
+    assert off <= bound, (engine, off, bound)
+    assert reference[-1] == pytest.approx(0.5 * a * T * T, rel=2 * H / T)  # 0.5 rad: against 1.5 alone
 
 
 @pytest.mark.parametrize("engine", [e for e in INSTALLED if not _declares(e)])

@@ -77,3 +77,13 @@ def test_chain_light_bodies_and_held_bodies_are_left_out() -> None:
         find_models([str(SUITE / "humanoid_CMU.xml")])[0], 0.5)).world.bodies)  # fmt: skip
     _check(cmu)
     _check(_engine_world("@pybullet_data/mjcf/pusher.xml"))
+
+
+@pytest.mark.parametrize("name", ["manipulator.xml", "stacker.xml"])
+def test_the_pinch_site_is_refused_now_that_ode_holds_mimics(name: str) -> None:
+    """The "pinch site" (1e-12 kg m^2, welded to the hand) is 2.1e-9 of the upper arm's inertia: refused for
+    `joint:mimic` before ODE had mimics, by this rule since (its docstring: lending it the hand's inertia and mass
+    passed the rule, but ODE stayed at its zero pivot's edge)."""
+    with pytest.raises(UnsupportedFeature) as info:
+        _check(_engine_world(str(SUITE / name)))
+    assert "Body `model.pinch site`" in str(info.value) and "2.1e-09 of `model.upper_arm`'s" in str(info.value)
