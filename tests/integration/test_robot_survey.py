@@ -63,43 +63,25 @@ def survey(request: pytest.FixtureRequest, tmp_path_factory: pytest.TempPathFact
 
 #: Engines known to run under 90 % of the MJCF corpus (45 files, 0.5 s). MuJoCo runs all 45 since MJCF's legacy
 #: dialect is upgraded before MuJoCo's compiler reads a file (runner.language.mjcf_legacy). Measured: MuJoCo 45,
-<<<<<<< HEAD
 #: Drake 41 (91 %), DART 41 (since its constraint impulses see the armature, backends/dart/_impacts.py; 35
 #: before), PyBullet 39, ODE 37; no other engine can reach 41: fish, ball_in_cup and quadruped need an acting
 #: tendon or a coupling of three joints, striker a ball joint's dynamics (refused up front by name); the rest are
-#: refused (a mimic on ODE, float32 ranges on ODE) or stopped by the energy watchdog (docs/robots.md, "The
-#: survey"). Each engine here is an expected miss until it reaches the target; reaching it fails the test, so
-#: that this list goes.
+#: refused (float32 ranges on ODE: dog, thrower, manipulator, stacker) or stopped by the energy watchdog
+#: (docs/robots.md, "The survey"). Each engine here is an expected miss until it reaches the target; reaching it
+#: fails the test, so that this list goes.
 MJCF_BELOW_TARGET = frozenset(ENGINES) - {"mujoco", "drake", "dart"}
-=======
-#: Drake 41 (91 %), PyBullet 39, ODE 36, DART 35; no other engine can reach 41: fish, ball_in_cup and quadruped
-#: need an acting tendon or a coupling of three joints, striker a ball joint's dynamics (refused up front by name);
-#: the rest are refused (float32 ranges on ODE) or stopped by the energy watchdog (docs/robots.md,
-#: "The survey"). Each engine here is an expected miss until it reaches the target; reaching it fails the test,
-#: so that this list goes.
-MJCF_BELOW_TARGET = frozenset(ENGINES) - {"mujoco", "drake"}
->>>>>>> s40-odemimic
 #: Engines known to run under 90 % of the URDF corpus: none. Drake was (51 of 95, 40 refused for `shape:convex`)
 #: until issue 32 mapped convex hulls: measured 91 of 95 since (docs/robots.md, "The survey").
 URDF_BELOW_TARGET: frozenset[str] = frozenset()
 
 
 #: Engines known to run under 90 % of the whole survey (140 models: 95 URDF, 45 MJCF; 0.5 s; 126 is 90 %).
-<<<<<<< HEAD
 #: Measured, ran (URDF + MJCF): MuJoCo 136 (91 + 45), Drake 132 (91 + 41), DART 131 (90 + 41; 125 before its
-#: constraint impulses saw the armature, backends/dart/_impacts.py), PyBullet 130 (91 + 39) and ODE 126 (89 + 37:
-#: laikago's mesh feet and ant run since ODE's mesh pairs keep distinct contacts and its damping is an implicit
-#: row; `<mimic>` refused, ODE has no gear joint; dog and thrower beyond float32's range): every engine meets it
+#: constraint impulses saw the armature, backends/dart/_impacts.py), PyBullet 130 (91 + 39) and ODE 127 (90 + 37;
+#: 123 before its mesh pairs kept distinct contacts (laikago's two URDFs), its damping became an implicit row
+#: (ant) and it held `<mimic>` by a force pair solved each step (franka_panda)): every engine meets it
 #: (docs/robots.md, "The survey"). An engine that falls below is listed here as an expected miss, with its cause.
 WHOLE_BELOW_TARGET: frozenset[str] = frozenset()
-=======
-#: Measured, ran (URDF + MJCF): MuJoCo 136 (91 + 45), Drake 132 (91 + 41), PyBullet 130 (91 + 39) meet it; DART 125
-#: (90 + 35: its contact impulses do not see the armature, 5 MJCF models stopped by the energy watchdog; xarm6's
-#: five mimics in one tree refused) and ODE 124 (88 + 36, franka_panda with its mimic: LCP failures on laikago's
-#: mesh feet, xarm6_with_gripper and ant; dog, thrower, manipulator and stacker beyond float32's range) miss it
-#: (docs/robots.md, "The survey"). Reaching the target fails the test, so that this list goes.
-WHOLE_BELOW_TARGET = frozenset({"dart", "ode"}) & frozenset(ENGINES)
->>>>>>> s40-odemimic
 
 
 @pytest.mark.parametrize("engine", ENGINES)
