@@ -332,7 +332,7 @@ def test_the_pair_runs_as_a_mimic(tmp_path: Path, engine: str) -> None:
     assert float(np.ptp(lead)) > 2.0
 
 
-@pytest.mark.parametrize("engine", [e for e in INSTALLED if not _declares_mimic(e)])
+@pytest.mark.parametrize("engine", [*(e for e in INSTALLED if not _declares_mimic(e)), "fake"])  # fake: none
 def test_an_engine_without_mimic_refuses_the_pair_up_front(tmp_path: Path, engine: str) -> None:
     (tmp_path / "pair.xml").write_text(PAIR)
     (tmp_path / "pair.yaml").write_text(SCENARIO)
