@@ -42,7 +42,7 @@ from ._contacts import Collider
 from ._held import raise_held_inertia
 from ._imported import read_imported
 from ._joint_dynamics import JointDynamics, check_joint_dynamics
-from ._mimic import Mimics
+from ._mimic import Mimics, check_mimics
 from ._options import OdeOptions, check_resting_stack, check_stack
 from ._ranges import check_ranges
 
@@ -124,6 +124,7 @@ class OdeBackend(Backend):
     def check_world(cls, world: CompiledWorld, options: BackendOptions) -> None:
         check_joint_dynamics(world)
         check_ranges(world)
+        check_mimics(world)  # one coupling per group of jointed bodies (_mimic)
         check_stack(stacks(world).landing)
         free = _free_stacks(world)
         check_resting_stack(free.tallest, free.landing, _has_friction(world))

@@ -34,6 +34,14 @@ pivot (xarm6_with_gripper aborted so in a slope's trial); the trial taken is kep
 coupling. A coupling that contacts or stops lock (the slope singular) keeps the least-squares step on the rest; one
 not held to tolerance after :data:`ITERATIONS` Newton steps keeps the trial with the smallest residual, and
 the run's log says so once per coupling (``messages``), with the residual.
+
+Refused up front: two couplings in one group of jointed bodies. Their force pairs meet in the same bodies, and
+the trial steps' rates stop being an affine function of the forces where the group's stops and couplings
+switch: pybullet_data's xarm6_with_gripper (five fingers mimicking one joint, every joint starting at its
+lower stop 0), held 1 m above the ground with a fixed base, warned "not held" with one coupling (0.28 mm at
+0.162 s), ran with two, and aborted the process with three ("bNormalizationResult" in _dNormalize4, signal 6)
+and with all five (a zero pivot in _dLDLTRemove); no trial schedule found was safe, so the run is refused, as
+on DART (backends/dart/_mimic.py), rather than let ODE abort.
 """
 
 from __future__ import annotations
@@ -47,10 +55,12 @@ from panda3d.core import Quat
 from panda3d.ode import OdeBody, OdeUtil
 
 from .._kit.coupling_solve import solve_coupled_step
-from ..types import CompiledWorld, JointKind
+from ..errors import UnsupportedFeature
+from ..types import CompiledWorld, JointKind, Motion
 from . import _native
 from ._build import JointHandle, Scene
 from ._joint_dynamics import motor_row_rate
+from ._ranges import jointed_groups
 
 #: Newton steps at most per engine step (an affine step needs one)
 ITERATIONS = 8
@@ -110,6 +120,27 @@ def _push(handle: JointHandle, force: float) -> None:
         handle.joint.addTorque(force)
     else:
         handle.joint.addForce(force)
+
+
+def check_mimics(world: CompiledWorld) -> None:
+    """Refuse two couplings in one group of jointed bodies up front (module docstring)."""
+    if len(world.couplings) < 2:
+        return
+    body_of = {spec.name: spec.body for spec in world.joints}
+    dynamic = {b.name for b in world.bodies if b.motion is Motion.DYNAMIC}
+    group = jointed_groups(world, {body_of[c.joint] for c in world.couplings} & dynamic)
+    seen: dict[str, str] = {}
+    for coupling in world.couplings:
+        key = group.get(body_of[coupling.joint])
+        if key is None:
+            continue
+        if key in seen:
+            raise UnsupportedFeature(
+                f"Backend `ode` holds one joint:mimic per group of jointed bodies: `{seen[key]}` and "
+                f"`{coupling.joint}` share one; their force pairs, solved on trial steps, made ODE abort "
+                '(docs/backends/ode.md, "Mimic joints")'
+            )
+        seen[key] = coupling.joint
 
 
 class Mimics:

@@ -37,7 +37,7 @@ from ..types import BodySpec, CompiledWorld, Motion
 from ._held import FLOAT32_EPS, held_bodies
 
 
-def _groups(world: CompiledWorld, bodies: set[str]) -> dict[str, str]:
+def jointed_groups(world: CompiledWorld, bodies: set[str]) -> dict[str, str]:
     """Each body's group: the bodies that joints between dynamic bodies connect (a chain's light bodies join
     their two neighbours), by union-find; the representative of each."""
     parent = {b.name: b.name for b in world.bodies if b.motion is Motion.DYNAMIC}
@@ -61,7 +61,7 @@ def check_ranges(world: CompiledWorld) -> None:
     jointed = {j.body for j in world.joints} | {j.other for j in world.joints if j.other is not None}
     by_name = {b.name: b for b in world.bodies}
     checked = {n for n in jointed if n in by_name and by_name[n].motion is Motion.DYNAMIC and n not in skip}
-    group = _groups(world, checked)
+    group = jointed_groups(world, checked)
     heaviest: dict[str, BodySpec] = {}
     widest: dict[str, BodySpec] = {}
     for name in sorted(checked):

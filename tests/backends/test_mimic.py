@@ -245,11 +245,20 @@ def test_an_engine_without_mimic_refuses_it_up_front(tmp_path: Path, engine: str
         run_loaded(load_scenario(tmp_path / "pair.yaml"), engine, tmp_path / engine)
 
 
-@pytest.mark.skipif(not (is_installed("pybullet") and is_installed("dart")), reason="pybullet_data, DART")
-def test_dart_refuses_two_mimics_in_one_tree_up_front(tmp_path: Path) -> None:
+#: what each engine that refuses several couplings in one joint tree says (the engine's _mimic module docstring)
+SHARED_TREE_REFUSALS = {
+    "dart": r"`dart` holds one joint:mimic per joint tree: `arm\.\w+` and",
+    "ode": r"`ode` holds one joint:mimic per group of jointed bodies: `arm\.\w+` and",
+}
+
+
+@pytest.mark.parametrize("engine", [e for e in SHARED_TREE_REFUSALS if e in INSTALLED])
+@pytest.mark.skipif(not is_installed("pybullet"), reason="pybullet_data")
+def test_several_mimics_in_one_tree_are_refused_up_front(tmp_path: Path, engine: str) -> None:
     """xarm6_with_gripper: five fingers mimic one joint. DART's coupler rows of one tree share an LCP whose
     matrix is not symmetric (row: the follower's rate; impulse: on both joints), which its solver leaves
-    unsolved (docs/backends/dart.md, "Mimic joints"): refused before the run, naming both joints."""
+    unsolved (docs/backends/dart.md, "Mimic joints"); on ODE the force pairs' trial steps made ODE abort
+    (docs/backends/ode.md, "Mimic joints"): refused before the run, naming both joints."""
     (tmp_path / "xarm.yaml").write_text(
         """schema_version: 1
 scenario: xarm
@@ -258,8 +267,8 @@ robots:
   arm: {urdf: "@pybullet_data/xarm/xarm6_with_gripper.urdf", fixed: true}
 """
     )
-    with pytest.raises(UnsupportedFeature, match=r"`dart` holds one joint:mimic per joint tree: `arm\.\w+` and"):
-        run_loaded(load_scenario(tmp_path / "xarm.yaml"), "dart", tmp_path / "out")
+    with pytest.raises(UnsupportedFeature, match=SHARED_TREE_REFUSALS[engine]):
+        run_loaded(load_scenario(tmp_path / "xarm.yaml"), engine, tmp_path / "out")
 
 
 @pytest.mark.skipif(not is_installed("pybullet"), reason="pybullet_data ships with pybullet")
