@@ -11,13 +11,13 @@ several times the other engines' (notes §9).
 from __future__ import annotations
 
 import math
+from functools import partial
 from typing import Any, ClassVar
 
 import dartpy as dart
 import numpy as np
 
 from .._kit import BackendOptions, KinematicPose, SubstepContacts, SubstepMean
-from .._kit.stacks import stack_height
 from ..base import Backend
 from ..errors import UnsupportedFeature
 from ..types import (
@@ -40,12 +40,14 @@ from . import _contacts, _surfaces
 from ._armature import add_armature, check_armature, hold_armature
 from ._build import BodyHandle, JointHandle, build, place_free
 from ._build import check as check_build
+from ._friction import friction_model
 from ._gate import BounceGate
 from ._impacts import ArmatureImpacts
 from ._imported import read_imported
 from ._mimic import Mimics, check_mimics
-from ._options import MAX_CONE_MU, MAX_CONE_STACK, DartOptions
-from ._reads import state_readers
+from ._options import DartOptions
+from ._reactions import Reactions
+from ._reads import com_motion, rotvec_to_quat, row_index, state_readers
 
 _NAME = "dart"
 
@@ -84,7 +86,7 @@ class DartBackend(Backend):
     @classmethod
     def check_world(cls, world: CompiledWorld, options: BackendOptions) -> None:
         if isinstance(options, DartOptions):
-            _friction_model(world, options.friction)  # `friction: cone` above the solver's mu is refused
+            friction_model(world, options.friction)  # `friction: cone` above the solver's mu is refused
         check_build(world)  # the joint trees: loops, joint kinds, planes (no engine call)
         check_armature(world)  # armature with a motor or friction loss (DART's servo does not see it)
         check_mimics(world)  # one coupling per joint tree, no motor on a follower (_mimic)
@@ -97,7 +99,7 @@ class DartBackend(Backend):
             coefficients, self._surface_conflict = _surfaces.solve(world), ""
         except UnsupportedFeature as exc:  # no fixed values exist: solve for the touching pairs each step
             coefficients, self._surface_conflict = _surfaces.solve(world, []), str(exc)
-        self._friction = _friction_model(world, self.options.friction)
+        self._friction = friction_model(world, self.options.friction)
         built = build(world, self._detector, coefficients, self._engine_steps, self._friction)
         self._dart: Any = built.world
         self._bodies: list[BodyHandle] = built.bodies
@@ -108,11 +110,12 @@ class DartBackend(Backend):
         self._impacts = ArmatureImpacts({id(s): s for s in moving}.values(), built.joints)
         self._coefficients = built.coefficients
         self._free = [i for i, h in enumerate(self._bodies) if h.free]
-        self._free_at = _rows(self._free)
+        self._free_at = row_index(self._free)
         self._read_q, self._read_v = state_readers([self._bodies[i].skeleton for i in self._free])
         self._static = [i for i, b in enumerate(world.bodies) if b.motion is Motion.STATIC]
-        self._static_at = _rows(self._static)
+        self._static_at = row_index(self._static)
         self._reader = _contacts.ContactReader(len(world.bodies), self._static)
+        self._com_motion = partial(com_motion, world.bodies, self._bodies)  # for the approach speeds
         self._linked = [i for i in range(len(world.bodies)) if i not in set(self._free) | set(self._static)]
         coordinate = (JointKind.SLIDER, JointKind.HINGE)
         self._coordinates = [(j, h.joint, h.sign) for j, h in enumerate(self._joints) if h.spec.kind in coordinate]
@@ -121,8 +124,8 @@ class DartBackend(Backend):
         self._static_quat = np.array([world.bodies[i].quat for i in self._static], dtype=float).reshape(-1, 4)
         self._prev_quat = np.array([b.quat for b in world.bodies], dtype=float).reshape(-1, 4)
         self._motor_mean = SubstepMean(len(self._joints))
-        self._watched = self._watch_reactions()
-        self._reaction_mean = SubstepMean(6 * len(self._watched))
+        self._reactions = Reactions(self.world, self._bodies, self._joints)
+        self._reaction_mean = SubstepMean(6 * len(self._reactions))
         self._substep_contacts = SubstepContacts(self._engine_steps)
         self._relevant = set(_surfaces.touching_pairs(world))
         self._touching: list[tuple[int, int]] | None = None
@@ -186,7 +189,7 @@ class DartBackend(Backend):
         servos, n = self._servos, self._engine_steps
         h = self.world.dt / n
         self._motor_mean.start()
-        if self._watched:
+        if self._reactions:
             self._reaction_mean.start()
         self._substep_contacts.start()
         for _ in range(n):
@@ -201,12 +204,12 @@ class DartBackend(Backend):
             for j, handle in servos:
                 applied[j] = handle.sign * handle.joint.getConstraintImpulse(0) / h
             self._motor_mean.add(applied)
-            if self._watched:
-                self._reaction_mean.add(self._reactions_now())
+            if self._reactions:
+                self._reaction_mean.add(self._reactions.now())
             if n > 1:
                 self._substep_contacts.add(self._reader.contacts(self._dart.getLastCollisionResult().getContacts()))
         self._motor_mean.finish()
-        if self._watched:
+        if self._reactions:
             self._reaction_mean.finish()
         dt = self.world.dt
         for i, pose in self.kinematic.items():
@@ -233,34 +236,6 @@ class DartBackend(Backend):
                 body.node.addExtForce(acc[:3], body.com, False, True)
             body.node.addExtTorque(acc[3:])
         hold_armature(self._armature)
-
-    def _watch_reactions(self) -> list[tuple[Any, Any, float, Any]]:
-        """Per joint of ``world.reaction_joints``: (the DART joint, its child node, +1 when that is the joint's
-        first body else -1, the first body's node)."""
-        index = {j.name: k for k, j in enumerate(self.world.joints)}
-        out = []
-        for name in self.world.reaction_joints:
-            handle = self._joints[index[name]]
-            first = self._bodies[self.world.body_index(handle.spec.body)].node
-            child = handle.joint.getChildBodyNode()
-            out.append((handle.joint, child, 1.0 if child.getName() == first.getName() else -1.0, first))
-        return out
-
-    def _reactions_now(self) -> list[float]:
-        """The watched joints' wrenches on their first bodies after this engine step: DART's body force of the
-        child (``getWrenchToChildBodyNode`` in the child's own frame: torque and force at its origin, the
-        constraint impulses / h included), turned to world axes, moved to the first body's centre of mass.
-        DART's body force is the wrench the child transmits to the joint, the opposite of the one it gets
-        (a body held at rest reads F = m g down, docs/conformance.md case 19): hence the minus."""
-        out: list[float] = []
-        for joint, child, sign, first in self._watched:
-            wrench = np.asarray(joint.getWrenchToChildBodyNode(child))
-            pose = child.getWorldTransform()
-            turn, origin = np.asarray(pose.rotation()), np.asarray(pose.translation())
-            force = -sign * (turn @ wrench[3:])
-            torque = -sign * (turn @ wrench[:3]) + np.cross(origin - np.asarray(first.getCOM()), force)
-            out.extend((*force, *torque))
-        return out
 
     def _joint_reactions(self) -> np.ndarray:
         return self._reaction_mean.mean.reshape(-1, 6).copy()
@@ -375,47 +350,8 @@ class DartBackend(Backend):
                 aspect.setFrictionCoeff(f)
                 aspect.setRestitutionCoeff(r)
 
-    def _com_motion(self, indices: list[int]) -> np.ndarray:
-        """(N, 9) rows of these bodies: centre of mass (the body frame's origin), linear and angular velocity
-        (zeros for a static body)."""
-        rows = np.zeros((len(indices), 9))
-        for k, i in enumerate(indices):
-            if self.world.bodies[i].motion is Motion.STATIC:
-                continue
-            node = self._bodies[i].node
-            rows[k, 0:3] = node.getWorldTransform().translation()
-            rows[k, 3:6] = node.getLinearVelocity()
-            rows[k, 6:9] = node.getAngularVelocity()
-        return rows
-
     def _close(self) -> None:
         self._dart.removeAllSkeletons()
-
-
-def _friction_model(world: CompiledWorld, option: str) -> str:
-    """``cone`` or ``pyramid`` for the ``friction`` option: ``auto`` takes the cone where DART can solve it.
-
-    NsgsFrictionSolver fails above :data:`MAX_CONE_MU` (``_options``); a pair with such a mu (or inf) slides
-    only under a tangential force 100 times its normal load, where the pyramid's direction hardly matters.
-    Nor does it hold a column taller than :data:`MAX_CONE_STACK` (``_options``): ``auto`` then takes the
-    pyramid (Dantzig's exact LCP), whose only cost is friction's direction on a floor's diagonal.
-    """
-    if option == "pyramid":
-        return option
-    if option == "auto" and stack_height(world) > MAX_CONE_STACK:
-        return "pyramid"
-    names = [b.name for b in world.bodies]
-    for a, b in _surfaces.touching_pairs(world):
-        mu = world.surface(names[a], names[b]).mu
-        if mu > MAX_CONE_MU:
-            if option == "auto":
-                return "pyramid"
-            raise UnsupportedFeature(
-                f"Backend `dart` with `friction: cone` solves friction with DART's NsgsFrictionSolver, which "
-                f"fails above mu {MAX_CONE_MU:g} (NaN impulses: bodies fall through); the pair "
-                f"`{names[a]}`-`{names[b]}` has mu={mu:g}. Use `friction: pyramid` or a smaller mu."
-            )
-    return "cone"
 
 
 def _split(step: float, longest: float | None) -> int:
@@ -423,21 +359,3 @@ def _split(step: float, longest: float | None) -> int:
     if longest is None:
         return 1
     return max(1, math.ceil(step / longest - 1e-9))
-
-
-def _rows(indices: list[int]) -> slice | np.ndarray:
-    """Row indices as a slice when they are consecutive (cheaper to assign through), else an array."""
-    if indices and indices == list(range(indices[0], indices[-1] + 1)):
-        return slice(indices[0], indices[-1] + 1)
-    return np.array(indices, dtype=np.intp)
-
-
-def rotvec_to_quat(rv: np.ndarray) -> np.ndarray:
-    """(N, 3) rotation vectors -> (N, 4) unit quaternions (w, x, y, z)."""
-    angle = np.sqrt(np.add.reduce(rv * rv, axis=(1,)))  # np.linalg.norm(rv, axis=1) without its checks
-    small = angle < 1e-8
-    safe = np.where(small, 1.0, angle)
-    scale = np.where(small, 0.5 - angle * angle / 48.0, np.sin(0.5 * angle) / safe)
-    quat = np.empty((len(rv), 4))
-    quat[:, 0], quat[:, 1:] = np.cos(0.5 * angle), rv * scale[:, None]
-    return quat

@@ -1,4 +1,5 @@
-"""DART's per-step state reads: the free bodies' coordinates in as few dartpy calls as the bindings allow.
+"""DART's per-step state reads: the free bodies' coordinates in as few dartpy calls as the bindings allow
+(turned into quaternions by :func:`rotvec_to_quat`), and the bodies' motion for approach speeds.
 
 A free body is one Skeleton on a FreeJoint (``_build``), read as its positions ([rotation vector,
 translation]) and velocities ([angular, linear]). dartpy 6.20 has no world-level state getter (``World``
@@ -19,6 +20,9 @@ from typing import Any
 
 import dartpy as dart
 import numpy as np
+
+from ..types import BodySpec, Motion
+from ._build import BodyHandle
 
 #: A FreeJoint's coordinates.
 FREE_DOFS = 6
@@ -52,3 +56,35 @@ def _chain(first: Any, second: Any) -> Any | None:
     dofs = [chain.getDof(i) for i in range(len(expected))]
     found = [(dof.getSkeleton().getName(), dof.getIndexInSkeleton()) for dof in dofs]
     return chain if found == expected and first.getName() != second.getName() else None
+
+
+def row_index(indices: list[int]) -> slice | np.ndarray:
+    """Row indices as a slice when they are consecutive (cheaper to assign through), else an array."""
+    if indices and indices == list(range(indices[0], indices[-1] + 1)):
+        return slice(indices[0], indices[-1] + 1)
+    return np.array(indices, dtype=np.intp)
+
+
+def rotvec_to_quat(rv: np.ndarray) -> np.ndarray:
+    """(N, 3) rotation vectors -> (N, 4) unit quaternions (w, x, y, z)."""
+    angle = np.sqrt(np.add.reduce(rv * rv, axis=(1,)))  # np.linalg.norm(rv, axis=1) without its checks
+    small = angle < 1e-8
+    safe = np.where(small, 1.0, angle)
+    scale = np.where(small, 0.5 - angle * angle / 48.0, np.sin(0.5 * angle) / safe)
+    quat = np.empty((len(rv), 4))
+    quat[:, 0], quat[:, 1:] = np.cos(0.5 * angle), rv * scale[:, None]
+    return quat
+
+
+def com_motion(specs: Sequence[BodySpec], bodies: Sequence[BodyHandle], indices: list[int]) -> np.ndarray:
+    """(N, 9) rows of these bodies: centre of mass (the body frame's origin), linear and angular velocity
+    (zeros for a static body)."""
+    rows = np.zeros((len(indices), 9))
+    for k, i in enumerate(indices):
+        if specs[i].motion is Motion.STATIC:
+            continue
+        node = bodies[i].node
+        rows[k, 0:3] = node.getWorldTransform().translation()
+        rows[k, 3:6] = node.getLinearVelocity()
+        rows[k, 6:9] = node.getAngularVelocity()
+    return rows

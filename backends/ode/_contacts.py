@@ -21,8 +21,8 @@ velocity at the contact point, projected on the contact plane: the first row the
 the box decelerates at mu*g whatever its direction (the pyramid turns with the slip each substep).
 The slip followed is the one the substep would make without friction: the relative velocity plus h times
 the two bodies' relative acceleration from gravity and the applied forces (so a box at rest on a tilted
-plane, or pushed, gets its first row along the load before it moves). Below :data:`SLIP_SPEED` the slip
-is numerical creep with no meaningful direction, and the contact keeps the direction it had the substep
+plane, or pushed, gets its first row along the load before it moves). Below ``_contact_surface.SLIP_SPEED``
+the slip is numerical creep with no meaningful direction, and the contact keeps the direction it had the substep
 before (hysteresis; ODE's default directions if it never had one): rows turned by noise every substep
 made a resting column of boxes jitter and break loose (conformance 12). A sticking contact is inside the
 pyramid, where its direction does not matter; it matters only at the limit. panda3d's surface table
@@ -49,33 +49,27 @@ from panda3d.ode import (
     OdeContactJoint,
     OdeJoint,
     OdeJointFeedback,
-    OdeSurfaceParameters,
     OdeUtil,
 )
 
 from .._kit import contact_point, group_by_pair, sorted_points
-from ..types import Contact, ContactPoint, Surface
+from ..types import Contact, ContactPoint
 from ._build import MAX_SURFACE_CLASSES, Scene
+from ._contact_surface import (
+    IMPACT_CFM,
+    IMPACT_SPEED,
+    MODE,
+    MODE_FDIR1,
+    MODE_SOFT,
+    MODE_SOFT_FDIR1,
+    approach_speed,
+    ode_mu,
+    predicted_slip,
+    surface_parameters,
+)
 from ._manifold import reduce_contacts
 
 CALLBACK_MAX_CONTACTS = 150  # PyODE's ode.collide() default, as the lab calls it
-_MODE = OdeSurfaceParameters.MFContactBounce | OdeSurfaceParameters.MFContactApprox1
-_MODE_FDIR1 = _MODE | OdeSurfaceParameters.MFContactFDir1
-_MODE_SOFT = _MODE | OdeSurfaceParameters.MFContactSoftCFM
-_MODE_SOFT_FDIR1 = _MODE_FDIR1 | OdeSurfaceParameters.MFContactSoftCFM
-#: Predicted slip speed (m/s) below which a contact keeps its previous friction direction. A body held by
-#: friction creeps at CFM * F per contact row (1.75e-5 m/s for 7 N on 4 contacts at CFM 1e-5) and the
-#: float32 noise of a resting 4-box column reaches 5.2e-6 m/s (conformance 12, measured): neither has a
-#: direction worth following, so the threshold is several times the creep. A tangential load a (m/s^2)
-#: shows as h*a in the predicted slip: 1e-4 m/s is a = 0.01 m/s^2 at h 0.01 s (a 0.06 deg tilt), below
-#: which the pyramid's direction changes the friction limit only for mu < 1e-3.
-SLIP_SPEED = 1e-4
-#: An impact's CFM as a fraction of its normal row's inverse mass times h (see ``Collider._impact_cfm``).
-IMPACT_CFM = 1e-4
-#: Approach speed (m/s) above which a contact is an impact and gets :data:`IMPACT_CFM`. A resting body
-#: approaches at CFM creep and float noise (< 1e-4 m/s, see :data:`SLIP_SPEED`): it keeps the world's
-#: CFM, so resting stacks are the world's. Slower impacts keep it too: their rebound is below 1 cm/s.
-IMPACT_SPEED = 0.01
 _JT_CONTACT = OdeJoint.JTContact
 #: The getters ``_summaries`` maps over a pair's points (unbound: no attribute lookup per point).
 _DEPTH, _NORMAL = OdeContactGeom.getDepth, OdeContactGeom.getNormal
@@ -128,15 +122,15 @@ class Collider:
             cfm = world.getCfm()
             for (i, j), s in scene.surfaces.items():
                 if i <= j:
-                    world.setSurfaceEntry(i, j, _mu(s), s.bounce, s.bounce_vel, 0.0, cfm, 0.0, 0.0)
+                    world.setSurfaceEntry(i, j, ode_mu(s), s.bounce, s.bounce_vel, 0.0, cfm, 0.0, 0.0)
             space.setAutoCollideWorld(world)
             space.setAutoCollideJointGroup(scene.contact_group)
             for geom in scene.geoms:  # a compound body's geoms share its class
                 space.setSurfaceType(geom, scene.surface_class[self._index[hash(geom.getId())]])
         else:
-            self._params = {key: _surface_parameters(s, _MODE) for key, s in scene.surfaces.items()}
-            self._params_fdir1 = {key: _surface_parameters(scene.surfaces[key], _MODE_FDIR1) for key in self._slipping}
-            #: Per body: h / mass (0 for a static geom) and h * gravity (None with gravity off) for ``_slip``.
+            self._params = {key: surface_parameters(s, MODE) for key, s in scene.surfaces.items()}
+            self._params_fdir1 = {key: surface_parameters(scene.surfaces[key], MODE_FDIR1) for key in self._slipping}
+            #: Per body: h / mass (0 for a static geom) and h * gravity (None with gravity off) for ``predicted_slip``.
             self._step = step
             self._per_mass = [0.0 if b is None else step / b.getMass().getMagnitude() for b in scene.bodies]
             gravity = scene.world.getGravity() * step
@@ -285,9 +279,9 @@ class Collider:
             contact = OdeContact()
             contact.setGeom(geom)
             slip = self._direction((i, j, k), body1, body2, geom) if follow else None
-            if impacts and _approach(body1, body2, geom) > IMPACT_SPEED:
-                mode = _MODE_SOFT if slip is None else _MODE_SOFT_FDIR1
-                contact.setSurface(_surface_parameters(scene.surfaces[key], mode, self._impact_cfm(i, j)))
+            if impacts and approach_speed(body1, body2, geom) > IMPACT_SPEED:
+                mode = MODE_SOFT if slip is None else MODE_SOFT_FDIR1
+                contact.setSurface(surface_parameters(scene.surfaces[key], mode, self._impact_cfm(i, j)))
             elif slip is None:
                 contact.setSurface(params)
             else:
@@ -303,7 +297,7 @@ class Collider:
 
     def _direction(self, key: tuple[int, int, int], body1: Any, body2: Any, geom: Any) -> Any:
         """The contact's first friction direction: its predicted slip, else the last one it had, else None."""
-        slip = _slip(body1, body2, geom, self._kick(key[0]), self._kick(key[1]))
+        slip = predicted_slip(body1, body2, geom, self._kick(key[0]), self._kick(key[1]))
         if slip is None:
             slip = self._directions.get(key)
             if slip is None:
@@ -370,51 +364,3 @@ def _summaries(records: list[_Record], pool: list[OdeJointFeedback], n_bodies: i
             # |F1 . n| is that contact's normal force whichever body is the joint's first.
             force += map(abs, map(_DOT, map(_FORCE1, pool[slot : slot + k]), map(_NORMAL, geoms)))
     return group_by_pair(n_bodies, first, second, depth, force)
-
-
-def _mu(surface: Surface) -> float:
-    return OdeUtil.getInfinity() if math.isinf(surface.mu) else surface.mu
-
-
-def _slip(body1: Any, body2: Any, geom: Any, kick1: Any, kick2: Any) -> Any:
-    """The unit direction of body 1's predicted velocity relative to body 2 at the contact, in its plane.
-
-    Predicted: the point velocity plus the substep's kick h * (F/m + g), what the substep would add
-    without contacts (applied torques are left out). None below :data:`SLIP_SPEED`. A static geom has
-    no body.
-    """
-    pos, normal = geom.getPos(), geom.getNormal()
-    rel = Vec3(0.0, 0.0, 0.0)
-    if body1 is not None:
-        rel += body1.getPointVel(pos)
-        if kick1 is not None:
-            rel += kick1
-    if body2 is not None:
-        rel -= body2.getPointVel(pos)
-        if kick2 is not None:
-            rel -= kick2
-    rel -= normal * rel.dot(normal)
-    speed = rel.length()
-    return rel / speed if speed > SLIP_SPEED else None
-
-
-def _approach(body1: Any, body2: Any, geom: Any) -> float:
-    """The speed at which the two bodies approach each other at the contact, along its normal (ODE's
-    ``-outgoing``: the normal points into body 1)."""
-    pos, normal = geom.getPos(), geom.getNormal()
-    rel = Vec3(0.0, 0.0, 0.0)
-    if body1 is not None:
-        rel += body1.getPointVel(pos)
-    if body2 is not None:
-        rel -= body2.getPointVel(pos)
-    return -float(rel.dot(normal))
-
-
-def _surface_parameters(surface: Surface, mode: int, cfm: float = 0.0) -> OdeSurfaceParameters:
-    params = OdeSurfaceParameters()
-    params.setMode(mode)
-    params.setSoftCfm(cfm)
-    params.setMu(_mu(surface))
-    params.setBounce(surface.bounce)
-    params.setBounceVel(surface.bounce_vel)
-    return params
