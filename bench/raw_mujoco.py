@@ -108,7 +108,7 @@ class MujocoLoop:
 
 
 #: Issue 19: on MuJoCo the runner with the full trace is also held to 1.30 x this loop without reads
-#: (bench/report.py reads it here, so that bench/ names no engine outside its own loop).
+#: (bench/report_sections.py reads it here, so that bench/ names no engine outside its own loop).
 TARGET_RATIO_RAW = 1.30
 
 #: The loop bench/measure.py runs for this engine (found by the file name, bench/raw_<registry name>.py).
