@@ -30,6 +30,7 @@ from typing import Any
 
 import numpy as np
 
+from .._kit.components import components
 from ..types import JointKind
 
 
@@ -107,18 +108,7 @@ def _dynamic_dofs(skeleton: Any) -> np.ndarray:
 
 def _groups(hit: set[str], pairs: Iterable[tuple[str, str]]) -> list[set[str]]:
     """The skeletons in ``hit`` joined by touching ``pairs`` (connected components)."""
-    parent = {n: n for n in hit}
-
-    def root(n: str) -> str:
-        while parent[n] != n:
-            parent[n] = parent[parent[n]]
-            n = parent[n]
-        return n
-
-    for a, b in pairs:
-        if a in parent and b in parent:
-            parent[root(a)] = root(b)
     out: dict[str, set[str]] = {}
-    for n in hit:
-        out.setdefault(root(n), set()).add(n)
+    for name, root in components(hit, pairs).items():
+        out.setdefault(root, set()).add(name)
     return list(out.values())

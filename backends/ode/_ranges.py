@@ -32,6 +32,7 @@ the mapping's own, at ``chain_light`` of their body, measured there), and bodies
 
 from __future__ import annotations
 
+from .._kit.components import components
 from ..errors import UnsupportedFeature
 from ..types import BodySpec, CompiledWorld, Motion
 from ._held import FLOAT32_EPS, held_bodies
@@ -39,19 +40,10 @@ from ._held import FLOAT32_EPS, held_bodies
 
 def jointed_groups(world: CompiledWorld, bodies: set[str]) -> dict[str, str]:
     """Each body's group: the bodies that joints between dynamic bodies connect (a chain's light bodies join
-    their two neighbours), by union-find; the representative of each."""
-    parent = {b.name: b.name for b in world.bodies if b.motion is Motion.DYNAMIC}
-
-    def root(x: str) -> str:
-        while parent[x] != x:
-            parent[x] = parent[parent[x]]
-            x = parent[x]
-        return x
-
-    for j in world.joints:
-        if j.body in parent and j.other in parent:
-            parent[root(j.body)] = root(j.other)
-    return {n: root(n) for n in bodies}
+    their two neighbours); the representative of each."""
+    dynamic = (b.name for b in world.bodies if b.motion is Motion.DYNAMIC)
+    group = components(dynamic, ((j.body, j.other) for j in world.joints if j.other is not None))
+    return {n: group[n] for n in bodies}
 
 
 def check_ranges(world: CompiledWorld) -> None:
