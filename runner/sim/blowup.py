@@ -64,11 +64,15 @@ def blown_up(states: BodyStates) -> tuple[int, bool] | None:
 
 def last_good(snapshot: Snapshot, i: int) -> dict[str, Any] | None:
     """Body ``i``'s last state that passed the checks, as every engine failure reports it."""
-    last = snapshot.bodies
+    return last_good_state(snapshot.time, snapshot.bodies, i)
+
+
+def last_good_state(time: float, last: BodyStates, i: int) -> dict[str, Any] | None:
+    """Body ``i``'s state in ``last``, read at ``time``, as an engine failure reports its last good state."""
     if not len(last.pos):  # nothing read yet
         return None
     return {
-        "time": snapshot.time,
+        "time": time,
         "pos": last.pos[i].tolist(),
         "vel": last.lin_vel[i].tolist(),
         "angvel": last.ang_vel[i].tolist(),

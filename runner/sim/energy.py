@@ -36,8 +36,13 @@ window that is the floor ``sum(m) |g|^2 h * (25 h)``. Rounding adds ``4 N eps su
 
 A rise of ``E - booked work`` above the reference by more than ``GAIN_FRACTION * K_peak + floor +
 rounding`` raises :class:`~runner.errors.EnergyGain`, naming the body whose energy rose most since the
-reference was taken. The check is a sum and a few products over the bodies: vectorised, a few
-microseconds per step for tens of bodies.
+reference was taken. The check is a sum and a few products over the bodies, vectorised over the bodies and
+over a block of ``BLOCK_STEPS`` steps at once: each whole-array call costs about 1 us whatever its size, so
+the block's calls cost about what one step's did. The steps are then taken in order, one by one, as
+before: the same reference, bound, time and body. What the block changes is only when a gain is found:
+up to ``BLOCK_STEPS - 1`` steps after it happened. The session flushes the block before it reports any
+other failure of the run (a blow-up, an engine error, an interruption) and at its end, so that a gain
+that came first is the one reported (docs/semantics.md, "Energy watchdog").
 """
 
 from __future__ import annotations
@@ -49,13 +54,17 @@ import numpy as np
 
 from backends.types import IDENTITY_QUAT, BodyStates, CompiledWorld, JointStates, Motion
 from runner.errors import EnergyGain
+from runner.sim.blowup import last_good_state
 
-__all__ = ["GAIN_FRACTION", "WINDOW_STEPS", "BodyEnergy", "EnergyWatch", "body_energies"]
+__all__ = ["BLOCK_STEPS", "GAIN_FRACTION", "WINDOW_STEPS", "BodyEnergy", "EnergyWatch", "body_energies"]
 
 #: steps the reference looks back: ERP 0.2 corrects 1 - 0.8^25 = 99.6 % of a penetration within them
 WINDOW_STEPS = 25
 #: a slow motion's integrator error above the window's maximum: 2a/(1+a) with a = pi/25, < 0.223
 GAIN_FRACTION = 0.25
+#: steps whose energies are computed together (runner.sim.session flushes the block before it reports any
+#: other failure and at the end of the run): the check's verdicts and times are those of a step-by-step check
+BLOCK_STEPS = WINDOW_STEPS
 _ROUNDING = 4 * float(np.finfo(float).eps)
 _NONE = np.zeros(0)  # no joint stores energy
 #: (3, 9): w -> its cross-product matrix, row-major ([w]x r = w x r), as one product for a whole array
@@ -119,20 +128,25 @@ class BodyEnergy:
 
     def __call__(self, states: BodyStates) -> tuple[np.ndarray, np.ndarray]:
         index = self.index
-        quat, w = states.quat[index], states.ang_vel[index]
-        pos, v = states.pos[index], states.lin_vel[index]
-        n = len(quat)
-        rot = ((quat[:, :, None] * quat[:, None, :]).reshape(n, 16) @ _QUAT_MATRIX).reshape(n, 3, 3)
-        body_w = (w[:, None, :] @ rot)[:, 0, :]  # R^T w, the body-frame angular velocity
+        return self.of_arrays(states.quat[index], states.ang_vel[index], states.pos[index], states.lin_vel[index])
+
+    def of_arrays(
+        self, quat: np.ndarray, w: np.ndarray, pos: np.ndarray, v: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """(kinetic, total) of these bodies' states, (..., N, 4) and (..., N, 3) arrays: one step's (N rows) or
+        a block of steps' (K, N) at once, in the same whole-array calls."""
+        lead = quat.shape[:-1]
+        rot = ((quat[..., :, None] * quat[..., None, :]).reshape(*lead, 16) @ _QUAT_MATRIX).reshape(*lead, 3, 3)
+        body_w = (w[..., None, :] @ rot)[..., 0, :]  # R^T w, the body-frame angular velocity
         if self.com is not None:
-            offset = (rot @ self.com)[:, :, 0]  # R com: from the body frame's origin to the COM, world axes
+            offset = (rot @ self.com)[..., 0]  # R com: from the body frame's origin to the COM, world axes
             pos = pos + offset
-            v = v + ((w @ _SKEW).reshape(n, 3, 3) @ offset[:, :, None])[:, :, 0]  # the COM's: v + w x offset
+            v = v + ((w @ _SKEW).reshape(*lead, 3, 3) @ offset[..., None])[..., 0]  # the COM's: v + w x offset
         if self.half_tensor is None:
-            rotational = np.add.reduce(self.half_inertia * body_w * body_w, axis=1)
+            rotational = np.add.reduce(self.half_inertia * body_w * body_w, axis=-1)
         else:
-            rotational = np.add.reduce((body_w[:, None, :] @ self.half_tensor)[:, 0, :] * body_w, axis=1)
-        kinetic = self.half_mass * np.add.reduce(v * v, axis=1) + rotational
+            rotational = np.add.reduce((body_w[..., None, :] @ self.half_tensor)[..., 0, :] * body_w, axis=-1)
+        kinetic = self.half_mass * np.add.reduce(v * v, axis=-1) + rotational
         return kinetic, kinetic - self.mass * (pos @ self.gravity)
 
 
@@ -149,12 +163,27 @@ def body_energies(
     return BodyEnergy(index, mass, inertia, gravity, com, tensor)(states)
 
 
+def _stacked(arrays: list[np.ndarray]) -> np.ndarray:
+    """``np.stack`` of same-shaped arrays by one ``concatenate``: a third of its time for a block of small ones."""
+    return np.concatenate(arrays).reshape(len(arrays), *arrays[0].shape)
+
+
+def totals_back(totals: deque[float], top: float) -> int:
+    """How many steps back from the newest the newest of ``totals`` equal to ``top`` is."""
+    newest_first = list(totals)
+    newest_first.reverse()
+    return newest_first.index(top)
+
+
 class EnergyWatch:
     """Checks one run's energy after each step (see the module docstring)."""
 
-    def __init__(self, world: CompiledWorld, backend: str, zeros: dict[str, float] | None = None) -> None:
+    def __init__(
+        self, world: CompiledWorld, backend: str, zeros: dict[str, float] | None = None, block: int = 0
+    ) -> None:
         """``zeros``: what the runner adds to a joint's reading (from the start) to read it from its stated zero
-        (program.joint_zeros): the readings checked are those, so each spring's rest moves with them."""
+        (program.joint_zeros): the readings checked are those, so each spring's rest moves with them. ``block``:
+        the steps evaluated together (0: :data:`BLOCK_STEPS`; 1: each step as it is checked)."""
         self.backend = backend
         self.names = [b.name for b in world.bodies]
         self.joint_names = [j.name for j in world.joints]
@@ -199,72 +228,123 @@ class EnergyWatch:
         self._reference_at = 0.0
         self._reference_bodies = np.zeros(0)
         self._reference_joints = np.zeros(0)
+        #: steps evaluated together (``check`` queues, ``flush`` evaluates): the whole-array calls cost about
+        #: 1 us each whatever their size, so a block of 25 steps costs little more than one step did
+        self.block = int(block) if block > 0 else BLOCK_STEPS
+        self._pending: list[tuple[float, BodyStates, JointStates, bool]] = []
+        self._previous: tuple[float, BodyStates] | None = None  # the last step evaluated: time and states
 
     def driven(self) -> None:
         """Something did work of unknown amount during this step: the next check starts afresh."""
         self._driven = True
 
     def check(self, t: float, states: BodyStates, joints: JointStates) -> None:
-        """The state after the step ending at ``t``; raises EnergyGain on a rise beyond the bound."""
+        """The state after the step ending at ``t``. Taken with the block's other steps (``block``): raises
+        EnergyGain, naming the step where the energy rose beyond the bound, when the block is evaluated."""
         if not self.index.size:
             return
-        if self.motors.size:
-            rows = self._motor_rows
-            power = np.abs(joints.motor_force[rows] * joints.velocity[rows])
-            work = float(np.add.reduce(power))
-            if not math.isfinite(work):  # rare (a sum of |terms| is finite iff they all are, short of overflow)
-                work = float(np.add.reduce(np.nan_to_num(power)))
-            self.work += work * self.dt
-        kinetic, energy = self._energy(states)
-        total = float(np.add.reduce(energy)) - self.work
-        stored = _NONE
-        if self.stored.size:
-            rate, stretch = joints.velocity[self.stored], joints.position[self.stored] - self.springref
+        self._pending.append((t, states, joints, self._driven))
+        self._driven = False
+        if len(self._pending) >= self.block:
+            self.flush()
+
+    def flush(self) -> None:
+        """Evaluate the steps checked and not yet evaluated; raises EnergyGain at the first one beyond the bound,
+        with the named body's state at the step before it as its last good state."""
+        if self._pending:
+            pending, self._pending = self._pending, []
+            self._evaluate(pending)
+
+    def _evaluate(self, steps: list[tuple[float, BodyStates, JointStates, bool]]) -> None:
+        """Each step's energies by whole-array calls over the block, then the reference and the bound step by
+        step, in order, exactly as one step at a time."""
+        rows = self.rows
+        quat = _stacked([s[1].quat for s in steps])[:, rows]
+        w = _stacked([s[1].ang_vel for s in steps])[:, rows]
+        pos = _stacked([s[1].pos for s in steps])[:, rows]
+        v = _stacked([s[1].lin_vel for s in steps])[:, rows]
+        kinetic, energy = self._energy.of_arrays(quat, w, pos, v)  # (K, N)
+        body_totals = np.add.reduce(energy, axis=1).tolist()
+        kinetic_totals = np.add.reduce(kinetic, axis=1).tolist()
+        works = [0.0] * len(steps)
+        velocity = _stacked([s[2].velocity for s in steps]) if self.motors.size or self.stored.size else None
+        if self.motors.size and velocity is not None:
+            mrows = self._motor_rows
+            force = _stacked([s[2].motor_force for s in steps])[:, mrows]
+            power = np.abs(force * velocity[:, mrows])
+            works = np.add.reduce(power, axis=1).tolist()
+            for k, work in enumerate(works):
+                if not math.isfinite(work):  # rare (a sum of |terms| is finite iff they all are, short of overflow)
+                    works[k] = float(np.add.reduce(np.nan_to_num(power[k])))
+        stored: np.ndarray | None = None
+        stored_totals: list[float] = []
+        rotor_totals: list[float] = []
+        if self.stored.size and velocity is not None:
+            rate = velocity[:, self.stored]
+            stretch = _stacked([s[2].position for s in steps])[:, self.stored] - self.springref
             joint_kinetic = 0.5 * self.armature * rate * rate
             stored = joint_kinetic + 0.5 * self.stiffness * stretch * stretch
-            total += float(np.nansum(stored))
-            kinetic = np.append(kinetic, np.nansum(joint_kinetic))
-        entry = (total, energy, stored)
-        k_now = float(np.add.reduce(kinetic))
-        if self._driven:
-            self._driven = False
-            self._window.clear()
-            self._window.append(entry)
-            self._totals.clear()
-            self._totals.append(total)
-            self._reference, self._reference_at, self._reference_bodies = total, t, energy
-            self._reference_joints = stored
-            self._k_peak = k_now
-            return
-        if k_now > self._k_peak:
-            self._k_peak = k_now
-        rise = total - self._reference
-        if rise > 0.0:
-            bound = self.bound(energy)
-            if rise > bound:
-                self._raise(t, rise, bound, energy, stored)
-        self._window.append(entry)
-        self._totals.append(total)
-        top = max(reversed(self._totals))  # the window's largest energy (newest first)
-        if top < self._reference:  # the newest entry holding it (steps back from now)
-            back = next(k for k, e in enumerate(reversed(self._totals)) if e == top)
-            self._reference, self._reference_at = top, t - back * self.dt
-            self._reference_bodies = self._window[-1 - back][1]
-            self._reference_joints = self._window[-1 - back][2]
+            stored_totals = np.nansum(stored, axis=1).tolist()
+            rotor_totals = np.nansum(joint_kinetic, axis=1).tolist()
+        # the bound's rounding term for each step: 4 N eps sum |E_i| (the module docstring)
+        rounding = (_ROUNDING * energy.shape[1] * np.add.reduce(np.abs(energy), axis=1)).tolist()
+        previous = self._previous
+        window, totals, dt, floor = self._window, self._totals, self.dt, self.floor
+        for k, (t, states, _, restart) in enumerate(steps):
+            self.work += works[k] * dt
+            total = body_totals[k] - self.work
+            k_now = kinetic_totals[k]
+            joints_now = _NONE
+            if stored is not None:
+                total += stored_totals[k]
+                k_now += rotor_totals[k]
+                joints_now = stored[k]
+            entry = (total, energy[k], joints_now)
+            if restart:  # the check starts afresh from this step
+                window.clear()
+                totals.clear()
+                self._reference, self._reference_at = total, t
+                self._reference_bodies, self._reference_joints = energy[k], joints_now
+                self._k_peak = k_now
+            else:
+                if k_now > self._k_peak:
+                    self._k_peak = k_now
+                rise = total - self._reference
+                if rise > 0.0:
+                    bound = GAIN_FRACTION * self._k_peak + floor + rounding[k]
+                    if rise > bound:
+                        self._raise(t, rise, bound, energy[k], joints_now, previous)
+            window.append(entry)
+            totals.append(total)
+            top = max(totals)  # the window's largest energy
+            if top < self._reference:  # the newest entry holding it (steps back from now)
+                back = totals_back(totals, top)
+                self._reference, self._reference_at = top, t - back * dt
+                self._reference_bodies = window[-1 - back][1]
+                self._reference_joints = window[-1 - back][2]
+            previous = (t, states)
+        self._previous = previous
 
-    def bound(self, energy: np.ndarray) -> float:
-        """The rise allowed now (J): integrator error on the motion, position correction at rest, rounding."""
-        return GAIN_FRACTION * self._k_peak + self.floor + _ROUNDING * len(energy) * float(np.abs(energy).sum())
-
-    def _raise(self, t: float, rise: float, bound: float, energy: np.ndarray, stored: np.ndarray) -> None:
-        """Name the body, or the joint's rotor and spring (armature, stiffness), whose energy rose most."""
+    def _raise(
+        self,
+        t: float,
+        rise: float,
+        bound: float,
+        energy: np.ndarray,
+        stored: np.ndarray,
+        previous: tuple[float, BodyStates] | None,
+    ) -> None:
+        """Name the body, or the joint's rotor and spring (armature, stiffness), whose energy rose most, with the
+        body's state at the step before (``previous``: time and states; None when there was none)."""
         gains = energy - self._reference_bodies
         k = int(np.argmax(gains))
-        name, what, gain = self.names[int(self.index[k])], "body", float(gains[k])
+        body = int(self.index[k])
+        name, what, gain = self.names[body], "body", float(gains[k])
         if stored.size and self._reference_joints.size == stored.size:
             joint_gains = stored - self._reference_joints
             j = int(np.argmax(joint_gains))
             if joint_gains[j] > gain:
+                body = -1
                 name, what, gain = (
                     self.joint_names[int(self.stored[j])],
                     "the rotor and spring of joint",
@@ -277,4 +357,5 @@ class EnergyWatch:
             backend=self.backend,
             body=name,
             time=t,
+            last_good=None if previous is None or body < 0 else last_good_state(*previous, body),
         )

@@ -210,11 +210,7 @@ class Session(SessionInputs):
             )
         joints = with_zeros(self.backend.joint_states(), self._zeros)  # stated zeros (compile.joints)
         joints = self.drives.with_torques(joints)  # `<joint>.force` includes a drive's torque (sim.drives)
-        try:
-            self.energy.check(t, states, joints)
-        except EngineFailure as exc:
-            exc.last_good = last_good(self.snapshot, self.body_index[exc.body]) if exc.body in self.body_index else None
-            raise
+        self.energy.check(t, states, joints)  # a gain raises EnergyGain with the state before it
         self.snapshot.time = t
         self.snapshot.bodies = states
         self.snapshot.joints = joints
@@ -324,59 +320,67 @@ class Session(SessionInputs):
         t = 0.0
         k = 0
         yield t
-        for k in range(steps):
-            t = k * self.dt
-            if self.queue or self.injected or (inputs and inputs[0].step <= k):  # events due at t
-                pending = list(self.queue)
-                self.queue.clear()
-                while inputs and inputs[0].step <= k:
-                    pending.append((inputs.popleft().event, "input"))
-                pending.extend((event, "input") for event in self.injected)
-                self.injected.clear()
-                for event, source in pending:
-                    self.dispatch(event, t, source)
-                    if self.ended:
-                        break
-            if self.ended:
-                break
-            t_next = (k + 1) * self.dt
-            self.intervals.step(t_next)
-            if self.kinematics.drive(self.backend, self.dt):
-                self.energy.driven()  # a moving kinematic body pushes what it touches: unbooked work
-            if self.held:
-                for i, force, torque in self.held.step_inputs(self.snapshot.bodies.quat, self.truth):
-                    self.add_force(self.names[i], force.tolist(), torque.tolist(), 1.0)
-            if self.drives or self.actuators:
-                self._command_joints()
-            elif self.drives.applied:
-                self.drives.applied = {}  # the last command ended: the joint's force is its motor's again
-            if self.fluid:
-                self._fluid_forces()
-            if self.fluid.adds_energy:
-                self.energy.driven()  # a wind's work is not booked: the check starts afresh after this step
-            for i, f in self.forces.items():
-                self.backend.apply_force(i, tuple(f[:3]), tuple(f[3:]))
-            self.forces.clear()
-            if self.servos:
-                self.servos.drive(self.backend, self.snapshot.joints.position.tolist(), self.resolver)
-            if self.joint_friction:
-                self.joint_friction.drive(self.backend, self.snapshot.joints.velocity.tolist())
-            if pause:
-                yield BEFORE_STEP
-            self._step(t_next)
-            recorded = self.trace is not None and ((k + 1) % self.record_every == 0 or k == steps - 1)
-            self._read(t_next, contacts=recorded)
-            self._detect(t_next)
-            self._record(t_next, k + 1, last=k == steps - 1)
-            interrupts.check()  # a SIGINT/SIGTERM that came during this step: the trace ends with it whole
-            if self.watchdog is not None:
-                self.watchdog.check(k + 1)
-            t = t_next
-            if self.progress is not None and (k % 50 == 0 or k == steps - 1):
-                self.progress(k + 1, steps)
-            yield t
-        else:
-            k = steps
+        try:
+            for k in range(steps):
+                t = k * self.dt
+                if self.queue or self.injected or (inputs and inputs[0].step <= k):  # events due at t
+                    pending = list(self.queue)
+                    self.queue.clear()
+                    while inputs and inputs[0].step <= k:
+                        pending.append((inputs.popleft().event, "input"))
+                    pending.extend((event, "input") for event in self.injected)
+                    self.injected.clear()
+                    for event, source in pending:
+                        self.dispatch(event, t, source)
+                        if self.ended:
+                            break
+                if self.ended:
+                    break
+                t_next = (k + 1) * self.dt
+                self.intervals.step(t_next)
+                if self.kinematics.drive(self.backend, self.dt):
+                    self.energy.driven()  # a moving kinematic body pushes what it touches: unbooked work
+                if self.held:
+                    for i, force, torque in self.held.step_inputs(self.snapshot.bodies.quat, self.truth):
+                        self.add_force(self.names[i], force.tolist(), torque.tolist(), 1.0)
+                if self.drives or self.actuators:
+                    self._command_joints()
+                elif self.drives.applied:
+                    self.drives.applied = {}  # the last command ended: the joint's force is its motor's again
+                if self.fluid:
+                    self._fluid_forces()
+                if self.fluid.adds_energy:
+                    self.energy.driven()  # a wind's work is not booked: the check starts afresh after this step
+                for i, f in self.forces.items():
+                    self.backend.apply_force(i, tuple(f[:3]), tuple(f[3:]))
+                self.forces.clear()
+                if self.servos:
+                    self.servos.drive(self.backend, self.snapshot.joints.position.tolist(), self.resolver)
+                if self.joint_friction:
+                    self.joint_friction.drive(self.backend, self.snapshot.joints.velocity.tolist())
+                if pause:
+                    yield BEFORE_STEP
+                self._step(t_next)
+                recorded = self.trace is not None and ((k + 1) % self.record_every == 0 or k == steps - 1)
+                self._read(t_next, contacts=recorded)
+                self._detect(t_next)
+                self._record(t_next, k + 1, last=k == steps - 1)
+                interrupts.check()  # a SIGINT/SIGTERM that came during this step: the trace ends with it whole
+                if self.watchdog is not None:
+                    self.watchdog.check(k + 1)
+                t = t_next
+                if self.progress is not None and (k % 50 == 0 or k == steps - 1):
+                    self.progress(k + 1, steps)
+                yield t
+            else:
+                k = steps
+        except GeneratorExit:
+            raise
+        except BaseException:
+            # the energy check's last steps first: a gain there came before this failure (runner.sim.energy)
+            self.energy.flush()
+            raise
+        self.energy.flush()
         if self.trace is not None and self._recorded != t:  # ended between recorded steps: keep the last state
             self._trace_step(t)
         self.tracker.on_step(t, self.resolver, self.in_contact, final=True)
@@ -385,16 +389,6 @@ class Session(SessionInputs):
         )
         self._log_verdicts(t)
         status = "passed" if all(v.passed for v in verdicts) else "failed"
-        return RunResult(
-            self.program.name,
-            self.program.loaded.variant,
-            self.backend.name,
-            status,
-            verdicts,
-            t,
-            k,
-            self.events,
-            self.sound_starts,
-            wallclock.perf_counter() - start,
-            engine_messages=self.engine_messages,
-        )
+        return RunResult(self.program.name, self.program.loaded.variant, self.backend.name, status, verdicts, t, k,
+                         self.events, self.sound_starts, wallclock.perf_counter() - start,
+                         engine_messages=self.engine_messages)  # fmt: skip
