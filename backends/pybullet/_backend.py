@@ -11,7 +11,6 @@ and the kit merges them (backends/base.py: the contacts used during the step).
 from __future__ import annotations
 
 import math
-from itertools import chain
 from typing import Any, ClassVar
 
 import numpy as np
@@ -36,17 +35,15 @@ from ..types import (
 from ._build import PLANE_HALF_SIZE, Layout, build, xyzw
 from ._build import check as check_build
 from ._dynamics import set_body_dynamics, set_joint_dynamics
-from ._frames import InertialFrames
+from ._frames import InertialFrames, LinkFrames
 from ._impacts import ImpactErp
 from ._imported import read_imported
 from ._options import PyBulletOptions, check_stack, solver_iterations
 from ._reactions import ReactionSensors
-from ._reads import ROW, ContactReader, JointReader, base_rows
+from ._reads import ROW, ContactReader, JointReader, base_rows, link_rows
 from ._rotors import add_mimics, add_rotors
 from ._springs import Springs
 from ._surfaces import FRICTION_CLAMP, SurfaceFit, fit_surfaces
-
-_flat = chain.from_iterable
 
 _NAME = "pybullet"
 #: Bullet keeps contact points up to this distance apart (default 0.02 m). Restitution is lost when a
@@ -109,7 +106,11 @@ class PyBulletBackend(Backend):
         p.setGravity(*world.gravity, physicsClientId=c)
         p.setTimeStep(self._h, physicsClientId=c)
         self._layout: Layout = build(p, c, world)
-        self._frames = InertialFrames(world)
+        link_bodies = [i for i in range(len(world.bodies)) if self._layout.link[i] >= 0]
+        self._frames = InertialFrames(world, links=link_bodies)  # bases' offsets; links' below
+        #: per multibody with links: its uid, links and their bodies, and the links' frame conversion (or None)
+        self._link_reads = [(uid, links, bodies, LinkFrames.of(world, bodies))
+                            for uid, links, bodies in self._layout.link_groups]  # fmt: skip
         #: per joint tuple ``set_motors`` was given: (multibody, its links, (place in the tuple, sign) each)
         self._motor_groups: dict[tuple[int, ...], list[tuple[int, list[int], list[tuple[int, float]]]]] = {}
         self._fit: SurfaceFit = fit_surfaces(world)
@@ -235,14 +236,9 @@ class PyBulletBackend(Backend):
         if self._base_rows is not None:  # some bodies are links of jointed trees
             bases, arr = arr, np.empty((len(self.world.bodies), ROW))
             arr[self._base_rows] = bases
-            for uid, links, bodies in self._layout.link_groups:
-                states = p.getLinkStates(
-                    uid, links, computeLinkVelocity=1, computeForwardKinematics=1, physicsClientId=c
-                )
-                values = _flat(_flat((ls[0], ls[1], ls[6], ls[7]) for ls in states))  # pos, xyzw, lin, ang
-                arr[bodies] = np.fromiter(values, np.float64, ROW * len(links)).reshape(-1, ROW)
-        if self._frames.offsets:  # inertial frames -> body frames
-            self._frames.to_body(arr)
+            for uid, links, bodies, frames in self._link_reads:
+                arr[bodies] = link_rows(c, uid, links, frames)
+        self._frames.to_body(arr)  # the bases' inertial frames -> body frames
         self._cache = arr
         return arr
 
