@@ -28,6 +28,7 @@ from ..types import (
     ContactPoint,
     ImportedModel,
     JointStates,
+    Motion,
     Precision,
     Quat,
     Vec3,
@@ -55,6 +56,13 @@ CONTACT_BREAKING_THRESHOLD = 0.001
 _GRAVITY_MARGIN = 1.5
 #: The quaternion's columns in a state row, in (w, x, y, z) order.
 _WXYZ = np.array([6, 3, 4, 5])
+
+
+def _rows(indices: list[int]) -> slice | list[int]:
+    """Row indices as a slice where they are consecutive (a slice assignment is cheaper than an indexed one)."""
+    if indices and indices == list(range(indices[0], indices[-1] + 1)):
+        return slice(indices[0], indices[-1] + 1)
+    return indices
 
 
 class PyBulletBackend(Backend):
@@ -108,8 +116,8 @@ class PyBulletBackend(Backend):
         self._layout: Layout = build(p, c, world)
         link_bodies = [i for i in range(len(world.bodies)) if self._layout.link[i] >= 0]
         self._frames = InertialFrames(world, links=link_bodies)  # bases' offsets; links' below
-        #: per multibody with links: its uid, links and their bodies, and the links' frame conversion (or None)
-        self._link_reads = [(uid, links, bodies, LinkFrames.of(world, bodies))
+        #: per multibody with links: its uid, links and their bodies (and as rows), the links' frame conversion
+        self._link_reads = [(uid, links, bodies, _rows(bodies), LinkFrames.of(world, bodies))
                             for uid, links, bodies in self._layout.link_groups]  # fmt: skip
         #: per joint tuple ``set_motors`` was given: (multibody, its links, (place in the tuple, sign) each)
         self._motor_groups: dict[tuple[int, ...], list[tuple[int, list[int], list[tuple[int, float]]]]] = {}
@@ -140,6 +148,14 @@ class PyBulletBackend(Backend):
         bases = [i for i in range(len(world.bodies)) if layout.link[i] < 0]
         self._base_uids = [layout.uid[i] for i in bases]
         self._base_rows = None if bases == list(range(len(world.bodies))) else bases  # None: every body, in order
+        # A static base never moves (a mass-0 base that Backend.reset_body refuses and no track moves): its row is
+        # read once, on the first read, and copied after (the ground and a fixed robot's base: 3 us a step each)
+        moving = [i for i in bases if world.bodies[i].motion is not Motion.STATIC]
+        self._static = [i for i in bases if world.bodies[i].motion is Motion.STATIC]
+        self._moving_uids = [layout.uid[i] for i in moving]
+        self._moving_rows = _rows(moving)
+        self._every_body_moves = moving == list(range(len(world.bodies)))  # free bodies only: one read is the array
+        self._still: np.ndarray | None = None  # the static bases' rows (others 0), once read
         self._joint_reader = JointReader(len(world.joints), layout)
         self._motor_mean = SubstepMean(len(world.joints))
         self._sensors = ReactionSensors(c, world, layout)  # joint reactions (_reactions)
@@ -232,12 +248,17 @@ class PyBulletBackend(Backend):
         if self._cache is not None:
             return self._cache
         c = self._c
-        arr = base_rows(c, self._base_uids)
-        if self._base_rows is not None:  # some bodies are links of jointed trees
-            bases, arr = arr, np.empty((len(self.world.bodies), ROW))
-            arr[self._base_rows] = bases
-            for uid, links, bodies, frames in self._link_reads:
-                arr[bodies] = link_rows(c, uid, links, frames)
+        if self._every_body_moves:
+            arr = base_rows(c, self._moving_uids)
+        else:  # static bases, or links of jointed trees
+            if self._still is None:
+                self._still = np.zeros((len(self.world.bodies), ROW))
+                self._still[self._static] = base_rows(c, [self._layout.uid[i] for i in self._static])
+            arr = self._still.copy()
+            if self._moving_uids:
+                arr[self._moving_rows] = base_rows(c, self._moving_uids)
+            for uid, links, _, rows, frames in self._link_reads:
+                arr[rows] = link_rows(c, uid, links, frames)
         self._frames.to_body(arr)  # the bases' inertial frames -> body frames
         self._cache = arr
         return arr
@@ -246,7 +267,7 @@ class PyBulletBackend(Backend):
         arr = self._read()
         return BodyStates(
             pos=arr[:, 0:3].copy(),
-            quat=arr[:, _WXYZ],  # x, y, z, w -> w, x, y, z
+            quat=arr.take(_WXYZ, axis=1),  # x, y, z, w -> w, x, y, z
             lin_vel=arr[:, 7:10].copy(),
             ang_vel=arr[:, 10:13].copy(),
         )

@@ -43,8 +43,9 @@ def test_the_column_conversion_is_the_per_body_one_to_the_bit(monkeypatch: pytes
     assert per_body.tobytes() == columns.tobytes()
 
 
-def _robot(path: Path) -> tuple[CompiledWorld, Any, list[tuple[int, list[int], list[int], Any]]]:
-    """The adapter built on a robot scenario, and its multibodies with links (uid, links, bodies, conversion)."""
+def _robot(path: Path) -> tuple[CompiledWorld, Any, list[tuple[int, list[int], list[int], Any, Any]]]:
+    """The adapter built on a robot scenario, and its multibodies with links (uid, links, bodies, their rows,
+    the conversion)."""
     from backends.pybullet import PyBulletBackend
 
     world = build_program(load_scenario(path)).world
@@ -72,7 +73,7 @@ def _poses(adapter: Any, rng: np.random.Generator, count: int) -> Iterator[None]
     c = adapter._c
     yield
     for _ in range(count):
-        for uid, links, _bodies, _frames_of in adapter._link_reads:
+        for uid, links, *_ in adapter._link_reads:
             for link in links:
                 if p.getJointInfo(uid, link, physicsClientId=c)[2] in (p.JOINT_REVOLUTE, p.JOINT_PRISMATIC):
                     q, qd = rng.uniform(-2.5, 2.5), rng.uniform(-3.0, 3.0)
@@ -104,7 +105,7 @@ def test_links_read_as_body_frames_are_the_conversion_to_the_bit(robot: str, tmp
         turned = any(tuple(world.bodies[b].inertia_quat) != (1.0, 0.0, 0.0, 0.0) for g in groups for b in g[2])
         assert turned == (robot in ("pendulum5", "quadruped"))  # both branches of the quaternion product
         for _ in _poses(adapter, np.random.default_rng(29), 12):
-            for uid, links, bodies, frames in groups:
+            for uid, links, bodies, _, frames in groups:
                 assert frames is not None  # every one of these robots has offset links
                 raw = link_rows(c, uid, links, None)  # the inertial frames, as read
                 zeros += int(np.count_nonzero(raw[:, 3:7] == 0.0))
@@ -146,7 +147,7 @@ def test_bullets_link_frame_fields_are_single_precision(robot: str) -> None:
     try:
         c, rng, worst = adapter._c, np.random.default_rng(5), 0.0
         for _ in _poses(adapter, rng, 5):
-            for uid, links, bodies, frames in groups:
+            for uid, links, bodies, _, frames in groups:
                 assert frames is not None
                 ours = adapter._fresh_rows()[bodies]
                 for k, state in enumerate(p.getLinkStates(uid, links, computeForwardKinematics=1, physicsClientId=c)):
