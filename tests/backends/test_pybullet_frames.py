@@ -89,12 +89,12 @@ def test_links_read_as_body_frames_are_the_conversion_to_the_bit(robot: str, tmp
     gives them converted by ``_inertial_to_body`` (the conversion bases use): equal bytes at the start pose
     and at random poses and rates, on the KUKA arm (offset COMs, principal axes the links' own), pendulum5
     (URDF) and the bench's MJCF quadruped (turned principal axes), and r2d2 (links with and without an offset
-    in one multibody)."""
+    in one multibody); and the adapter's whole read (static bases read once) is every body's fresh read."""
     import pybullet as p
 
     from backends.geometry import quat_conj
     from backends.pybullet import _frames
-    from backends.pybullet._reads import link_rows
+    from backends.pybullet._reads import base_rows, link_rows
 
     robots = ROOT / "scenarios" / "robots"
     path = {"kuka_arm": robots / "kuka_arm.yaml", "pendulum5": robots / "pendulum5.yaml",
@@ -104,7 +104,11 @@ def test_links_read_as_body_frames_are_the_conversion_to_the_bit(robot: str, tmp
         c, converted, zeros, unconverted = adapter._c, 0, 0, 0
         turned = any(tuple(world.bodies[b].inertia_quat) != (1.0, 0.0, 0.0, 0.0) for g in groups for b in g[2])
         assert turned == (robot in ("pendulum5", "quadruped"))  # both branches of the quaternion product
+        bases = [i for i in range(len(world.bodies)) if adapter._layout.link[i] < 0]
         for _ in _poses(adapter, np.random.default_rng(29), 12):
+            every = np.empty((len(world.bodies), 13))  # every body read afresh: the bases converted as by the adapter
+            every[bases] = base_rows(c, [adapter._layout.uid[i] for i in bases])
+            adapter._frames.to_body(every)
             for uid, links, bodies, _, frames in groups:
                 assert frames is not None  # every one of these robots has offset links
                 raw = link_rows(c, uid, links, None)  # the inertial frames, as read
@@ -122,7 +126,9 @@ def test_links_read_as_body_frames_are_the_conversion_to_the_bit(robot: str, tmp
                                          physicsClientId=c)  # fmt: skip
                 got = frames.rows(states)
                 assert got.tobytes() == expected.tobytes()
-                assert adapter._fresh_rows()[bodies].tobytes() == expected.tobytes()  # and what the adapter reports
+                every[bodies] = expected
+            # what the adapter reports, its static bases read once at the start
+            assert adapter._fresh_rows().tobytes() == every.tobytes()
         assert converted > 0
         assert (unconverted > 0) == (robot == "r2d2")
         if robot == "kuka_arm":
