@@ -10,9 +10,10 @@ getLinkState's link-frame fields (fifth and sixth, worldLinkFramePosition and -O
 it: the C API computes them on the client (``b3GetLinkState``: com * inertial.inverse() in ``b3Transform``)
 in Bullet3Common's ``b3Scalar``, which pybullet's build leaves single precision (only BT_USE_DOUBLE_PRECISION
 is defined), and the quaternion comes back from a rotation matrix with its own sign [checked: every value
-float32-representable; 5e-8 m and 9e-8 from this module's double-precision frames, and 6 of the quadruped's
-12 link quaternions of the opposite sign]. So links, like bases, are converted here, in double precision:
-:class:`LinkFrames` on getLinkStates' tuples as they are read, :class:`InertialFrames` for bases.
+float32-representable; up to 1.5e-7 m and 2.2e-7 from this module's double-precision frames, and 8 of
+pendulum5's 30 link quaternions of the opposite sign: tests/backends/test_pybullet_frames.py]. So links, like
+bases, are converted here, in double precision: :class:`LinkFrames` on getLinkStates' tuples as they are read,
+:class:`InertialFrames` for bases.
 """
 
 from __future__ import annotations
@@ -163,8 +164,8 @@ class LinkFrames:
     floats, straight into the flat list one ``fromiter`` makes the rows of: about 1 us per link beyond the
     engine call, where streaming the fields into an array and converting the rows after cost 2 to 3 [measured
     in-process, KUKA arm (7 offset links) and the bench's quadruped (12, turned principal axes): 12.3 and 22.9
-    us with getLinkStates, against 23 and 45]. Whole-array arithmetic costs more below about 40 links (a
-    dozen numpy calls of about 1 us each, before the read's array)."""
+    us with getLinkStates, against 23 and 45]. A whole-array conversion (tried: ten numpy calls on the read's
+    array, 10-15 us for 7-12 links, and different rounding) would pay off only beyond about 40 links."""
 
     def __init__(self, world: CompiledWorld, bodies: Sequence[int]) -> None:
         specs = [world.bodies[i] for i in bodies]
