@@ -89,7 +89,8 @@ def test_links_read_as_body_frames_are_the_conversion_to_the_bit(robot: str, tmp
     gives them converted by ``_inertial_to_body`` (the conversion bases use): equal bytes at the start pose
     and at random poses and rates, on the KUKA arm (offset COMs, principal axes the links' own), pendulum5
     (URDF) and the bench's MJCF quadruped (turned principal axes), and r2d2 (links with and without an offset
-    in one multibody); and the adapter's whole read (static bases read once) is every body's fresh read."""
+    in one multibody); and the adapter's whole read (unturned static bases read once) is every body's
+    fresh read."""
     import pybullet as p
 
     from backends.geometry import quat_conj
@@ -127,7 +128,7 @@ def test_links_read_as_body_frames_are_the_conversion_to_the_bit(robot: str, tmp
                 got = frames.rows(states)
                 assert got.tobytes() == expected.tobytes()
                 every[bodies] = expected
-            # what the adapter reports, its static bases read once at the start
+            # what the adapter reports, its unturned static bases read once at the start
             assert adapter._fresh_rows().tobytes() == every.tobytes()
         assert converted > 0
         assert (unconverted > 0) == (robot == "r2d2")
@@ -190,3 +191,29 @@ def test_the_link_conversion_keeps_the_signs_of_exact_zeros() -> None:
         conj = (*com, *quat_conj(inertia_quat))
         expected = [v for r in rows.tolist() for v in _frames._inertial_to_body(*r, *conj)]
         assert np.array(got).tobytes() == np.array(expected).tobytes()
+
+
+def test_a_turned_static_base_is_read_every_step() -> None:
+    """Bullet moves a turned static base's quaternion by an ulp and back every step (its quaternion-matrix round
+    trip), so the adapter reads it afresh, and reads only unturned static bases once: on the friction
+    conformance's 20-degree incline (a turned static ground) the adapter's rows are the fresh reads' bytes at
+    every step, while the ground's own read does change between steps."""
+    from backends.pybullet import PyBulletBackend
+    from backends.pybullet._reads import base_rows
+
+    world = build_program(load_scenario(ROOT / "scenarios" / "conformance" / "08_friction.yaml", "incline-stays")).world
+    adapter = PyBulletBackend(world)
+    try:
+        c, uids = adapter._c, adapter._layout.uid
+        assert adapter._layout.link == [-1] * len(world.bodies)  # bases only: the ground and the box
+        ground = [b.name for b in world.bodies].index("ground")
+        reads = []
+        for _ in range(4):
+            every = base_rows(c, uids)
+            adapter._frames.to_body(every)
+            assert adapter._fresh_rows().tobytes() == every.tobytes()
+            reads.append(every[ground].tobytes())
+            adapter.step()
+        assert len(set(reads)) > 1  # the engine's own read of the static ground changed
+    finally:
+        adapter.close()
