@@ -23,6 +23,7 @@ import pybullet as p
 from .._kit.contacts import NUMPY_FROM, contact_point, group_by_pair, sorted_points
 from ..types import Contact, ContactPoint
 from ._build import Layout
+from ._frames import LinkFrames
 
 #: One base's row: position (3), orientation x y z w (4), linear (3) and angular (3) velocity.
 ROW = 13
@@ -31,6 +32,8 @@ _flat = chain.from_iterable
 #: A contact point's bodyUniqueIdA, bodyUniqueIdB, linkIndexA, linkIndexB, contactDistance, normalForce.
 _FIELDS_AT = (1, 2, 3, 4, 8, 9)
 _FIELDS = itemgetter(*_FIELDS_AT)
+#: A link state's worldPosition, worldOrientation (its inertial frame's), worldLinearVelocity, worldAngularVelocity.
+_LINK_STATE = itemgetter(0, 1, 6, 7)
 
 
 def base_rows(c: int, uids: Sequence[int]) -> np.ndarray:
@@ -40,6 +43,16 @@ def base_rows(c: int, uids: Sequence[int]) -> np.ndarray:
     twists = map(p.getBaseVelocity, uids, repeat(c))
     values = _flat(_flat(_flat(zip(poses, twists, strict=True))))  # ((pos, orn), (lin, ang)) -> 13 floats
     return np.fromiter(values, np.float64, ROW * n).reshape(n, ROW)
+
+
+def link_rows(c: int, uid: int, links: list[int], frames: LinkFrames | None) -> np.ndarray:
+    """(len(links), 13) states of these links of one multibody, in the order given: their body frames
+    (``frames``: the links' inertial offsets), or their inertial frames as getLinkStates gives them (COM
+    position and orientation, linear and angular velocity: fields 0, 1, 6, 7) where ``frames`` is None."""
+    states = p.getLinkStates(uid, links, computeLinkVelocity=1, computeForwardKinematics=1, physicsClientId=c)
+    if frames is not None:
+        return frames.rows(states)
+    return np.fromiter(_flat(_flat(map(_LINK_STATE, states))), np.float64, ROW * len(links)).reshape(-1, ROW)
 
 
 class ContactReader:
