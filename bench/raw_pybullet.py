@@ -112,7 +112,8 @@ LOOP = PyBulletLoop
 class PyBulletRobotLoop:
     """A robot on PyBullet by hand (bench/robot.py): the servos' rates in one ``setJointMotorControlArray``
     per multibody, ``stepSimulation``, then ``getBasePositionAndOrientation`` + ``getBaseVelocity`` per
-    base, one ``getLinkStates`` (with velocities) per multibody and one ``getJointStates`` per multibody
+    moving base (an unturned static base, the ground or a fixed robot's, is read once, as the adapter reads
+    it), one ``getLinkStates`` (with velocities) per multibody and one ``getJointStates`` per multibody
     (position, velocity and the motor's applied torque), the floats streamed into arrays."""
 
     def __init__(self, adapter: Any, servos: list[Servo]) -> None:
@@ -120,9 +121,10 @@ class PyBulletRobotLoop:
             raise ValueError("the hand-written robot loop steps once per step with no bouncing pair")
         self.c, lay = adapter._c, adapter._layout
         self.servos = servos
-        self.bases = adapter._base_uids
         self.n = len(adapter.world.bodies)
-        self.base_rows = adapter._base_rows if adapter._base_rows is not None else slice(None)
+        self.bases, self.base_rows = adapter._moving_uids, adapter._moving_rows
+        self.still = np.zeros((self.n, 13))
+        self.still[adapter._static] = base_rows(self.c, [lay.uid[i] for i in adapter._static])
         self.groups = [(uid, list(links), list(bodies)) for uid, links, bodies in lay.link_groups]
         handles = [lay.joints[s.joint] for s in servos]
         self.sign = [h.sign for h in handles]
@@ -154,7 +156,7 @@ class PyBulletRobotLoop:
 
     def read(self) -> None:
         c = self.c
-        rows = np.empty((self.n, 13))
+        rows = self.still.copy()
         if self.bases:
             rows[self.base_rows] = base_rows(c, self.bases)
         for uid, links, bodies in self.groups:
