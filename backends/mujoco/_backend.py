@@ -132,6 +132,9 @@ class MujocoBackend(Backend):
         self._target = np.zeros(motors.size)  # per slot, in the MuJoCo joint's coordinate
         #: per joint tuple ``set_motors`` was given: its motors' tendons, slots and signs
         self._motor_rows: dict[tuple[int, ...], tuple[np.ndarray, np.ndarray, np.ndarray]] = {}
+        #: the last ``_set_motors`` call's joints and force bounds, while no other call has written any since (a
+        #: servo's bounds do not change between steps: the same values are not written again)
+        self._bounds_written: tuple[tuple[int, ...], list[float]] | None = None
         self._motor_mean = SubstepMean(motors.size)
         self._reaction = reaction_rows(world, m, lay)  # (child body, sign, first body) per watched joint
         self._reaction_mean = SubstepMean(6 * len(world.reaction_joints))
@@ -148,6 +151,10 @@ class MujocoBackend(Backend):
         self._no_reading, self._no_force = np.full(len(world.joints), np.nan), np.zeros(len(world.joints))
         self._motored = motors  # world joints with a motor, their slots, signs
         self._motored_slot, self._motored_sign = self._motor_of[motors], self._sign[motors]
+        every = np.arange(len(world.joints))
+        #: every joint rated, or motored, in world order (a robot's, usually): its reading is the whole array
+        self._all_rated = rated.size == every.size and bool((rated == every).all())
+        self._all_motored = np.size(motors) == every.size and bool((np.asarray(motors) == every).all())
         self._stale = True
         # a reading counts from the start, itself from the file's zero: qpos0, a joint's `ref` (0 for the
         # runner's own joints), so world = sign (qpos - qpos0) - start (an MJCF robot's start: _native)
@@ -172,6 +179,7 @@ class MujocoBackend(Backend):
     def _set_motor(self, joint: int, vel: float, fmax: float) -> None:
         slot = int(self._motor_of[joint])
         self._m.tendon_frictionloss[self._motor_tendon[slot]] = fmax  # 0: no row, the motor is off
+        self._bounds_written = None
         self._target[slot] = self._sign[joint] * vel
 
     def _set_motors(self, joints: tuple[int, ...], vels: list[float], fmaxes: list[float]) -> None:
@@ -185,7 +193,9 @@ class MujocoBackend(Backend):
             slots = self._motor_of[list(joints)].astype(int)
             rows = self._motor_rows[joints] = (self._motor_tendon[slots], slots, self._sign[list(joints)])
         tendons, slots, sign = rows
-        self._m.tendon_frictionloss[tendons] = fmaxes  # 0: no row, the motor is off
+        if self._bounds_written is None or self._bounds_written[0] != joints or self._bounds_written[1] != fmaxes:
+            self._m.tendon_frictionloss[tendons] = fmaxes  # 0: no row, the motor is off
+            self._bounds_written = joints, fmaxes
         self._target[slots] = sign * np.array(vels)
 
     def _set_control(self, actuator: int, ctrl: float) -> None:
@@ -361,6 +371,11 @@ class MujocoBackend(Backend):
 
     def _joint_states(self) -> JointStates:
         rated, motored = self._rated, self._motored
+        if self._all_rated and self._all_motored:  # the same values, without the copies and the indexed writes
+            sign = self._rated_sign
+            return JointStates(position=sign * self._qpos[self._rated_qpos] - self._starts,
+                               velocity=sign * self._qvel[self._rated_dof],
+                               motor_force=self._motored_sign * self._motor_mean.mean[self._motored_slot])  # fmt: skip
         position, velocity, force = self._no_reading.copy(), self._no_reading.copy(), self._no_force.copy()
         if rated.size:
             sign = self._rated_sign

@@ -43,6 +43,11 @@ class _Check:
     route: str = ""
     #: an `at:` check's step (its time's nearest step; None: `at: end`)
     at_step: int | None = None
+    #: a window or extremum check's times (``_window`` of its `during`), and a window check's condition (None:
+    #: a contact's), made once
+    lo: float = 0.0
+    hi: float = math.inf
+    text: str | None = None
 
 
 def _route(spec: Any, dt: float) -> tuple[str, int | None]:
@@ -66,6 +71,13 @@ class AssertionTracker:
         self.expr = expressions
         self.checks = [_Check(s, type(s).__name__.removesuffix("Assertion").lower(), route=route, at_step=at_step)
                        for s in specs for route, at_step in (_route(s, dt),)]  # fmt: skip
+        for c in self.checks:
+            if c.route in ("window", "extremum"):
+                c.lo, c.hi = _window(c.spec.during)
+            if c.route == "window":
+                c.text = None if isinstance(c.spec, A.ContactAssertion) else str(getattr(c.spec, c.kind))
+        #: the checks still running each step, in order (decided ones leave it)
+        self._running = [c for c in self.checks if c.route]
         self.decided: list[Verdict] = []  # verdicts decided since the last pop_decided(), in order
 
     def pop_decided(self) -> list[Verdict]:
@@ -97,23 +109,22 @@ class AssertionTracker:
         return f"{value} at t={t:.4f}" + (f": {detail}" if detail else "")
 
     def on_step(self, t: float, r: Resolver, contact: Callable[[str, str], bool], final: bool = False) -> None:
-        pending = [c for c in self.checks if c.done is None]
-        if not pending:
+        if not self._running:
             return
         self._on_step(t, r, contact, final)
-        for c in pending:
-            if c.done is not None:
-                c.done = self._limited(c.done, c.spec)
-                self.decided.append(c.done)
+        if any(c.done is not None for c in self._running):
+            for c in self._running:
+                if c.done is not None:
+                    c.done = self._limited(c.done, c.spec)
+                    self.decided.append(c.done)
+            self._running = [c for c in self._running if c.done is None]
 
     def _limited(self, v: Verdict, spec: Any) -> Verdict:
         return apply_known_limit(v, getattr(spec, "known_limits", {}), self.backend)
 
     def _on_step(self, t: float, r: Resolver, contact: Callable[[str, str], bool], final: bool) -> None:
         step: int | None = None  # the recorded step nearest to t (as _at_time), when an `at:` check asks
-        for c in self.checks:
-            if c.done is not None:
-                continue
+        for c in self._running:
             s, route = c.spec, c.route
             if route == "at":
                 if c.at_step is None:
@@ -128,8 +139,8 @@ class AssertionTracker:
             if route == "window":
                 self._over_window(c, t, r, contact)
             elif route == "extremum":
-                lo, hi = _window(s.during)
-                if lo - TIME_EPS <= t <= hi + TIME_EPS:
+                hi = c.hi
+                if c.lo - TIME_EPS <= t <= hi + TIME_EPS:
                     is_max = isinstance(s, A.MaxAssertion)
                     of = s.max_of if isinstance(s, A.MaxAssertion) else s.min_of
                     number = self.expr[of].number(r)
@@ -141,17 +152,14 @@ class AssertionTracker:
                 self._becomes(c, t, r)
 
     def _over_window(self, c: _Check, t: float, r: Resolver, contact: Callable[[str, str], bool]) -> None:
-        s = c.spec
-        lo, hi = _window(s.during)
-        if t < lo - TIME_EPS or t > hi + TIME_EPS:
+        if t < c.lo - TIME_EPS or t > c.hi + TIME_EPS:
             return
         c.seen = True
-        text: str | None = None
-        if isinstance(s, A.ContactAssertion):
+        s, text = c.spec, c.text
+        if text is None:  # a contact assertion
             value, mode = contact(*s.contact), str(s.when)
         else:
             mode = c.kind
-            text = str(getattr(s, mode))
             value = self.expr[text].truth(r)
         if mode == "always" and not value:
             why = self._why(text, t, r, "false") if text else f"not touching at t={t:.4f}"

@@ -27,15 +27,16 @@ def blown_up(states: BodyStates) -> tuple[int, bool] | None:
 
     Every step checks every body, so the common case (all well) is four whole-array calls: the sums of the
     squared speeds over all bodies bound each body's (a sum of non-negative terms is at least each of them;
-    a NaN or an inf makes the sum fail the comparison, and the positions' and quaternions' sums are not
-    finite when an element is not), held a little below the limit so that no rounding of the sums can let
-    a body through. Anything else takes the exact per-body test.
+    a NaN or an inf makes the sum fail the comparison, and the positions' and quaternions' sums of squares
+    are not finite when an element is not, or when one is beyond 1e154, which the exact test then clears),
+    held a little below the limit so that no rounding of the sums can let a body through. Anything else
+    takes the exact per-body test.
     """
     lin, ang = states.lin_vel, states.ang_vel
     if not len(lin) or (
         float(np.vdot(lin, lin)) <= _FAST_LIMIT
         and float(np.vdot(ang, ang)) <= _FAST_LIMIT
-        and math.isfinite(float(np.add.reduce(states.pos, axis=None)) + float(np.add.reduce(states.quat, axis=None)))
+        and math.isfinite(float(np.vdot(states.pos, states.pos)) + float(np.vdot(states.quat, states.quat)))
     ):
         return None
     lin2, ang2 = np.add.reduce(lin * lin, axis=1), np.add.reduce(ang * ang, axis=1)

@@ -59,6 +59,9 @@ class Servos:
         #: every target, when none is an expression (read once, not every step)
         constant = [s.target for _, s in self.specs if isinstance(s.target, float)]
         self._constant = constant if len(constant) == len(self.specs) else None
+        #: the constant targets in place (0 where an expression's goes), and the expressions with their places
+        self._template = [s.target if isinstance(s.target, float) else 0.0 for _, s in self.specs]
+        self._read = [(k, s.target) for k, (_, s) in enumerate(self.specs) if not isinstance(s.target, float)]
 
     def __bool__(self) -> bool:
         return bool(self.specs)
@@ -67,7 +70,10 @@ class Servos:
         """Every servo's target now, in ``specs`` order (an expression target is read every step)."""
         if self._constant is not None:
             return self._constant
-        return [s.target if isinstance(s.target, float) else float(s.target.number(resolver)) for _, s in self.specs]
+        out = self._template.copy()
+        for k, expression in self._read:
+            out[k] = float(expression.number(resolver))
+        return out
 
     def drive(self, backend: Backend, positions: list[float], resolver: Resolver) -> None:
         """Every servo's motor command, in one ``set_motors`` call (one engine call where the engine has one;
