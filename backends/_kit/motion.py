@@ -99,7 +99,11 @@ class OneStepForces:
 
 
 class SubstepMean:
-    """The mean over a scenario step of a vector measured once per engine step (summed from zero)."""
+    """The mean over a scenario step of a vector measured once per engine step (summed from zero).
+
+    Each step's sum is a fresh array, begun as 0 + its first value (a -0.0 reads +0.0, as a sum from zero
+    does), and a step of one engine step takes that sum as its mean (x / 1 is x): the same numbers as
+    zeroing, adding and dividing, with one whole-array operation instead of three."""
 
     def __init__(self, size: int) -> None:
         self._total = np.zeros(size)
@@ -107,16 +111,20 @@ class SubstepMean:
         self._mean = np.zeros(size)
 
     def start(self) -> None:
-        self._total[:] = 0.0
         self._count = 0
 
     def add(self, values: np.ndarray | Sequence[float]) -> None:
-        self._total += values
+        if self._count:
+            self._total += values
+        else:
+            self._total = np.add(values, 0.0)
         self._count += 1
 
     def finish(self) -> np.ndarray:
         """Closes the step; its mean stays available as :attr:`mean` until the next one finishes."""
-        if self._count:
+        if self._count == 1:
+            self._mean = self._total
+        elif self._count:
             self._mean = self._total / self._count
         return self._mean
 
