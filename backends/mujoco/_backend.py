@@ -141,6 +141,7 @@ class MujocoBackend(Backend):
         self._substep_contacts = SubstepContacts(self._nsteps)  # the step's engine steps but the last
         self._listed: list[Contact] | None = []  # None: the last engine step's contacts are still in MjData
         self._warnings = self._d.warning.number  # live views into MjData
+        self._bad_counts = self._warnings[_BAD]  # the invalid-state warnings' counters (a view too)
         self._qpos, self._qvel = self._d.qpos, self._d.qvel
         self._geom_body = lay.geom_body  # MuJoCo geom -> world body, for _touching
         rated = np.array([j for j, joint in enumerate(world.joints) if joint.kind in _RATED], dtype=np.int64)
@@ -319,7 +320,7 @@ class MujocoBackend(Backend):
     def _check(self) -> None:
         """MuJoCo's own verdict: a state it counted as invalid (its warnings) is an EngineFailure. Blow-ups it
         does not call invalid are the runner's to find (runner.sim.session)."""
-        if not self._warnings[_BAD].any():
+        if not any(self._bad_counts.tolist()):  # a few ints: cheaper as a list than as a numpy reduction
             return
         d = self._d
         dofs = {d.warning[w].lastinfo for w in _BAD_STATE[1:] if d.warning[w].number}  # lastinfo: the dof

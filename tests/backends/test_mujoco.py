@@ -389,3 +389,17 @@ def test_mujocos_own_error_is_an_engine_failure(monkeypatch: pytest.MonkeyPatch)
                     flat.quat)  # fmt: skip
     with pytest.raises(EngineFailure, match=r"^mujoco: MjSpec.compile refused the model: Error: size"):
         make_backend("mujoco", w.world("flat", [flat]))
+
+
+def test_an_invalid_state_mujoco_reports_is_an_engine_failure_naming_the_body() -> None:
+    """MuJoCo counts an acceleration beyond mjMAXVAL (1e10) as an invalid state (mjWARN_BADQACC, and resets its
+    data): the adapter reports it as an engine failure naming the body, not as a run that goes on from rest.
+    A force of 1e12 times the body's mass gives it 1e12 m/s^2, a hundred times the limit."""
+    world = w.free_fall()
+    k = next(i for i, b in enumerate(world.bodies) if b.motion is Motion.DYNAMIC)
+    with make_backend("mujoco", world) as sim:
+        sim.step()  # a valid step first: nothing to report
+        sim.apply_force(k, (0.0, 0.0, 1e12 * world.bodies[k].mass), (0.0, 0.0, 0.0))
+        with pytest.raises(EngineFailure, match="invalid state") as failure:
+            sim.step()
+    assert failure.value.body == world.bodies[k].name
