@@ -9,6 +9,9 @@ import subprocess
 import sys
 from pathlib import Path
 
+import pytest
+
+from tests.engines import INSTALLED
 from tests.paths import ROOT
 
 ONE_STEP = ROOT / "bench" / "scenarios" / "one_step.yaml"
@@ -24,10 +27,16 @@ NOT_FOR_A_RUN = (
 )
 
 
-def _imported(args: list[str], cwd: Path) -> set[str]:
-    """The modules a `scenario` command's own process imports (``-X importtime``)."""
+def _imported(args: list[str], cwd: Path, environ: dict[str, str | None] | None = None) -> set[str]:
+    """The modules a `scenario` command's own process imports (``-X importtime``); ``environ``: variables
+    set (a string) or removed (None) for it."""
     env = {**os.environ, "PYTHONPATH": str(ROOT)}
     env.pop("PYTEST_CURRENT_TEST", None)
+    for name, value in (environ or {}).items():
+        if value is None:
+            env.pop(name, None)
+        else:
+            env[name] = value
     done = subprocess.run([sys.executable, "-X", "importtime", "-m", "runner", *args], capture_output=True,
                           text=True, cwd=cwd, env=env, check=False, timeout=300)  # fmt: skip
     assert done.returncode == 0, done.stderr[-2000:]
@@ -44,3 +53,14 @@ def test_validate_imports_neither_the_step_loop_nor_the_trace(tmp_path: Path) ->
     modules = _imported(["validate", str(ONE_STEP)], tmp_path)
     assert "runner.language.load" in modules
     assert not modules & {*NOT_FOR_A_RUN, "runner.sim.session", "runner.trace.writer"}
+
+
+@pytest.mark.skipif("mujoco" not in INSTALLED, reason="MuJoCo is an optional engine, not installed here")
+def test_a_mujoco_run_leaves_mujocos_renderer_unloaded_unless_the_user_asks(tmp_path: Path) -> None:
+    """runner.cli.entry.HEADLESS: the command never draws through MuJoCo, so its GL context (GLFW) stays
+    unloaded; a MUJOCO_GL the user set is theirs. The worker's imports reach the command's stderr as the
+    engine's output, so both processes are seen."""
+    run = ["run", str(ONE_STEP), "--backend", "mujoco", "--quiet", "--out", str(tmp_path)]
+    modules = _imported(run, tmp_path, {"MUJOCO_GL": None})
+    assert "mujoco" in modules and "glfw" not in modules
+    assert "glfw" in _imported(run, tmp_path, {"MUJOCO_GL": "glfw"})
