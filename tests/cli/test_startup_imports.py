@@ -68,3 +68,22 @@ def test_a_mujoco_run_leaves_mujocos_renderer_unloaded_unless_the_user_asks(tmp_
     modules = _imported(run, tmp_path, {"MUJOCO_GL": None})
     assert "mujoco" in modules and "glfw" not in modules
     assert "glfw" in _imported(run, tmp_path, {"MUJOCO_GL": "glfw"})
+
+
+def test_the_collector_is_back_on_after_the_imports_with_what_they_made_frozen(tmp_path: Path) -> None:
+    """runner.startup: the command's imports run without the cyclic collector, which must be on again for the
+    command itself (a long run makes garbage cycles); what the imports made is frozen, once per process."""
+    probe = (
+        "import gc, sys\n"
+        "from runner.cli.main import main\n"
+        "code = main(['validate', sys.argv[1]])\n"
+        "frozen = gc.get_freeze_count()\n"
+        "main(['validate', sys.argv[1]])\n"
+        "print(code, gc.isenabled(), frozen > 0, gc.get_freeze_count() == frozen)\n"
+    )
+    env = {**os.environ, "PYTHONPATH": str(ROOT)}
+    env.pop("PYTEST_CURRENT_TEST", None)
+    done = subprocess.run([sys.executable, "-c", probe, str(ONE_STEP)], capture_output=True, text=True, cwd=tmp_path,
+                          env=env, check=False, timeout=300)  # fmt: skip
+    assert done.returncode == 0, done.stderr[-2000:]
+    assert done.stdout.split()[-4:] == ["0", "True", "True", "True"]
