@@ -51,6 +51,8 @@ def test_a_run_imports_neither_the_other_commands_nor_the_trace_reader(tmp_path:
     modules = _imported(["run", str(ONE_STEP), "--backend", "pybullet", "--quiet", "--out", str(tmp_path)], tmp_path)
     assert "runner.sim.session" in modules and "runner.trace.writer" in modules  # it did run and write its trace
     assert not modules & {*NOT_FOR_A_RUN, *NOT_FOR_A_QUIET_PASS}
+    again = _imported(["run", str(ONE_STEP), "--backend", "pybullet", "--quiet", "--out", str(tmp_path)], tmp_path)
+    assert "mcap.stream_reader" not in again  # its own trace, recognised without mcap's reader, is replaced
 
 
 def test_validate_imports_neither_the_step_loop_nor_the_trace(tmp_path: Path) -> None:
