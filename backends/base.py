@@ -153,10 +153,12 @@ class Backend(OptionalContract, abc.ABC):
     @classmethod
     def engine_version(cls) -> str:
         """The installed engine's version (from package metadata; no engine import needed)."""
-        from importlib.metadata import PackageNotFoundError, version
+        from importlib.metadata import PackageNotFoundError
+
+        from backends.versions import installed_version
 
         try:
-            return version(cls.engine_distribution)
+            return installed_version(cls.engine_distribution)
         except PackageNotFoundError:
             return "not installed"
 

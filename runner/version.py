@@ -2,9 +2,11 @@
 
 from __future__ import annotations
 
+import functools
 from importlib.metadata import PackageNotFoundError, version
 
 
+@functools.cache  # read once per process: the command's parser and each trace's record ask for it
 def tool_version() -> str:
     try:
         return version("physics-scenarios")

@@ -12,10 +12,17 @@ import sys
 
 from runner import interrupts
 
-__all__ = ["main"]
+__all__ = ["HEADLESS", "main"]
+
+#: Settings of the engines that keep their renderers from loading, unless the user set them: the command never
+#: draws through an engine (its pictures and windows are Panda3D's), and MuJoCo's GL context (GLFW, which starts
+#: a Python subprocess to ask the library's version) is about a tenth of a one-step run's start-up.
+HEADLESS = {"MUJOCO_GL": "disable"}
 
 
 def main() -> int:
+    for name, value in HEADLESS.items():
+        os.environ.setdefault(name, value)
     interrupts.install()  # kept: runner.cli.main.main installs them again and restores these at its end
     try:
         from runner.cli.main import main as command

@@ -28,6 +28,7 @@ from runner import interrupts
 from runner.errors import ExitCode, ScenarioValidationError
 from runner.exec.exits import classify
 from runner.interrupts import Terminated
+from runner.startup import imports_uncollected
 from runner.version import tool_version
 
 
@@ -88,7 +89,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         out = _console(stderr=False)
         err = _console(stderr=True)
         argv = sys.argv[1:] if argv is None else list(argv)
-        parser, modules = build_parser(argv)
+        with imports_uncollected():  # the command's modules: long-lived objects only
+            parser, modules = build_parser(argv)
         args = parser.parse_args(argv)
         return int(modules[args.command].execute(args, out, err))
     except BrokenPipeError:  # our output was closed (`scenario ... | head`): nothing more to say

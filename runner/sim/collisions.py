@@ -174,7 +174,9 @@ class SolidTraverser:
         self._collider_rank: dict[int, int] = {}
         for position, c in enumerate(self.colliders):
             self._collider_rank.setdefault(rank[c.name], position)
-        self._from = np.flatnonzero(np.isin(self._node, list(self._collider_rank)))
+        colliding = np.zeros(len(order), dtype=bool)  # by node rank (np.isin would import numpy.ma at start-up)
+        colliding[list(self._collider_rank)] = True
+        self._from = np.flatnonzero(colliding[self._node])
 
     def traverse(self, poses: Sequence[Pose]) -> list[tuple[str, str, bool]]:
         pos = np.array([p.pos for p in poses], dtype=float).reshape(len(poses), 3)

@@ -72,7 +72,73 @@ def lock_path(trace: Path) -> Path:
     return trace.with_name(f".{trace.name}.lock")
 
 
+#: opcodes of the MCAP records read here, and mcap's StreamReader's default limit on a record's length
+_HEADER, _METADATA, _RECORD_LIMIT = 0x01, 0x0C, 4 * 2**30
+#: bytes read for the quick look at a trace's first two records
+_HEAD_BYTES = 1 << 16
+
+
+def _string(data: bytes, at: int) -> tuple[str, int]:
+    """The length-prefixed UTF-8 string at ``at``, and where it ends; ValueError if it is not whole there."""
+    if at + 4 > len(data):
+        raise ValueError("cut")
+    (n,) = struct.unpack_from("<I", data, at)
+    if at + 4 + n > len(data):
+        raise ValueError("cut")
+    return str(data[at + 4 : at + 4 + n], "utf-8"), at + 4 + n
+
+
+def _record(data: bytes, at: int, opcode: int) -> tuple[int, int]:
+    """(where the content of the record at ``at`` starts, where the record ends) when it is whole in ``data`` and
+    has ``opcode``; ValueError otherwise."""
+    if at + 9 > len(data) or data[at] != opcode:
+        raise ValueError("not that record")
+    (length,) = struct.unpack_from("<Q", data, at + 1)
+    if length > _RECORD_LIMIT or at + 9 + length > len(data):
+        raise ValueError("too long or cut")
+    return at + 9, at + 9 + length
+
+
+def _own_trace_quick(path: Path) -> bool | None:
+    """:func:`_own_trace`'s answer for a whole header and scenario record at the start of the file, read by hand
+    (what mcap's StreamReader reads there, without importing it and its decompressors: a run over its previous
+    trace pays for it at start-up); None where the file is anything else, for mcap's reader to decide."""
+    try:
+        with open(path, "rb") as f:
+            data = f.read(_HEAD_BYTES)
+        if not data.startswith(_MAGIC):
+            return None
+        start, end = _record(data, len(_MAGIC), _HEADER)
+        _, at = _string(data, start)
+        library, at = _string(data, at)
+        if not library.startswith(_LIBRARIES):
+            return False
+        if library.startswith(tf.LIBRARY):
+            return True
+        start, end = _record(data, max(end, at), _METADATA)
+        name, at = _string(data, start)
+        if at + 4 > end:
+            return None
+        (size,) = struct.unpack_from("<I", data, at)
+        keys, at, stop = set(), at + 4, at + 4 + size
+        while at < stop:
+            key, at = _string(data, at)
+            _, at = _string(data, at)
+            keys.add(key)
+    except (OSError, ValueError):
+        return None
+    if at > end:  # the map ran past its record: mcap's reader reads on, into the next record
+        return None
+    return name == tf.METADATA_SCENARIO and tf.KEY_TRACE_FORMAT in keys
+
+
 def _own_trace(path: Path) -> bool:
+    quick = _own_trace_quick(path)
+    return quick if quick is not None else _own_trace_read(path)
+
+
+def _own_trace_read(path: Path) -> bool:
+    """Whether ``path`` is the tool's trace (the module docstring), read by mcap's StreamReader."""
     from mcap.exceptions import McapError  # mcap's reader (with its decompressors) only where a file is read
     from mcap.records import Header, Metadata
     from mcap.stream_reader import StreamReader

@@ -16,6 +16,7 @@ where proto3 would leave the field out. Both decode to the same message (the fie
 
 from __future__ import annotations
 
+import random
 from collections.abc import Callable, Sequence
 from typing import Any, NamedTuple
 
@@ -26,6 +27,8 @@ __all__ = ["PairTemplates", "SlotTemplate", "StampedTemplate", "TemplateError", 
 
 #: absolute resolution of per-step values (reports.trace_format.VALUE_RESOLUTION as a scale)
 _SCALE = 1e9
+#: the bits of 1.0 (IEEE 754 double): with a 52-bit mantissa, a double in [1, 2)
+_ONE_BITS = np.uint64(0x3FF0000000000000)
 
 
 class TemplateError(RuntimeError):
@@ -39,9 +42,12 @@ def quantize(values: np.ndarray) -> np.ndarray:
 
 
 def _sentinels(n: int, seed: int) -> np.ndarray:
-    """``n`` distinct doubles in [1, 2) with random mantissas: their bytes occur nowhere else by chance
-    (and if they did, the template's check would refuse it)."""
-    return np.random.default_rng(seed).uniform(1.0, 2.0, n)
+    """``n`` doubles in [1, 2) with random mantissas: their bytes occur nowhere else by chance (and if they did,
+    or two were equal, the template's check would refuse it). Drawn with the standard library's generator:
+    numpy.random is a module more to import in every worker, for a few draws."""
+    draw = random.Random(seed).getrandbits
+    mantissas = np.fromiter((draw(52) for _ in range(n)), dtype=np.uint64, count=n)
+    return (mantissas | _ONE_BITS).view(np.float64)
 
 
 def _find(data: bytes, patterns: Sequence[bytes]) -> list[int]:
@@ -65,9 +71,12 @@ def _used(data: bytes, values: np.ndarray) -> tuple[list[int], list[int]]:
     keys = np.ascontiguousarray(values, dtype="<f8").view("<u8")
     order = np.argsort(keys)
     sorted_keys = keys[order]
-    at = np.flatnonzero(np.isin(windows, sorted_keys))
-    which = order[np.searchsorted(sorted_keys, windows[at])]
-    if len(np.unique(which)) != len(which):
+    # membership by binary search (np.isin and np.unique would import numpy.ma in every worker)
+    nearest = np.minimum(np.searchsorted(sorted_keys, windows), len(sorted_keys) - 1)
+    at = np.flatnonzero(sorted_keys[nearest] == windows)
+    which = order[nearest[at]]
+    ranked = np.sort(which)
+    if (ranked[1:] == ranked[:-1]).any():
         raise TemplateError("a sentinel value occurs twice in the serialised template")
     by_value = np.argsort(which)
     return at[by_value].tolist(), which[by_value].tolist()

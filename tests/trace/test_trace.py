@@ -513,3 +513,51 @@ def test_own_traces_are_told_from_other_sdk_recordings(tmp_path: Path) -> None:
     partial = tmp_path / ("cut.mcap" + tf.PARTIAL_SUFFIX)
     partial.write_bytes(ours.read_bytes()[:40])  # killed inside the header: still the tool's to replace
     assert output.is_own(partial, tmp_path / "cut.mcap")
+
+
+def test_the_quick_look_at_a_trace_agrees_with_mcaps_reader(tmp_path: Path) -> None:
+    """runner.trace.output reads a trace's header and scenario record by hand (mcap's reader is not imported at
+    start-up); where it answers, it must answer as mcap's StreamReader does: on every prefix of the tool's
+    trace and of a user's SDK recording (as a final and as a partial file), and with each byte of the first
+    two records changed in turn."""
+    import foxglove
+
+    ours = tmp_path / "ours.mcap"
+    write_trace(ours)
+    theirs = tmp_path / "theirs.mcap"
+    context = foxglove.Context()
+    with foxglove.open_mcap(theirs, context=context):
+        foxglove.Channel("/x", message_encoding="json", context=context).log(b"{}", log_time=1)
+    probe, answered = tmp_path / "probe.mcap", 0
+
+    def reading(path: Path) -> object:
+        """mcap's reader's answer, or the class of what it raised (a damaged chunk's zstd error, as before)."""
+        try:
+            return output._own_trace_read(path)
+        except Exception as exc:  # noqa: BLE001 - the same failure on both paths is agreement too
+            return type(exc)
+
+    def check(data: bytes, partial: bool) -> None:
+        nonlocal answered
+        path = probe.with_name(probe.name + tf.PARTIAL_SUFFIX) if partial else probe
+        path.write_bytes(data)
+        quick = output._own_trace_quick(path)
+        if quick is not None:
+            answered += 1
+            assert quick == reading(path), (len(data), partial, data[:96])
+        else:
+            try:
+                whole: object = output._own_trace(path)
+            except Exception as exc:  # noqa: BLE001
+                whole = type(exc)
+            assert whole == reading(path)
+        path.unlink()
+
+    for whole in (ours.read_bytes(), theirs.read_bytes()):
+        head = 8 + 9 + int.from_bytes(whole[9:17], "little")  # magic, then the header record
+        head += 9 + int.from_bytes(whole[head + 1 : head + 9], "little")  # then the record after it
+        for n in range(head + 64):
+            check(whole[:n], partial=n % 2 == 1)
+        for i in range(head):
+            check(whole[:i] + bytes([whole[i] ^ 0x5A]) + whole[i + 1 :], partial=False)
+    assert answered > 0  # the quick look did decide some of them: the comparison is not empty
