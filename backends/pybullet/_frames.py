@@ -48,6 +48,13 @@ def _inertial_to_body(*row: Any) -> tuple[Any, ...]:
     bx = w * jx + x * jw + y * jz - z * jy
     by = w * jy - x * jz + y * jw + z * jx
     bz = w * jz + x * jy - y * jx + z * jw
+    return _from_com(px, py, pz, bx, by, bz, bw, vx, vy, vz, ox, oy, oz, cx, cy, cz)
+
+
+def _from_com(*row: Any) -> tuple[Any, ...]:
+    """A row whose quaternion is already the body frame's (x y z w), with the COM (cx, cy, cz) in the body
+    frame: its position and velocity moved from the COM to the frame's origin (``_inertial_to_body``'s end)."""
+    px, py, pz, bx, by, bz, bw, vx, vy, vz, ox, oy, oz, cx, cy, cz = row
     # arm = R(qb) com
     ux = by * cz - bz * cy
     uy = bz * cx - bx * cz
@@ -145,15 +152,7 @@ def _links_to_body(states: Sequence[Any], offsets: LinkOffsets) -> list[float]:
         if turned or not (x and y and z and w):
             x, y, z, w = (w * jx + x * jw + y * jz - z * jy, w * jy - x * jz + y * jw + z * jx,
                           w * jz + x * jy - y * jx + z * jw, w * jw - x * jx - y * jy - z * jz)  # fmt: skip
-        ux = y * cz - z * cy
-        uy = z * cx - x * cz
-        uz = x * cy - y * cx
-        ax = cx + 2.0 * (w * ux + y * uz - z * uy)
-        ay = cy + 2.0 * (w * uy + z * ux - x * uz)
-        az = cz + 2.0 * (w * uz + x * uy - y * ux)
-        nx, ny, nz = -ax, -ay, -az
-        put((px - ax, py - ay, pz - az, x, y, z, w,
-             vx + (oy * nz - oz * ny), vy + (oz * nx - ox * nz), vz + (ox * ny - oy * nx), ox, oy, oz))  # fmt: skip
+        put(_from_com(px, py, pz, x, y, z, w, vx, vy, vz, ox, oy, oz, cx, cy, cz))
     return out
 
 
