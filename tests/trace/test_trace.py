@@ -495,9 +495,8 @@ def test_a_verdict_is_logged_when_it_is_decided(tmp_path: Path) -> None:
     ]
 
 
-def test_own_traces_are_told_from_other_sdk_recordings(tmp_path: Path) -> None:
-    """The SDK names itself in the header, so a trace is the tool's by the scenario record that follows it: a
-    user's own recording with the same SDK (messages, no scenario record) is never taken for one."""
+def _ours_and_an_sdk_recording(tmp_path: Path) -> tuple[Path, Path]:
+    """The tool's trace, and a user's own recording with the same SDK (one JSON message, no scenario record)."""
     import foxglove  # the writer's library, as a user would call it
 
     ours = tmp_path / "ours.mcap"
@@ -506,6 +505,13 @@ def test_own_traces_are_told_from_other_sdk_recordings(tmp_path: Path) -> None:
     context = foxglove.Context()
     with foxglove.open_mcap(theirs, context=context):
         foxglove.Channel("/x", message_encoding="json", context=context).log(b"{}", log_time=1)
+    return ours, theirs
+
+
+def test_own_traces_are_told_from_other_sdk_recordings(tmp_path: Path) -> None:
+    """The SDK names itself in the header, so a trace is the tool's by the scenario record that follows it: a
+    user's own recording with the same SDK (messages, no scenario record) is never taken for one."""
+    ours, theirs = _ours_and_an_sdk_recording(tmp_path)
     with open(theirs, "rb") as f:
         assert make_reader(f).get_header().library.startswith(tf.SDK_LIBRARY)
     assert output.is_own(ours, ours)
@@ -520,14 +526,7 @@ def test_the_quick_look_at_a_trace_agrees_with_mcaps_reader(tmp_path: Path) -> N
     start-up); where it answers, it must answer as mcap's StreamReader does: on every prefix of the tool's
     trace and of a user's SDK recording (as a final and as a partial file), and with each byte of the first
     two records changed in turn."""
-    import foxglove
-
-    ours = tmp_path / "ours.mcap"
-    write_trace(ours)
-    theirs = tmp_path / "theirs.mcap"
-    context = foxglove.Context()
-    with foxglove.open_mcap(theirs, context=context):
-        foxglove.Channel("/x", message_encoding="json", context=context).log(b"{}", log_time=1)
+    ours, theirs = _ours_and_an_sdk_recording(tmp_path)
     probe, answered = tmp_path / "probe.mcap", 0
 
     def reading(path: Path) -> object:
