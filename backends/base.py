@@ -153,14 +153,9 @@ class Backend(OptionalContract, abc.ABC):
     @classmethod
     def engine_version(cls) -> str:
         """The installed engine's version (from package metadata; no engine import needed)."""
-        from importlib.metadata import PackageNotFoundError
+        from backends.versions import version_or_absent
 
-        from backends.versions import installed_version
-
-        try:
-            return installed_version(cls.engine_distribution)
-        except PackageNotFoundError:
-            return "not installed"
+        return version_or_absent(cls.engine_distribution)
 
     @classmethod
     def engine_label(cls) -> str:

@@ -15,7 +15,6 @@ import difflib
 import importlib
 import importlib.util
 from collections.abc import Iterator, Mapping
-from importlib.metadata import PackageNotFoundError
 from typing import Any
 
 from ._kit.options import BackendOptions
@@ -24,7 +23,7 @@ from .entry import BackendEntry
 from .entry_points import BrokenBackend, registered
 from .errors import BackendNotInstalled, UnknownBackend, UnsupportedFeature
 from .types import Capability, CompiledWorld, Precision
-from .versions import installed_version
+from .versions import version_or_absent
 
 # Kept sorted by name.
 _KNOWN: dict[str, BackendEntry] = {
@@ -160,10 +159,7 @@ def is_installed(name: str) -> bool:
 
 
 def engine_version(name: str) -> str:
-    try:
-        return installed_version(entry(name).distribution)
-    except PackageNotFoundError:
-        return "not installed"
+    return version_or_absent(entry(name).distribution)
 
 
 def distribution_installed(name: str) -> bool:

@@ -7,9 +7,9 @@ the header lines, which end at the first blank line; only those are read here (t
 
 from __future__ import annotations
 
-from importlib.metadata import distribution
+from importlib.metadata import PackageNotFoundError, distribution
 
-__all__ = ["installed_version"]
+__all__ = ["installed_version", "version_or_absent"]
 
 
 def installed_version(name: str) -> str:
@@ -23,3 +23,11 @@ def installed_version(name: str) -> str:
         if colon and not key[:1].isspace() and key.strip().lower() == "version":
             return value.strip()
     return dist.version
+
+
+def version_or_absent(name: str) -> str:
+    """:func:`installed_version`, or "not installed" (how the registry and the adapters name a missing engine)."""
+    try:
+        return installed_version(name)
+    except PackageNotFoundError:
+        return "not installed"

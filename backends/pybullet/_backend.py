@@ -154,8 +154,6 @@ class PyBulletBackend(Backend):
         add_mimics(p, c, world, layout)  # URDF <mimic>: a gear between the two joints (_rotors)
         self._springs = Springs(world, layout)  # joint stiffness: the spring's torque each engine step (_springs)
         bases = [i for i in range(len(world.bodies)) if layout.link[i] < 0]
-        self._base_uids = [layout.uid[i] for i in bases]
-        self._base_rows = None if bases == list(range(len(world.bodies))) else bases  # None: every body, in order
         # A static base never moves (a mass-0 base that Backend.reset_body refuses and no track moves), but Bullet
         # turns its quaternion into a matrix and back every step, which moves a turned one's by an ulp and back
         # [checked: the friction conformance's incline, 20 degrees: x alternates by 2.8e-17]; unturned, both

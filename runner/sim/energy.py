@@ -178,12 +178,9 @@ def totals_back(totals: deque[float], top: float) -> int:
 class EnergyWatch:
     """Checks one run's energy after each step (see the module docstring)."""
 
-    def __init__(
-        self, world: CompiledWorld, backend: str, zeros: dict[str, float] | None = None, block: int = 0
-    ) -> None:
+    def __init__(self, world: CompiledWorld, backend: str, zeros: dict[str, float] | None = None) -> None:
         """``zeros``: what the runner adds to a joint's reading (from the start) to read it from its stated zero
-        (program.joint_zeros): the readings checked are those, so each spring's rest moves with them. ``block``:
-        the steps evaluated together (0: :data:`BLOCK_STEPS`; 1: each step as it is checked)."""
+        (program.joint_zeros): the readings checked are those, so each spring's rest moves with them."""
         self.backend = backend
         self.names = [b.name for b in world.bodies]
         self.joint_names = [j.name for j in world.joints]
@@ -230,7 +227,7 @@ class EnergyWatch:
         self._reference_joints = np.zeros(0)
         #: steps evaluated together (``check`` queues, ``flush`` evaluates): the whole-array calls cost about
         #: 1 us each whatever their size, so a block of 25 steps costs little more than one step did
-        self.block = int(block) if block > 0 else BLOCK_STEPS
+        self.block = BLOCK_STEPS
         self._pending: list[tuple[float, BodyStates, JointStates, bool]] = []
         self._previous: tuple[float, BodyStates] | None = None  # the last step evaluated: time and states
 

@@ -56,10 +56,8 @@ class Servos:
                        for j, s in self.specs]  # fmt: skip
         self._joints = tuple(j for j, _ in self.specs)
         self._fmaxes = [fixed[4] for fixed in self._fixed]
-        #: every target, when none is an expression (read once, not every step)
-        constant = [s.target for _, s in self.specs if isinstance(s.target, float)]
-        self._constant = constant if len(constant) == len(self.specs) else None
-        #: the constant targets in place (0 where an expression's goes), and the expressions with their places
+        #: the constant targets in place (0 where an expression's goes), and the expressions with their places;
+        #: with no expression, the template is every target (read once, not every step)
         self._template = [s.target if isinstance(s.target, float) else 0.0 for _, s in self.specs]
         self._read = [(k, s.target) for k, (_, s) in enumerate(self.specs) if not isinstance(s.target, float)]
 
@@ -68,8 +66,8 @@ class Servos:
 
     def targets(self, resolver: Resolver) -> list[float]:
         """Every servo's target now, in ``specs`` order (an expression target is read every step)."""
-        if self._constant is not None:
-            return self._constant
+        if not self._read:
+            return self._template
         out = self._template.copy()
         for k, expression in self._read:
             out[k] = float(expression.number(resolver))
