@@ -21,9 +21,20 @@ from mcap.data_stream import ReadDataStream
 from mcap.opcode import Opcode
 from mcap.records import Channel, Chunk, Message, Schema
 
-__all__ = ["check_schema", "chunk_records", "inflate"]
+__all__ = ["check_schema", "chunk_records", "inflate", "read_damage"]
 
 _PIECE = 1 << 20
+
+
+def read_damage() -> tuple[type[Exception], ...]:
+    """What mcap's own readers (``StreamReader``, ``make_reader``) raise on a damaged file: mcap's errors, a cut
+    record's (``EOFError``, ``struct.error``, ``ValueError``) and, on a damaged compressed chunk, its
+    decompressors' own: zstandard's ``ZstdError`` and lz4's ``RuntimeError`` (checked: a chunk of garbage
+    behind a valid header raises each, not an mcap error)."""
+    from mcap.exceptions import McapError
+    from zstandard import ZstdError
+
+    return McapError, EOFError, ValueError, struct.error, ZstdError, RuntimeError
 
 
 def inflate(chunk: Chunk) -> bytes:

@@ -12,16 +12,15 @@ trace) is read from the start and reading stops at the first damaged record, kee
 from __future__ import annotations
 
 import json
-import struct
 from collections.abc import Callable, Mapping
 from pathlib import Path
 from typing import Any
 
-from mcap.exceptions import McapError
 from mcap.reader import make_reader
 from mcap.records import Schema
 
 from reports import trace_format as tf
+from reports.trace_chunks import read_damage
 
 __all__ = ["SCENE_SCHEMA", "read_scene_updates"]
 
@@ -81,6 +80,7 @@ def read_scene_updates(path: Path) -> list[tuple[float, Mapping[str, Any]]]:
     empty when the file has no scene channel in an encoding this module decodes."""
     out: list[tuple[float, Mapping[str, Any]]] = []
     decoders: dict[int, Decoder | None] = {}
+    ends: tuple[type[Exception], ...] = (OSError, KeyError, *read_damage())
     try:
         with open(path, "rb") as f:
             reader = make_reader(f, validate_crcs=True)
@@ -90,7 +90,7 @@ def read_scene_updates(path: Path) -> list[tuple[float, Mapping[str, Any]]]:
                 decode = decoders[channel.id]
                 if decode is not None:
                     out.append((message.log_time / 1e9, decode(message.data)))
-    except (OSError, McapError, EOFError, ValueError, KeyError, struct.error):
+    except ends:
         pass  # a damaged end (partial trace): keep what was read; no channel: the metadata shapes serve
     out.sort(key=lambda item: item[0])
     return out

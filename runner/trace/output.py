@@ -139,10 +139,13 @@ def _own_trace(path: Path) -> bool:
 
 def _own_trace_read(path: Path) -> bool:
     """Whether ``path`` is the tool's trace (the module docstring), read by mcap's StreamReader."""
-    from mcap.exceptions import McapError  # mcap's reader (with its decompressors) only where a file is read
-    from mcap.records import Header, Metadata
+    from mcap.records import Header, Metadata  # mcap's reader (with its decompressors) only where a file is read
     from mcap.stream_reader import StreamReader
 
+    from reports.trace_chunks import read_damage
+
+    damage = read_damage()
+    unread: tuple[type[Exception], ...] = (OSError, StopIteration, *damage)
     try:
         with open(path, "rb") as f:
             head = f.read(len(_MAGIC))
@@ -161,9 +164,9 @@ def _own_trace_read(path: Path) -> bool:
             partial = path.name.endswith(tf.PARTIAL_SUFFIX)
             try:
                 record = next(records, None)
-            except (McapError, ValueError, EOFError, struct.error):
+            except damage:  # a damaged second record (a chunk that does not inflate): not this tool's record
                 return partial
-    except (OSError, McapError, StopIteration, ValueError, EOFError, struct.error):
+    except unread:
         return path.name.endswith(tf.PARTIAL_SUFFIX) and _partial_header(path)
     if record is None:
         return partial
@@ -303,16 +306,18 @@ def refusal(paths: list[Path]) -> str:
 
 def _record_ends(data: bytes) -> list[int]:
     """Offsets in ``data`` (an MCAP file) at which a whole record ends, read by mcap's own stream reader."""
-    from mcap.exceptions import McapError
     from mcap.stream_reader import StreamReader
 
+    from reports.trace_chunks import read_damage
+
+    stops: tuple[type[Exception], ...] = (StopIteration, *read_damage())
     stream = io.BytesIO(data)
     ends = [len(_MAGIC)] if data.startswith(_MAGIC) else []
     records = iter(StreamReader(stream, skip_magic=False).records)
     while True:
         try:
             next(records)
-        except (StopIteration, McapError, EOFError, ValueError, struct.error):
+        except stops:
             return ends
         ends.append(stream.tell())
 
