@@ -89,7 +89,7 @@ def _mesh_triangles(placed: PlacedShape, rgba: Sequence[float], scale: float) ->
     """A mesh as an indexed triangle list (each vertex once)."""
     mesh = placed.shape.mesh
     vertices, faces = (mesh.vertices, mesh.faces) if mesh is not None else ((), ())
-    prim = fx.triangles([tuple(c * scale for c in v) for v in vertices], rgba)
+    prim = fx.triangles(vertices if scale == 1.0 else [(x * scale, y * scale, z * scale) for x, y, z in vertices], rgba)
     prim.indices.extend(i for face in faces for i in face)
     return prim
 
