@@ -72,7 +72,7 @@ class BodyStates:
 
     def rows(self) -> np.ndarray:
         """One (N, 13) float64 array: each row pos, quat (w x y z), lin_vel, ang_vel."""
-        return np.hstack((self.pos, self.quat, self.lin_vel, self.ang_vel)).astype(np.float64, copy=False)
+        return np.concatenate((self.pos, self.quat, self.lin_vel, self.ang_vel), axis=1).astype(np.float64, copy=False)
 
 
 @dataclass

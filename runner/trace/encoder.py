@@ -13,6 +13,7 @@ import math
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from itertools import chain
+from operator import is_
 from typing import Any
 
 import numpy as np
@@ -96,6 +97,8 @@ class TraceEncoder:
         self._joints = [SlotTemplate(self._filler(cls, part, self._fill_joints), jwidth * len(part))
                         for cls, part in zip(self.messages.joints, joint_parts, strict=True)]  # fmt: skip
         self._jrows = np.empty((len(self.joints), jwidth))
+        #: the last /state message: its variables' names, their value objects, its bytes (``state_message``)
+        self._last_state: tuple[tuple[str, ...], tuple[Any, ...], bytes] = ((), (), b"")
         self._pairs = PairTemplates(len(self.bodies), self._contacts_head, self._contact_pair)
 
     # ---- schemas ----------------------------------------------------------------------------------
@@ -191,7 +194,18 @@ class TraceEncoder:
         return self._pairs.render(pairs)
 
     def state_message(self, values: Mapping[str, Any]) -> bytes:
-        """/state; a value whose type differs from its variable's declared one is converted to it."""
+        """/state; a value whose type differs from its variable's declared one is converted to it. The state
+        changes only when a handler sets it: a step whose values are the very objects of the last message's
+        (immutable: bools, numbers, text; held here, so none is another's) reuses its bytes."""
+        names, objects = tuple(values), tuple(values.values())
+        last_names, last_objects, last_data = self._last_state
+        if names == last_names and all(map(is_, objects, last_objects)):
+            return last_data
+        data = self._state_bytes(values)
+        self._last_state = (names, objects, data)
+        return data
+
+    def _state_bytes(self, values: Mapping[str, Any]) -> bytes:
         msg = self.messages.state()
         for name, kind in self.messages.state_types.items():
             if name not in values:

@@ -52,6 +52,8 @@ class EventRuns:
         """The summaries of the runs that cannot continue at ``ns`` (every run with ``everything``), as
         (time, text), in time order; ``written_ns`` is the latest time already written. A run of one
         delivery has nothing to sum up."""
+        if not self._runs:  # every step asks; mostly no event is being delivered
+            return []
         out: list[tuple[int, str]] = []
         for key, run in list(self._runs.items()):
             if not everything and self._continues(run, ns):
