@@ -560,3 +560,22 @@ def test_the_quick_look_at_a_trace_agrees_with_mcaps_reader(tmp_path: Path) -> N
         for i in range(head):
             check(whole[:i] + bytes([whole[i] ^ 0x5A]) + whole[i + 1 :], partial=False)
     assert answered > 0  # the quick look did decide some of them: the comparison is not empty
+
+
+def test_state_messages_reused_only_for_the_same_value_objects() -> None:
+    """/state's bytes are reused while the step's values are the very objects of the last message; any other
+    value, even an equal one of another type (1 and 1.0 in a text variable), is encoded afresh."""
+    from runner.trace.encoder import TraceEncoder
+
+    enc = TraceEncoder(["box"], [])
+    enc.state_channel({"open": False, "count": 0.0, "label": "a"})
+    one, other = 1, 1.0
+    steps = [{"open": False, "count": 2.5, "label": "a"}, {"open": True, "count": 2.5, "label": "a"},
+             {"open": True, "count": -0.0, "label": one}, {"open": True, "count": 0.0, "label": other}]  # fmt: skip
+    fresh = TraceEncoder(["box"], [])
+    fresh.state_channel(steps[0])
+    for values in steps:
+        first = enc.state_message(values)
+        assert enc.state_message(dict(values)) is first  # the same objects: the same bytes, not encoded again
+        assert first == fresh._state_bytes(values)
+    assert len({enc.state_message(v) for v in steps}) == 4  # -0.0 and 0.0, 1 and 1.0 give different messages
