@@ -108,7 +108,8 @@ def mcap_messages(path: Path) -> list[tuple[str, str, int, Any]]:
     mcap-protobuf's decoder, with classes built from the file's own schema records."""
     with open(path, "rb") as f:
         reader = make_reader(f, decoder_factories=[DecoderFactory()])
-        return [(c.topic, s.name, m.log_time, d) for s, c, m, d in reader.iter_decoded_messages(log_time_order=False)]
+        messages = reader.iter_decoded_messages(log_time_order=False)
+        return [(c.topic, s.name if s is not None else "", m.log_time, d) for s, c, m, d in messages]
 
 
 def as_ns(times: np.ndarray) -> list[int]:
@@ -126,7 +127,7 @@ def test_round_trip_with_the_mcap_reader(trace_file: Path) -> None:
     with open(trace_file, "rb") as f:
         reader = make_reader(f)
         summary = reader.get_summary()
-        assert reader.get_header().library.startswith(tf.SDK_LIBRARY)
+        assert summary is not None and reader.get_header().library.startswith(tf.SDK_LIBRARY)
         schema_of = {ch.topic: summary.schemas[ch.schema_id] for ch in summary.channels.values()}
         for ch in summary.channels.values():
             assert (ch.message_encoding, schema_of[ch.topic].encoding) == ("protobuf", "protobuf")
@@ -220,6 +221,7 @@ def test_foxglove_channels_carry_foxglove_s_own_schemas(trace_file: Path) -> Non
     them by name and read them by these descriptors)."""
     with open(trace_file, "rb") as f:
         summary = make_reader(f).get_summary()
+    assert summary is not None
     schemas = {ch.topic: summary.schemas[ch.schema_id] for ch in summary.channels.values()}
     for topic, cls in (("/tf", FrameTransforms), ("/scene", SceneUpdate), ("/log", Log)):
         files = {fd.name: fd for fd in FileDescriptorSet.FromString(schemas[topic].data).file}
@@ -346,7 +348,9 @@ def test_truncated_trace_is_recovered_up_to_its_last_complete_chunk(tmp_path: Pa
     write_trace(path, steps=100, flush_interval=0.2)
     data = path.read_bytes()
     with open(path, "rb") as f:
-        chunks = sorted(make_reader(f).get_summary().chunk_indexes, key=lambda c: c.chunk_start_offset)
+        summary = make_reader(f).get_summary()
+    assert summary is not None
+    chunks = sorted(summary.chunk_indexes, key=lambda c: c.chunk_start_offset)
     assert len(chunks) >= 15
     middle = chunks[len(chunks) // 2]
     cut = middle.chunk_start_offset + middle.chunk_length // 2  # the middle of the file, inside a chunk
@@ -570,8 +574,12 @@ def test_state_messages_reused_only_for_the_same_value_objects() -> None:
     enc = TraceEncoder(["box"], [])
     enc.state_channel({"open": False, "count": 0.0, "label": "a"})
     one, other = 1, 1.0
-    steps = [{"open": False, "count": 2.5, "label": "a"}, {"open": True, "count": 2.5, "label": "a"},
-             {"open": True, "count": -0.0, "label": one}, {"open": True, "count": 0.0, "label": other}]  # fmt: skip
+    steps: list[dict[str, Any]] = [
+        {"open": False, "count": 2.5, "label": "a"},
+        {"open": True, "count": 2.5, "label": "a"},
+        {"open": True, "count": -0.0, "label": one},
+        {"open": True, "count": 0.0, "label": other},
+    ]
     fresh = TraceEncoder(["box"], [])
     fresh.state_channel(steps[0])
     for values in steps:
