@@ -28,8 +28,8 @@ NOT_FOR_A_RUN = (
 )
 #: not needed by a one-step run that passes under --quiet: the verdict table (rich.table: no table is drawn), and in
 #: the worker numpy's masked arrays and random generators (the trace's templates and the collision traverser's set
-#: up use neither)
-NOT_FOR_A_QUIET_PASS = ("rich.table", "numpy.ma", "numpy.random")
+#: up use neither); difflib only hints at a misspelt name, wave only reads a scenario's sounds
+NOT_FOR_A_QUIET_PASS = ("rich.table", "numpy.ma", "numpy.random", "difflib", "wave")
 
 
 def _imported(args: list[str], cwd: Path, environ: dict[str, str | None] | None = None) -> set[str]:
