@@ -11,7 +11,6 @@ here and in the adapters only (tests/architecture checks the runner, tests/perf 
 
 from __future__ import annotations
 
-import difflib
 import importlib
 import importlib.util
 from collections.abc import Iterator, Mapping
@@ -148,6 +147,8 @@ def entry(name: str) -> BackendEntry:
         broken = broken_backends()
         if name in broken:
             raise BrokenBackend(broken[name]) from None
+        import difflib  # here: only an unknown name needs it
+
         close = difflib.get_close_matches(name, [n for n, e in table.items() if not e.hidden], n=1)
         hint = f" Did you mean `{close[0]}`?" if close else ""
         listed = ", ".join(n for n, e in table.items() if not e.hidden)

@@ -49,6 +49,8 @@ GROUPS = (
     ("foxglove", "protobuf, foxglove schemas, mcap (the trace)"),
     ("mcap", "protobuf, foxglove schemas, mcap (the trace)"),
     ("yaml", "yaml"),
+    ("importlib.metadata", "importlib.metadata, email (entry-point scans: MuJoCo's plugins, pydantic's plugin loader)"),
+    ("email", "importlib.metadata, email (entry-point scans: MuJoCo's plugins, pydantic's plugin loader)"),
     ("runner", "runner (the rest)"),
     ("backends", "backends"),
     ("reports", "reports"),

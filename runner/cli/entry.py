@@ -14,10 +14,23 @@ from runner import interrupts
 
 __all__ = ["HEADLESS", "main"]
 
-#: Settings of the engines that keep their renderers from loading, unless the user set them: the command never
-#: draws through an engine (its pictures and windows are Panda3D's), and MuJoCo's GL context (GLFW, which starts
-#: a Python subprocess to ask the library's version) is about a tenth of a one-step run's start-up.
-HEADLESS = {"MUJOCO_GL": "disable"}
+#: Settings the command gives the libraries it loads, unless the user set them (each is ``os.environ.setdefault``,
+#: so a variable the user set, even empty, is theirs; the workers inherit them). None changes a result:
+#:
+#: - ``MUJOCO_GL=disable``: MuJoCo's renderer stays unloaded. The command never draws through an engine (its
+#:   pictures and windows are Panda3D's), and MuJoCo's GL context (GLFW, which starts a Python subprocess to ask
+#:   the library's version) is about a tenth of a one-step run's start-up.
+#: - ``OPENBLAS_THREAD_TIMEOUT=4``: numpy's OpenBLAS threads go to sleep as soon as they have no work, instead of
+#:   spinning for about 2**28 cycles (0.1 s) after they start and after each threaded call: in a one-step run that
+#:   spin was about 90 ms of CPU time, a sixth of the run, taken from the other core. The number of threads, and
+#:   so every result, is unchanged; a large threaded call (none in the runner, whose arrays are small) waits a
+#:   few microseconds for the threads to wake.
+#: - ``PYDANTIC_DISABLE_PLUGINS=__all__``: pydantic does not look for plugins (the entry points of the group
+#:   ``pydantic``: every installed distribution's list, read when the first validator is built, about 4 ms). The
+#:   scenario language's models are the tool's own: a pydantic plugin installed in the same environment (tracing
+#:   or logging validations) would only see the tool's internals, and does not run on them; set the variable (to
+#:   an empty string, for instance) to have pydantic load its plugins.
+HEADLESS = {"MUJOCO_GL": "disable", "OPENBLAS_THREAD_TIMEOUT": "4", "PYDANTIC_DISABLE_PLUGINS": "__all__"}
 
 
 def main() -> int:

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import difflib
 from typing import Any
 
 from pydantic import BaseModel, ValidationError
@@ -115,6 +114,8 @@ def _found(value: Any) -> str:
 
 def issues_from(error: ValidationError, positions: Positions, data: Any, root: type[BaseModel]) -> list[Issue]:
     """Located issues, one per distinct problem, with suggestions for misspelt keys."""
+    import difflib  # here: only a scenario with errors needs it (their hints)
+
     seen: set[Path] = set()
     issues: list[Issue] = []
     for err in error.errors(include_url=False):

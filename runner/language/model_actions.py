@@ -225,7 +225,7 @@ else:
         Union[tuple(Annotated[cls, Tag(tag)] for tag, cls in ACTION_TAGS.items())],  # noqa: UP007
         Discriminator(lambda v: tag_of(v, ACTION_TAGS)),
     ]
-IfAction.model_rebuild()
+# IfAction's `Action` is resolved from this module when its validator is first built (Strict: defer_build)
 
 
 __all__ = [

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import difflib
 from collections.abc import Container, Mapping
 from dataclasses import dataclass
 
@@ -162,6 +161,8 @@ def check_name(name: str, valid: set[str]) -> str | None:
     """An error message if ``name`` cannot be read, else None."""
     if name in valid:
         return None
+    import difflib  # here: only a name that is not valid needs it
+
     close = difflib.get_close_matches(name, sorted(valid), n=1, cutoff=0.7)
     hint = f"; did you mean `{written(close[0])}`?" if close else ""
     return f"unknown name `{written(name)}` in expression{hint}"

@@ -4,7 +4,6 @@
 from __future__ import annotations
 
 import copy
-import difflib
 import re
 from typing import Any
 
@@ -90,6 +89,8 @@ def set_path(data: dict[str, Any], dotted: str, value: Any) -> Path:
 
 
 def unknown_name(kind: str, name: str, known: list[str], note: str = "") -> str:
+    import difflib  # here: only an unknown name needs it
+
     close = difflib.get_close_matches(name, known, n=1, cutoff=0.6)
     hint = f"did you mean `{close[0]}`?" if close else f"declared: {', '.join(sorted(known)) or 'none'}"
     return f"unknown {kind} `{name}`{note}; {hint}"

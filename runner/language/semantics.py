@@ -13,7 +13,6 @@ Each check reports through ``bad(path, message, at_key=False)`` (runner.language
 
 from __future__ import annotations
 
-import difflib
 import math
 from collections.abc import Callable, Iterable, Iterator
 from typing import Any
@@ -30,6 +29,8 @@ TIME_EPS = 1e-9
 
 
 def unknown(kind: str, name: str, known: Iterable[str]) -> str:
+    import difflib  # here: only an unknown name needs it
+
     known = sorted(known)
     close = difflib.get_close_matches(name, known, n=1, cutoff=0.6)
     hint = f"did you mean `{close[0]}`?" if close else f"defined: {', '.join(known) or 'none'}"
@@ -136,6 +137,8 @@ def check_backend_options(model: Scenario, bad: Bad) -> None:
             continue
         for key in options:
             if key not in accepted:
+                import difflib  # here: only an unknown option needs it
+
                 close = difflib.get_close_matches(key, list(accepted), n=1, cutoff=0.6)
                 hint = f"did you mean `{close[0]}`?" if close else f"accepted: {', '.join(sorted(accepted)) or 'none'}"
                 bad(("backend_options", backend, key), f"unknown option `{key}` of backend `{backend}`; {hint}", True)

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import stat
 import struct
-import wave
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -28,6 +27,8 @@ class SoundFileError(ValueError):
 
 
 def read_info(path: Path) -> SoundInfo:
+    import wave  # here: only a scenario with sounds reads one
+
     try:
         status = path.stat()
     except FileNotFoundError:

@@ -8,7 +8,6 @@ writes, at its time, the sound from its offset to its end with its volume applie
 from __future__ import annotations
 
 import io
-import wave
 
 import numpy as np
 
@@ -27,6 +26,8 @@ class SoundBank:
         """Keep ``data`` if ``attachment`` is a sound file this format plays (16-bit PCM WAV); else ignore it."""
         if not (attachment.startswith(_PREFIX) and attachment.endswith(_SUFFIX)):
             return
+        import wave  # here: only a scenario with sounds has one
+
         try:
             with wave.open(io.BytesIO(data), "rb") as w:
                 if w.getsampwidth() != 2 or w.getcomptype() != "NONE":

@@ -4,6 +4,7 @@ measures that): a module a command does not use, imported at start-up, costs eve
 
 from __future__ import annotations
 
+import json
 import os
 import subprocess
 import sys
@@ -27,8 +28,8 @@ NOT_FOR_A_RUN = (
 )
 #: not needed by a one-step run that passes under --quiet: the verdict table (rich.table: no table is drawn), and in
 #: the worker numpy's masked arrays and random generators (the trace's templates and the collision traverser's set
-#: up use neither)
-NOT_FOR_A_QUIET_PASS = ("rich.table", "numpy.ma", "numpy.random")
+#: up use neither); difflib only hints at a misspelt name, wave only reads a scenario's sounds
+NOT_FOR_A_QUIET_PASS = ("rich.table", "numpy.ma", "numpy.random", "difflib", "wave")
 
 
 def _imported(args: list[str], cwd: Path, environ: dict[str, str | None] | None = None) -> set[str]:
@@ -89,3 +90,34 @@ def test_the_collector_is_back_on_after_the_imports_with_what_they_made_frozen(t
                           env=env, check=False, timeout=300)  # fmt: skip
     assert done.returncode == 0, done.stderr[-2000:]
     assert done.stdout.split()[-4:] == ["0", "True", "True", "True"]
+
+
+@pytest.mark.parametrize("user_set", [False, True])
+def test_the_command_gives_its_library_settings_unless_the_user_set_them(tmp_path: Path, user_set: bool) -> None:
+    """runner.cli.entry.HEADLESS: each variable is set for the command and its workers (before any library is
+    imported), and one the user set, even empty, is kept as it is."""
+    probe = (
+        "import json, os, sys\n"
+        "import runner.cli.main\n"
+        "from runner.cli.entry import HEADLESS, main\n"
+        "runner.cli.main.main = lambda: print(json.dumps({k: os.environ.get(k) for k in HEADLESS})) or 0\n"
+        "main()\n"
+        "print(json.dumps(sorted(m for m in ('numpy', 'pydantic') if m in sys.modules)))\n"
+    )
+    env = {**os.environ, "PYTHONPATH": str(ROOT)}
+    env.pop("PYTEST_CURRENT_TEST", None)
+    names = ("MUJOCO_GL", "OPENBLAS_THREAD_TIMEOUT", "PYDANTIC_DISABLE_PLUGINS")
+    for name in names:
+        env.pop(name, None)
+        if user_set:
+            env[name] = ""
+    done = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True, cwd=tmp_path, env=env,
+                          check=False, timeout=300)  # fmt: skip
+    assert done.returncode == 0, done.stderr[-2000:]
+    seen, imported = (json.loads(line) for line in done.stdout.splitlines()[-2:])
+    assert set(seen) == set(names)
+    if user_set:
+        assert seen == dict.fromkeys(names, "")
+    else:
+        assert seen == {"MUJOCO_GL": "disable", "OPENBLAS_THREAD_TIMEOUT": "4", "PYDANTIC_DISABLE_PLUGINS": "__all__"}
+    assert imported == []  # set before numpy (OpenBLAS reads it when loaded) and pydantic are imported
