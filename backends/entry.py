@@ -10,6 +10,8 @@ from .types import Precision
 
 @dataclass(frozen=True)
 class BackendEntry:
+    """One engine in the registry: its name, adapter class, import name and distribution (backends.registry)."""
+
     name: str
     target: str  # "module:Class"
     module: str  # the engine's import name, checked without importing it

@@ -32,6 +32,8 @@ class BrokenBackend(BackendError):
 
 @dataclasses.dataclass(frozen=True)
 class Registered:
+    """The engines registered from outside this repository, and the entry points that could not be read."""
+
     entries: dict[str, BackendEntry]
     broken: dict[str, str]  # name -> the reason, naming the entry point and its distribution
 

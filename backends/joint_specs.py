@@ -10,6 +10,8 @@ from .basic_types import JointKind, Vec3
 
 @dataclass(frozen=True)
 class Motor:
+    """An ODE velocity motor: target rate ``vel`` and the largest force or torque ``fmax`` it may apply."""
+
     vel: float
     fmax: float
 
@@ -41,6 +43,8 @@ NO_DYNAMICS = JointDynamics()
 
 @dataclass(frozen=True)
 class JointSpec:
+    """One joint of a compiled world, engine-neutral: its kind, bodies, anchor, axes, limits, motor and dynamics."""
+
     name: str
     kind: JointKind
     body: str

@@ -102,6 +102,8 @@ class Mesh:
 
 @dataclass(frozen=True)
 class Shape:
+    """A collision shape in its body's frame: a primitive (sizes in metres), a mesh, or a compound."""
+
     kind: ShapeKind
     size: Vec3 = (0.0, 0.0, 0.0)  # box: full edge lengths
     radius: float = 0.0  # sphere, capsule, cylinder
@@ -131,6 +133,9 @@ class Surface:
 
 @dataclass(frozen=True)
 class BodySpec:
+    """One body of a compiled world, engine-neutral: motion, collision shape(s), mass properties, start state and
+    colour."""
+
     name: str
     motion: Motion
     shape: Shape
@@ -161,6 +166,8 @@ class BodySpec:
 
 @dataclass(frozen=True)
 class PairSurface:
+    """The contact surface of one pair of bodies, overriding the world's default for it."""
+
     a: str
     b: str
     surface: Surface
@@ -206,6 +213,8 @@ class ModelFile:
 
 @dataclass(frozen=True)
 class CompiledWorld:
+    """What every adapter builds: the bodies, joints, surfaces and settings of one scenario variant, ODE semantics."""
+
     name: str
     gravity: Vec3
     dt: float  # one scenario step

@@ -58,6 +58,8 @@ OUTCOMES: Final = frozenset({CRASHED, TIMED_OUT, OVER_MEMORY, EXITED, ERROR, INT
 
 @dataclass(frozen=True)
 class RunOutcome:
+    """How a case's process ended when its trace cannot say (the ``.outcome.json`` beside it)."""
+
     scenario: str
     variant: str
     backend: str

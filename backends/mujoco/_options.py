@@ -24,6 +24,8 @@ MAX_STACK = 50
 
 @dataclass(frozen=True)
 class MujocoOptions(BackendOptions):
+    """The MuJoCo adapter's options (`backend_options: {mujoco: {...}}`), each with its default and bounds."""
+
     erp: float = option(
         0.2, "ODE-style error reduction per engine step of contacts and joint stops (default 0.2)",
         minimum=0.0, min_exclusive=True, maximum=1.0,

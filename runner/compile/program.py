@@ -27,6 +27,8 @@ STEP_EPS = 1e-9  # a timed input at t is due at the first step whose time is >= 
 
 @dataclass(frozen=True)
 class TimedInput:
+    """An input event due at a step (its time as written, rounded to the step it falls on)."""
+
     step: int
     time: float  # as written (the scheduled time)
     event: str
@@ -52,6 +54,8 @@ class TriggerSpec:
 
 @dataclass
 class Program:
+    """A loaded scenario variant compiled for the step loop: its world, steps, inputs, intervals and handlers."""
+
     loaded: LoadedScenario
     world: CompiledWorld
     steps: int

@@ -55,6 +55,8 @@ STATIC_COLOR = (0.55, 0.55, 0.55, 1.0)
 
 @dataclass(frozen=True)
 class RobotParts:
+    """A robot's links and joints as world bodies and joints, with the pairs it excludes and its surfaces."""
+
     bodies: tuple[BodySpec, ...]
     joints: tuple[JointSpec, ...]
     excluded: tuple[tuple[str, str], ...]

@@ -20,6 +20,8 @@ class SolidDef:
 
 @dataclass(frozen=True)
 class NodeDef:
+    """A collision node (Panda3D style: a name for its collision events) and its solids, on a body."""
+
     name: str
     body: int  # index into the world's bodies
     solids: tuple[SolidDef, ...]

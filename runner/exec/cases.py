@@ -40,6 +40,8 @@ Files = tuple[tuple[str, bytes], ...]  # (path relative to the scenario's folder
 
 @dataclass(frozen=True)
 class Case:
+    """One run to make: a scenario file's variant on a backend, where its trace goes and its limits."""
+
     path: str  # the scenario file
     variant: str | None  # None: the base case
     backend: str
@@ -156,6 +158,8 @@ OUTCOME_TAIL = 2000  # characters of a crashed engine's output kept in its outco
 
 @dataclass
 class CaseResult:
+    """How a case ended: its status, its result or error, and its trace."""
+
     case: Case
     status: str  # passed | failed | engine-failure | error | crashed | timed-out | over-memory | exited | interrupted
     result: RunResult | None = None  # when the run completed (passed, failed, engine-failure)

@@ -72,6 +72,8 @@ LABELS = {
 
 @dataclass(frozen=True)
 class Exit:
+    """The exit code and first line a command gives for an outcome."""
+
     code: ExitCode
     label: str  # what the first line starts with: "error", "engine failure", ...
     message: str  # the exception's message (may span lines)

@@ -86,6 +86,8 @@ class Job:
 
 @dataclass(frozen=True)
 class Ending:
+    """How a worker's job ended: returned (with its payload), crashed, exited, timed out or interrupted."""
+
     how: str  # RETURNED, CRASHED, EXITED, TIMED_OUT or INTERRUPTED
     payload: dict[str, Any] | None = None  # what the job returned, if it did
     signal: int | None = None  # the signal that ended the process, if one did
@@ -121,6 +123,8 @@ def schedule(jobs: Sequence[Job]) -> list[int]:
 
 @dataclass(eq=False)
 class _Worker:
+    """A worker process of the pool, its pipe and log, and how many jobs it has run."""
+
     process: Any
     conn: Any
     log: Path

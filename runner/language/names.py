@@ -51,6 +51,8 @@ RESERVED = frozenset(
 
 @dataclass(frozen=True)
 class BodyInstance:
+    """A body as the world has it: a single body, or one copy of an array, with its key and index."""
+
     name: str  # e.g. "crate_3" for an array copy, else the key
     key: str  # the key in `bodies`
     index: tuple[int, int, int]  # (ix, iy, iz) within the array; (0, 0, 0) for a single body

@@ -64,6 +64,8 @@ class FrameDesc:
 
 @dataclass(frozen=True)
 class LinkDesc:
+    """A model file's link, engine-neutral: mass properties, frame at the zero configuration, shapes."""
+
     name: str
     mass: float  # kg; 0: the model says none (only a fixed root may have none)
     com: Vec3  # in the link frame
@@ -90,6 +92,8 @@ class MimicDesc:
 
 @dataclass(frozen=True)
 class JointDesc:
+    """A model file's joint, engine-neutral, in the model frame at the zero configuration."""
+
     name: str
     kind: str  # hinge | slider | fixed | ball | free (MJCF: a free body)
     parent: str
@@ -147,6 +151,8 @@ class KeyframeDesc:
 
 @dataclass(frozen=True)
 class ModelDesc:
+    """A URDF or MJCF model as read: its links and joints, and what the loader decided for the user."""
+
     file: str  # as resolved (absolute)
     root: str  # the root link
     links: tuple[LinkDesc, ...]

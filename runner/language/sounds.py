@@ -15,6 +15,8 @@ MAX_SOUND_BYTES = 50_000_000  # every sound is attached to every trace
 
 @dataclass(frozen=True)
 class SoundInfo:
+    """A sound file's format and length, as its header gives them."""
+
     path: Path
     length: float  # seconds
     sample_rate: int

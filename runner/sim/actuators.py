@@ -29,6 +29,8 @@ from runner.language.robot_desc import ActuatorDesc, ModelDesc
 
 @dataclass(frozen=True)
 class _Actuator:
+    """An MJCF actuator the scenario drives by name, and the world joint it acts on."""
+
     index: int  # in the model file's actuator order (MuJoCo's)
     desc: ActuatorDesc
     joint: int | None  # the world joint it drives (None: not a hinge or slide)

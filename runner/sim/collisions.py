@@ -20,6 +20,8 @@ from runner.language.patterns import expand
 
 @dataclass(frozen=True)
 class Pose:
+    """A node's pose for the collision traverser: position, rotation matrix and scale."""
+
     pos: np.ndarray  # (3,)
     rot: np.ndarray  # (3, 3)
     scale: float
@@ -84,6 +86,8 @@ def nodes_collide(from_node: NodeDef, from_pose: Pose, into_node: NodeDef, into_
 
 @dataclass(frozen=True)
 class CollisionEvent:
+    """A collision event to deliver: its kind (in, again, out), name and the two nodes."""
+
     kind: str  # in | again | out
     name: str  # the event name after pattern expansion
     from_name: str

@@ -20,6 +20,8 @@ from runner.language.model_actions import ApplyCommand
 
 @dataclass
 class Held:
+    """A force or torque held on a body, for a number of steps or until a condition holds."""
+
     body: int
     command: ApplyCommand
     steps_left: int | None  # None: until the condition holds

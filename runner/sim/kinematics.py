@@ -13,6 +13,8 @@ from runner.language.hpr import hpr_to_quat
 
 @dataclass
 class KinematicBody:
+    """A kinematic body's pose and scale now and at the end of the coming step."""
+
     index: int
     pos: Vec3
     hpr: Vec3

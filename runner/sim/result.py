@@ -10,6 +10,8 @@ from runner.sim.assertions import Verdict
 
 @dataclass
 class RunResult:
+    """What one run gave: its status, verdicts, events, sounds, steps and timing."""
+
     scenario: str
     variant: str
     backend: str

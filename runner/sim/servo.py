@@ -23,6 +23,8 @@ from runner.language.model import Scenario
 
 @dataclass(frozen=True)
 class ServoSpec:
+    """A robot joint's position servo: target (a number or an expression), gain, fmax and vmax."""
+
     joint: str  # `<robot>.<joint>`
     target: float | Expression
     gain: float

@@ -26,6 +26,8 @@ PASSED, FAILED, KNOWN_LIMIT = "passed", "failed", "known limit"
 
 @dataclass
 class Verdict:
+    """One assertion's verdict: passed or not, measured against expected, when, and why."""
+
     name: str
     kind: str
     passed: bool  # the verdict does not fail the run (a known limit's expected failure does not)

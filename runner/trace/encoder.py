@@ -35,6 +35,8 @@ def _slices(parts: Sequence[Sequence[str]]) -> list[tuple[int, int]]:
 
 @dataclass(frozen=True)
 class Channel:
+    """A trace channel to register: its topic and its schema's name and bytes."""
+
     topic: str
     schema_name: str
     schema_data: bytes

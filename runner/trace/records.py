@@ -21,6 +21,8 @@ __all__ = ["TraceMeta", "exit_status", "finish_on_exit", "scenario_record"]
 
 @dataclass(frozen=True)
 class TraceMeta:
+    """What a trace records about its run before the first step: scenario, backend, settings, bodies, joints."""
+
     scenario: str
     variant: str
     backend: str

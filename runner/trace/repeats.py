@@ -19,6 +19,8 @@ __all__ = ["EventRuns", "seconds_text"]
 
 @dataclass
 class _Run:
+    """A run of deliveries of one event: its first and last time and how many."""
+
     first_ns: int
     last_ns: int
     count: int
