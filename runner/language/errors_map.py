@@ -118,9 +118,14 @@ def issues_from(error: ValidationError, positions: Positions, data: Any, root: t
 
     seen: set[Path] = set()
     issues: list[Issue] = []
-    for err in error.errors(include_url=False):
+    errors = error.errors(include_url=False)
+    paths = [_clean_loc(tuple(err["loc"]), data, err["type"] == "missing") for err in errors]
+    for err, path in zip(errors, paths, strict=True):
         kind = err["type"]
-        path = _clean_loc(tuple(err["loc"]), data, kind == "missing")
+        if kind.endswith("_type") and any(len(p) > len(path) and p[: len(path)] == path for p in paths):
+            # a union's other alternative (`on: {event: [actions] | handler}`): the value is of the kind whose
+            # errors lie deeper, which say what is wrong with it; "should be a dictionary" there says nothing
+            continue
         value = err.get("input")
         is_key = "[key]" in err["loc"]
         if kind == "extra_forbidden":

@@ -9,6 +9,7 @@ from collections.abc import Iterator
 from typing import TYPE_CHECKING, Any
 
 from pydantic import BaseModel
+from pydantic.errors import PydanticUndefinedAnnotation
 
 from runner.language import model_actions as Act
 from runner.language import model_behaviour as B
@@ -30,19 +31,6 @@ def _models_in(annotation: Any) -> list[type[BaseModel]]:
     return out
 
 
-def _container(annotation: Any) -> str | None:
-    """'list', 'dict' or None for the outermost container of an annotation (through Optional/Annotated)."""
-    origin = typing.get_origin(annotation)
-    if origin in (list, tuple):
-        return "list"
-    if origin is dict:
-        return "dict"
-    if origin in (typing.Union, types.UnionType, typing.Annotated):
-        kinds = {_container(a) for a in typing.get_args(annotation)} - {None}
-        return kinds.pop() if len(kinds) == 1 else None
-    return None
-
-
 def _pick(candidates: list[type[BaseModel]], value: Any) -> type[BaseModel] | None:
     if not candidates:
         return None
@@ -57,30 +45,72 @@ def _pick(candidates: list[type[BaseModel]], value: Any) -> type[BaseModel] | No
     return candidates[0] if len(candidates) == 1 else None
 
 
+def _members(annotation: Any) -> list[Any]:
+    """The alternatives of a type annotation, through Annotated and unions (itself if it has none)."""
+    origin = typing.get_origin(annotation)
+    if origin is typing.Annotated:
+        return _members(typing.get_args(annotation)[0])
+    if origin in (typing.Union, types.UnionType):
+        return [m for a in typing.get_args(annotation) for m in _members(a)]
+    return [annotation]
+
+
+def _model_for(annotation: Any, value: Any) -> type[BaseModel] | None:
+    """The model that describes ``value`` where ``annotation`` is expected (a tagged union's member by its tag);
+    None where ``value`` is no mapping (a list in a place that takes a list or a model)."""
+    if not isinstance(value, dict):
+        return None
+    models = [m for m in _members(annotation) if isinstance(m, type) and issubclass(m, BaseModel)]
+    return _pick(models, value)
+
+
+def _item_type(annotation: Any, value: Any) -> Any:
+    """What an item of ``value`` is expected to be where ``annotation`` is: a list's items, a dict's values (of
+    the union's alternative whose container ``value`` is); None if it cannot be told."""
+    for member in _members(annotation):
+        origin = typing.get_origin(member)
+        args = typing.get_args(member)
+        if origin in (list, tuple) and isinstance(value, list) and args:
+            return args[0]
+        if origin is dict and isinstance(value, dict) and len(args) == 2:
+            return args[1]
+    return None
+
+
+def _field_type(model: type[BaseModel], name: str) -> Any:
+    """The field's annotation, resolved: a model whose annotations name a type defined after it (IfAction's
+    `then: list[Action]`) keeps them unresolved until its validator is built, which is done here (only a
+    scenario with errors asks)."""
+    annotation = model.model_fields[name].annotation
+    if isinstance(annotation, typing.ForwardRef | str) and not model.__pydantic_complete__:
+        try:
+            model.model_rebuild()
+        except PydanticUndefinedAnnotation:  # a name the module does not define: no hint, as before
+            return None
+        annotation = model.model_fields[name].annotation
+    return annotation
+
+
 def keys_at(root: type[BaseModel], data: Any, path: Path) -> list[str]:
-    """The keys the model at ``path`` accepts (by alias), or [] if it cannot be told."""
-    model: type[BaseModel] | None = root
+    """The keys the model at ``path`` accepts (by alias), or [] if it cannot be told. The path is followed
+    through the models' fields and through lists and dicts (a handler's actions, an `if` action's branches),
+    a union's alternative chosen by the document's value there."""
+    annotation: Any = root
     value = data
-    annotation: Any = None
-    pending_container: str | None = None
     for part in path:
-        if pending_container is not None:
-            value = value[part] if isinstance(value, dict | list) and _has(value, part) else None  # type: ignore[index]
-            pending_container = None
-            model = _pick(_models_in(annotation), value)
-            continue
-        if model is None:
-            return []
-        field = next((f for n, f in model.model_fields.items() if (f.alias or n) == part), None)
-        if field is None:
-            return []
-        annotation = field.annotation
-        value = value.get(part) if isinstance(value, dict) else None
-        pending_container = _container(annotation)
-        model = None if pending_container else _pick(_models_in(annotation), value)
-    if model is None or pending_container:
-        return []
-    return [f.alias or n for n, f in model.model_fields.items()]
+        model = _model_for(annotation, value)
+        if model is not None:
+            name = next((n for n, f in model.model_fields.items() if (f.alias or n) == part), None)
+            if name is None:
+                return []
+            annotation = _field_type(model, name)
+        else:
+            annotation = _item_type(annotation, value)
+            if annotation is None:
+                return []
+        value = value[part] if isinstance(value, dict | list) and _has(value, part) else None  # type: ignore[index]
+    model = _model_for(annotation, value)
+    return [] if model is None else [f.alias or n for n, f in model.model_fields.items()]
 
 
 def _has(container: Any, part: Any) -> bool:

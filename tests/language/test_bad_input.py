@@ -129,6 +129,27 @@ CASES = [
         "5:40",
         r"bodies\.box\.density: unknown parameter `rho`",
     ),
+    # keys inside a handler's actions and an `if` action's branches get their hints (the model is found through
+    # the handler's list and the branch's list, whose item type `if` names before it is defined)
+    (
+        "misspelt key of an action in a handler",
+        BASE + "inputs: [{at: 0.5, event: go}]\non:\n  go: [{force: {body: box, valu: [0, 0, 1]}}]\n",
+        "8:28",
+        exact("on.go[0].force.valu: unknown key `valu`; did you mean `value`?"),
+    ),
+    (
+        "unknown key of an action in an if branch",
+        BASE + "state: {x: 0}\ninputs: [{at: 0.5, event: go}]\non:\n"
+        "  go: [{if: state.x > 1, then: [], else: [{set: {x: 2}, colr: 1}]}]\n",
+        "9:57",
+        exact("on.go[0].else[0].colr: unknown key `colr`; expected one of: set"),
+    ),
+    (
+        "misspelt key of a handler",
+        BASE + "inputs: [{at: 0.5, event: go}]\non:\n  go: {do: [{log: hi}], onse: true}\n",
+        "8:25",
+        r"on\.go\.onse: unknown key `onse`; did you mean `once`\?",
+    ),
     ("bad yaml", BASE + "on: [\n", "7:1", r"invalid YAML"),
     ("python tag", BASE + "x: !!python/object/apply:os.system [ls]\n", "6:4", r"x: unsupported YAML tag"),
     (
@@ -334,3 +355,17 @@ def test_limits_on_bodies_and_steps(tmp_path: Path) -> None:
     text = str(info.value)
     assert "expected at most 10000 bodies (arrays expanded), found 12001" in text
     assert f"{path}:3:" in text and "expected at most 10000000 steps (duration / dt), found 25000000" in text
+
+
+@pytest.mark.parametrize("handler", ["[{force: {body: box, valu: [0, 0, 1]}}]",
+                                     "{do: [{force: {body: box, valu: 1}}]}"])  # fmt: skip
+def test_a_handler_s_errors_are_its_own_form_s(tmp_path: Path, handler: str) -> None:
+    """`on: {event: [actions] | {do: [actions], ...}}`: a mistake inside one form is reported there, without the
+    other form's "should be a list / a dictionary" at the event (which said nothing about the mistake)."""
+    path = tmp_path / "t.yaml"
+    path.write_text(BASE + f"inputs: [{{at: 0.5, event: go}}]\non:\n  go: {handler}\n")
+    with pytest.raises(ScenarioValidationError) as info:
+        load_scenario(path, None)
+    messages = [issue.message for issue in info.value.issues]
+    assert any("unknown key `valu`; did you mean `value`?" in m for m in messages), messages
+    assert not any("valid dictionary" in m or "valid list" in m for m in messages), messages
