@@ -21,16 +21,6 @@ if TYPE_CHECKING:
     from runner.language.model import Scenario
 
 
-def _models_in(annotation: Any) -> list[type[BaseModel]]:
-    """Every BaseModel class reachable inside a type annotation (unions, containers, Annotated)."""
-    if isinstance(annotation, type) and issubclass(annotation, BaseModel):
-        return [annotation]
-    out: list[type[BaseModel]] = []
-    for arg in typing.get_args(annotation):
-        out.extend(_models_in(arg))
-    return out
-
-
 def _pick(candidates: list[type[BaseModel]], value: Any) -> type[BaseModel] | None:
     if not candidates:
         return None

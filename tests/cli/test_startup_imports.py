@@ -32,9 +32,11 @@ NOT_FOR_A_RUN = (
 NOT_FOR_A_QUIET_PASS = ("rich.table", "numpy.ma", "numpy.random", "difflib", "wave")
 
 
-def _imported(args: list[str], cwd: Path, environ: dict[str, str | None] | None = None) -> set[str]:
-    """The modules a `scenario` command's own process imports (``-X importtime``); ``environ``: variables
-    set (a string) or removed (None) for it."""
+def _python(
+    args: list[str], cwd: Path, environ: dict[str, str | None] | None = None
+) -> subprocess.CompletedProcess[str]:
+    """A fresh Python process on this checkout with ``args``, which must succeed; ``environ``: variables set (a
+    string) or removed (None) for it."""
     env = {**os.environ, "PYTHONPATH": str(ROOT)}
     env.pop("PYTEST_CURRENT_TEST", None)
     for name, value in (environ or {}).items():
@@ -42,10 +44,17 @@ def _imported(args: list[str], cwd: Path, environ: dict[str, str | None] | None 
             env.pop(name, None)
         else:
             env[name] = value
-    done = subprocess.run([sys.executable, "-X", "importtime", "-m", "runner", *args], capture_output=True,
-                          text=True, cwd=cwd, env=env, check=False, timeout=300)  # fmt: skip
+    done = subprocess.run([sys.executable, *args], capture_output=True, text=True, cwd=cwd, env=env, check=False,
+                          timeout=300)  # fmt: skip
     assert done.returncode == 0, done.stderr[-2000:]
-    return {line.rsplit("|", 1)[1].strip() for line in done.stderr.splitlines() if line.startswith("import time:")}
+    return done
+
+
+def _imported(args: list[str], cwd: Path, environ: dict[str, str | None] | None = None) -> set[str]:
+    """The modules a `scenario` command's own process imports (``-X importtime``); ``environ`` as for
+    :func:`_python`."""
+    err = _python(["-X", "importtime", "-m", "runner", *args], cwd, environ).stderr
+    return {line.rsplit("|", 1)[1].strip() for line in err.splitlines() if line.startswith("import time:")}
 
 
 def test_a_run_imports_neither_the_other_commands_nor_the_trace_reader(tmp_path: Path) -> None:
@@ -84,11 +93,7 @@ def test_the_collector_is_back_on_after_the_imports_with_what_they_made_frozen(t
         "main(['validate', sys.argv[1]])\n"
         "print(code, gc.isenabled(), frozen > 0, gc.get_freeze_count() == frozen)\n"
     )
-    env = {**os.environ, "PYTHONPATH": str(ROOT)}
-    env.pop("PYTEST_CURRENT_TEST", None)
-    done = subprocess.run([sys.executable, "-c", probe, str(ONE_STEP)], capture_output=True, text=True, cwd=tmp_path,
-                          env=env, check=False, timeout=300)  # fmt: skip
-    assert done.returncode == 0, done.stderr[-2000:]
+    done = _python(["-c", probe, str(ONE_STEP)], tmp_path)
     assert done.stdout.split()[-4:] == ["0", "True", "True", "True"]
 
 
@@ -104,16 +109,8 @@ def test_the_command_gives_its_library_settings_unless_the_user_set_them(tmp_pat
         "main()\n"
         "print(json.dumps(sorted(m for m in ('numpy', 'pydantic') if m in sys.modules)))\n"
     )
-    env = {**os.environ, "PYTHONPATH": str(ROOT)}
-    env.pop("PYTEST_CURRENT_TEST", None)
     names = ("MUJOCO_GL", "OPENBLAS_THREAD_TIMEOUT", "PYDANTIC_DISABLE_PLUGINS")
-    for name in names:
-        env.pop(name, None)
-        if user_set:
-            env[name] = ""
-    done = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True, cwd=tmp_path, env=env,
-                          check=False, timeout=300)  # fmt: skip
-    assert done.returncode == 0, done.stderr[-2000:]
+    done = _python(["-c", probe], tmp_path, dict.fromkeys(names, "" if user_set else None))
     seen, imported = (json.loads(line) for line in done.stdout.splitlines()[-2:])
     assert set(seen) == set(names)
     if user_set:
